@@ -1,0 +1,47 @@
+#pragma once
+
+#include <string>
+
+/// @file
+/// Every LCM channel name of the product, in one place. Per-robot channels are
+/// "<robot>.<STREAM>" (rover1.LIDAR); fleet channels have no prefix.
+
+namespace cairn::channels {
+
+// Fleet channels.
+inline constexpr char kHealth[] = "HEALTH";
+inline constexpr char kSimClock[] = "SIM.CLOCK";
+inline constexpr char kSimControl[] = "SIM.CONTROL";
+inline constexpr char kSimControlReply[] = "SIM.CONTROL_REPLY";
+inline constexpr char kMapstoreRequest[] = "MAPSTORE.REQUEST";
+inline constexpr char kMapstoreReply[] = "MAPSTORE.REPLY";
+inline constexpr char kMapstoreTiles[] = "MAPSTORE.TILES";
+inline constexpr char kMapstoreTileResend[] = "MAPSTORE.TILE_RESEND";
+
+// Per-robot stream suffixes.
+inline constexpr char kLidar[] = "LIDAR";
+inline constexpr char kScan[] = "SCAN";
+inline constexpr char kTurretScan[] = "TURRET_SCAN";
+inline constexpr char kOdom[] = "ODOM";
+inline constexpr char kPose[] = "POSE";  // ground truth
+inline constexpr char kImu[] = "IMU";
+inline constexpr char kSonar[] = "SONAR";
+inline constexpr char kCmdVel[] = "CMD_VEL";
+inline constexpr char kGoal[] = "GOAL";
+inline constexpr char kPath[] = "PATH";
+inline constexpr char kNavStatus[] = "NAV_STATUS";
+inline constexpr char kMapTiles[] = "MAP.TILES";            // grid-map layer tiles
+inline constexpr char kMapManifest[] = "MAP.MANIFEST";      // layer versions and tile checksums
+inline constexpr char kMapTileResend[] = "MAP.TILE_RESEND";  // receivers ask for missed tiles
+inline constexpr char kMapOccupancy[] = "MAP.OCCUPANCY";    // 2-D occupancy tiles
+inline constexpr char kMapOctomap[] = "MAP.OCTOMAP";
+inline constexpr char kMapObstacles[] = "MAP.OBSTACLES";
+inline constexpr char kMapControl[] = "MAP.CONTROL";        // mapper requests (clear layer, reload)
+inline constexpr char kMapControlReply[] = "MAP.CONTROL_REPLY";
+
+/// "<robot>.<stream>".
+inline std::string ForRobot(const std::string& robot, const char* stream) {
+  return robot + "." + stream;
+}
+
+}  // namespace cairn::channels

@@ -1,0 +1,36 @@
+#pragma once
+
+#include <string>
+
+/// @file
+/// Names of grid-map layers and the cost convention shared by mapper, map store and planner.
+///
+/// Cost layers ("cost/<profile>") hold per cell: 0 free, (0, 100) graded (harder terrain costs
+/// more), 100 lethal, NaN unknown. This matches the ROS occupancy convention (0..100, -1
+/// unknown) that exports use.
+
+namespace cairn::layers {
+
+// Robot-agnostic base layers (stored once per site).
+inline constexpr char kElevation[] = "elevation";                  // m, world z
+inline constexpr char kElevationVariance[] = "elevation_variance";  // m^2
+inline constexpr char kObservationCount[] = "observation_count";    // fused measurements
+inline constexpr char kLastSeen[] = "last_seen_s";                  // sim time, s
+inline constexpr char kOccupancyLogOdds[] = "occupancy_logodds";    // 2-D log-odds
+inline constexpr char kStaticMap[] = "static";                      // 0..100, seed 001 static map
+inline constexpr char kShortTerm[] = "short_term";                  // 0..100
+inline constexpr char kLongTerm[] = "long_term";                    // 0..100
+inline constexpr char kFinal[] = "final";                           // max(short, long)
+
+// Geometric layers derived from the elevation (profile independent).
+inline constexpr char kSlope[] = "slope";          // rad, unsigned
+inline constexpr char kStepMax[] = "step";         // m, largest height difference to a neighbour
+inline constexpr char kRoughness[] = "roughness";  // m, residual of the local plane fit
+
+inline std::string CostLayer(const std::string& profile) { return "cost/" + profile; }
+inline bool IsCostLayer(const std::string& name) { return name.rfind("cost/", 0) == 0; }
+
+inline constexpr float kCostFree = 0.f;
+inline constexpr float kCostLethal = 100.f;
+
+}  // namespace cairn::layers

@@ -1,0 +1,65 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/types.h"
+
+/// @file
+/// The obstacle registry: connected terrain features found by the mapper, each with its
+/// measurements and, per robot profile, whether that profile can cross it. This is what another
+/// robot reads from a stored map.
+
+namespace cairn::common {
+
+enum class ObstacleKind : int8_t {
+  kRamp = 1,
+  kStepUp = 2,
+  kStepDown = 3,
+  kDitch = 4,
+  kWallOrObject = 5,
+};
+
+const char* ObstacleKindName(ObstacleKind kind);  ///< "ramp", "step_up", ...
+
+struct ObstacleVerdict {
+  std::string profile;
+  std::string profile_hash;
+  bool crossable{false};
+  std::string reason;  ///< why not ("slope 10.1 deg > 8.0 deg"); empty when crossable
+  bool operator==(const ObstacleVerdict& o) const {
+    return profile == o.profile && profile_hash == o.profile_hash && crossable == o.crossable &&
+           reason == o.reason;
+  }
+};
+
+struct Obstacle {
+  int32_t id{0};
+  ObstacleKind kind{ObstacleKind::kWallOrObject};
+  Vector2 centroid_m{Vector2::Zero()};
+  std::vector<Vector2> outline_m;  ///< polygon, world frame
+  double slope_rad{0.0};
+  double height_m{0.0};
+  double width_m{0.0};
+  double length_m{0.0};
+  double depth_m{0.0};  ///< NaN when the bottom was never seen
+  double area_m2{0.0};
+  int32_t num_cells{0};
+  std::vector<ObstacleVerdict> verdicts;
+
+  /// The verdict for a profile, or nullptr.
+  const ObstacleVerdict* VerdictFor(const std::string& profile) const {
+    for (const auto& v : verdicts) {
+      if (v.profile == profile) return &v;
+    }
+    return nullptr;
+  }
+};
+
+struct ObstacleRegistry {
+  int64_t map_version{0};
+  std::vector<Obstacle> obstacles;
+};
+
+}  // namespace cairn::common

@@ -1,0 +1,63 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/types.h"
+
+/// @file
+/// Lidar data as the core libraries see it. A revolution arrives as azimuth slices; each slice
+/// carries the sensor pose at its own time, so a moving robot yields an undistorted cloud.
+
+namespace cairn::common {
+
+struct LidarPoint {
+  float x_m{0.f};  ///< sensor frame
+  float y_m{0.f};
+  float z_m{0.f};
+  float intensity{0.f};
+  int16_t ring{0};
+};
+
+struct LidarSlice {
+  int64_t utime{0};
+  std::string robot;
+  int64_t revolution{0};   ///< counter of revolutions since start
+  int32_t slice_index{0};  ///< 0 .. slice_count-1
+  int32_t slice_count{1};
+  double azimuth_start_rad{0.0};
+  double azimuth_end_rad{0.0};
+  double max_range_m{0.0};
+  Pose3 sensor_pose;       ///< sensor in world at this slice's time
+  std::vector<LidarPoint> points;
+};
+
+/// A full revolution: its slices in order; a missing slice leaves a gap.
+struct LidarRevolution {
+  int64_t revolution{0};
+  std::string robot;
+  std::vector<LidarSlice> slices;
+  int32_t expected_slices{0};
+  bool complete() const { return static_cast<int32_t>(slices.size()) == expected_slices; }
+  size_t num_points() const {
+    size_t n = 0;
+    for (const auto& s : slices) n += s.points.size();
+    return n;
+  }
+};
+
+/// A planar laser scan (angles in the sensor frame, counter-clockwise from x).
+struct LaserScan {
+  int64_t utime{0};
+  std::string robot;
+  Pose3 sensor_pose;
+  double angle_min_rad{0.0};
+  double angle_increment_rad{0.0};
+  double range_min_m{0.0};
+  double range_max_m{0.0};
+  std::vector<float> ranges_m;  ///< +inf for no return
+  std::vector<float> intensities;
+};
+
+}  // namespace cairn::common

@@ -1,0 +1,308 @@
+#include "services/runtime/conversions.h"
+
+#include <cmath>
+
+namespace cairn::runtime {
+
+using common::InvalidArgumentError;
+using common::Result;
+
+void ToLcm(const common::Pose3& pose, double position_m[3], double orientation_wxyz[4]) {
+  for (int i = 0; i < 3; ++i) position_m[i] = pose.position_m[i];
+  orientation_wxyz[0] = pose.orientation.w();
+  orientation_wxyz[1] = pose.orientation.x();
+  orientation_wxyz[2] = pose.orientation.y();
+  orientation_wxyz[3] = pose.orientation.z();
+}
+
+Result<common::Pose3> PoseFromArrays(const double position_m[3], const double orientation_wxyz[4]) {
+  common::Pose3 pose;
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(position_m[i])) return InvalidArgumentError("pose position is not finite");
+    pose.position_m[i] = position_m[i];
+  }
+  const common::Quaternion q(orientation_wxyz[0], orientation_wxyz[1], orientation_wxyz[2],
+                             orientation_wxyz[3]);
+  if (!q.coeffs().allFinite()) return InvalidArgumentError("pose orientation is not finite");
+  const double norm = q.norm();
+  if (std::abs(norm - 1.0) > 1e-3) {
+    return InvalidArgumentError("pose orientation is not a unit quaternion (norm " +
+                                std::to_string(norm) + ")");
+  }
+  pose.orientation = q.normalized();
+  return pose;
+}
+
+cairn::lcmt_point_cloud_slice ToLcm(const common::LidarSlice& slice) {
+  cairn::lcmt_point_cloud_slice m;
+  m.utime = slice.utime;
+  m.robot = slice.robot;
+  m.frame = "lidar";
+  m.revolution = slice.revolution;
+  m.slice_index = slice.slice_index;
+  m.slice_count = slice.slice_count;
+  m.azimuth_start_rad = slice.azimuth_start_rad;
+  m.azimuth_end_rad = slice.azimuth_end_rad;
+  m.max_range_m = slice.max_range_m;
+  ToLcm(slice.sensor_pose, m.sensor_position_m, m.sensor_orientation_wxyz);
+  const size_t n = slice.points.size();
+  m.num_points = static_cast<int32_t>(n);
+  m.x_m.resize(n);
+  m.y_m.resize(n);
+  m.z_m.resize(n);
+  m.intensity.resize(n);
+  m.ring.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto& p = slice.points[i];
+    m.x_m[i] = p.x_m;
+    m.y_m[i] = p.y_m;
+    m.z_m[i] = p.z_m;
+    m.intensity[i] = p.intensity;
+    m.ring[i] = static_cast<int8_t>(p.ring);
+  }
+  return m;
+}
+
+Result<common::LidarSlice> FromLcm(const cairn::lcmt_point_cloud_slice& m) {
+  const size_t n = static_cast<size_t>(std::max(0, m.num_points));
+  if (m.x_m.size() != n || m.y_m.size() != n || m.z_m.size() != n || m.intensity.size() != n ||
+      m.ring.size() != n) {
+    return InvalidArgumentError("lidar slice arrays disagree with num_points");
+  }
+  if (m.slice_count <= 0 || m.slice_index < 0 || m.slice_index >= m.slice_count) {
+    return InvalidArgumentError("lidar slice index " + std::to_string(m.slice_index) + " of " +
+                                std::to_string(m.slice_count) + " is out of range");
+  }
+  auto pose = PoseFromArrays(m.sensor_position_m, m.sensor_orientation_wxyz);
+  if (!pose.ok()) return InvalidArgumentError("lidar slice: " + pose.status().message());
+  common::LidarSlice s;
+  s.utime = m.utime;
+  s.robot = m.robot;
+  s.revolution = m.revolution;
+  s.slice_index = m.slice_index;
+  s.slice_count = m.slice_count;
+  s.azimuth_start_rad = m.azimuth_start_rad;
+  s.azimuth_end_rad = m.azimuth_end_rad;
+  s.max_range_m = m.max_range_m;
+  s.sensor_pose = *pose;
+  s.points.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    s.points[i] = {m.x_m[i], m.y_m[i], m.z_m[i], m.intensity[i], m.ring[i]};
+  }
+  return s;
+}
+
+cairn::lcmt_laser_scan ToLcm(const common::LaserScan& scan) {
+  cairn::lcmt_laser_scan m;
+  m.utime = scan.utime;
+  m.robot = scan.robot;
+  m.frame = "laser";
+  ToLcm(scan.sensor_pose, m.sensor_position_m, m.sensor_orientation_wxyz);
+  m.turret_angle_rad = 0.0;
+  m.angle_min_rad = static_cast<float>(scan.angle_min_rad);
+  m.angle_increment_rad = static_cast<float>(scan.angle_increment_rad);
+  m.range_min_m = static_cast<float>(scan.range_min_m);
+  m.range_max_m = static_cast<float>(scan.range_max_m);
+  m.scan_time_s = 0.f;
+  m.num_ranges = static_cast<int32_t>(scan.ranges_m.size());
+  m.ranges_m = scan.ranges_m;
+  m.num_intensities = static_cast<int32_t>(scan.intensities.size());
+  m.intensities = scan.intensities;
+  return m;
+}
+
+Result<common::LaserScan> FromLcm(const cairn::lcmt_laser_scan& m) {
+  if (m.num_ranges < 0 || m.ranges_m.size() != static_cast<size_t>(m.num_ranges) ||
+      m.num_intensities < 0 || m.intensities.size() != static_cast<size_t>(m.num_intensities)) {
+    return InvalidArgumentError("laser scan arrays disagree with their counts");
+  }
+  if (!std::isfinite(m.angle_min_rad) || !std::isfinite(m.angle_increment_rad) ||
+      !std::isfinite(m.range_max_m) || m.range_max_m <= 0.f) {
+    return InvalidArgumentError("laser scan geometry is not finite");
+  }
+  auto pose = PoseFromArrays(m.sensor_position_m, m.sensor_orientation_wxyz);
+  if (!pose.ok()) return InvalidArgumentError("laser scan: " + pose.status().message());
+  common::LaserScan s;
+  s.utime = m.utime;
+  s.robot = m.robot;
+  s.sensor_pose = *pose;
+  // Float fields widen to double exactly, so the round trip is exact.
+  s.angle_min_rad = m.angle_min_rad;
+  s.angle_increment_rad = m.angle_increment_rad;
+  s.range_min_m = m.range_min_m;
+  s.range_max_m = m.range_max_m;
+  s.ranges_m = m.ranges_m;
+  s.intensities = m.intensities;
+  return s;
+}
+
+cairn::lcmt_robot_profile ToLcm(const common::RobotProfile& p) {
+  cairn::lcmt_robot_profile m;
+  m.name = p.name;
+  m.content_hash = p.ContentHash();
+  switch (p.drive) {
+    case common::DriveKind::kDifferential: m.drive = cairn::lcmt_robot_profile::DRIVE_DIFFERENTIAL; break;
+    case common::DriveKind::kSkidSteer: m.drive = cairn::lcmt_robot_profile::DRIVE_SKID_STEER; break;
+    case common::DriveKind::kAuv: m.drive = cairn::lcmt_robot_profile::DRIVE_AUV; break;
+  }
+  m.num_footprint = static_cast<int32_t>(p.footprint_m.size());
+  for (const auto& v : p.footprint_m) {
+    m.footprint_x_m.push_back(v.x());
+    m.footprint_y_m.push_back(v.y());
+  }
+  m.max_slope_up_rad = p.max_slope_up_rad;
+  m.max_slope_down_rad = p.max_slope_down_rad;
+  m.max_step_up_m = p.max_step_up_m;
+  m.max_step_down_m = p.max_step_down_m;
+  m.max_ditch_width_m = p.max_ditch_width_m;
+  m.ground_clearance_m = p.ground_clearance_m;
+  m.max_roughness_m = p.max_roughness_m;
+  m.max_vel_x_mps = p.max_vel_x_mps;
+  m.min_vel_x_mps = p.min_vel_x_mps;
+  m.max_vel_theta_radps = p.max_vel_theta_radps;
+  m.acc_lim_x_mps2 = p.acc_lim_x_mps2;
+  m.acc_lim_theta_radps2 = p.acc_lim_theta_radps2;
+  m.num_sensors = static_cast<int32_t>(p.sensors.size());
+  m.sensors = p.sensors;
+  return m;
+}
+
+Result<common::RobotProfile> FromLcm(const cairn::lcmt_robot_profile& m) {
+  if (m.num_footprint < 0 || m.footprint_x_m.size() != static_cast<size_t>(m.num_footprint) ||
+      m.footprint_y_m.size() != static_cast<size_t>(m.num_footprint) || m.num_sensors < 0 ||
+      m.sensors.size() != static_cast<size_t>(m.num_sensors)) {
+    return InvalidArgumentError("robot profile arrays disagree with their counts");
+  }
+  common::RobotProfile p;
+  p.name = m.name;
+  switch (m.drive) {
+    case cairn::lcmt_robot_profile::DRIVE_DIFFERENTIAL: p.drive = common::DriveKind::kDifferential; break;
+    case cairn::lcmt_robot_profile::DRIVE_SKID_STEER: p.drive = common::DriveKind::kSkidSteer; break;
+    case cairn::lcmt_robot_profile::DRIVE_AUV: p.drive = common::DriveKind::kAuv; break;
+    default: return InvalidArgumentError("robot profile has unknown drive " + std::to_string(m.drive));
+  }
+  for (int i = 0; i < m.num_footprint; ++i) p.footprint_m.emplace_back(m.footprint_x_m[i], m.footprint_y_m[i]);
+  p.max_slope_up_rad = m.max_slope_up_rad;
+  p.max_slope_down_rad = m.max_slope_down_rad;
+  p.max_step_up_m = m.max_step_up_m;
+  p.max_step_down_m = m.max_step_down_m;
+  p.max_ditch_width_m = m.max_ditch_width_m;
+  p.ground_clearance_m = m.ground_clearance_m;
+  p.max_roughness_m = m.max_roughness_m;
+  p.max_vel_x_mps = m.max_vel_x_mps;
+  p.min_vel_x_mps = m.min_vel_x_mps;
+  p.max_vel_theta_radps = m.max_vel_theta_radps;
+  p.acc_lim_x_mps2 = m.acc_lim_x_mps2;
+  p.acc_lim_theta_radps2 = m.acc_lim_theta_radps2;
+  p.sensors = m.sensors;
+  try {
+    p.Validate();
+  } catch (const std::invalid_argument& e) {
+    return InvalidArgumentError(e.what());
+  }
+  return p;
+}
+
+cairn::lcmt_pose ToLcmPose(const common::Pose3& pose, int64_t utime, const std::string& robot,
+                           const std::string& frame) {
+  cairn::lcmt_pose m{};
+  m.utime = utime;
+  m.robot = robot;
+  m.frame = frame;
+  ToLcm(pose, m.position_m, m.orientation_wxyz);
+  for (int i = 0; i < 3; ++i) m.linear_velocity_mps[i] = m.angular_velocity_radps[i] = 0.0;
+  return m;
+}
+
+Result<common::Pose3> FromLcm(const cairn::lcmt_pose& m) {
+  return PoseFromArrays(m.position_m, m.orientation_wxyz);
+}
+
+Result<common::Pose3> FromLcm(const cairn::lcmt_odometry& m) {
+  return PoseFromArrays(m.position_m, m.orientation_wxyz);
+}
+
+cairn::lcmt_obstacle ToLcm(const common::Obstacle& o) {
+  cairn::lcmt_obstacle m;
+  m.id = o.id;
+  m.kind = static_cast<int8_t>(o.kind);
+  m.centroid_m[0] = o.centroid_m.x();
+  m.centroid_m[1] = o.centroid_m.y();
+  m.num_outline = static_cast<int32_t>(o.outline_m.size());
+  for (const auto& v : o.outline_m) {
+    m.outline_x_m.push_back(v.x());
+    m.outline_y_m.push_back(v.y());
+  }
+  m.slope_rad = o.slope_rad;
+  m.height_m = o.height_m;
+  m.width_m = o.width_m;
+  m.length_m = o.length_m;
+  m.depth_m = o.depth_m;
+  m.area_m2 = o.area_m2;
+  m.num_cells = o.num_cells;
+  m.num_verdicts = static_cast<int32_t>(o.verdicts.size());
+  for (const auto& v : o.verdicts) {
+    cairn::lcmt_obstacle_verdict mv;
+    mv.profile = v.profile;
+    mv.profile_hash = v.profile_hash;
+    mv.crossable = v.crossable;
+    mv.reason = v.reason;
+    m.verdicts.push_back(mv);
+  }
+  return m;
+}
+
+Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& m) {
+  if (m.num_outline < 0 || m.outline_x_m.size() != static_cast<size_t>(m.num_outline) ||
+      m.outline_y_m.size() != static_cast<size_t>(m.num_outline) || m.num_verdicts < 0 ||
+      m.verdicts.size() != static_cast<size_t>(m.num_verdicts)) {
+    return InvalidArgumentError("obstacle arrays disagree with their counts");
+  }
+  if (m.kind < cairn::lcmt_obstacle::KIND_RAMP || m.kind > cairn::lcmt_obstacle::KIND_WALL_OR_OBJECT) {
+    return InvalidArgumentError("obstacle has unknown kind " + std::to_string(m.kind));
+  }
+  common::Obstacle o;
+  o.id = m.id;
+  o.kind = static_cast<common::ObstacleKind>(m.kind);
+  o.centroid_m = {m.centroid_m[0], m.centroid_m[1]};
+  for (int i = 0; i < m.num_outline; ++i) o.outline_m.emplace_back(m.outline_x_m[i], m.outline_y_m[i]);
+  o.slope_rad = m.slope_rad;
+  o.height_m = m.height_m;
+  o.width_m = m.width_m;
+  o.length_m = m.length_m;
+  o.depth_m = m.depth_m;
+  o.area_m2 = m.area_m2;
+  o.num_cells = m.num_cells;
+  for (const auto& mv : m.verdicts) {
+    o.verdicts.push_back({mv.profile, mv.profile_hash, mv.crossable != 0, mv.reason});
+  }
+  return o;
+}
+
+cairn::lcmt_obstacle_registry ToLcm(const common::ObstacleRegistry& r, int64_t utime,
+                                    const std::string& robot, const std::string& map_name) {
+  cairn::lcmt_obstacle_registry m;
+  m.utime = utime;
+  m.robot = robot;
+  m.map_name = map_name;
+  m.map_version = r.map_version;
+  m.num_obstacles = static_cast<int32_t>(r.obstacles.size());
+  for (const auto& o : r.obstacles) m.obstacles.push_back(ToLcm(o));
+  return m;
+}
+
+Result<common::ObstacleRegistry> FromLcm(const cairn::lcmt_obstacle_registry& m) {
+  if (m.num_obstacles < 0 || m.obstacles.size() != static_cast<size_t>(m.num_obstacles)) {
+    return InvalidArgumentError("obstacle registry size disagrees with num_obstacles");
+  }
+  common::ObstacleRegistry r;
+  r.map_version = m.map_version;
+  for (const auto& mo : m.obstacles) {
+    auto o = FromLcm(mo);
+    if (!o.ok()) return o.status();
+    r.obstacles.push_back(std::move(o.value()));
+  }
+  return r;
+}
+
+}  // namespace cairn::runtime

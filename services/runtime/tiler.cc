@@ -1,0 +1,428 @@
+#include "services/runtime/tiler.h"
+
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+namespace cairn::runtime {
+namespace {
+
+int8_t ToOccupancy(float v) {
+  if (std::isnan(v)) return -1;
+  return static_cast<int8_t>(std::clamp(std::lround(v), 0L, 100L));
+}
+
+template <typename Msg>
+void FillGeometry(const common::GridGeometry& g, int tile_size, Msg* m) {
+  m->resolution_m = g.resolution_m;
+  m->origin_x_m = g.origin.x_m;
+  m->origin_y_m = g.origin.y_m;
+  m->origin_yaw_rad = g.origin.yaw_rad;
+  m->layer_size_x = g.size_x;
+  m->layer_size_y = g.size_y;
+  m->tile_size = tile_size;
+}
+
+template <typename Msg>
+common::GridGeometry GeometryOf(const Msg& m) {
+  common::GridGeometry g;
+  g.resolution_m = m.resolution_m;
+  g.size_x = m.layer_size_x;
+  g.size_y = m.layer_size_y;
+  g.origin = {m.origin_x_m, m.origin_y_m, m.origin_yaw_rad};
+  return g;
+}
+
+}  // namespace
+
+uint32_t Crc32(const void* data, size_t size) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  const auto* bytes = static_cast<const Bytef*>(data);
+  while (size > 0) {
+    const uInt chunk = static_cast<uInt>(std::min<size_t>(size, 1u << 30));
+    crc = crc32(crc, bytes, chunk);
+    bytes += chunk;
+    size -= chunk;
+  }
+  return static_cast<uint32_t>(crc);
+}
+
+LayerTiler::LayerTiler(std::string robot, std::string map_name, int tile_size_cells)
+    : robot_(std::move(robot)), map_name_(std::move(map_name)), tile_size_(tile_size_cells) {
+  if (tile_size_ <= 0 || static_cast<size_t>(tile_size_) * tile_size_ * 4 + 512 > kMaxMessageBytes) {
+    throw std::invalid_argument("tile size " + std::to_string(tile_size_) +
+                                " cells does not fit a 256 KB message");
+  }
+}
+
+int64_t LayerTiler::version(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  return it == layers_.end() ? 0 : it->second.version;
+}
+
+LayerTiler::Batch LayerTiler::Update(const common::GridMap& map, const std::string& layer,
+                                     TileEncoding encoding, int64_t utime, bool force_all) {
+  const common::Layer& values = map.at(layer);
+  LayerState& state = layers_[layer];
+  const bool reset = state.version == 0 || state.geometry != map.geometry() ||
+                     state.encoding != encoding;
+  if (reset) {
+    state.tiles.clear();
+    state.geometry = map.geometry();
+    state.encoding = encoding;
+  }
+  const int64_t next_version = state.version + 1;
+  const int nx = (map.size_x() + tile_size_ - 1) / tile_size_;
+  const int ny = (map.size_y() + tile_size_ - 1) / tile_size_;
+  std::vector<std::pair<int, int>> changed;
+  std::map<std::pair<int, int>, TileState> next_tiles;
+  for (int ty = 0; ty < ny; ++ty) {
+    for (int tx = 0; tx < nx; ++tx) {
+      TileState tile;
+      tile.cells_x = std::min(tile_size_, map.size_x() - tx * tile_size_);
+      tile.cells_y = std::min(tile_size_, map.size_y() - ty * tile_size_);
+      const int n = tile.cells_x * tile.cells_y;
+      bool any_known = false;
+      if (encoding == TileEncoding::kFloat) {
+        tile.data.resize(n);
+        for (int y = 0; y < tile.cells_y; ++y) {
+          const float* col = &values(tx * tile_size_, ty * tile_size_ + y);
+          std::memcpy(&tile.data[y * tile.cells_x], col, sizeof(float) * tile.cells_x);
+          for (int x = 0; x < tile.cells_x && !any_known; ++x) any_known = !std::isnan(col[x]);
+        }
+        tile.checksum = Crc32(tile.data.data(), tile.data.size() * sizeof(float));
+      } else {
+        tile.occupancy.resize(n);
+        for (int y = 0; y < tile.cells_y; ++y) {
+          for (int x = 0; x < tile.cells_x; ++x) {
+            const int8_t v = ToOccupancy(values(tx * tile_size_ + x, ty * tile_size_ + y));
+            tile.occupancy[y * tile.cells_x + x] = v;
+            any_known |= v >= 0;
+          }
+        }
+        tile.checksum = Crc32(tile.occupancy.data(), tile.occupancy.size());
+      }
+      if (!any_known) continue;  // absent from the manifest means all unknown
+      const auto key = std::make_pair(tx, ty);
+      auto old = state.tiles.find(key);
+      if (force_all || old == state.tiles.end() || old->second.checksum != tile.checksum) {
+        tile.tile_version = next_version;
+        changed.push_back(key);
+      } else {
+        tile.tile_version = old->second.tile_version;
+      }
+      next_tiles.emplace(key, std::move(tile));
+    }
+  }
+  // A tile that became all unknown also counts as a change (it leaves the manifest).
+  bool removed = false;
+  for (const auto& [key, tile] : state.tiles) removed |= next_tiles.count(key) == 0;
+  Batch batch;
+  batch.changed = reset || removed || !changed.empty();
+  if (batch.changed) state.version = next_version;
+  state.tiles = std::move(next_tiles);
+  state.utime = utime;
+  for (const auto& key : changed) {
+    AppendTile(layer, state, key.first, key.second, state.tiles.at(key), &batch);
+  }
+  batch.manifest = MakeManifest(layer, state);
+  return batch;
+}
+
+void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, int ix, int iy,
+                            const TileState& tile, Batch* batch) const {
+  if (state.encoding == TileEncoding::kFloat) {
+    cairn::lcmt_grid_tile m;
+    m.utime = state.utime;
+    m.robot = robot_;
+    m.map_name = map_name_;
+    m.layer = layer;
+    m.layer_version = state.version;
+    m.tile_version = tile.tile_version;
+    FillGeometry(state.geometry, tile_size_, &m);
+    m.tile_ix = ix;
+    m.tile_iy = iy;
+    m.cells_x = tile.cells_x;
+    m.cells_y = tile.cells_y;
+    m.checksum = tile.checksum;
+    m.num_cells = static_cast<int32_t>(tile.data.size());
+    m.data = tile.data;
+    batch->tiles.push_back(std::move(m));
+  } else {
+    cairn::lcmt_occupancy_tile m;
+    m.utime = state.utime;
+    m.robot = robot_;
+    m.map_name = map_name_;
+    m.layer = layer;
+    m.layer_version = state.version;
+    m.tile_version = tile.tile_version;
+    FillGeometry(state.geometry, tile_size_, &m);
+    m.tile_ix = ix;
+    m.tile_iy = iy;
+    m.cells_x = tile.cells_x;
+    m.cells_y = tile.cells_y;
+    m.checksum = tile.checksum;
+    m.num_cells = static_cast<int32_t>(tile.occupancy.size());
+    m.data = tile.occupancy;
+    batch->occupancy_tiles.push_back(std::move(m));
+  }
+}
+
+cairn::lcmt_grid_manifest LayerTiler::MakeManifest(const std::string& layer,
+                                                   const LayerState& state) const {
+  cairn::lcmt_grid_manifest m;
+  m.utime = state.utime;
+  m.robot = robot_;
+  m.map_name = map_name_;
+  m.layer = layer;
+  m.layer_version = state.version;
+  FillGeometry(state.geometry, tile_size_, &m);
+  for (const auto& [key, tile] : state.tiles) {
+    m.tile_ix.push_back(key.first);
+    m.tile_iy.push_back(key.second);
+    m.tile_version.push_back(tile.tile_version);
+    m.checksum.push_back(tile.checksum);
+  }
+  m.num_tiles = static_cast<int32_t>(m.tile_ix.size());
+  return m;
+}
+
+LayerTiler::Batch LayerTiler::Resend(const cairn::lcmt_tile_resend_request& request) const {
+  Batch batch;
+  auto it = layers_.find(request.layer);
+  if (it == layers_.end()) return batch;
+  const LayerState& state = it->second;
+  if (request.num_tiles <= 0) {
+    for (const auto& [key, tile] : state.tiles) {
+      AppendTile(request.layer, state, key.first, key.second, tile, &batch);
+    }
+  } else {
+    const int n = std::min<int>(request.num_tiles,
+                                std::min(request.tile_ix.size(), request.tile_iy.size()));
+    for (int i = 0; i < n; ++i) {
+      auto t = state.tiles.find({request.tile_ix[i], request.tile_iy[i]});
+      if (t != state.tiles.end()) {
+        AppendTile(request.layer, state, t->first.first, t->first.second, t->second, &batch);
+      }
+    }
+  }
+  batch.manifest = MakeManifest(request.layer, state);
+  batch.changed = !batch.tiles.empty() || !batch.occupancy_tiles.empty();
+  return batch;
+}
+
+LayerAssembler::LayerState& LayerAssembler::StateFor(const std::string& layer,
+                                                     const common::GridGeometry& geometry,
+                                                     int tile_size) {
+  LayerState& state = layers_[layer];
+  if (state.geometry != geometry || state.tile_size != tile_size) {
+    state = LayerState();
+    state.geometry = geometry;
+    state.tile_size = tile_size;
+  }
+  return state;
+}
+
+template <typename TileMsg>
+bool LayerAssembler::OnTileImpl(const TileMsg& tile, std::vector<float> data, uint32_t crc) {
+  if (static_cast<uint32_t>(tile.checksum) != crc || tile.num_cells != tile.cells_x * tile.cells_y ||
+      tile.tile_size <= 0 || tile.cells_x > tile.tile_size || tile.cells_y > tile.tile_size) {
+    ++checksum_errors_;
+    return false;
+  }
+  const common::GridGeometry geometry = GeometryOf(tile);
+  if (!(geometry.resolution_m > 0) || geometry.size_x < 0 || geometry.size_y < 0) {
+    ++checksum_errors_;
+    return false;
+  }
+  LayerState& state = StateFor(tile.layer, geometry, tile.tile_size);
+  state.robot = tile.robot;
+  state.map_name = tile.map_name;
+  Held& held = state.tiles[{tile.tile_ix, tile.tile_iy}];
+  if (tile.tile_version < held.tile_version) return true;  // older than what we hold
+  held.tile_version = tile.tile_version;
+  held.checksum = crc;
+  held.cells_x = tile.cells_x;
+  held.cells_y = tile.cells_y;
+  held.data = std::move(data);
+  return true;
+}
+
+bool LayerAssembler::OnTile(const cairn::lcmt_grid_tile& tile) {
+  if (tile.data.size() != static_cast<size_t>(std::max(0, tile.num_cells))) {
+    ++checksum_errors_;
+    return false;
+  }
+  const uint32_t crc = Crc32(tile.data.data(), tile.data.size() * sizeof(float));
+  return OnTileImpl(tile, tile.data, crc);
+}
+
+bool LayerAssembler::OnTile(const cairn::lcmt_occupancy_tile& tile) {
+  if (tile.data.size() != static_cast<size_t>(std::max(0, tile.num_cells))) {
+    ++checksum_errors_;
+    return false;
+  }
+  const uint32_t crc = Crc32(tile.data.data(), tile.data.size());
+  std::vector<float> data(tile.data.size());
+  for (size_t i = 0; i < data.size(); ++i) {
+    data[i] = tile.data[i] < 0 ? common::kUnknown : static_cast<float>(tile.data[i]);
+  }
+  return OnTileImpl(tile, std::move(data), crc);
+}
+
+void LayerAssembler::OnManifest(const cairn::lcmt_grid_manifest& m) {
+  const size_t n = static_cast<size_t>(std::max(0, m.num_tiles));
+  if (m.tile_ix.size() != n || m.tile_iy.size() != n || m.checksum.size() != n ||
+      m.tile_version.size() != n) {
+    return;
+  }
+  LayerState& state = StateFor(m.layer, GeometryOf(m), m.tile_size);
+  if (state.has_manifest && m.layer_version < state.manifest_version) return;
+  state.has_manifest = true;
+  state.manifest_version = m.layer_version;
+  state.robot = m.robot;
+  state.map_name = m.map_name;
+  state.expected.clear();
+  for (size_t i = 0; i < n; ++i) {
+    state.expected[{m.tile_ix[i], m.tile_iy[i]}] = static_cast<uint32_t>(m.checksum[i]);
+  }
+  // Tiles no longer in the manifest became all unknown.
+  for (auto it = state.tiles.begin(); it != state.tiles.end();) {
+    if (state.expected.count(it->first) == 0 && it->second.tile_version <= m.layer_version) {
+      it = state.tiles.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+std::vector<std::string> LayerAssembler::layers() const {
+  std::vector<std::string> names;
+  for (const auto& [name, state] : layers_) names.push_back(name);
+  return names;
+}
+
+int64_t LayerAssembler::version(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  return it == layers_.end() ? 0 : it->second.manifest_version;
+}
+
+std::vector<std::pair<int, int>> LayerAssembler::Missing(const std::string& layer) const {
+  std::vector<std::pair<int, int>> missing;
+  auto it = layers_.find(layer);
+  if (it == layers_.end() || !it->second.has_manifest) return missing;
+  for (const auto& [key, crc] : it->second.expected) {
+    auto held = it->second.tiles.find(key);
+    if (held == it->second.tiles.end() || held->second.checksum != crc) missing.push_back(key);
+  }
+  return missing;
+}
+
+bool LayerAssembler::Complete(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  return it != layers_.end() && it->second.has_manifest && Missing(layer).empty();
+}
+
+std::optional<cairn::lcmt_tile_resend_request> LayerAssembler::MakeResendRequest(
+    const std::string& layer, const std::string& requester, int64_t utime) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end() || !it->second.has_manifest) return std::nullopt;
+  const auto missing = Missing(layer);
+  if (missing.empty()) return std::nullopt;
+  cairn::lcmt_tile_resend_request r;
+  r.utime = utime;
+  r.requester = requester;
+  r.robot = it->second.robot;
+  r.map_name = it->second.map_name;
+  r.layer = layer;
+  r.layer_version = it->second.manifest_version;
+  for (const auto& [ix, iy] : missing) {
+    r.tile_ix.push_back(ix);
+    r.tile_iy.push_back(iy);
+  }
+  r.num_tiles = static_cast<int32_t>(r.tile_ix.size());
+  return r;
+}
+
+std::optional<common::GridMap> LayerAssembler::Layer(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  const LayerState& state = it->second;
+  common::GridMap map(state.geometry);
+  common::Layer& values = map.AddLayer(layer);
+  for (const auto& [key, held] : state.tiles) {
+    const int x0 = key.first * state.tile_size, y0 = key.second * state.tile_size;
+    for (int y = 0; y < held.cells_y; ++y) {
+      for (int x = 0; x < held.cells_x; ++x) {
+        if (x0 + x < map.size_x() && y0 + y < map.size_y()) {
+          values(x0 + x, y0 + y) = held.data[y * held.cells_x + x];
+        }
+      }
+    }
+  }
+  return map;
+}
+
+std::vector<common::LidarSlice> SplitSlice(const common::LidarSlice& whole, size_t max_bytes) {
+  constexpr size_t kHeaderBytes = 512;
+  const size_t per_slice =
+      max_bytes > kHeaderBytes ? std::max<size_t>(1, (max_bytes - kHeaderBytes) / kBytesPerLidarPoint) : 1;
+  const size_t n = whole.points.size();
+  const size_t count = std::max<size_t>(1, (n + per_slice - 1) / per_slice);
+  std::vector<common::LidarSlice> slices;
+  slices.reserve(count);
+  const double span = whole.azimuth_end_rad - whole.azimuth_start_rad;
+  for (size_t i = 0; i < count; ++i) {
+    common::LidarSlice s;
+    s.utime = whole.utime;
+    s.robot = whole.robot;
+    s.revolution = whole.revolution;
+    s.slice_index = static_cast<int32_t>(i);
+    s.slice_count = static_cast<int32_t>(count);
+    s.azimuth_start_rad = whole.azimuth_start_rad + span * i / count;
+    s.azimuth_end_rad = whole.azimuth_start_rad + span * (i + 1) / count;
+    s.max_range_m = whole.max_range_m;
+    s.sensor_pose = whole.sensor_pose;
+    const size_t begin = i * per_slice, end = std::min(n, begin + per_slice);
+    s.points.assign(whole.points.begin() + begin, whole.points.begin() + end);
+    slices.push_back(std::move(s));
+  }
+  return slices;
+}
+
+std::vector<common::LidarRevolution> RevolutionAssembler::OnSlice(common::LidarSlice slice) {
+  std::vector<common::LidarRevolution> done;
+  const auto key = std::make_pair(slice.robot, slice.revolution);
+  // Older pending revolutions of the same robot are superseded by a newer one.
+  for (auto it = pending_.begin(); it != pending_.end();) {
+    if (it->first.first == slice.robot && it->first.second < slice.revolution) {
+      ++incomplete_;
+      missing_slices_ += it->second.expected_slices - static_cast<int64_t>(it->second.slices.size());
+      done.push_back(std::move(it->second));
+      it = pending_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  common::LidarRevolution& rev = pending_[key];
+  rev.revolution = slice.revolution;
+  rev.robot = slice.robot;
+  rev.expected_slices = slice.slice_count;
+  const bool duplicate = std::any_of(rev.slices.begin(), rev.slices.end(), [&](const auto& s) {
+    return s.slice_index == slice.slice_index;
+  });
+  if (!duplicate) {
+    auto pos = std::lower_bound(rev.slices.begin(), rev.slices.end(), slice.slice_index,
+                                [](const common::LidarSlice& s, int idx) { return s.slice_index < idx; });
+    rev.slices.insert(pos, std::move(slice));
+  }
+  if (rev.complete()) {
+    done.push_back(std::move(rev));
+    pending_.erase(key);
+  }
+  return done;
+}
+
+}  // namespace cairn::runtime

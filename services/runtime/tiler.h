@@ -1,0 +1,167 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "cairn/lcmt_grid_manifest.hpp"
+#include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_occupancy_tile.hpp"
+#include "cairn/lcmt_tile_resend_request.hpp"
+#include "common/grid_map.h"
+#include "common/point_cloud.h"
+
+/// @file
+/// Large data in small messages. A lost UDP fragment loses a whole LCM message, so no message
+/// on the bus exceeds about 256 KB (and most stay under one 64 KB datagram):
+///
+/// - LayerTiler splits a grid-map layer into tiles (100 x 100 cells = 40 KB of floats by
+///   default), sends only the tiles whose content changed, and a manifest of every tile's
+///   version and CRC-32. All-unknown tiles are left out of the manifest (absent = unknown).
+/// - LayerAssembler rebuilds a layer from tiles, checks each tile's checksum, compares its
+///   holdings with the newest manifest and names the tiles it must ask for again.
+/// - SplitSlice / RevolutionAssembler do the same for lidar revolutions.
+
+namespace cairn::runtime {
+
+/// Encoding of a layer on the bus: float32 cells (lcmt_grid_tile) or int8 occupancy
+/// (lcmt_occupancy_tile: NaN -> -1, else rounded and clamped to 0..100).
+enum class TileEncoding { kFloat, kOccupancy };
+
+inline constexpr int kDefaultTileSize = 100;
+inline constexpr size_t kMaxMessageBytes = 256 * 1024;
+
+/// CRC-32 (zlib) of a byte buffer.
+uint32_t Crc32(const void* data, size_t size);
+
+/// Publisher side: remembers what it sent per layer.
+class LayerTiler {
+ public:
+  LayerTiler(std::string robot, std::string map_name, int tile_size_cells = kDefaultTileSize);
+
+  struct Batch {
+    std::vector<cairn::lcmt_grid_tile> tiles;
+    std::vector<cairn::lcmt_occupancy_tile> occupancy_tiles;
+    cairn::lcmt_grid_manifest manifest;
+    bool changed{false};  ///< false when nothing changed since the last Update
+  };
+
+  /// Tiles `layer` of `map`. Tiles whose bytes changed since the last call (all of them on the
+  /// first call, after a geometry change, or with force_all) are returned, and the layer
+  /// version is bumped when any did. @throws std::out_of_range if the layer is missing.
+  Batch Update(const common::GridMap& map, const std::string& layer, TileEncoding encoding,
+               int64_t utime, bool force_all = false);
+  /// Tiles named by a resend request (all current tiles when it names none), from the last
+  /// Update; an unknown layer gives an empty batch.
+  Batch Resend(const cairn::lcmt_tile_resend_request& request) const;
+  /// Current version of a layer (0 before its first Update).
+  int64_t version(const std::string& layer) const;
+  int tile_size() const { return tile_size_; }
+
+ private:
+  struct TileState {
+    int64_t tile_version{0};
+    uint32_t checksum{0};
+    int cells_x{0};
+    int cells_y{0};
+    std::vector<float> data;        // kFloat
+    std::vector<int8_t> occupancy;  // kOccupancy
+  };
+  struct LayerState {
+    common::GridGeometry geometry;
+    TileEncoding encoding{TileEncoding::kFloat};
+    int64_t version{0};
+    int64_t utime{0};
+    std::map<std::pair<int, int>, TileState> tiles;  // non-empty tiles only
+  };
+  void AppendTile(const std::string& layer, const LayerState& state, int ix, int iy,
+                  const TileState& tile, Batch* batch) const;
+  cairn::lcmt_grid_manifest MakeManifest(const std::string& layer, const LayerState& state) const;
+
+  std::string robot_;
+  std::string map_name_;
+  int tile_size_;
+  std::map<std::string, LayerState> layers_;
+};
+
+/// Receiver side: rebuilds layers from tiles and manifests.
+class LayerAssembler {
+ public:
+  /// Returns false (and counts a checksum error) when the tile's data do not match its CRC.
+  bool OnTile(const cairn::lcmt_grid_tile& tile);
+  bool OnTile(const cairn::lcmt_occupancy_tile& tile);
+  void OnManifest(const cairn::lcmt_grid_manifest& manifest);
+
+  /// Layers seen so far (from tiles or manifests).
+  std::vector<std::string> layers() const;
+  /// True when every tile of the newest manifest of `layer` is held with the same checksum.
+  bool Complete(const std::string& layer) const;
+  /// Version of the newest manifest of a layer (0 if none).
+  int64_t version(const std::string& layer) const;
+  /// Tiles of the newest manifest not held (or held stale), as (tile_ix, tile_iy).
+  std::vector<std::pair<int, int>> Missing(const std::string& layer) const;
+  /// A request for the missing tiles; nullopt when nothing is missing or no manifest arrived.
+  std::optional<cairn::lcmt_tile_resend_request> MakeResendRequest(const std::string& layer,
+                                                                   const std::string& requester,
+                                                                   int64_t utime) const;
+  /// The layer as a one-layer GridMap (cells of absent tiles are NaN); nullopt if the layer was
+  /// never seen. Occupancy -1 becomes NaN.
+  std::optional<common::GridMap> Layer(const std::string& layer) const;
+
+  int64_t checksum_errors() const { return checksum_errors_; }
+  /// Forget a layer.
+  void Drop(const std::string& layer) { layers_.erase(layer); }
+
+ private:
+  struct Held {
+    int64_t tile_version{0};
+    uint32_t checksum{0};
+    int cells_x{0};
+    int cells_y{0};
+    std::vector<float> data;
+  };
+  struct LayerState {
+    common::GridGeometry geometry;
+    int tile_size{0};
+    bool has_manifest{false};
+    int64_t manifest_version{0};
+    std::string robot;
+    std::string map_name;
+    std::map<std::pair<int, int>, uint32_t> expected;  // from the newest manifest
+    std::map<std::pair<int, int>, Held> tiles;
+  };
+  LayerState& StateFor(const std::string& layer, const common::GridGeometry& geometry,
+                       int tile_size);
+  template <typename TileMsg>
+  bool OnTileImpl(const TileMsg& tile, std::vector<float> data, uint32_t computed_crc);
+
+  std::map<std::string, LayerState> layers_;
+  int64_t checksum_errors_{0};
+};
+
+/// Splits one slice into consecutive slices whose encoded size stays under max_bytes; all keep
+/// the original pose and revolution, and slice_index/slice_count are renumbered within the
+/// given revolution (indices start at first_index, count is total_count or the number made).
+std::vector<common::LidarSlice> SplitSlice(const common::LidarSlice& whole, size_t max_bytes);
+/// Encoded bytes per point in lcmt_point_cloud_slice (x, y, z, intensity, ring).
+inline constexpr size_t kBytesPerLidarPoint = 17;
+
+/// Collects slices into revolutions. A revolution is emitted when its last missing slice
+/// arrives, or, incomplete, when a slice of a newer revolution arrives.
+class RevolutionAssembler {
+ public:
+  /// Returns the revolutions this slice completed or superseded (oldest first).
+  std::vector<common::LidarRevolution> OnSlice(common::LidarSlice slice);
+  int64_t incomplete_revolutions() const { return incomplete_; }
+  int64_t missing_slices() const { return missing_slices_; }
+
+ private:
+  std::map<std::pair<std::string, int64_t>, common::LidarRevolution> pending_;
+  int64_t incomplete_{0};
+  int64_t missing_slices_{0};
+};
+
+}  // namespace cairn::runtime

@@ -1,0 +1,128 @@
+#pragma once
+
+#include <sys/types.h>
+
+#include <chrono>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "cairn/lcmt_health.hpp"
+
+/// @file
+/// Integration-test harness: real processes on a private LCM bus.
+///
+/// - PrivateLcmUrl() gives each test its own multicast port (ttl=0, never leaves the host).
+/// - ChildProcess starts an executable with its output captured to a log file and kills its
+///   process group when destroyed.
+/// - ProcessSet prints the logs of every process it started when the test failed.
+/// - WaitFor polls a condition with a bound (no sleep-and-hope).
+/// - Bus subscribes on the private URL and keeps the newest message per channel.
+
+namespace cairn::testing {
+
+/// udpm://239.255.76.67:<a free port>?ttl=0, different for every call in a run.
+std::string PrivateLcmUrl();
+/// build/bin/<name>.
+std::string BinPath(const std::string& name);
+/// The source tree (for config files and worlds).
+std::string SourcePath(const std::string& relative);
+/// A fresh directory under build/test-tmp/<test name>, removed first if it exists.
+std::string TestTempDir();
+
+class ChildProcess {
+ public:
+  /// Starts argv[0] with argv; env entries "K=V" are added to the environment. Output goes to
+  /// log_path. @throws std::runtime_error if fork/exec setup fails.
+  ChildProcess(std::vector<std::string> argv, std::vector<std::string> env, std::string log_path);
+  ~ChildProcess();
+  ChildProcess(const ChildProcess&) = delete;
+  ChildProcess& operator=(const ChildProcess&) = delete;
+
+  pid_t pid() const { return pid_; }
+  const std::string& name() const { return name_; }
+  const std::string& log_path() const { return log_path_; }
+  bool Running();
+  void Signal(int signal);
+  /// Waits for exit; returns the raw wait status, or nullopt on timeout.
+  std::optional<int> WaitExit(double timeout_s);
+  /// SIGTERM, wait up to grace, then SIGKILL. Returns the wait status.
+  int Stop(double grace_s = 5.0);
+  std::string Log() const;
+
+ private:
+  std::string name_;
+  std::string log_path_;
+  pid_t pid_{-1};
+  std::optional<int> status_;
+};
+
+/// Owns processes of one test; prints their logs in the destructor when the test failed.
+class ProcessSet {
+ public:
+  explicit ProcessSet(std::string url);
+  ~ProcessSet();
+  const std::string& url() const { return url_; }
+  const std::string& dir() const { return dir_; }
+  /// Starts build/bin/<exe> with args plus --lcm-url.
+  ChildProcess& Start(const std::string& exe, std::vector<std::string> args,
+                      std::vector<std::string> env = {});
+  /// Starts an arbitrary command (no --lcm-url added).
+  ChildProcess& StartRaw(const std::string& label, std::vector<std::string> argv,
+                         std::vector<std::string> env = {});
+  void PrintLogs() const;
+
+ private:
+  std::string url_;
+  std::string dir_;
+  std::vector<std::unique_ptr<ChildProcess>> processes_;
+};
+
+/// Polls `condition` (calling `pump` in between, for example Bus::Pump) until it holds or the
+/// timeout passes. Returns the final value of the condition.
+bool WaitFor(const std::function<bool()>& condition, double timeout_s,
+             const std::function<void()>& pump = nullptr);
+
+/// A subscriber on the test's bus.
+class Bus {
+ public:
+  explicit Bus(const std::string& url);
+  lcm::LCM& lcm() { return lcm_; }
+  /// Handles traffic for up to timeout_ms.
+  void Pump(int timeout_ms = 20);
+  /// Raw bytes of the newest message per channel (all channels).
+  bool Seen(const std::string& channel) const { return last_.count(channel) > 0; }
+  int64_t Count(const std::string& channel) const;
+  template <typename Msg>
+  std::optional<Msg> Last(const std::string& channel) const {
+    auto it = last_.find(channel);
+    if (it == last_.end()) return std::nullopt;
+    Msg m;
+    if (m.decode(it->second.data(), 0, static_cast<int>(it->second.size())) < 0) return std::nullopt;
+    return m;
+  }
+  /// Newest heartbeat of a process (by process name, and robot when given).
+  std::optional<cairn::lcmt_health> Health(const std::string& process,
+                                           const std::string& robot = "") const;
+  template <typename Msg>
+  bool Publish(const std::string& channel, const Msg& msg) {
+    return lcm_.publish(channel, &msg) == 0;
+  }
+  /// Every message on a channel since the start, decoded (for channels you asked to keep).
+  void Keep(const std::string& channel) { keep_[channel]; }
+  const std::vector<std::vector<uint8_t>>& Kept(const std::string& channel) { return keep_[channel]; }
+
+ private:
+  lcm::LCM lcm_;
+  std::map<std::string, std::vector<uint8_t>> last_;
+  std::map<std::string, int64_t> counts_;
+  std::map<std::string, cairn::lcmt_health> health_;
+  std::map<std::string, std::vector<std::vector<uint8_t>>> keep_;
+};
+
+}  // namespace cairn::testing

@@ -1,0 +1,145 @@
+#include "services/runtime/conversions.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+namespace cairn::runtime {
+namespace {
+
+common::Pose3 SomePose() {
+  common::Pose3 p;
+  p.position_m = {1.5, -2.25, 0.4};
+  p.orientation = common::Quaternion(Eigen::AngleAxisd(0.3, common::Vector3(0.2, 0.1, 1).normalized()));
+  return p;
+}
+
+TEST(ConversionsTest, LidarSliceRoundTrip) {
+  common::LidarSlice s;
+  s.utime = 123456;
+  s.robot = "rover1";
+  s.revolution = 7;
+  s.slice_index = 2;
+  s.slice_count = 18;
+  s.azimuth_start_rad = 0.1;
+  s.azimuth_end_rad = 0.45;
+  s.max_range_m = 70.0;
+  s.sensor_pose = SomePose();
+  s.points = {{1.f, 2.f, 3.f, 0.5f, 4}, {-1.f, 0.f, 0.25f, 1.f, 31}};
+  auto back = FromLcm(ToLcm(s));
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  EXPECT_EQ(back->utime, s.utime);
+  EXPECT_EQ(back->robot, s.robot);
+  EXPECT_EQ(back->revolution, 7);
+  EXPECT_EQ(back->slice_index, 2);
+  EXPECT_EQ(back->slice_count, 18);
+  EXPECT_DOUBLE_EQ(back->azimuth_end_rad, 0.45);
+  EXPECT_TRUE(back->sensor_pose.position_m.isApprox(s.sensor_pose.position_m));
+  EXPECT_TRUE(back->sensor_pose.orientation.isApprox(s.sensor_pose.orientation));
+  ASSERT_EQ(back->points.size(), 2u);
+  EXPECT_EQ(back->points[1].ring, 31);
+  EXPECT_EQ(back->points[1].z_m, 0.25f);
+}
+
+TEST(ConversionsTest, LidarSliceRejectsBadInput) {
+  common::LidarSlice s;
+  s.slice_count = 1;
+  auto m = ToLcm(s);
+  m.num_points = 3;  // arrays are empty
+  EXPECT_FALSE(FromLcm(m).ok());
+  m = ToLcm(s);
+  m.sensor_orientation_wxyz[0] = NAN;
+  EXPECT_FALSE(FromLcm(m).ok());
+  m = ToLcm(s);
+  m.slice_index = 5;
+  EXPECT_FALSE(FromLcm(m).ok());
+}
+
+TEST(ConversionsTest, LaserScanRoundTrip) {
+  common::LaserScan s;
+  s.utime = 99;
+  s.robot = "kobuki1";
+  s.sensor_pose = SomePose();
+  s.angle_min_rad = -2.0943951f;
+  s.angle_increment_rad = 0.00613f;
+  s.range_min_m = 0.02f;
+  s.range_max_m = 5.6f;
+  s.ranges_m = {1.f, INFINITY, 2.5f};
+  auto back = FromLcm(ToLcm(s));
+  ASSERT_TRUE(back.ok());
+  EXPECT_EQ(back->ranges_m.size(), 3u);
+  EXPECT_TRUE(std::isinf(back->ranges_m[1]));
+  EXPECT_EQ(back->angle_min_rad, s.angle_min_rad);
+  EXPECT_EQ(back->range_max_m, s.range_max_m);
+}
+
+TEST(ConversionsTest, RobotProfileRoundTrip) {
+  common::RobotProfile p;
+  p.name = "rover";
+  p.drive = common::DriveKind::kSkidSteer;
+  p.footprint_m = common::RectangleFootprint(0.7, 0.55);
+  p.max_slope_down_rad = INFINITY;
+  p.sensors = {"hdl32e"};
+  const auto m = ToLcm(p);
+  EXPECT_EQ(m.content_hash, p.ContentHash());
+  auto back = FromLcm(m);
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  EXPECT_EQ(*back, p);
+  auto bad = m;
+  bad.max_step_up_m = -1;
+  EXPECT_FALSE(FromLcm(bad).ok());
+  bad = m;
+  bad.drive = 42;
+  EXPECT_FALSE(FromLcm(bad).ok());
+}
+
+TEST(ConversionsTest, PoseRoundTripAndRejectsNonUnitQuaternion) {
+  const common::Pose3 p = SomePose();
+  auto back = FromLcm(ToLcmPose(p, 5, "r", "world"));
+  ASSERT_TRUE(back.ok());
+  EXPECT_TRUE(back->position_m.isApprox(p.position_m));
+  auto m = ToLcmPose(p, 5, "r", "world");
+  m.orientation_wxyz[0] = 2.0;
+  EXPECT_FALSE(FromLcm(m).ok());
+}
+
+}  // namespace
+}  // namespace cairn::runtime
+
+namespace cairn::runtime {
+namespace {
+
+TEST(ConversionsTest, ObstacleRegistryRoundTrip) {
+  common::ObstacleRegistry r;
+  r.map_version = 12;
+  common::Obstacle o;
+  o.id = 4;
+  o.kind = common::ObstacleKind::kRamp;
+  o.centroid_m = {3.0, -1.0};
+  o.outline_m = {{2, -2}, {4, -2}, {4, 0}, {2, 0}};
+  o.slope_rad = 0.1745;
+  o.height_m = 0.35;
+  o.width_m = 2.0;
+  o.length_m = 2.0;
+  o.depth_m = NAN;
+  o.area_m2 = 4.0;
+  o.num_cells = 100;
+  o.verdicts = {{"pioneer3at", "abc", false, "slope 10.0 deg > 8.0 deg"}, {"rover", "def", true, ""}};
+  r.obstacles.push_back(o);
+  auto back = FromLcm(ToLcm(r, 1, "r1", "live"));
+  ASSERT_TRUE(back.ok());
+  ASSERT_EQ(back->obstacles.size(), 1u);
+  const auto& b = back->obstacles[0];
+  EXPECT_EQ(back->map_version, 12);
+  EXPECT_EQ(b.kind, common::ObstacleKind::kRamp);
+  EXPECT_EQ(b.outline_m.size(), 4u);
+  EXPECT_TRUE(std::isnan(b.depth_m));
+  EXPECT_EQ(b.verdicts, o.verdicts);
+  EXPECT_EQ(b.VerdictFor("rover")->crossable, true);
+  auto bad = ToLcm(o);
+  bad.kind = 9;
+  EXPECT_FALSE(FromLcm(bad).ok());
+}
+
+}  // namespace
+}  // namespace cairn::runtime

@@ -1,0 +1,175 @@
+#include "services/runtime/tiler.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+namespace cairn::runtime {
+namespace {
+
+common::GridMap MakeMap(int nx, int ny) {
+  common::GridGeometry g;
+  g.resolution_m = 0.2;
+  g.size_x = nx;
+  g.size_y = ny;
+  g.origin = {-3.0, 5.0, 0.0};
+  common::GridMap map(g);
+  common::Layer& l = map.AddLayer("elevation");
+  for (int x = 0; x < nx; ++x) {
+    for (int y = 0; y < ny; ++y) l(x, y) = 0.01f * x + 0.1f * y;  // asymmetric
+  }
+  return map;
+}
+
+TEST(LayerTilerTest, FirstUpdateSendsAllTilesThenOnlyChanged) {
+  common::GridMap map = MakeMap(250, 130);  // 3 x 2 tiles of 100, edges smaller
+  LayerTiler tiler("r1", "live");
+  auto first = tiler.Update(map, "elevation", TileEncoding::kFloat, 1);
+  EXPECT_TRUE(first.changed);
+  EXPECT_EQ(first.tiles.size(), 6u);
+  EXPECT_EQ(first.manifest.num_tiles, 6);
+  EXPECT_EQ(first.manifest.layer_version, 1);
+  for (const auto& t : first.tiles) {
+    EXPECT_LT(t.getEncodedSize(), static_cast<int>(kMaxMessageBytes));
+    EXPECT_EQ(t.num_cells, t.cells_x * t.cells_y);
+  }
+  // No change: nothing sent, version unchanged.
+  auto same = tiler.Update(map, "elevation", TileEncoding::kFloat, 2);
+  EXPECT_FALSE(same.changed);
+  EXPECT_TRUE(same.tiles.empty());
+  EXPECT_EQ(same.manifest.layer_version, 1);
+  // One cell in tile (2, 1) changes.
+  map.at("elevation")(240, 120) = 42.f;
+  auto one = tiler.Update(map, "elevation", TileEncoding::kFloat, 3);
+  ASSERT_EQ(one.tiles.size(), 1u);
+  EXPECT_EQ(one.tiles[0].tile_ix, 2);
+  EXPECT_EQ(one.tiles[0].tile_iy, 1);
+  EXPECT_EQ(one.manifest.layer_version, 2);
+}
+
+TEST(LayerAssemblerTest, RebuildsExactlyAndDetectsMissingTiles) {
+  common::GridMap map = MakeMap(250, 130);
+  LayerTiler tiler("r1", "live");
+  auto batch = tiler.Update(map, "elevation", TileEncoding::kFloat, 1);
+  LayerAssembler assembler;
+  assembler.OnManifest(batch.manifest);
+  // Lose tile (1, 0).
+  for (const auto& t : batch.tiles) {
+    if (!(t.tile_ix == 1 && t.tile_iy == 0)) {
+      EXPECT_TRUE(assembler.OnTile(t));
+    }
+  }
+  EXPECT_FALSE(assembler.Complete("elevation"));
+  auto missing = assembler.Missing("elevation");
+  ASSERT_EQ(missing.size(), 1u);
+  EXPECT_EQ(missing[0], std::make_pair(1, 0));
+  auto request = assembler.MakeResendRequest("elevation", "test", 5);
+  ASSERT_TRUE(request.has_value());
+  EXPECT_EQ(request->num_tiles, 1);
+  // The publisher answers the request; the layer is then complete and identical.
+  auto resend = tiler.Resend(*request);
+  ASSERT_EQ(resend.tiles.size(), 1u);
+  EXPECT_TRUE(assembler.OnTile(resend.tiles[0]));
+  EXPECT_TRUE(assembler.Complete("elevation"));
+  auto rebuilt = assembler.Layer("elevation");
+  ASSERT_TRUE(rebuilt.has_value());
+  EXPECT_EQ(rebuilt->geometry(), map.geometry());
+  EXPECT_TRUE(*rebuilt == map);
+}
+
+TEST(LayerAssemblerTest, CorruptTileIsRefusedAndStaleTileIsMissing) {
+  common::GridMap map = MakeMap(120, 50);
+  LayerTiler tiler("r1", "live");
+  auto v1 = tiler.Update(map, "elevation", TileEncoding::kFloat, 1);
+  LayerAssembler assembler;
+  auto corrupt = v1.tiles[0];
+  corrupt.data[3] += 1.f;
+  EXPECT_FALSE(assembler.OnTile(corrupt));
+  EXPECT_EQ(assembler.checksum_errors(), 1);
+  for (const auto& t : v1.tiles) assembler.OnTile(t);
+  assembler.OnManifest(v1.manifest);
+  EXPECT_TRUE(assembler.Complete("elevation"));
+  // Version 2 changes tile (0,0); its manifest arrives but the tile is lost.
+  map.at("elevation")(5, 5) = -1.f;
+  auto v2 = tiler.Update(map, "elevation", TileEncoding::kFloat, 2);
+  assembler.OnManifest(v2.manifest);
+  EXPECT_FALSE(assembler.Complete("elevation"));
+  EXPECT_EQ(assembler.Missing("elevation"), (std::vector<std::pair<int, int>>{{0, 0}}));
+  EXPECT_EQ(assembler.version("elevation"), 2);
+}
+
+TEST(LayerTilerTest, UnknownTilesAreAbsentAndOccupancyEncodes) {
+  common::GridGeometry g;
+  g.resolution_m = 0.05;
+  g.size_x = 300;
+  g.size_y = 100;
+  common::GridMap map(g);
+  common::Layer& occ = map.AddLayer("occupancy");  // all NaN
+  occ(250, 10) = 100.f;
+  occ(251, 10) = 0.f;
+  occ(252, 10) = 49.6f;
+  LayerTiler tiler("r1", "live");
+  auto batch = tiler.Update(map, "occupancy", TileEncoding::kOccupancy, 1);
+  ASSERT_EQ(batch.occupancy_tiles.size(), 1u);  // only tile (2, 0) holds anything
+  EXPECT_EQ(batch.manifest.num_tiles, 1);
+  const auto& t = batch.occupancy_tiles[0];
+  EXPECT_EQ(t.data[10 * t.cells_x + 50], 100);
+  EXPECT_EQ(t.data[10 * t.cells_x + 52], 50);
+  EXPECT_EQ(t.data[0], -1);
+  LayerAssembler assembler;
+  assembler.OnManifest(batch.manifest);
+  assembler.OnTile(t);
+  ASSERT_TRUE(assembler.Complete("occupancy"));
+  auto back = assembler.Layer("occupancy");
+  EXPECT_EQ(back->at("occupancy")(250, 10), 100.f);
+  EXPECT_TRUE(std::isnan(back->at("occupancy")(0, 0)));
+}
+
+TEST(SplitSliceTest, SlicesStayUnderLimitAndKeepEveryPoint) {
+  common::LidarSlice whole;
+  whole.revolution = 3;
+  whole.azimuth_start_rad = 0.0;
+  whole.azimuth_end_rad = 2 * M_PI;
+  for (int i = 0; i < 57600; ++i) whole.points.push_back({float(i), 0.f, 0.f, 0.f, int16_t(i % 32)});
+  auto slices = SplitSlice(whole, 64000);
+  EXPECT_GE(slices.size(), 16u);
+  size_t total = 0;
+  for (size_t i = 0; i < slices.size(); ++i) {
+    EXPECT_EQ(slices[i].slice_index, static_cast<int>(i));
+    EXPECT_EQ(slices[i].slice_count, static_cast<int>(slices.size()));
+    EXPECT_LE(slices[i].points.size() * kBytesPerLidarPoint + 512, 64000u);
+    total += slices[i].points.size();
+  }
+  EXPECT_EQ(total, whole.points.size());
+  EXPECT_EQ(slices.back().points.back().x_m, 57599.f);
+}
+
+TEST(RevolutionAssemblerTest, CompletesAndReportsGaps) {
+  RevolutionAssembler assembler;
+  auto make = [](int64_t rev, int idx, int count) {
+    common::LidarSlice s;
+    s.robot = "r";
+    s.revolution = rev;
+    s.slice_index = idx;
+    s.slice_count = count;
+    return s;
+  };
+  EXPECT_TRUE(assembler.OnSlice(make(1, 1, 3)).empty());
+  EXPECT_TRUE(assembler.OnSlice(make(1, 0, 3)).empty());
+  EXPECT_TRUE(assembler.OnSlice(make(1, 0, 3)).empty());  // duplicate ignored
+  auto done = assembler.OnSlice(make(1, 2, 3));
+  ASSERT_EQ(done.size(), 1u);
+  EXPECT_TRUE(done[0].complete());
+  EXPECT_EQ(done[0].slices[0].slice_index, 0);
+  // Revolution 2 loses slice 1; revolution 3 supersedes it.
+  assembler.OnSlice(make(2, 0, 3));
+  assembler.OnSlice(make(2, 2, 3));
+  done = assembler.OnSlice(make(3, 0, 3));
+  ASSERT_EQ(done.size(), 1u);
+  EXPECT_FALSE(done[0].complete());
+  EXPECT_EQ(assembler.incomplete_revolutions(), 1);
+  EXPECT_EQ(assembler.missing_slices(), 1);
+}
+
+}  // namespace
+}  // namespace cairn::runtime
