@@ -1,0 +1,71 @@
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+/// @file
+/// One benchmark figure: printed as a readable line and as a machine line
+///   FIGURE {"name": ..., "value": ..., "unit": ..., "baseline": ..., "baseline_value": ...,
+///           "ratio": ..., "target": ..., "pass": ...}
+/// which scripts/bench gathers into build/bench/results.json. `ratio` is always "times better
+/// than the baseline": baseline/value when lower is better, value/baseline when higher is.
+
+namespace cairn::bench {
+
+struct Figure {
+  std::string name;             ///< "transport.sliced_10hz.p99_latency"
+  double value{0.0};
+  std::string unit;             ///< "ms", "points/s", "%", "x"
+  std::string baseline;         ///< what it is compared with, measured in the same run if possible
+  double baseline_value{NAN};   ///< NaN when the baseline is a published figure with no value
+  bool higher_is_better{false};
+  std::string target;           ///< "<= 1 ms"
+  bool pass{true};
+};
+
+inline std::string JsonEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    if (c == '"' || c == '\\') {
+      out += '\\';
+      out += c;
+    } else if (c == '\n') {
+      out += "\\n";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+inline std::string JsonNumber(double v) {
+  if (!std::isfinite(v)) return "null";
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.6g", v);
+  return buf;
+}
+
+inline double Ratio(const Figure& f) {
+  if (!std::isfinite(f.baseline_value) || f.baseline_value == 0.0 || f.value == 0.0) return NAN;
+  return f.higher_is_better ? f.value / f.baseline_value : f.baseline_value / f.value;
+}
+
+inline void Report(const Figure& f) {
+  const double ratio = Ratio(f);
+  std::printf("%-48s %12s %-9s | baseline %s = %s | ratio %s | target %s | %s\n", f.name.c_str(),
+              JsonNumber(f.value).c_str(), f.unit.c_str(), f.baseline.c_str(),
+              JsonNumber(f.baseline_value).c_str(), JsonNumber(ratio).c_str(), f.target.c_str(),
+              f.pass ? "PASS" : "FAIL");
+  std::printf(
+      "FIGURE {\"name\": \"%s\", \"value\": %s, \"unit\": \"%s\", \"baseline\": \"%s\", "
+      "\"baseline_value\": %s, \"ratio\": %s, \"target\": \"%s\", \"pass\": %s, "
+      "\"higher_is_better\": %s}\n",
+      JsonEscape(f.name).c_str(), JsonNumber(f.value).c_str(), JsonEscape(f.unit).c_str(),
+      JsonEscape(f.baseline).c_str(), JsonNumber(f.baseline_value).c_str(),
+      JsonNumber(ratio).c_str(), JsonEscape(f.target).c_str(), f.pass ? "true" : "false",
+      f.higher_is_better ? "true" : "false");
+  std::fflush(stdout);
+}
+
+}  // namespace cairn::bench
