@@ -128,7 +128,6 @@ void Node::RunTimers() {
 }
 
 bool Node::SpinOnce(int timeout_ms) {
-  if (stopping()) return false;
   // Wait no longer than the next timer.
   auto now = std::chrono::steady_clock::now();
   int wait_ms = timeout_ms;

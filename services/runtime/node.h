@@ -91,7 +91,8 @@ class Node {
 
   /// Runs until Stop() or a signal. Returns 0.
   int Spin();
-  /// Handles messages for at most timeout_ms, runs due timers. False once stopping.
+  /// Handles messages for at most timeout_ms and runs due timers (also while stopping, so a
+  /// process can drain). Returns false once Stop() was called or a signal arrived.
   bool SpinOnce(int timeout_ms);
   void Stop();
   bool stopping() const;

@@ -1,0 +1,44 @@
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "cairn/lcmt_health.hpp"
+#include "services/launch/posix_runner.h"
+#include "services/launch/status.h"
+#include "services/launch/supervisor.h"
+#include "services/runtime/channel_meter.h"
+#include "services/runtime/node.h"
+
+/// @file
+/// The LCM side of cairn-launch: feeds heartbeats and measured channel rates into the
+/// supervisor, ticks it, and writes <run_dir>/status.json.
+
+namespace cairn::launch {
+
+class LaunchService {
+ public:
+  LaunchService(runtime::Node* node, Supervisor* supervisor, PosixRunner* runner,
+                std::string status_path);
+  /// Runs until the graph is down. Returns the process exit code: 0, or 1 when a required
+  /// process failed for good.
+  int Run();
+  GraphStatus MakeStatus(double now_s);
+
+ private:
+  void OnMessage(const std::string& channel, const void* data, int size);
+  void Tick();
+  double Now() const;
+
+  runtime::Node* node_;
+  Supervisor* supervisor_;
+  PosixRunner* runner_;
+  std::string status_path_;
+  runtime::ChannelMeter meter_;
+  ProcSampler sampler_;
+  std::map<int, cairn::lcmt_health> health_by_pid_;
+  std::string message_;
+  bool announced_ready_{false};
+};
+
+}  // namespace cairn::launch

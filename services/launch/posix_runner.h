@@ -1,0 +1,44 @@
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "services/launch/supervisor.h"
+
+/// @file
+/// Real processes for the supervisor: fork/exec in a process group of their own, output appended
+/// to <run_dir>/logs/<name>.log, LCM_DEFAULT_URL set to the graph's bus.
+
+namespace cairn::launch {
+
+class PosixRunner : public ProcessRunner {
+ public:
+  /// @param log_dir folder for per-process logs (created); @param lcm_url given to children.
+  PosixRunner(std::string log_dir, std::string lcm_url);
+  pid_t Spawn(const ProcessSpec& spec, std::string* error) override;
+  void Signal(pid_t pid, int signal) override;
+  std::optional<int> Poll(pid_t pid) override;
+
+  std::string LogPath(const std::string& name) const { return log_dir_ + "/" + name + ".log"; }
+
+ private:
+  std::string log_dir_;
+  std::string lcm_url_;
+};
+
+/// CPU use and resident memory of a pid, from /proc.
+struct ProcSample {
+  double cpu_percent{0.0};
+  double rss_mb{0.0};
+};
+
+/// Keeps the previous CPU tick count per pid to turn /proc counters into a percentage.
+class ProcSampler {
+ public:
+  ProcSample Sample(pid_t pid, double now_s);
+
+ private:
+  std::map<pid_t, std::pair<double, long long>> last_;  // pid -> (time, ticks)
+};
+
+}  // namespace cairn::launch

@@ -1,0 +1,44 @@
+#include "services/runtime/channel_meter.h"
+
+#include <algorithm>
+
+namespace cairn::runtime {
+
+void ChannelMeter::Trim(Entry& e, double now_s) const {
+  while (!e.window.empty() && e.window.front().first < now_s - window_s_) e.window.pop_front();
+}
+
+void ChannelMeter::Record(const std::string& channel, int bytes, double now_s) {
+  Entry& e = channels_[channel];
+  if (e.messages == 0) e.first_s = now_s;
+  ++e.messages;
+  e.bytes += bytes;
+  e.last_s = now_s;
+  e.window.emplace_back(now_s, bytes);
+  Trim(e, now_s);
+}
+
+std::map<std::string, ChannelRate> ChannelMeter::Rates(double now_s) {
+  std::map<std::string, ChannelRate> out;
+  for (auto& [name, e] : channels_) {
+    Trim(e, now_s);
+    ChannelRate r;
+    r.messages = e.messages;
+    r.bytes = e.bytes;
+    // n messages in the window span n - 1 intervals, measured up to now so that a channel that
+    // went quiet decays towards zero.
+    const size_t n = e.window.size();
+    if (n >= 2) {
+      const double span = std::max(now_s - e.window.front().first, 1e-6);
+      int64_t bytes = 0;
+      for (size_t i = 1; i < n; ++i) bytes += e.window[i].second;
+      r.rate_hz = (n - 1) / span;
+      r.bandwidth_Bps = bytes / span;
+    }
+    r.last_age_s = now_s - e.last_s;
+    out[name] = r;
+  }
+  return out;
+}
+
+}  // namespace cairn::runtime

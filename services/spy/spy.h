@@ -1,0 +1,44 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "services/runtime/channel_meter.h"
+
+/// @file
+/// cairn-spy's model: every channel on the bus with its decoded type (looked up by the 64-bit
+/// fingerprint at the start of each message among the generated cairn types), rate, bandwidth,
+/// decode errors and the age of the last message, against expected rates from a graph file.
+
+namespace cairn::spy {
+
+struct ChannelView {
+  std::string channel;
+  std::string type;  ///< "cairn.lcmt_pose", or "? (fingerprint 0x...)"
+  runtime::ChannelRate rate;
+  int64_t decode_errors{0};
+  double expected_hz{0.0};  ///< 0 when the graph does not name the channel
+  bool slow{false};         ///< below 80 % of the expected rate (or never seen)
+};
+
+class Spy {
+ public:
+  explicit Spy(std::map<std::string, double> expected_rates_hz = {});
+  /// Records one message (bytes as received).
+  void OnMessage(const std::string& channel, const void* data, int size, double now_s);
+  std::map<std::string, ChannelView> Snapshot(double now_s);
+  /// The table printed by cairn-spy.
+  std::string Format(double now_s);
+
+ private:
+  runtime::ChannelMeter meter_;
+  std::map<std::string, std::string> types_;
+  std::map<std::string, int64_t> decode_errors_;
+  std::map<std::string, double> expected_;
+};
+
+/// Type name for a fingerprint (nullptr when unknown).
+const char* TypeForFingerprint(int64_t fingerprint);
+
+}  // namespace cairn::spy

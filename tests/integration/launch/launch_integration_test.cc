@@ -1,0 +1,140 @@
+// cairn-launch against real processes on a private bus.
+
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <fstream>
+#include <regex>
+
+#include <gtest/gtest.h>
+
+#include "services/launch/status.h"
+#include "tests/support/harness.h"
+
+namespace cairn::testing {
+namespace {
+
+std::string WriteGraph(const std::string& dir, const std::string& url) {
+  const std::string path = dir + "/pair.yaml";
+  std::ofstream out(path);
+  out << "name: pair\n"
+         "lcm_url: " << url << "\n"
+         "processes:\n"
+         "  watcher:\n"
+         "    command: " << BinPath("cairn-spy") << "\n"
+         "    args: [--refresh, '10']\n"
+         "    restart: always\n"
+         "    backoff_s: 0.2\n"
+         "  follower:\n"
+         "    command: " << BinPath("cairn-spy") << "\n"
+         "    args: [--refresh, '10']\n"
+         "    depends_on: [watcher]\n"
+         "    restart: on-failure\n"
+         "    backoff_s: 0.2\n"
+         "    expected_rates_hz: {HEALTH: 2.0}\n";
+  return path;
+}
+
+std::optional<launch::GraphStatus> ReadStatus(const std::string& run_dir) {
+  std::string error;
+  return launch::ReadStatusFile(run_dir + "/status.json", &error);
+}
+
+const launch::ProcessRow* Row(const launch::GraphStatus& s, const std::string& name) {
+  for (const auto& p : s.processes) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
+TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
+  ProcessSet procs(PrivateLcmUrl());
+  const std::string graph = WriteGraph(procs.dir(), procs.url());
+  const std::string run_dir = procs.dir() + "/run";
+  ChildProcess& launcher =
+      procs.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir});
+
+  // Ready means both processes sent READY heartbeats.
+  std::optional<launch::GraphStatus> status;
+  ASSERT_TRUE(WaitFor([&] {
+    status = ReadStatus(run_dir);
+    return status && status->state == "ready";
+  }, 30.0)) << "graph never became ready";
+  const launch::ProcessRow* follower = Row(*status, "follower");
+  ASSERT_NE(follower, nullptr);
+  const int old_pid = follower->pid;
+  ASSERT_GT(old_pid, 0);
+  EXPECT_EQ(follower->restarts, 0);
+
+  // SIGKILL one process: the launcher restarts it.
+  ASSERT_EQ(kill(old_pid, SIGKILL), 0);
+  ASSERT_TRUE(WaitFor([&] {
+    status = ReadStatus(run_dir);
+    if (!status) return false;
+    const auto* row = Row(*status, "follower");
+    return row && row->restarts == 1 && row->pid > 0 && row->pid != old_pid && row->state == "ready";
+  }, 30.0)) << "follower was not restarted";
+  EXPECT_EQ(Row(*status, "follower")->last_exit, "killed by SIGKILL");
+
+  // `cairn-launch status` prints the table with the restart count.
+  ChildProcess& status_cmd =
+      procs.StartRaw("status", {BinPath("cairn-launch"), "status", "--run-dir", run_dir});
+  auto exit = status_cmd.WaitExit(20.0);
+  ASSERT_TRUE(exit.has_value());
+  EXPECT_EQ(*exit, 0);
+  const std::string table = status_cmd.Log();
+  EXPECT_TRUE(std::regex_search(table, std::regex(R"(follower\s+-\s+ready\s+\d+\s+1\s)"))) << table;
+  EXPECT_TRUE(std::regex_search(table, std::regex(R"(watcher\s+-\s+ready\s+\d+\s+0\s)"))) << table;
+
+  // `down` stops everything and the launcher exits 0.
+  ChildProcess& down = procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
+  ASSERT_TRUE(down.WaitExit(30.0).has_value());
+  auto launcher_exit = launcher.WaitExit(30.0);
+  ASSERT_TRUE(launcher_exit.has_value());
+  EXPECT_TRUE(WIFEXITED(*launcher_exit) && WEXITSTATUS(*launcher_exit) == 0);
+  status = ReadStatus(run_dir);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(status->state, "stopped");
+  for (const auto& p : status->processes) EXPECT_EQ(p.pid, -1) << p.name;
+}
+
+TEST(LaunchIntegrationTest, RequiredProcessFailingForGoodStopsTheGraph) {
+  ProcessSet procs(PrivateLcmUrl());
+  const std::string path = procs.dir() + "/failing.yaml";
+  {
+    std::ofstream out(path);
+    out << "name: failing\nlcm_url: " << procs.url() << "\nprocesses:\n"
+        << "  watcher:\n    command: " << BinPath("cairn-spy") << "\n    args: [--refresh, '10']\n"
+        << "  broken:\n    command: /bin/false\n    ready: {heartbeat: false}\n"
+        << "    restart: on-failure\n    max_restarts: 2\n    backoff_s: 0.1\n";
+  }
+  ChildProcess& launcher = procs.StartRaw(
+      "cairn-launch", {BinPath("cairn-launch"), "up", path, "--run-dir", procs.dir() + "/run"});
+  auto exit = launcher.WaitExit(60.0);
+  ASSERT_TRUE(exit.has_value()) << "the launcher did not stop";
+  EXPECT_TRUE(WIFEXITED(*exit));
+  EXPECT_EQ(WEXITSTATUS(*exit), 1);
+  EXPECT_NE(launcher.Log().find("required process 'broken' failed for good: exited 1 after 2 restarts"),
+            std::string::npos)
+      << launcher.Log();
+}
+
+TEST(LaunchIntegrationTest, InvalidGraphIsRefusedBeforeAnythingStarts) {
+  ProcessSet procs(PrivateLcmUrl());
+  const std::string path = procs.dir() + "/bad.yaml";
+  {
+    std::ofstream out(path);
+    out << "processes:\n  a:\n    command: " << BinPath("cairn-spy") << "\n    depends_on: [b]\n"
+        << "  b:\n    command: " << BinPath("cairn-spy") << "\n    depends_on: [a]\n";
+  }
+  ChildProcess& launcher = procs.StartRaw(
+      "cairn-launch", {BinPath("cairn-launch"), "up", path, "--run-dir", procs.dir() + "/run"});
+  auto exit = launcher.WaitExit(20.0);
+  ASSERT_TRUE(exit.has_value());
+  EXPECT_EQ(WEXITSTATUS(*exit), 2);
+  EXPECT_NE(launcher.Log().find("bad.yaml:5: dependency cycle: a -> b -> a"), std::string::npos) << launcher.Log();
+  EXPECT_FALSE(std::ifstream(procs.dir() + "/run/status.json").good());
+}
+
+}  // namespace
+}  // namespace cairn::testing

@@ -1,0 +1,222 @@
+#include "services/launch/supervisor.h"
+
+#include <signal.h>
+#include <sys/wait.h>
+
+#include <map>
+#include <memory>
+#include <set>
+
+#include <gtest/gtest.h>
+
+namespace cairn::launch {
+namespace {
+
+// A fake process table: tests decide when processes exit.
+class FakeRunner : public ProcessRunner {
+ public:
+  pid_t Spawn(const ProcessSpec& spec, std::string* error) override {
+    if (fail_spawn.count(spec.name)) {
+      *error = "no such file";
+      return -1;
+    }
+    const pid_t pid = next_pid++;
+    alive[pid] = spec.name;
+    spawned.push_back(spec.name);
+    return pid;
+  }
+  void Signal(pid_t pid, int sig) override {
+    signals.emplace_back(alive.count(pid) ? alive[pid] : "?", sig);
+    if (sig == SIGKILL || exit_on_signal) Exit(pid, sig == SIGKILL ? 9 : 0, sig == SIGKILL);
+  }
+  std::optional<int> Poll(pid_t pid) override {
+    auto it = exited.find(pid);
+    if (it == exited.end()) return std::nullopt;
+    const int status = it->second;
+    exited.erase(it);
+    return status;
+  }
+  void Exit(pid_t pid, int code, bool by_signal = false) {
+    alive.erase(pid);
+    exited[pid] = by_signal ? code : (code << 8);  // wait status encoding
+  }
+  pid_t PidOf(const std::string& name) const {
+    for (const auto& [pid, n] : alive) {
+      if (n == name) return pid;
+    }
+    return -1;
+  }
+
+  pid_t next_pid{100};
+  bool exit_on_signal{true};
+  std::map<pid_t, std::string> alive;
+  std::map<pid_t, int> exited;
+  std::vector<std::string> spawned;
+  std::vector<std::pair<std::string, int>> signals;
+  std::set<std::string> fail_spawn;
+};
+
+GraphSpec TwoProcessGraph(RestartPolicy policy = RestartPolicy::kOnFailure, int max_restarts = 2) {
+  GraphSpec g;
+  g.name = "g";
+  ProcessSpec a;
+  a.name = "a";
+  a.executable = "/bin/a";
+  a.restart = policy;
+  a.max_restarts = max_restarts;
+  a.backoff_s = 1.0;
+  ProcessSpec b = a;
+  b.name = "b";
+  b.executable = "/bin/b";
+  b.depends_on = {"a"};
+  g.processes = {a, b};
+  return g;
+}
+
+class SupervisorTest : public ::testing::Test {
+ protected:
+  void Make(GraphSpec g) {
+    dut_ = std::make_unique<Supervisor>(std::move(g), &runner_, [this](const std::string& e) {
+      events_.push_back(e);
+    });
+  }
+  const ProcStatus& St(const std::string& name) {
+    for (const auto& s : dut_->statuses()) {
+      if (s.name == name) return s;
+    }
+    throw std::out_of_range(name);
+  }
+  FakeRunner runner_;
+  std::vector<std::string> events_;
+  std::unique_ptr<Supervisor> dut_;
+};
+
+TEST_F(SupervisorTest, StartsInDependencyOrderAfterReadiness) {
+  Make(TwoProcessGraph());
+  dut_->Tick(0.0);
+  EXPECT_EQ(runner_.spawned, std::vector<std::string>{"a"});
+  EXPECT_EQ(St("a").state, ProcState::kStarting);
+  dut_->Tick(1.0);
+  EXPECT_EQ(runner_.spawned.size(), 1u);  // b waits for a to be ready
+  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true);
+  dut_->Tick(1.1);
+  EXPECT_EQ(St("a").state, ProcState::kReady);
+  dut_->Tick(1.2);
+  EXPECT_EQ(runner_.spawned, (std::vector<std::string>{"a", "b"}));
+  dut_->OnHeartbeat(runner_.PidOf("b"), "b", "", true);
+  dut_->Tick(1.3);
+  EXPECT_TRUE(dut_->AllReady());
+}
+
+TEST_F(SupervisorTest, NotReadyHeartbeatDoesNotCount) {
+  Make(TwoProcessGraph());
+  dut_->Tick(0.0);
+  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", false);
+  dut_->Tick(0.5);
+  EXPECT_EQ(St("a").state, ProcState::kStarting);
+}
+
+TEST_F(SupervisorTest, ChannelRateReadiness) {
+  GraphSpec g = TwoProcessGraph();
+  g.processes[0].ready.heartbeat = false;
+  g.processes[0].ready.channel = "r.POSE";
+  g.processes[0].ready.min_rate_hz = 10.0;
+  Make(g);
+  dut_->Tick(0.0);
+  dut_->SetChannelRate("r.POSE", 4.0);
+  dut_->Tick(0.5);
+  EXPECT_EQ(St("a").state, ProcState::kStarting);
+  dut_->SetChannelRate("r.POSE", 12.0);
+  dut_->Tick(0.6);
+  EXPECT_EQ(St("a").state, ProcState::kReady);
+}
+
+TEST_F(SupervisorTest, RestartsWithBackoffThenFailsForGood) {
+  Make(TwoProcessGraph(RestartPolicy::kOnFailure, 2));
+  dut_->Tick(0.0);
+  runner_.Exit(runner_.PidOf("a"), 3);
+  dut_->Tick(1.0);
+  EXPECT_EQ(St("a").state, ProcState::kBackoff);
+  dut_->Tick(1.5);  // back-off 1 s not over yet
+  EXPECT_EQ(runner_.spawned.size(), 1u);
+  dut_->Tick(2.0);
+  EXPECT_EQ(runner_.spawned.size(), 2u);
+  EXPECT_EQ(St("a").restarts, 1);
+  runner_.Exit(runner_.PidOf("a"), 3);
+  dut_->Tick(2.1);
+  dut_->Tick(3.0);  // back-off doubled to 2 s
+  EXPECT_EQ(runner_.spawned.size(), 2u);
+  dut_->Tick(4.2);
+  EXPECT_EQ(St("a").restarts, 2);
+  runner_.Exit(runner_.PidOf("a"), 3);
+  dut_->Tick(4.3);
+  EXPECT_EQ(St("a").state, ProcState::kFailed);
+  ASSERT_TRUE(dut_->FatalFailure().has_value());
+  EXPECT_NE(dut_->FatalFailure()->find("'a'"), std::string::npos);
+  EXPECT_NE(dut_->FatalFailure()->find("exited 3"), std::string::npos);
+}
+
+TEST_F(SupervisorTest, CleanExitUnderOnFailureIsNotRestarted) {
+  Make(TwoProcessGraph(RestartPolicy::kOnFailure));
+  dut_->Tick(0.0);
+  runner_.Exit(runner_.PidOf("a"), 0);
+  dut_->Tick(0.1);
+  dut_->Tick(5.0);
+  EXPECT_EQ(St("a").state, ProcState::kExited);
+  EXPECT_EQ(runner_.spawned.size(), 1u);
+  EXPECT_FALSE(dut_->FatalFailure().has_value());
+}
+
+TEST_F(SupervisorTest, KilledBySignalIsRestartedUnderAlways) {
+  Make(TwoProcessGraph(RestartPolicy::kAlways));
+  dut_->Tick(0.0);
+  runner_.Exit(runner_.PidOf("a"), SIGKILL, /*by_signal=*/true);
+  dut_->Tick(0.1);
+  EXPECT_EQ(St("a").last_exit, "killed by SIGKILL");
+  dut_->Tick(1.2);
+  EXPECT_EQ(St("a").restarts, 1);
+  EXPECT_EQ(St("a").state, ProcState::kStarting);
+}
+
+TEST_F(SupervisorTest, SpawnFailureOfRequiredProcessIsFatal) {
+  Make(TwoProcessGraph());
+  runner_.fail_spawn.insert("a");
+  dut_->Tick(0.0);
+  EXPECT_EQ(St("a").state, ProcState::kFailed);
+  EXPECT_TRUE(dut_->FatalFailure().has_value());
+}
+
+TEST_F(SupervisorTest, ReadinessTimeoutKillsTheProcess) {
+  GraphSpec g = TwoProcessGraph();
+  g.processes[0].ready.timeout_s = 2.0;
+  Make(g);
+  dut_->Tick(0.0);
+  dut_->Tick(2.5);
+  ASSERT_FALSE(runner_.signals.empty());
+  EXPECT_EQ(runner_.signals.back(), std::make_pair(std::string("a"), SIGKILL));
+}
+
+TEST_F(SupervisorTest, StopsInReverseOrderAndEscalates) {
+  Make(TwoProcessGraph());
+  dut_->Tick(0.0);
+  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true);
+  dut_->Tick(0.1);
+  dut_->Tick(0.2);
+  ASSERT_EQ(runner_.spawned.size(), 2u);
+  runner_.exit_on_signal = false;  // b ignores SIGTERM
+  dut_->RequestStop(1.0);
+  dut_->Tick(1.0);
+  ASSERT_EQ(runner_.signals.size(), 1u);
+  EXPECT_EQ(runner_.signals[0], std::make_pair(std::string("b"), SIGTERM));  // a waits for b
+  dut_->Tick(7.0);  // grace 5 s passed
+  EXPECT_EQ(runner_.signals.back(), std::make_pair(std::string("b"), SIGKILL));
+  runner_.exit_on_signal = true;
+  dut_->Tick(7.1);  // b's exit is collected; a is signalled now
+  EXPECT_EQ(runner_.signals.back(), std::make_pair(std::string("a"), SIGTERM));
+  dut_->Tick(7.2);
+  EXPECT_TRUE(dut_->AllDown());
+  EXPECT_FALSE(dut_->FatalFailure().has_value());
+}
+
+}  // namespace
+}  // namespace cairn::launch
