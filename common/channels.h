@@ -17,6 +17,15 @@ inline constexpr char kMapstoreRequest[] = "MAPSTORE.REQUEST";
 inline constexpr char kMapstoreReply[] = "MAPSTORE.REPLY";
 inline constexpr char kMapstoreTiles[] = "MAPSTORE.TILES";
 inline constexpr char kMapstoreTileResend[] = "MAPSTORE.TILE_RESEND";
+inline constexpr char kMapstoreManifest[] = "MAPSTORE.MANIFEST";  // manifests of reply layers
+inline constexpr char kMapstoreOctomap[] = "MAPSTORE.OCTOMAP";    // OctoMap chunks of replies
+// A push save: the client sends its layers, obstacles and OctoMap here before OP_SAVE, and
+// answers the store's resend requests for tiles it missed.
+inline constexpr char kMapstorePushTiles[] = "MAPSTORE.PUSH.TILES";
+inline constexpr char kMapstorePushManifest[] = "MAPSTORE.PUSH.MANIFEST";
+inline constexpr char kMapstorePushObstacles[] = "MAPSTORE.PUSH.OBSTACLES";
+inline constexpr char kMapstorePushOctomap[] = "MAPSTORE.PUSH.OCTOMAP";
+inline constexpr char kMapstorePushTileResend[] = "MAPSTORE.PUSH.TILE_RESEND";
 
 // Per-robot stream suffixes.
 inline constexpr char kLidar[] = "LIDAR";

@@ -55,6 +55,15 @@ void FlagParser::AddBool(const std::string& name, bool* value, const std::string
   order_.push_back(name);
 }
 
+void FlagParser::AddStringList(const std::string& name, std::vector<std::string>* values,
+                               const std::string& help) {
+  flags_[name] = {help + " (repeatable)", "", false, [values](const std::string& v) {
+                    values->push_back(v);
+                    return true;
+                  }};
+  order_.push_back(name);
+}
+
 void FlagParser::AddHelpSection(const std::string& title, const std::string& body) {
   sections_.emplace_back(title, body);
 }

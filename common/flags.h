@@ -20,6 +20,9 @@ class FlagParser {
   void AddDouble(const std::string& name, double* value, const std::string& help);
   void AddInt(const std::string& name, int* value, const std::string& help);
   void AddBool(const std::string& name, bool* value, const std::string& help);
+  /// A flag that may be given several times; each occurrence appends its value.
+  void AddStringList(const std::string& name, std::vector<std::string>* values,
+                     const std::string& help);
   /// A free-form section appended to --help (lists of worlds, robots, sensors, ...).
   void AddHelpSection(const std::string& title, const std::string& body);
 

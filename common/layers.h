@@ -17,15 +17,22 @@ inline constexpr char kElevationVariance[] = "elevation_variance";  // m^2
 inline constexpr char kObservationCount[] = "observation_count";    // fused measurements
 inline constexpr char kLastSeen[] = "last_seen_s";                  // sim time, s
 inline constexpr char kOccupancyLogOdds[] = "occupancy_logodds";    // 2-D log-odds
+inline constexpr char kOccupancy[] = "occupancy";                   // 2-D occupancy, 100·p
 inline constexpr char kStaticMap[] = "static";                      // 0..100, seed 001 static map
 inline constexpr char kShortTerm[] = "short_term";                  // 0..100
 inline constexpr char kLongTerm[] = "long_term";                    // 0..100
 inline constexpr char kFinal[] = "final";                           // max(short, long)
+// Lowest height at which a lidar ray crossed the cell without a return (m, world z): the
+// terrain there lies below it. Lets the terrain layers tell a gap the sensor saw into (a ditch)
+// from one it never looked at.
+inline constexpr char kGroundBound[] = "ground_bound";
 
 // Geometric layers derived from the elevation (profile independent).
 inline constexpr char kSlope[] = "slope";          // rad, unsigned
 inline constexpr char kStepMax[] = "step";         // m, largest height difference to a neighbour
 inline constexpr char kRoughness[] = "roughness";  // m, residual of the local plane fit
+inline constexpr char kDitchDepth[] = "ditch_depth";  // m below the rims (a lower bound if unseen)
+inline constexpr char kDitchWidth[] = "ditch_width";  // m, gap between the rims
 
 inline std::string CostLayer(const std::string& profile) { return "cost/" + profile; }
 inline bool IsCostLayer(const std::string& name) { return name.rfind("cost/", 0) == 0; }

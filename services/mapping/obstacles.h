@@ -5,24 +5,89 @@
 #include "common/grid_map.h"
 #include "common/obstacle.h"
 #include "common/robot_profile.h"
+#include "services/mapping/traversability.h"
 
 /// @file
 /// The obstacle registry: connected terrain features with their measurements, and per-profile
 /// verdicts computed from those measurements alone (so a stored registry can be re-labelled for
 /// any profile without the elevation). CONTRACT shared with the map store: keep these signatures.
+///
+/// Features are found from the elevation and the geometric layers (traversability.h), never
+/// from a profile:
+/// - ditch: cells of a negative obstacle (layers::kDitchDepth), with the unseen gap and the
+///   bottom the sensor saw; width is the gap between the rims, depth NaN when no bottom cell
+///   was seen;
+/// - step (up or down): a height difference over one or two cells along x or y (two when a
+///   vertical face left an intermediate height in the cell it cuts) that stands out from the
+///   differences just before and after it along the same line (a ramp rises evenly, a step
+///   does not), plus drops into a gap the sensor looked into; up when it rises from the larger
+///   of the two surfaces it separates (see surface_continuity_m), down when it falls from it;
+/// - wall_or_object: the same discontinuities, at least wall_min_height_m high;
+/// - ramp: inclined cells away from any edge; its slope is the larger of the sustained slope
+///   (75th percentile of the interior cells, so a steep section is not averaged away) and the
+///   slope of the plane fitted to its heights (robust where only part of it was seen).
 
 namespace cairn::mapping {
 
 struct ObstacleParams {
   double min_ramp_slope_rad{0.035};   ///< slopes below this are flat ground
-  double min_step_height_m{0.005};    ///< height differences below this are not steps
-  int min_cells{3};                   ///< smaller components are noise
+  double min_step_height_m{0.006};    ///< height differences below this are not steps
+  int min_cells{4};                   ///< smaller components are noise
+  /// A height difference is a step when it exceeds this multiple of the differences just
+  /// before and after it along the same line.
+  double step_contrast{1.5};
+  /// Discontinuities at least this high are walls or objects, not steps.
+  double wall_min_height_m{0.3};
+  /// A drop into a gap the sensor looked into counts from this depth (m).
+  double min_drop_height_m{0.05};
+  /// Steps lower than this must be edge lines (at least min_small_step_length_m long and
+  /// min_small_step_elongation times longer than wide): a compact patch of centimetre
+  /// differences is lidar noise, not a step.
+  double small_step_height_m{0.02};
+  double min_small_step_length_m{1.0};
+  double min_small_step_elongation{2.0};
+  /// Ramps smaller than this are the rims of other features, not ramps (m²).
+  double min_ramp_area_m2{0.5};
+  /// Neighbouring cells closer in height than this lie on one surface (m). A step rises from
+  /// the larger surface it separates onto the smaller one (a block on the ground is a step up,
+  /// the edge of a raised platform a step down).
+  double surface_continuity_m{0.05};
+  /// Outline simplification tolerance, as a fraction of the resolution.
+  double outline_tolerance_cells{0.5};
+
+  /// @throws std::invalid_argument naming a bad field.
+  void Validate() const;
 };
 
+/// Per-cell feature layers (internal to the mapping core; kept in the live map so the registry
+/// can be assembled without classifying every cell again).
+inline constexpr char kFeatureClassLayer[] = "feature_class";  ///< 0 none, 1 ditch, 2 wall,
+                                                              ///< 3 step, 4 drop, 5 ramp
+inline constexpr char kFeatureEdgeLayer[] = "feature_edge";  ///< largest discontinuity (m)
+inline constexpr char kFeatureLowLayer[] = "feature_low";    ///< its lower side (m, world z)
+inline constexpr char kFeatureHighLayer[] = "feature_high";  ///< its higher side
+
+/// Classifies the cells of `rect` into the feature layers, from the elevation, the geometric
+/// layers and the ground bound. Reads up to FeatureRadiusCells() around `rect`.
+/// @throws std::invalid_argument if a needed layer is missing.
+void ComputeFeatureLayers(common::GridMap* map, const ObstacleParams& params,
+                          const CellRect& rect);
+/// How far (cells) a feature cell depends on the elevation and geometric layers around it.
+inline constexpr int FeatureRadiusCells() { return 4; }
+
+/// Connected components of the feature layers, measured; no verdicts yet.
+/// @throws std::invalid_argument if a needed layer is missing.
+common::ObstacleRegistry AssembleObstacles(const common::GridMap& map, const ObstacleParams& params);
+
 /// Finds features in a map holding elevation and the geometric layers; no verdicts yet.
+/// Missing geometric layers are computed (with default TraversabilityParams) on a copy.
+/// Obstacles are numbered from 1 in the order of their centroids (y, then x).
 common::ObstacleRegistry ExtractObstacles(const common::GridMap& map, const ObstacleParams& params);
 
-/// Whether `profile` can cross `obstacle`, with the reason when not.
+/// Whether `profile` can cross `obstacle`, with the reason when not:
+/// ramp: slope < min(max_slope_up, max_slope_down); step up: height <= max_step_up;
+/// step down: height <= max_step_down; ditch: width <= max_ditch_width (bridged) or a seen
+/// bottom no deeper than both step limits; wall or object: height <= max_step_up.
 common::ObstacleVerdict JudgeObstacle(const common::Obstacle& obstacle,
                                       const common::RobotProfile& profile);
 

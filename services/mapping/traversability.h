@@ -9,8 +9,37 @@
 /// @file
 /// Traversability from an elevation map (seed 000), per robot profile.
 /// CONTRACT shared with the map store and the planner: keep these signatures.
+///
+/// Two stages:
+/// 1. ComputeGeometricLayers: profile-independent layers from layers::kElevation (and, when
+///    present, layers::kGroundBound): slope (PCA normal over a radius, slope = acos(n_z)),
+///    step (largest height difference to a 4-neighbour), roughness (RMS residual of the plane
+///    fit), the normal's horizontal components, and the ditch layers (cells inside a negative
+///    obstacle, with the depth below its rims and the gap width).
+/// 2. ComputeCostLayer: one profile's cost from those layers. The rules are the ones seed 000
+///    intends (its text), not what its listing does:
+///    - a cell is lethal if any rule says so (obstacle wins; the listing's first-match chain
+///      let a cell be free or keep the previous cell's label);
+///    - slope >= min(max_slope_up, max_slope_down) is lethal (the slope is unsigned, so a
+///      non-directional grid must respect both limits);
+///    - a 4-neighbour higher by more than max_step_up or lower by more than max_step_down is
+///      lethal; the bounds are inclusive (exactly the limit is crossable) and every neighbour is
+///      checked (the listing initialised only one of its four neighbour values);
+///    - a neighbour the sensor looked into without a return (ground bound) counts as lower by at
+///      least the bound's depth: a drop into an unseen gap is a step down;
+///    - a ditch wider than max_ditch_width is lethal; narrower ones are bridged (graded);
+///    - roughness above max_roughness is lethal;
+///    - an unknown cell is free inside the blind zone around the robot's current position (the
+///      listing used the centre of its robot-centric map window, on every update), else
+///      unknown; a known cell with a neighbour outside the map is unknown;
+///    - everything else gets 0 when it uses at most free_fraction of every limit, else a graded
+///      cost in (0, graded_cost_max] growing with the most used limit.
 
 namespace cairn::mapping {
+
+/// Layer names local to the terrain layers (the shared ones are in common/layers.h).
+inline constexpr char kNormalXLayer[] = "normal_x";  ///< x component of the unit surface normal
+inline constexpr char kNormalYLayer[] = "normal_y";  ///< y component (n_z = sqrt(1 - x² - y²))
 
 struct TraversabilityParams {
   double normal_radius_m{0.3};        ///< PCA window for normals (3 x 3 cells at 0.2 m)
@@ -18,18 +47,67 @@ struct TraversabilityParams {
   bool imu_pitch_compensation{false};  ///< add the robot's pitch to the map slope
   bool unknown_is_lethal{false};       ///< else unknown stays NaN in the cost layer
   double graded_cost_max{90.0};        ///< highest graded cost (free terrain costs 0)
+  /// Terrain using at most this fraction of every profile limit costs 0 (free).
+  double free_fraction{0.3};
+  /// A gap is a ditch when the terrain in it lies at least this far below both rims (m).
+  double min_ditch_depth_m{0.05};
+  /// How far (m) the ditch analysis looks for the rims on both sides of a gap; wider gaps are
+  /// not recognised as ditches (they stay unknown).
+  double max_ditch_search_m{1.8};
+  /// Slack on height comparisons (m), for float elevations: makes the inclusive bounds hold.
+  double height_tolerance_m{1e-5};
+
+  /// @throws std::invalid_argument naming a bad field.
+  void Validate() const;
+};
+
+/// A half-open rectangle of cells [x0, x1) x [y0, y1).
+struct CellRect {
+  int x0{0};
+  int y0{0};
+  int x1{0};
+  int y1{0};
+  bool empty() const { return x1 <= x0 || y1 <= y0; }
+  /// The whole grid.
+  static CellRect All(const common::GridMap& map) { return {0, 0, map.size_x(), map.size_y()}; }
+};
+
+/// Where the robot is and how it is tilted, for the blind-zone rule and IMU compensation.
+struct RobotContext {
+  std::optional<common::Vector2> xy_m;  ///< world position (blind zone), none to skip the rule
+  std::optional<double> yaw_rad;        ///< heading; lets the pitch tilt the normals exactly
+  double pitch_rad{0.0};                ///< nose up positive (common::Pose3::pitch_rad)
 };
 
 /// Adds the profile-independent layers (layers::kSlope, kStepMax, kRoughness) computed from
 /// layers::kElevation. @throws std::invalid_argument if the map has no elevation layer.
 void ComputeGeometricLayers(common::GridMap* map, const TraversabilityParams& params);
 
+/// As above, but writes only the cells of `rect` (the layers are created when missing). Cells
+/// outside `rect` are read, never written, so computing a window of a larger map with enough
+/// margin around `rect` gives the same values as computing the whole map.
+void ComputeGeometricLayers(common::GridMap* map, const TraversabilityParams& params,
+                            const CellRect& rect);
+
+/// How far (cells) a geometric or cost value depends on its neighbours: a window computed with
+/// this much margin around the written rectangle matches the whole-map computation.
+int DependencyRadiusCells(const TraversabilityParams& params, double resolution_m);
+
 /// Adds layers::CostLayer(profile.name): 0 free, (0,100) graded, 100 lethal, NaN unknown.
 /// Computes the geometric layers first when they are missing. `robot_xy_m` applies the
 /// blind-zone rule around the robot; `robot_pitch_rad` the IMU compensation when enabled.
+/// Without a heading, the compensation is the seed's worst case (slope + pitch).
 void ComputeCostLayer(common::GridMap* map, const common::RobotProfile& profile,
                       const TraversabilityParams& params,
                       std::optional<common::Vector2> robot_xy_m = std::nullopt,
                       double robot_pitch_rad = 0.0);
+
+/// As above with the robot's heading (exact IMU compensation: the map normals are tilted by
+/// the pitch about the robot's lateral axis, so level ground ahead of a pitched robot stays
+/// level), writing only the cells of `rect`. The geometric layers must exist.
+/// @throws std::invalid_argument if they do not or the profile is invalid.
+void ComputeCostLayer(common::GridMap* map, const common::RobotProfile& profile,
+                      const TraversabilityParams& params, const RobotContext& robot,
+                      const CellRect& rect);
 
 }  // namespace cairn::mapping

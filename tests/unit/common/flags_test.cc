@@ -41,5 +41,14 @@ TEST(FlagParserTest, ErrorsAndHelp) {
   EXPECT_NE(parser.Usage().find("--speed VALUE"), std::string::npos);
 }
 
+TEST(FlagParserTest, RepeatedStringList) {
+  std::vector<std::string> robots;
+  FlagParser parser("prog", "does things");
+  parser.AddStringList("robot", &robots, "a robot");
+  EXPECT_EQ(ParseArgs(parser, {"prog", "--robot", "a:kobuki", "--robot=b:p3dx"}), -1);
+  EXPECT_EQ(robots, (std::vector<std::string>{"a:kobuki", "b:p3dx"}));
+  EXPECT_NE(parser.Usage().find("(repeatable)"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace cairn::common

@@ -1,0 +1,464 @@
+#include "mapstore/blob_codec.h"
+
+#include "common/robot_profile.h"
+
+#include <zlib.h>
+#include <zstd.h>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <atomic>
+#include <cstring>
+#include <exception>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+namespace cairn::mapstore {
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__,
+              "blobs are stored little endian; a big-endian port needs byte swaps here");
+
+namespace {
+
+// Splits n 4-byte elements into 4 byte planes (and back).
+void Shuffle4(const uint8_t* in, size_t n, uint8_t* out) {
+  for (size_t i = 0; i < n; ++i) {
+    out[i] = in[4 * i];
+    out[n + i] = in[4 * i + 1];
+    out[2 * n + i] = in[4 * i + 2];
+    out[3 * n + i] = in[4 * i + 3];
+  }
+}
+
+void Unshuffle4(const uint8_t* in, size_t n, uint8_t* out) {
+  size_t i = 0;
+#if defined(__SSE2__)
+  // Interleave 16 elements at a time: bytes b0 b1 | b2 b3, then the two halves.
+  for (; i + 16 <= n; i += 16) {
+    const __m128i p0 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + i));
+    const __m128i p1 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + n + i));
+    const __m128i p2 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + 2 * n + i));
+    const __m128i p3 = _mm_loadu_si128(reinterpret_cast<const __m128i*>(in + 3 * n + i));
+    const __m128i a_lo = _mm_unpacklo_epi8(p0, p1), a_hi = _mm_unpackhi_epi8(p0, p1);
+    const __m128i b_lo = _mm_unpacklo_epi8(p2, p3), b_hi = _mm_unpackhi_epi8(p2, p3);
+    __m128i* dst = reinterpret_cast<__m128i*>(out + 4 * i);
+    _mm_storeu_si128(dst + 0, _mm_unpacklo_epi16(a_lo, b_lo));
+    _mm_storeu_si128(dst + 1, _mm_unpackhi_epi16(a_lo, b_lo));
+    _mm_storeu_si128(dst + 2, _mm_unpacklo_epi16(a_hi, b_hi));
+    _mm_storeu_si128(dst + 3, _mm_unpackhi_epi16(a_hi, b_hi));
+  }
+#endif
+  for (; i < n; ++i) {
+    out[4 * i] = in[i];
+    out[4 * i + 1] = in[n + i];
+    out[4 * i + 2] = in[2 * n + i];
+    out[4 * i + 3] = in[3 * n + i];
+  }
+}
+
+std::string Hex32(uint32_t v) {
+  char buf[16];
+  std::snprintf(buf, sizeof(buf), "%08x", v);
+  return buf;
+}
+
+// Little-endian writer and bounds-checked reader for the registry format.
+class Writer {
+ public:
+  template <typename T>
+  void Put(T v) {
+    const size_t at = out_.size();
+    out_.resize(at + sizeof(T));
+    std::memcpy(&out_[at], &v, sizeof(T));
+  }
+  void PutString(const std::string& s) {
+    Put<uint32_t>(static_cast<uint32_t>(s.size()));
+    out_ += s;
+  }
+  std::string Take() { return std::move(out_); }
+
+ private:
+  std::string out_;
+};
+
+class Reader {
+ public:
+  explicit Reader(const std::string& in) : in_(in) {}
+  template <typename T>
+  bool Get(T* v) {
+    if (in_.size() - pos_ < sizeof(T)) return false;
+    std::memcpy(v, in_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return true;
+  }
+  bool GetString(std::string* s) {
+    uint32_t n = 0;
+    if (!Get(&n) || in_.size() - pos_ < n) return false;
+    s->assign(in_.data() + pos_, n);
+    pos_ += n;
+    return true;
+  }
+  size_t remaining() const { return in_.size() - pos_; }
+
+ private:
+  const std::string& in_;
+  size_t pos_{0};
+};
+
+constexpr uint32_t kRegistryMagic = 0x31475243;  // "CRG1"
+
+}  // namespace
+
+void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn) {
+  const size_t workers = std::min<size_t>(n, static_cast<size_t>(std::max(1, threads)));
+  if (workers <= 1) {
+    for (size_t i = 0; i < n; ++i) fn(i);
+    return;
+  }
+  std::atomic<size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mutex;
+  auto work = [&] {
+    for (size_t i = next++; i < n; i = next++) {
+      try {
+        fn(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (size_t t = 1; t < workers; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+uint32_t Crc32(const void* data, size_t size) {
+  uLong crc = crc32(0L, Z_NULL, 0);
+  const auto* bytes = static_cast<const Bytef*>(data);
+  while (size > 0) {
+    const uInt chunk = static_cast<uInt>(std::min<size_t>(size, 1u << 30));
+    crc = crc32(crc, bytes, chunk);
+    bytes += chunk;
+    size -= chunk;
+  }
+  return static_cast<uint32_t>(crc);
+}
+
+namespace {
+
+// One zstd context per thread: creating one per blob costs more than compressing a tile.
+ZSTD_CCtx* ThreadCompressor() {
+  thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> ctx(ZSTD_createCCtx(),
+                                                                       ZSTD_freeCCtx);
+  return ctx.get();
+}
+
+ZSTD_DCtx* ThreadDecompressor() {
+  thread_local std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(),
+                                                                       ZSTD_freeDCtx);
+  return ctx.get();
+}
+
+// Whether a zstd frame carries a content checksum (RFC 8878: bit 2 of the frame header
+// descriptor, the byte after the magic number).
+bool HasContentChecksum(const char* frame, size_t size) {
+  if (size < 5) return false;
+  uint32_t magic = 0;
+  std::memcpy(&magic, frame, 4);
+  return magic == 0xFD2FB528u && (static_cast<uint8_t>(frame[4]) & 0x04) != 0;
+}
+
+std::vector<uint8_t>& ThreadScratch() {
+  thread_local std::vector<uint8_t> scratch;
+  return scratch;
+}
+
+}  // namespace
+
+EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level) {
+  EncodedBlob blob;
+  blob.codec = codec;
+  blob.raw_size = static_cast<int64_t>(size);
+  blob.raw_crc32 = Crc32(raw, size);
+  switch (codec) {
+    case Codec::kRaw:
+      blob.data.assign(static_cast<const char*>(raw), size);
+      // Content address: both checksums of the bytes themselves.
+      blob.key = Hex32(blob.raw_crc32) + "-" +
+                 Hex32(static_cast<uint32_t>(common::Fnv1a64(raw, size))) + "-" +
+                 std::to_string(size) + "r";
+      return blob;
+    case Codec::kZstd:
+    case Codec::kZstdShuffle4: {
+      const void* src = raw;
+      if (codec == Codec::kZstdShuffle4) {
+        if (size % 4 != 0) throw std::invalid_argument("shuffle4 needs a multiple of 4 bytes");
+        std::vector<uint8_t>& shuffled = ThreadScratch();
+        shuffled.resize(size);
+        Shuffle4(static_cast<const uint8_t*>(raw), size / 4, shuffled.data());
+        src = shuffled.data();
+      }
+      // The frame carries zstd's own content checksum (XXH64): it is verified on every
+      // decompression and, with the CRC-32, makes the content address.
+      ZSTD_CCtx* ctx = ThreadCompressor();
+      ZSTD_CCtx_reset(ctx, ZSTD_reset_session_and_parameters);
+      ZSTD_CCtx_setParameter(ctx, ZSTD_c_compressionLevel, zstd_level);
+      ZSTD_CCtx_setParameter(ctx, ZSTD_c_checksumFlag, 1);
+      blob.data.resize(ZSTD_compressBound(size));
+      const size_t n = ZSTD_compress2(ctx, blob.data.data(), blob.data.size(), src, size);
+      if (ZSTD_isError(n) || n < 4) {
+        throw std::runtime_error(std::string("zstd compression failed: ") +
+                                 (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short frame"));
+      }
+      blob.data.resize(n);
+      uint32_t frame_checksum = 0;
+      std::memcpy(&frame_checksum, blob.data.data() + n - 4, 4);
+      blob.key = Hex32(blob.raw_crc32) + "-" + Hex32(frame_checksum) + "-" +
+                 std::to_string(size) + "z";
+      return blob;
+    }
+    default:
+      throw std::invalid_argument("unknown codec " + std::to_string(static_cast<int>(codec)));
+  }
+}
+
+common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t raw_size,
+                            uint32_t raw_crc32, uint8_t* out, bool verify_crc) {
+  if (raw_size < 0) return common::CorruptError("blob has a negative size");
+  switch (codec) {
+    case Codec::kRaw:
+      if (size != static_cast<size_t>(raw_size)) {
+        return common::CorruptError("blob holds " + std::to_string(size) + " bytes, expected " +
+                                    std::to_string(raw_size));
+      }
+      std::memcpy(out, data, size);
+      break;
+    case Codec::kZstd:
+    case Codec::kZstdShuffle4: {
+      const unsigned long long frame = ZSTD_getFrameContentSize(data, size);
+      if (frame == ZSTD_CONTENTSIZE_ERROR || frame != static_cast<unsigned long long>(raw_size)) {
+        return common::CorruptError("blob is not a zstd frame of " + std::to_string(raw_size) +
+                                    " bytes");
+      }
+      uint8_t* target = out;
+      if (codec == Codec::kZstdShuffle4) {
+        if (raw_size % 4 != 0) return common::CorruptError("shuffled blob size not a multiple of 4");
+        std::vector<uint8_t>& scratch = ThreadScratch();
+        scratch.resize(static_cast<size_t>(raw_size));
+        target = scratch.data();
+      }
+      const size_t n = ZSTD_decompressDCtx(ThreadDecompressor(), target,
+                                           static_cast<size_t>(raw_size), data, size);
+      if (ZSTD_isError(n) || n != static_cast<size_t>(raw_size)) {
+        return common::CorruptError(std::string("blob does not decompress: ") +
+                                    (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short output"));
+      }
+      if (codec == Codec::kZstdShuffle4) Unshuffle4(target, n / 4, out);
+      // zstd verified its content checksum (XXH64) while decompressing: that covers damage to
+      // the stored bytes, so the CRC-32 pass is only needed for frames without one.
+      if (!verify_crc && HasContentChecksum(data, size)) return common::Status::Ok();
+      break;
+    }
+    default:
+      return common::CorruptError("blob has unknown codec " +
+                                  std::to_string(static_cast<int>(codec)));
+  }
+  const uint32_t crc = Crc32(out, static_cast<size_t>(raw_size));
+  if (crc != raw_crc32) {
+    return common::CorruptError("blob checksum mismatch (crc32 " + Hex32(crc) + ", stored " +
+                                Hex32(raw_crc32) + ")");
+  }
+  return common::Status::Ok();
+}
+
+common::Result<std::string> DecodeBlob(Codec codec, const std::string& data, int64_t raw_size,
+                                       uint32_t raw_crc32, bool verify_crc) {
+  if (raw_size < 0 || raw_size > (int64_t{1} << 32)) {
+    return common::CorruptError("blob has an impossible size " + std::to_string(raw_size));
+  }
+  std::string out(static_cast<size_t>(raw_size), '\0');
+  common::Status s = DecodeBlobTo(codec, data.data(), data.size(), raw_size, raw_crc32,
+                                  reinterpret_cast<uint8_t*>(out.data()), verify_crc);
+  if (!s.ok()) return s;
+  return out;
+}
+
+std::vector<TileSpec> TilesOf(const common::GridGeometry& geometry, int tile_size,
+                              const std::optional<CellBox>& region) {
+  std::vector<TileSpec> tiles;
+  if (tile_size <= 0 || geometry.size_x <= 0 || geometry.size_y <= 0) return tiles;
+  CellBox box{0, 0, geometry.size_x, geometry.size_y};
+  if (region) box = ClipBox(*region, geometry);
+  if (box.empty()) return tiles;
+  const int tx0 = box.min_ix / tile_size, tx1 = (box.max_ix - 1) / tile_size;
+  const int ty0 = box.min_iy / tile_size, ty1 = (box.max_iy - 1) / tile_size;
+  for (int ty = ty0; ty <= ty1; ++ty) {
+    for (int tx = tx0; tx <= tx1; ++tx) {
+      TileSpec t;
+      t.tile_ix = tx;
+      t.tile_iy = ty;
+      t.x0 = tx * tile_size;
+      t.y0 = ty * tile_size;
+      t.cells_x = std::min(tile_size, geometry.size_x - t.x0);
+      t.cells_y = std::min(tile_size, geometry.size_y - t.y0);
+      tiles.push_back(t);
+    }
+  }
+  return tiles;
+}
+
+std::vector<float> ExtractTile(const common::Layer& layer, const TileSpec& tile) {
+  std::vector<float> cells(static_cast<size_t>(tile.cells_x) * tile.cells_y);
+  for (int y = 0; y < tile.cells_y; ++y) {
+    std::memcpy(&cells[static_cast<size_t>(y) * tile.cells_x], &layer(tile.x0, tile.y0 + y),
+                sizeof(float) * tile.cells_x);
+  }
+  return cells;
+}
+
+bool AllUnknown(const std::vector<float>& cells) {
+  for (float v : cells) {
+    if (!std::isnan(v)) return false;
+  }
+  return true;
+}
+
+void PasteTile(const TileSpec& tile, const float* cells, int offset_ix, int offset_iy,
+               common::Layer* layer) {
+  const int lx0 = std::max(tile.x0, offset_ix);
+  const int lx1 = std::min<int>(tile.x0 + tile.cells_x, offset_ix + static_cast<int>(layer->rows()));
+  if (lx1 <= lx0) return;
+  for (int y = 0; y < tile.cells_y; ++y) {
+    const int gy = tile.y0 + y;
+    const int ly = gy - offset_iy;
+    if (ly < 0 || ly >= layer->cols()) continue;
+    std::memcpy(&(*layer)(lx0 - offset_ix, ly),
+                cells + static_cast<size_t>(y) * tile.cells_x + (lx0 - tile.x0),
+                sizeof(float) * (lx1 - lx0));
+  }
+}
+
+CellBox ClipBox(const CellBox& box, const common::GridGeometry& geometry) {
+  CellBox c;
+  c.min_ix = std::max(0, box.min_ix);
+  c.min_iy = std::max(0, box.min_iy);
+  c.max_ix = std::min(geometry.size_x, box.max_ix);
+  c.max_iy = std::min(geometry.size_y, box.max_iy);
+  if (c.empty()) return CellBox{};
+  return c;
+}
+
+common::GridGeometry SubGeometry(const common::GridGeometry& geometry, const CellBox& box) {
+  common::GridGeometry g = geometry;
+  g.size_x = box.max_ix - box.min_ix;
+  g.size_y = box.max_iy - box.min_iy;
+  g.origin = geometry.origin.Compose(
+      {box.min_ix * geometry.resolution_m, box.min_iy * geometry.resolution_m, 0.0});
+  g.origin.yaw_rad = geometry.origin.yaw_rad;
+  return g;
+}
+
+std::string SerializeRegistry(const common::ObstacleRegistry& registry) {
+  Writer w;
+  w.Put<uint32_t>(kRegistryMagic);
+  w.Put<int64_t>(registry.map_version);
+  w.Put<uint32_t>(static_cast<uint32_t>(registry.obstacles.size()));
+  for (const auto& o : registry.obstacles) {
+    w.Put<int32_t>(o.id);
+    w.Put<int8_t>(static_cast<int8_t>(o.kind));
+    w.Put<double>(o.centroid_m.x());
+    w.Put<double>(o.centroid_m.y());
+    w.Put<double>(o.slope_rad);
+    w.Put<double>(o.height_m);
+    w.Put<double>(o.width_m);
+    w.Put<double>(o.length_m);
+    w.Put<double>(o.depth_m);
+    w.Put<double>(o.area_m2);
+    w.Put<int32_t>(o.num_cells);
+    w.PutString(SerializePolygon(o.outline_m));
+    w.Put<uint32_t>(static_cast<uint32_t>(o.verdicts.size()));
+    for (const auto& v : o.verdicts) {
+      w.PutString(v.profile);
+      w.PutString(v.profile_hash);
+      w.Put<uint8_t>(v.crossable ? 1 : 0);
+      w.PutString(v.reason);
+    }
+  }
+  return w.Take();
+}
+
+common::Result<common::ObstacleRegistry> ParseRegistry(const std::string& bytes) {
+  Reader r(bytes);
+  uint32_t magic = 0, count = 0;
+  common::ObstacleRegistry registry;
+  if (!r.Get(&magic) || magic != kRegistryMagic || !r.Get(&registry.map_version) ||
+      !r.Get(&count)) {
+    return common::CorruptError("not an obstacle registry");
+  }
+  // Each obstacle takes at least 93 bytes: refuse counts the bytes cannot hold.
+  if (count > r.remaining() / 93 + 1) return common::CorruptError("obstacle count too large");
+  registry.obstacles.resize(count);
+  for (auto& o : registry.obstacles) {
+    int8_t kind = 0;
+    double cx = 0, cy = 0;
+    std::string outline;
+    uint32_t verdicts = 0;
+    bool ok = r.Get(&o.id) && r.Get(&kind) && r.Get(&cx) && r.Get(&cy) && r.Get(&o.slope_rad) &&
+              r.Get(&o.height_m) && r.Get(&o.width_m) && r.Get(&o.length_m) &&
+              r.Get(&o.depth_m) && r.Get(&o.area_m2) && r.Get(&o.num_cells) &&
+              r.GetString(&outline) && r.Get(&verdicts);
+    if (!ok || kind < 1 || kind > 5 || verdicts > r.remaining() / 13) {
+      return common::CorruptError("truncated or malformed obstacle registry");
+    }
+    o.kind = static_cast<common::ObstacleKind>(kind);
+    o.centroid_m = {cx, cy};
+    auto polygon = ParsePolygon(outline);
+    if (!polygon.ok()) return polygon.status();
+    o.outline_m = std::move(polygon).value();
+    o.verdicts.resize(verdicts);
+    for (auto& v : o.verdicts) {
+      uint8_t crossable = 0;
+      if (!r.GetString(&v.profile) || !r.GetString(&v.profile_hash) || !r.Get(&crossable) ||
+          !r.GetString(&v.reason)) {
+        return common::CorruptError("truncated obstacle verdict");
+      }
+      v.crossable = crossable != 0;
+    }
+  }
+  if (r.remaining() != 0) return common::CorruptError("trailing bytes after obstacle registry");
+  return registry;
+}
+
+std::string SerializePolygon(const std::vector<common::Vector2>& polygon) {
+  std::string out(polygon.size() * 2 * sizeof(double), '\0');
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    const double xy[2] = {polygon[i].x(), polygon[i].y()};
+    std::memcpy(&out[i * 2 * sizeof(double)], xy, sizeof(xy));
+  }
+  return out;
+}
+
+common::Result<std::vector<common::Vector2>> ParsePolygon(const std::string& bytes) {
+  if (bytes.size() % (2 * sizeof(double)) != 0) {
+    return common::CorruptError("polygon blob of " + std::to_string(bytes.size()) +
+                                " bytes is not a list of (x, y) doubles");
+  }
+  std::vector<common::Vector2> polygon(bytes.size() / (2 * sizeof(double)));
+  for (size_t i = 0; i < polygon.size(); ++i) {
+    double xy[2];
+    std::memcpy(xy, &bytes[i * 2 * sizeof(double)], sizeof(xy));
+    polygon[i] = {xy[0], xy[1]};
+  }
+  return polygon;
+}
+
+}  // namespace cairn::mapstore

@@ -1,0 +1,94 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/grid_map.h"
+#include "common/status.h"
+#include "mapstore/map_store.h"
+
+/// @file
+/// How the map store keeps bytes: blobs compressed with zstd (float tiles byte-shuffled first,
+/// which lets zstd find the repeated exponent bytes of smooth terrain), each with the CRC-32 of
+/// its raw bytes, addressed by content. And how a layer is cut into tiles.
+
+namespace cairn::mapstore {
+
+/// Stored codec of a blob (a column of the blobs table: never renumber).
+enum class Codec : int {
+  kRaw = 0,            ///< bytes as they are
+  kZstd = 1,           ///< zstd frame
+  kZstdShuffle4 = 2,   ///< 4-byte elements split into byte planes, then zstd
+};
+
+/// A blob ready to store.
+struct EncodedBlob {
+  Codec codec{Codec::kRaw};
+  int64_t raw_size{0};
+  uint32_t raw_crc32{0};
+  std::string data;  ///< stored bytes
+  /// Content address: the CRC-32 of the raw bytes, a second independent checksum (zstd's
+  /// frame checksum, XXH64-based, for compressed blobs) and the raw size.
+  std::string key;
+};
+
+/// Runs fn(i) for every i in [0, n) on up to `threads` threads (the caller's among them).
+/// The first exception thrown by fn is rethrown in the caller after all threads finished.
+void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
+
+/// CRC-32 (zlib polynomial) of a buffer.
+uint32_t Crc32(const void* data, size_t size);
+
+/// Encodes raw bytes. kZstdShuffle4 needs a size that is a multiple of 4.
+/// @throws std::invalid_argument for a bad codec or size, std::runtime_error if zstd fails.
+EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level = 1);
+/// Decodes stored bytes into `out` (raw_size bytes) and verifies them: zstd's frame checksum
+/// when the frame has one, and the CRC-32 of the raw bytes when it has none or `verify_crc`.
+/// kCorrupt says what did not match. Thread-safe.
+common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t raw_size,
+                            uint32_t raw_crc32, uint8_t* out, bool verify_crc = false);
+/// As DecodeBlobTo, into a new string.
+common::Result<std::string> DecodeBlob(Codec codec, const std::string& data, int64_t raw_size,
+                                       uint32_t raw_crc32, bool verify_crc = false);
+
+/// One tile of a layer: tile (tile_ix, tile_iy) covers cells [x0, x0 + cells_x) x
+/// [y0, y0 + cells_y).
+struct TileSpec {
+  int tile_ix{0};
+  int tile_iy{0};
+  int x0{0};
+  int y0{0};
+  int cells_x{0};
+  int cells_y{0};
+};
+
+/// Every tile of a grid (or only those overlapping `region` when given), row by row.
+std::vector<TileSpec> TilesOf(const common::GridGeometry& geometry, int tile_size,
+                              const std::optional<CellBox>& region = std::nullopt);
+/// Cells of one tile, x fastest (the product's order).
+std::vector<float> ExtractTile(const common::Layer& layer, const TileSpec& tile);
+/// True when every cell is NaN (such tiles are not stored: absent = unknown).
+bool AllUnknown(const std::vector<float>& cells);
+/// Writes tile cells into `layer`, whose cell (0, 0) is cell (offset_ix, offset_iy) of the full
+/// grid; cells outside the layer are skipped.
+void PasteTile(const TileSpec& tile, const float* cells, int offset_ix, int offset_iy,
+               common::Layer* layer);
+
+/// The box clipped to a grid; empty when they do not overlap.
+CellBox ClipBox(const CellBox& box, const common::GridGeometry& geometry);
+/// Geometry of a box of a grid (same resolution and yaw, origin at the box's minimum corner).
+common::GridGeometry SubGeometry(const common::GridGeometry& geometry, const CellBox& box);
+
+/// Serialises a registry (obstacles, outlines, verdicts) in a compact little-endian form.
+std::string SerializeRegistry(const common::ObstacleRegistry& registry);
+/// kCorrupt when the bytes are not a registry.
+common::Result<common::ObstacleRegistry> ParseRegistry(const std::string& bytes);
+
+/// Polygons as little-endian doubles x0 y0 x1 y1 ...
+std::string SerializePolygon(const std::vector<common::Vector2>& polygon);
+common::Result<std::vector<common::Vector2>> ParsePolygon(const std::string& bytes);
+
+}  // namespace cairn::mapstore

@@ -1,0 +1,100 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include "cairn/lcmt_grid_manifest.hpp"
+#include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_mapstore_reply.hpp"
+#include "cairn/lcmt_mapstore_request.hpp"
+#include "cairn/lcmt_octomap.hpp"
+#include "cairn/lcmt_tile_resend_request.hpp"
+#include "common/status.h"
+#include "mapstore/map_store.h"
+#include "services/runtime/tiler.h"
+
+/// @file
+/// MapstoreClient: the caller's side of the cairn-mapstore protocol (see mapstore_service.h):
+/// request ids, replays on silence, push saves that answer the store's resend requests, and
+/// loads that reassemble the reply tiles and ask for what went missing. Single-threaded: the
+/// calls handle the LCM traffic themselves.
+
+namespace cairn::mapstore {
+
+struct MapstoreClientOptions {
+  double reply_timeout_s{2.0};     ///< re-send the request (same id) after this much silence
+  double total_timeout_s{60.0};    ///< give up after this
+  double resend_interval_s{0.1};   ///< ask for missing tiles after this long without progress
+  int tile_size{100};              ///< cells per side of pushed tiles
+  int tiles_per_burst{2};          ///< pushed tiles sent back to back before a short pause
+  double burst_pause_ms{0.1};      ///< lets the store's receive buffer drain (UDP drops the rest)
+};
+
+class MapstoreClient {
+ public:
+  /// `lcm` must outlive the client. `requester` names the caller in the store's audit log.
+  MapstoreClient(lcm::LCM& lcm, std::string requester, MapstoreClientOptions options = {});
+  ~MapstoreClient();
+  MapstoreClient(const MapstoreClient&) = delete;
+  MapstoreClient& operator=(const MapstoreClient&) = delete;
+
+  /// A fresh request id (unique per process and time).
+  int64_t NextRequestId();
+
+  /// Sends a request (request_id and requester filled in when empty) and waits for its reply.
+  /// kUnavailable when no reply came in time. The reply's own status is not interpreted.
+  common::Result<cairn::lcmt_mapstore_reply> Call(cairn::lcmt_mapstore_request request);
+
+  /// Push save of a snapshot: layers, obstacles and OctoMap, then OP_SAVE. `source_profile`
+  /// names the profile the map was made with.
+  common::Result<cairn::lcmt_mapstore_reply> Save(const MapSnapshot& snapshot);
+
+  struct Loaded {
+    cairn::lcmt_mapstore_reply reply;
+    common::GridMap layers;
+    common::ObstacleRegistry obstacles;
+    std::optional<OctomapData> octomap;
+    int resend_requests{0};  ///< how often tiles had to be asked for again
+  };
+  /// Loads a map for a profile (empty: base layers only). `layers` may include "octomap".
+  /// A reply status other than OK becomes an error status carrying the store's message.
+  common::Result<Loaded> Load(const std::string& site, const std::string& map, int64_t version,
+                              const std::string& profile,
+                              const std::vector<std::string>& layers = {});
+
+ private:
+  struct Incoming;
+  void OnReply(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_mapstore_reply* m);
+  void OnTile(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_grid_tile* m);
+  void OnManifest(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_grid_manifest* m);
+  void OnOctomap(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_octomap* m);
+  void OnPushResend(const lcm::ReceiveBuffer*, const std::string&,
+                    const cairn::lcmt_tile_resend_request* m);
+  /// Publishes a pushed tile, pausing after every burst.
+  void PublishPaced(const cairn::lcmt_grid_tile& tile);
+  int paced_{0};
+
+  lcm::LCM& lcm_;
+  std::string requester_;
+  MapstoreClientOptions options_;
+  std::vector<lcm::Subscription*> subscriptions_;
+  int64_t counter_{0};
+  // The call in progress.
+  int64_t active_id_{0};
+  std::optional<cairn::lcmt_mapstore_reply> reply_;
+  std::unique_ptr<Incoming> incoming_;
+  // A push in progress: what to send again when asked.
+  struct Push;
+  std::unique_ptr<Push> push_;
+};
+
+/// The core status matching a reply status (OK -> ok).
+common::Status StatusOfReply(const cairn::lcmt_mapstore_reply& reply);
+
+}  // namespace cairn::mapstore

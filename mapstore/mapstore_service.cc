@@ -1,0 +1,1148 @@
+#include "mapstore/mapstore_service.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <thread>
+
+#include "cairn/lcmt_map_control_request.hpp"
+#include "common/channels.h"
+#include "common/layers.h"
+#include "mapstore/map_operations.h"
+#include "mapstore/map_transfer.h"
+#include "mapstore/mapstore_conversions.h"
+#include "mapstore/names.h"
+#include "services/runtime/conversions.h"
+
+namespace cairn::mapstore {
+
+namespace fs = std::filesystem;
+using common::Result;
+using common::Status;
+using Reply = cairn::lcmt_mapstore_reply;
+using Request = cairn::lcmt_mapstore_request;
+
+namespace {
+
+constexpr char kActor[] = "cairn-mapstore";
+// Pseudo layers a push client is asked to send again (they cannot be layer names).
+constexpr char kResendObstacles[] = "#obstacles";
+constexpr char kResendOctomap[] = "#octomap";
+constexpr size_t kOctomapChunkBytes = 192 * 1024;
+
+double SecondsSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+// Profile-specific layers the store never saves: it derives them per profile itself.
+bool IsDerivedLayer(const std::string& name) {
+  return layers::IsCostLayer(name) || name == layers::kSlope || name == layers::kStepMax ||
+         name == layers::kRoughness || name == layers::kDitchDepth ||
+         name == layers::kDitchWidth;
+}
+
+// Chunks of one OctoMap version being reassembled.
+struct OctomapChunks {
+  int64_t version{0};
+  int32_t chunk_count{0};
+  int64_t total_bytes{0};
+  int64_t checksum{0};
+  bool binary{true};
+  double resolution_m{0.0};
+  std::map<int32_t, std::string> chunks;
+
+  // Adds a chunk; returns false for an inconsistent one.
+  bool Add(const cairn::lcmt_octomap& c) {
+    if (c.chunk_count <= 0 || c.chunk_index < 0 || c.chunk_index >= c.chunk_count ||
+        c.num_bytes != static_cast<int32_t>(c.data.size()) || c.total_bytes < 0 ||
+        c.total_bytes > (int64_t{1} << 31)) {
+      return false;
+    }
+    if (chunks.empty() || c.version != version || c.chunk_count != chunk_count) {
+      chunks.clear();
+      version = c.version;
+      chunk_count = c.chunk_count;
+      total_bytes = c.total_bytes;
+      checksum = c.checksum;
+      binary = c.binary;
+      resolution_m = c.resolution_m;
+    }
+    chunks[c.chunk_index].assign(c.data.begin(), c.data.end());
+    return true;
+  }
+  // The whole tree once every chunk arrived and the checksum holds.
+  std::optional<OctomapData> Complete() const {
+    if (chunk_count == 0 || static_cast<int32_t>(chunks.size()) != chunk_count) return std::nullopt;
+    OctomapData out;
+    out.binary = binary;
+    out.resolution_m = resolution_m;
+    for (const auto& [index, bytes] : chunks) out.bytes += bytes;
+    if (static_cast<int64_t>(out.bytes.size()) != total_bytes ||
+        runtime::Crc32(out.bytes.data(), out.bytes.size()) != static_cast<uint32_t>(checksum)) {
+      return std::nullopt;
+    }
+    return out;
+  }
+};
+
+std::vector<cairn::lcmt_octomap> OctomapChunksOf(const OctomapData& octomap,
+                                                 const std::string& robot,
+                                                 const std::string& map_name, int64_t utime) {
+  std::vector<cairn::lcmt_octomap> out;
+  const size_t total = octomap.bytes.size();
+  const int32_t count = static_cast<int32_t>(std::max<size_t>(1, (total + kOctomapChunkBytes - 1) /
+                                                                     kOctomapChunkBytes));
+  const int64_t crc = runtime::Crc32(octomap.bytes.data(), total);
+  for (int32_t i = 0; i < count; ++i) {
+    cairn::lcmt_octomap c{};
+    c.utime = utime;
+    c.robot = robot;
+    c.map_name = map_name;
+    c.resolution_m = octomap.resolution_m;
+    c.binary = octomap.binary;
+    c.version = 1;
+    c.chunk_index = i;
+    c.chunk_count = count;
+    c.total_bytes = static_cast<int64_t>(total);
+    c.checksum = crc;
+    const size_t begin = i * kOctomapChunkBytes, end = std::min(total, begin + kOctomapChunkBytes);
+    c.data.assign(octomap.bytes.begin() + begin, octomap.bytes.begin() + end);
+    c.num_bytes = static_cast<int32_t>(c.data.size());
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+// Layers of an assembler as one map; every layer must share one geometry.
+Result<common::GridMap> CollectLayers(const runtime::LayerAssembler& assembler,
+                                      const std::vector<std::string>& names) {
+  common::GridMap map;
+  bool first = true;
+  for (const std::string& name : names) {
+    auto layer = assembler.Layer(name);
+    if (!layer) return common::NotFoundError("no layer '" + name + "' arrived");
+    if (first) {
+      map = common::GridMap(layer->geometry());
+      first = false;
+    } else if (layer->geometry() != map.geometry()) {
+      return common::InvalidArgumentError("layer '" + name +
+                                          "' has another geometry than the other layers");
+    }
+    map.AddLayer(name) = layer->at(name);
+  }
+  return map;
+}
+
+}  // namespace
+
+int8_t ReplyStatus(const Status& status) {
+  switch (status.code()) {
+    case common::StatusCode::kOk: return Reply::STATUS_OK;
+    case common::StatusCode::kNotFound: return Reply::STATUS_NOT_FOUND;
+    case common::StatusCode::kInvalidArgument: return Reply::STATUS_INVALID;
+    case common::StatusCode::kCorrupt: return Reply::STATUS_CORRUPT;
+    case common::StatusCode::kUnavailable: return Reply::STATUS_BUSY;
+    case common::StatusCode::kAlreadyExists: return Reply::STATUS_CONFLICT;
+    default: return Reply::STATUS_ERROR;
+  }
+}
+
+struct MapstoreService::Outgoing {
+  std::string map_name;
+  std::string robot;
+  std::unique_ptr<runtime::LayerTiler> tiler;
+  std::vector<runtime::LayerTiler::Batch> first_send;  // sent once with the reply, then dropped
+  std::vector<std::string> layers;
+  std::optional<OctomapData> octomap;
+  int64_t cells{0};
+};
+
+struct MapstoreService::Staging {
+  runtime::LayerAssembler assembler;
+  std::set<std::string> manifests;
+  std::optional<common::ObstacleRegistry> obstacles;
+  OctomapChunks octomap;
+  std::string robot;
+  Clock::time_point last{Clock::now()};
+  int64_t cells{0};
+};
+
+struct MapstoreService::PendingSave {
+  Request request;
+  std::string key;
+  std::string map_name;  // push: "<request_id>/<map>"
+  bool pull{false};
+  Clock::time_point started{Clock::now()};
+  Clock::time_point next_resend{Clock::now()};
+};
+
+struct MapstoreService::LiveMirror {
+  runtime::LayerAssembler assembler;
+  std::map<std::string, Clock::time_point> manifest_time;
+  std::optional<common::ObstacleRegistry> obstacles;
+  Clock::time_point obstacles_time;
+  OctomapChunks octomap;
+  std::optional<OctomapData> complete_octomap;
+};
+
+MapstoreService::MapstoreService(runtime::Node& node, MapStore& store, ProfileDeriver deriver,
+                                 MapstoreServiceParams params)
+    : node_(node), store_(store), deriver_(std::move(deriver)), params_(std::move(params)) {
+  node_.Subscribe<Request>(channels::kMapstoreRequest,
+                           [this](const Request& r) { OnRequest(r); });
+  node_.Subscribe<cairn::lcmt_grid_tile>(channels::kMapstorePushTiles,
+                                         [this](const cairn::lcmt_grid_tile& t) { OnPushTile(t); });
+  node_.Subscribe<cairn::lcmt_grid_manifest>(
+      channels::kMapstorePushManifest,
+      [this](const cairn::lcmt_grid_manifest& m) { OnPushManifest(m); });
+  node_.Subscribe<cairn::lcmt_obstacle_registry>(
+      channels::kMapstorePushObstacles,
+      [this](const cairn::lcmt_obstacle_registry& r) { OnPushObstacles(r); });
+  node_.Subscribe<cairn::lcmt_octomap>(channels::kMapstorePushOctomap,
+                                       [this](const cairn::lcmt_octomap& c) { OnPushOctomap(c); });
+  node_.Subscribe<cairn::lcmt_tile_resend_request>(
+      channels::kMapstoreTileResend,
+      [this](const cairn::lcmt_tile_resend_request& r) { OnResend(r); });
+  node_.AddTimer(0.05, [this] { Poll(); });
+  node_.AddTimer(0.002, [this] { PollJobs(); });
+}
+
+MapstoreService::~MapstoreService() = default;
+
+std::string MapstoreService::RequestKey(const Request& request) const {
+  return request.requester + "#" + std::to_string(request.request_id);
+}
+
+void MapstoreService::SetStatus(const Status& status, Reply* reply) {
+  reply->status = ReplyStatus(status);
+  reply->message = status.ok() ? reply->message : status.message();
+  if (status.code() == common::StatusCode::kInvalidArgument) {
+    node_.CountDropped("invalid_requests");
+  } else if (status.code() == common::StatusCode::kNotFound) {
+    node_.Count("not_found");
+  } else if (!status.ok()) {
+    node_.Count("failed_requests");
+    node_.Warn("request_error", status.ToString());
+  }
+}
+
+void MapstoreService::Publish(const Reply& reply) { node_.Publish(channels::kMapstoreReply, reply); }
+
+void MapstoreService::OnRequest(const Request& request) {
+  const std::string key = RequestKey(request);
+  auto cached = replies_.find(key);
+  if (cached != replies_.end()) {
+    // A replay: the first reply again, and its payload if still kept.
+    node_.Count("replayed_requests");
+    Publish(cached->second);
+    auto out = outgoing_.find(std::to_string(request.request_id) + "/" + request.map_name);
+    if (out != outgoing_.end()) Resend(*out->second, nullptr);
+    return;
+  }
+  if (pending_.count(key)) return;  // still collecting tiles for this save
+  for (const auto& job : jobs_) {
+    if (RequestKey(job->request) == key) return;  // still working on it
+  }
+
+  const auto started = Clock::now();
+  Reply reply{};
+  reply.utime = node_.NowUtime();
+  reply.request_id = request.request_id;
+  reply.op = request.op;
+  reply.status = Reply::STATUS_OK;
+  reply.site = request.site.empty() ? kDefaultSite : request.site;
+  reply.map_name = request.map_name;
+  reply.version = request.version;
+  reply.num_maps = reply.num_profiles = reply.num_places = reply.num_obstacles = 0;
+  reply.num_tiles = reply.num_layers = 0;
+  reply.duration_us = 0;
+  bool done = true;
+  try {
+    done = Handle(request, &reply);
+  } catch (const std::exception& e) {
+    SetStatus(common::InternalError(std::string("internal error: ") + e.what()), &reply);
+  }
+  if (done) Finish(request, std::move(reply), started);
+}
+
+void MapstoreService::Finish(const Request& request, Reply reply, Clock::time_point started) {
+  reply.duration_us = static_cast<int64_t>(SecondsSince(started) * 1e6);
+  reply.num_maps = static_cast<int32_t>(reply.maps.size());
+  reply.num_profiles = static_cast<int32_t>(reply.profiles.size());
+  reply.num_places = static_cast<int32_t>(reply.places.size());
+  reply.num_obstacles = static_cast<int32_t>(reply.obstacles.size());
+  reply.num_layers = static_cast<int32_t>(reply.layers.size());
+  const std::string key = RequestKey(request);
+  replies_[key] = reply;
+  reply_order_.push_back(key);
+  while (static_cast<int>(reply_order_.size()) > params_.reply_cache_size) {
+    replies_.erase(reply_order_.front());
+    reply_order_.pop_front();
+  }
+  Publish(reply);
+  // The payload follows the reply that announces it.
+  auto out = outgoing_.find(std::to_string(request.request_id) + "/" + request.map_name);
+  if (out != outgoing_.end() && reply.status == Reply::STATUS_OK) Resend(*out->second, nullptr);
+}
+
+bool MapstoreService::Handle(const Request& request, Reply* reply) {
+  const std::string site = request.site.empty() ? kDefaultSite : request.site;
+  const MapRef ref{site, request.map_name, request.version};
+  const WriteContext ctx{request.requester.empty() ? "unknown" : request.requester,
+                         request.request_id, 0};
+  Status s;
+  switch (request.op) {
+    case Request::OP_SAVE:
+      return StartSave(request, reply);
+    case Request::OP_LOAD:
+    case Request::OP_SHARE:
+    case Request::OP_EXPORT:
+    case Request::OP_IMPORT:
+    case Request::OP_LOAD_OBSTACLES: {
+      if (request.num_layers < 0 ||
+          request.layers.size() != static_cast<size_t>(request.num_layers)) {
+        SetStatus(common::InvalidArgumentError("layers disagree with num_layers"), reply);
+        return true;
+      }
+      auto job = std::make_unique<Job>();
+      job->request = request;
+      job->started = Clock::now();
+      job->reply = *reply;
+      jobs_.push_back(std::move(job));
+      PollJobs();  // starts it now when a worker is free
+      return false;
+    }
+    case Request::OP_LIST_MAPS: {
+      MapFilter filter;
+      filter.site = request.site;
+      filter.name = request.map_name;
+      filter.all_versions = !request.map_name.empty();
+      auto maps = store_.ListMaps(filter);
+      if (!maps.ok()) {
+        SetStatus(maps.status(), reply);
+        return true;
+      }
+      for (const MapInfo& info : *maps) reply->maps.push_back(ToLcm(info));
+      reply->message = std::to_string(maps->size()) + " maps";
+      return true;
+    }
+    case Request::OP_LIST_PROFILES: {
+      auto profiles = store_.ListProfiles();
+      if (!profiles.ok()) {
+        SetStatus(profiles.status(), reply);
+        return true;
+      }
+      for (const StoredProfile& p : *profiles) reply->profiles.push_back(runtime::ToLcm(p.profile));
+      reply->message = std::to_string(profiles->size()) + " profiles";
+      return true;
+    }
+    case Request::OP_LIST_PLACES: {
+      auto places = store_.ListPlaces(site);
+      if (!places.ok()) {
+        SetStatus(places.status(), reply);
+        return true;
+      }
+      for (const Place& p : *places) reply->places.push_back(ToLcm(p));
+      reply->message = std::to_string(places->size()) + " places";
+      return true;
+    }
+    case Request::OP_PUT_PROFILE: {
+      if (!request.has_profile) {
+        SetStatus(common::InvalidArgumentError("OP_PUT_PROFILE without profile_data"), reply);
+        return true;
+      }
+      auto profile = runtime::FromLcm(request.profile_data);
+      if (!profile.ok()) {
+        SetStatus(common::InvalidArgumentError(profile.status().message()), reply);
+        return true;
+      }
+      s = store_.PutProfile(*profile, ctx);
+      SetStatus(s, reply);
+      if (s.ok()) {
+        reply->message = "profile '" + profile->name + "' stored (" + profile->ContentHash() + ")";
+        reply->profiles.push_back(runtime::ToLcm(*profile));
+        node_.Event("stored profile %s (%s) for %s", profile->name.c_str(),
+                    profile->ContentHash().c_str(), ctx.actor.c_str());
+      }
+      return true;
+    }
+    case Request::OP_GET_PROFILE: {
+      auto profile = store_.GetProfile(request.profile);
+      if (!profile.ok()) {
+        SetStatus(profile.status(), reply);
+        return true;
+      }
+      reply->profiles.push_back(runtime::ToLcm(profile->profile));
+      return true;
+    }
+    case Request::OP_DELETE:
+      s = store_.DeleteMap(ref, ctx);
+      SetStatus(s, reply);
+      if (s.ok()) {
+        reply->message = request.version == 0 ? "map deleted" : "version deleted";
+        node_.Event("deleted %s/%s%s for %s", site.c_str(), request.map_name.c_str(),
+                    request.version == 0 ? "" : (" v" + std::to_string(request.version)).c_str(),
+                    ctx.actor.c_str());
+      }
+      return true;
+    case Request::OP_PUT_PLACE: {
+      if (request.num_places <= 0 ||
+          request.places.size() != static_cast<size_t>(request.num_places)) {
+        SetStatus(common::InvalidArgumentError("OP_PUT_PLACE needs places (num_places > 0)"),
+                  reply);
+        return true;
+      }
+      std::vector<Place> places;
+      for (const auto& m : request.places) {
+        auto p = FromLcm(m);
+        if (!p.ok()) {
+          SetStatus(p.status(), reply);
+          return true;
+        }
+        places.push_back(std::move(p).value());
+      }
+      s = store_.PutPlaces(site, places, ctx);
+      SetStatus(s, reply);
+      if (s.ok()) reply->message = std::to_string(places.size()) + " places stored";
+      return true;
+    }
+    default:
+      SetStatus(common::InvalidArgumentError("unknown op " + std::to_string(request.op)), reply);
+      return true;
+  }
+}
+
+MapstoreService::JobResult MapstoreService::RunJob(const Request& request, Reply reply) const {
+  JobResult out;
+  out.reply = std::move(reply);
+  try {
+    switch (request.op) {
+      case Request::OP_LOAD: JobLoad(request, &out); break;
+      case Request::OP_SHARE: JobShare(request, &out); break;
+      case Request::OP_LOAD_OBSTACLES: JobLoadObstacles(request, &out); break;
+      case Request::OP_EXPORT: JobExport(request, &out); break;
+      case Request::OP_IMPORT: JobImport(request, &out); break;
+      default: out.status = common::InternalError("not a worker request"); break;
+    }
+  } catch (const std::exception& e) {
+    out.status = common::InternalError(std::string("internal error: ") + e.what());
+  }
+  return out;
+}
+
+void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
+  Reply* reply = &out->reply;
+  out->counter = "loads";
+  const std::string site = request.site.empty() ? kDefaultSite : request.site;
+  std::vector<std::string> wanted;
+  bool want_octomap = false;
+  for (const std::string& l : request.layers) {
+    if (l == "octomap") {
+      want_octomap = true;
+    } else {
+      wanted.push_back(l);
+    }
+  }
+  const bool only_octomap = want_octomap && wanted.empty();
+  ProfileView view;
+  if (only_octomap) {
+    auto info = store_.GetMapInfo({site, request.map_name, request.version});
+    if (!info.ok()) {
+      out->status = info.status();
+      return;
+    }
+    view.info = *info;
+  } else {
+    auto loaded = LoadForProfile(store_, &deriver_, {site, request.map_name, request.version},
+                                 request.profile, {wanted, std::nullopt});
+    if (!loaded.ok()) {
+      out->status = loaded.status();
+      return;
+    }
+    view = std::move(loaded).value();
+  }
+  if (want_octomap) {
+    auto o = store_.LoadOctomap({view.info.site, view.info.name, view.info.version});
+    if (!o.ok()) {
+      out->status = o.status();
+      return;
+    }
+    out->octomap = std::move(o).value();
+  }
+  reply->version = view.info.version;
+  reply->maps.push_back(ToLcm(view.info));
+  out->robot = view.info.provenance.source_robot;
+  if (!only_octomap) {
+    reply->layers = view.layers.layer_names();
+    out->layers = std::move(view.layers);
+  }
+  for (const auto& o : view.obstacles.obstacles) {
+    if (static_cast<int>(reply->obstacles.size()) >= params_.max_reply_obstacles) break;
+    reply->obstacles.push_back(runtime::ToLcm(o));
+  }
+  reply->message = std::to_string(reply->layers.size()) + " layers" +
+                   (request.profile.empty() ? std::string()
+                                            : view.from_cache ? ", derived layers from the cache"
+                                                              : ", derived now (not cached)") +
+                   (out->octomap ? ", OctoMap follows" : "");
+}
+
+void MapstoreService::JobShare(const Request& request, JobResult* out) const {
+  Reply* reply = &out->reply;
+  const std::string site = request.site.empty() ? kDefaultSite : request.site;
+  if (!deriver_.valid()) {
+    out->status = common::UnavailableError("this store cannot derive profile layers");
+    return;
+  }
+  const auto t0 = Clock::now();
+  auto shared = ShareMap(store_, deriver_, {site, request.map_name, request.version},
+                         request.profile,
+                         {request.requester.empty() ? "unknown" : request.requester,
+                          request.request_id, 0});
+  if (!shared.ok()) {
+    out->status = shared.status();
+    return;
+  }
+  reply->version = shared->info.version;
+  reply->maps.push_back(ToLcm(shared->info));
+  reply->layers = shared->derived.layers.layer_names();
+  for (const auto& o : shared->changed) {
+    if (static_cast<int>(reply->obstacles.size()) >= params_.max_reply_obstacles) break;
+    reply->obstacles.push_back(runtime::ToLcm(o));
+  }
+  char buf[256];
+  std::snprintf(buf, sizeof(buf), "%zu obstacles change verdict from %s to %s; layers %s",
+                shared->changed.size(),
+                shared->source_profile.empty() ? "(unknown)" : shared->source_profile.c_str(),
+                request.profile.c_str(), shared->was_cached ? "from the cache" : "derived");
+  reply->message = buf;
+  if (!shared->was_cached) {
+    std::snprintf(buf, sizeof(buf), "shared %s/%s v%lld with %s: derived in %.0f ms, %zu verdicts differ",
+                  site.c_str(), request.map_name.c_str(),
+                  static_cast<long long>(shared->info.version), request.profile.c_str(),
+                  SecondsSince(t0) * 1e3, shared->changed.size());
+    out->event = buf;
+  }
+}
+
+void MapstoreService::JobLoadObstacles(const Request& request, JobResult* out) const {
+  Reply* reply = &out->reply;
+  const std::string site = request.site.empty() ? kDefaultSite : request.site;
+  const MapRef ref{site, request.map_name, request.version};
+  auto info = store_.GetMapInfo(ref);
+  if (!info.ok()) {
+    out->status = info.status();
+    return;
+  }
+  common::ObstacleRegistry registry;
+  if (request.profile.empty()) {
+    auto stored = store_.LoadObstacles(ref);
+    if (!stored.ok()) {
+      out->status = stored.status();
+      return;
+    }
+    registry = std::move(stored).value();
+  } else {
+    auto view = LoadForProfile(store_, &deriver_, ref, request.profile,
+                               {{layers::CostLayer(request.profile)}, std::nullopt});
+    if (!view.ok()) {
+      out->status = view.status();
+      return;
+    }
+    registry = std::move(view->obstacles);
+  }
+  reply->version = info->version;
+  reply->maps.push_back(ToLcm(*info));
+  for (const auto& o : registry.obstacles) {
+    if (static_cast<int>(reply->obstacles.size()) >= params_.max_reply_obstacles) break;
+    reply->obstacles.push_back(runtime::ToLcm(o));
+  }
+  reply->message = std::to_string(registry.obstacles.size()) + " obstacles";
+  if (static_cast<int>(registry.obstacles.size()) > params_.max_reply_obstacles) {
+    reply->message += " (first " + std::to_string(params_.max_reply_obstacles) +
+                      " in this reply; export csv for all)";
+  }
+}
+
+Result<std::string> MapstoreService::FilesPath(const std::string& relative) const {
+  std::error_code ec;
+  fs::create_directories(params_.files_root, ec);
+  const fs::path root = fs::weakly_canonical(params_.files_root, ec);
+  if (ec) return common::UnavailableError("files root '" + params_.files_root + "' is unusable");
+  if (relative.find('\0') != std::string::npos) {
+    return common::InvalidArgumentError("path holds a NUL byte");
+  }
+  const fs::path candidate = fs::weakly_canonical(root / relative, ec);
+  if (ec) return common::InvalidArgumentError("cannot resolve path '" + relative + "'");
+  const fs::path rel = candidate.lexically_relative(root);
+  if (rel.empty() || *rel.begin() == "..") {
+    return common::InvalidArgumentError("path '" + relative + "' leaves the store's files folder");
+  }
+  return candidate.string();
+}
+
+void MapstoreService::JobExport(const Request& request, JobResult* out) const {
+  Reply* reply = &out->reply;
+  ExportOptions options;
+  options.ref = {request.site.empty() ? kDefaultSite : request.site, request.map_name,
+                 request.version};
+  options.format = request.format.empty() ? "ros" : request.format;
+  if (options.format.rfind("ros-", 0) == 0) {
+    auto mode = io::PgmModeFromName(options.format.substr(4));
+    if (!mode.ok()) {
+      out->status = mode.status();
+      return;
+    }
+    options.ros.mode = *mode;
+    options.format = "ros";
+  }
+  auto folder = FilesPath(request.path.empty() ? "." : request.path);
+  if (!folder.ok()) {
+    out->status = folder.status();
+    return;
+  }
+  options.folder = *folder;
+  options.profile = request.profile;
+  if (!request.layers.empty()) options.layer = request.layers.front();
+  auto files = ExportMap(store_, &deriver_, options);
+  if (!files.ok()) {
+    out->status = files.status();
+    return;
+  }
+  std::string list;
+  for (const std::string& f : *files) list += (list.empty() ? "" : ", ") + f;
+  reply->message = "wrote " + list;
+  out->event = "exported " + options.ref.site + "/" + request.map_name + " as " + options.format +
+               ": " + list;
+}
+
+void MapstoreService::JobImport(const Request& request, JobResult* out) const {
+  Reply* reply = &out->reply;
+  ImportOptions options;
+  options.site = request.site.empty() ? kDefaultSite : request.site;
+  options.name = request.map_name;
+  if (!request.layers.empty()) options.layer = request.layers.front();
+  auto path = FilesPath(request.path);
+  if (!path.ok()) {
+    out->status = path.status();
+    return;
+  }
+  options.path = *path;
+  options.provenance.source_robot = request.robot;
+  options.provenance.source_profile = request.profile;
+  auto info = ImportMap(store_, options,
+                        {request.requester.empty() ? "unknown" : request.requester,
+                         request.request_id, 0});
+  if (!info.ok()) {
+    out->status = info.status();
+    return;
+  }
+  reply->version = info->version;
+  reply->maps.push_back(ToLcm(*info));
+  reply->layers = info->layers;
+  reply->message = "imported as version " + std::to_string(info->version);
+  out->event = "imported " + request.path + " into " + options.site + "/" + options.name + " v" +
+               std::to_string(info->version);
+}
+
+void MapstoreService::ApplyJob(Job& job, JobResult result) {
+  Reply reply = std::move(result.reply);
+  SetStatus(result.status, &reply);
+  if (!result.counter.empty()) node_.Count(result.counter);
+  if (result.status.ok()) {
+    const std::string map_name = std::to_string(job.request.request_id) + "/" + job.request.map_name;
+    if (result.layers) reply.num_tiles = SendLayers(map_name, *result.layers, result.robot);
+    if (result.octomap) SendOctomap(map_name, *result.octomap);
+    if (!result.event.empty()) node_.Event("%s", result.event.c_str());
+  }
+  Finish(job.request, std::move(reply), job.started);
+}
+
+void MapstoreService::PollJobs() {
+  // Finished jobs reply in the order they finish; queued ones start while workers are free.
+  for (auto it = jobs_.begin(); it != jobs_.end();) {
+    Job& job = **it;
+    if (job.running &&
+        job.result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
+      std::unique_ptr<Job> done = std::move(*it);
+      it = jobs_.erase(it);
+      ApplyJob(*done, done->result.get());
+    } else {
+      ++it;
+    }
+  }
+  int running = 0;
+  for (const auto& job : jobs_) running += job->running;
+  for (auto& job : jobs_) {
+    if (running >= std::max(1, params_.worker_threads)) break;
+    if (job->running) continue;
+    job->running = true;
+    ++running;
+    job->result = std::async(std::launch::async,
+                             [this, request = job->request, reply = job->reply]() {
+                               return RunJob(request, reply);
+                             });
+  }
+}
+
+int MapstoreService::SendLayers(const std::string& map_name, const common::GridMap& layers,
+                                const std::string& robot) {
+  auto out = std::make_unique<Outgoing>();
+  out->map_name = map_name;
+  out->robot = robot;
+  out->tiler = std::make_unique<runtime::LayerTiler>(robot, map_name, params_.reply_tile_size);
+  int tiles = 0;
+  const int64_t utime = node_.NowUtime();
+  for (const std::string& name : layers.layer_names()) {
+    auto batch = out->tiler->Update(layers, name, runtime::TileEncoding::kFloat, utime, true);
+    tiles += static_cast<int>(batch.tiles.size());
+    out->first_send.push_back(std::move(batch));
+    out->layers.push_back(name);
+    out->cells += layers.geometry().num_cells();
+  }
+  // Keep the tiler for resends; the oldest payloads go first when memory runs short.
+  outgoing_cells_ += out->cells;
+  auto existing = outgoing_.find(map_name);
+  if (existing != outgoing_.end()) {
+    outgoing_cells_ -= existing->second->cells;
+    existing->second = std::move(out);
+  } else {
+    outgoing_[map_name] = std::move(out);
+    outgoing_order_.push_back(map_name);
+  }
+  while (outgoing_cells_ > params_.max_kept_reply_cells && outgoing_order_.size() > 1) {
+    auto victim = outgoing_.find(outgoing_order_.front());
+    if (victim != outgoing_.end()) {
+      outgoing_cells_ -= victim->second->cells;
+      outgoing_.erase(victim);
+    }
+    outgoing_order_.pop_front();
+  }
+  return tiles;
+}
+
+void MapstoreService::SendOctomap(const std::string& map_name, const OctomapData& octomap) {
+  auto it = outgoing_.find(map_name);
+  if (it == outgoing_.end()) {
+    auto out = std::make_unique<Outgoing>();
+    out->map_name = map_name;
+    it = outgoing_.emplace(map_name, std::move(out)).first;
+    outgoing_order_.push_back(map_name);
+  }
+  it->second->octomap = octomap;
+}
+
+void MapstoreService::Resend(Outgoing& out, const cairn::lcmt_tile_resend_request* request) {
+  // A null request sends the whole payload: every layer's manifest and tiles, then the OctoMap.
+  int sent = 0;
+  auto publish_batch = [&](const runtime::LayerTiler::Batch& batch) {
+    node_.Publish(channels::kMapstoreManifest, batch.manifest);
+    for (const auto& tile : batch.tiles) {
+      node_.Publish(channels::kMapstoreTiles, tile);
+      if (++sent % std::max(1, params_.tiles_per_burst) == 0 && params_.burst_pause_ms > 0) {
+        std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
+      }
+    }
+  };
+  if (request == nullptr && !out.first_send.empty()) {
+    // The first send of a reply: the batches made when the payload was tiled.
+    for (const auto& batch : out.first_send) publish_batch(batch);
+    out.first_send.clear();
+  } else if (out.tiler) {
+    if (request != nullptr) {
+      if (request->layer == kResendOctomap) {
+        // handled below
+      } else {
+        publish_batch(out.tiler->Resend(*request));
+      }
+    } else {
+      for (const std::string& layer : out.layers) {
+        cairn::lcmt_tile_resend_request all{};
+        all.layer = layer;
+        all.num_tiles = 0;
+        publish_batch(out.tiler->Resend(all));
+      }
+    }
+  }
+  if (out.octomap && (request == nullptr || request->layer == kResendOctomap)) {
+    for (const auto& chunk :
+         OctomapChunksOf(*out.octomap, out.robot, out.map_name, node_.NowUtime())) {
+      node_.Publish(channels::kMapstoreOctomap, chunk);
+    }
+  }
+}
+
+void MapstoreService::OnResend(const cairn::lcmt_tile_resend_request& request) {
+  auto it = outgoing_.find(request.map_name);
+  if (it == outgoing_.end()) return;  // not ours, or forgotten
+  node_.Count("tile_resend_requests");
+  Resend(*it->second, &request);
+}
+
+bool MapstoreService::StartSave(const Request& request, Reply* reply) {
+  const std::string site = request.site.empty() ? kDefaultSite : request.site;
+  Status s = ValidateName("site name", site);
+  if (s.ok()) s = ValidateName("map name", request.map_name);
+  if (s.ok() && !request.robot.empty()) s = ValidateName("robot name", request.robot);
+  if (s.ok() && (request.num_layers < 0 ||
+                 request.layers.size() != static_cast<size_t>(request.num_layers))) {
+    s = common::InvalidArgumentError("layers disagree with num_layers");
+  }
+  for (const std::string& layer : request.layers) {
+    if (s.ok()) s = ValidateLayerName(layer);
+  }
+  if (s.ok() && request.robot.empty() && request.layers.empty()) {
+    s = common::InvalidArgumentError("a pushed save must name its layers");
+  }
+  if (!s.ok()) {
+    SetStatus(s, reply);
+    return true;
+  }
+  // A save replayed after a restart: the audit log knows the version it made.
+  if (!request.requester.empty()) {
+    auto earlier = store_.FindRequest(request.requester, request.request_id);
+    if (earlier.ok() && earlier->has_value() && (*earlier)->op == "save" &&
+        (*earlier)->map == request.map_name) {
+      reply->version = (*earlier)->version;
+      reply->message = "already saved as version " + std::to_string((*earlier)->version);
+      return true;
+    }
+  }
+  auto save = std::make_unique<PendingSave>();
+  save->request = request;
+  save->request.site = site;
+  save->key = RequestKey(request);
+  save->pull = !request.robot.empty();
+  save->map_name = std::to_string(request.request_id) + "/" + request.map_name;
+  if (save->pull) {
+    EnsureMirror(request.robot);
+    cairn::lcmt_map_control_request control{};
+    control.utime = node_.NowUtime();
+    control.request_id = request.request_id;
+    control.requester = kActor;
+    control.op = cairn::lcmt_map_control_request::OP_PUBLISH_ALL;
+    control.has_profile = false;
+    node_.Publish(channels::ForRobot(request.robot, channels::kMapControl), control);
+    save->next_resend = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                           std::chrono::duration<double>(params_.pull_settle_s));
+  }
+  PendingSave& pending = *save;
+  pending_[save->key] = std::move(save);
+  TryFinishSave(pending, false);  // replies now when everything already arrived
+  return false;
+}
+
+bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
+  const Request& request = save.request;
+  Reply reply{};
+  reply.utime = node_.NowUtime();
+  reply.request_id = request.request_id;
+  reply.op = request.op;
+  reply.status = Reply::STATUS_OK;
+  reply.site = request.site;
+  reply.map_name = request.map_name;
+  reply.version = 0;
+  reply.num_tiles = 0;
+
+  // What must be there, and what is missing.
+  runtime::LayerAssembler* assembler = nullptr;
+  std::vector<std::string> wanted(request.layers.begin(), request.layers.end());
+  std::vector<std::string> missing;
+  std::optional<common::ObstacleRegistry> obstacles;
+  std::optional<OctomapData> octomap;
+  std::string push_robot;
+  std::vector<cairn::lcmt_tile_resend_request> resends;
+  const int64_t utime = node_.NowUtime();
+  if (save.pull) {
+    LiveMirror& mirror = *mirrors_.at(request.robot);
+    assembler = &mirror.assembler;
+    if (wanted.empty()) {
+      // Every robot-agnostic layer announced since the request; wait until none is new.
+      for (const auto& [layer, when] : mirror.manifest_time) {
+        if (!IsDerivedLayer(layer)) wanted.push_back(layer);
+      }
+      if (SecondsSince(save.started) < params_.pull_settle_s) return false;
+    }
+    if (wanted.empty()) missing.push_back("any layer (is the mapper of '" + request.robot + "' running?)");
+    for (const std::string& layer : wanted) {
+      auto it = mirror.manifest_time.find(layer);
+      const bool fresh = it != mirror.manifest_time.end() && it->second >= save.started;
+      if (fresh && assembler->Complete(layer)) continue;
+      missing.push_back(layer);
+      std::optional<cairn::lcmt_tile_resend_request> r;
+      if (fresh) r = assembler->MakeResendRequest(layer, kActor, utime);
+      if (!r) {
+        // No current manifest: ask for the whole layer (its manifest comes with it).
+        cairn::lcmt_tile_resend_request all{};
+        all.utime = utime;
+        all.requester = kActor;
+        all.robot = request.robot;
+        all.map_name = "live";
+        all.layer = layer;
+        r = all;
+      }
+      resends.push_back(*r);
+    }
+    // Obstacles published after the request, or (a mapper without any) none after a while.
+    const bool obstacles_fresh = mirror.obstacles && mirror.obstacles_time >= save.started;
+    if (!obstacles_fresh && SecondsSince(save.started) < 4 * params_.pull_settle_s) {
+      missing.push_back("obstacles");
+    }
+    if (mirror.obstacles) obstacles = mirror.obstacles;
+    octomap = mirror.complete_octomap;
+  } else {
+    auto it = staging_.find(save.map_name);
+    if (it == staging_.end()) {
+      for (const auto& layer : wanted) missing.push_back(layer);
+      if (request.expect_obstacles) missing.push_back(kResendObstacles);
+      if (request.expect_octomap) missing.push_back(kResendOctomap);
+    } else {
+      Staging& staging = *it->second;
+      assembler = &staging.assembler;
+      push_robot = staging.robot;
+      for (const std::string& layer : wanted) {
+        if (!staging.manifests.count(layer) || !assembler->Complete(layer)) missing.push_back(layer);
+      }
+      obstacles = staging.obstacles;
+      octomap = staging.octomap.Complete();
+      if (request.expect_obstacles && !obstacles) missing.push_back(kResendObstacles);
+      if (request.expect_octomap && !octomap) missing.push_back(kResendOctomap);
+    }
+    for (const std::string& layer : missing) {
+      std::optional<cairn::lcmt_tile_resend_request> r;
+      if (assembler != nullptr && it != staging_.end() && it->second->manifests.count(layer)) {
+        r = assembler->MakeResendRequest(layer, kActor, utime);
+      }
+      if (!r) {
+        cairn::lcmt_tile_resend_request all{};
+        all.utime = utime;
+        all.requester = kActor;
+        all.layer = layer;
+        all.layer_version = 0;
+        all.num_tiles = 0;
+        r = all;
+      }
+      r->map_name = save.map_name;
+      resends.push_back(*r);
+    }
+  }
+
+  if (!missing.empty()) {
+    if (timed_out) {
+      std::string list;
+      for (const auto& m : missing) list += (list.empty() ? "" : ", ") + m;
+      SetStatus(common::UnavailableError("timed out after " +
+                                         std::to_string(static_cast<int>(params_.save_timeout_s)) +
+                                         " s waiting for: " + list),
+                &reply);
+      node_.Count("save_timeouts");
+    } else {
+      if (Clock::now() >= save.next_resend) {
+        const std::string channel =
+            save.pull ? channels::ForRobot(request.robot, channels::kMapTileResend)
+                      : std::string(channels::kMapstorePushTileResend);
+        for (const auto& r : resends) node_.Publish(channel, r);
+        save.next_resend = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                              std::chrono::duration<double>(params_.resend_interval_s));
+      }
+      return false;
+    }
+  } else {
+    // Everything is here: store it.
+    auto base = CollectLayers(*assembler, wanted);
+    if (!base.ok()) {
+      SetStatus(base.status(), &reply);
+    } else {
+      MapSnapshot snapshot;
+      snapshot.site = request.site;
+      snapshot.name = request.map_name;
+      snapshot.base = std::move(base).value();
+      snapshot.provenance.source_robot =
+          save.pull ? request.robot : (push_robot.empty() ? request.requester : push_robot);
+      snapshot.provenance.source_profile = request.profile;
+      snapshot.provenance.code_version = request.code_version;
+      snapshot.provenance.parameters = request.parameters;
+      if (!request.profile.empty()) {
+        auto p = store_.GetProfile(request.profile);
+        if (p.ok()) snapshot.provenance.source_profile_hash = p->content_hash;
+      }
+      if (ValidateName("robot", snapshot.provenance.source_robot).code() != common::StatusCode::kOk) {
+        snapshot.provenance.source_robot.clear();
+      }
+      if (obstacles) snapshot.obstacles = *obstacles;
+      if (octomap) snapshot.octomap = *octomap;
+      const auto t0 = Clock::now();
+      auto info = store_.SaveMap(snapshot, {request.requester.empty() ? "unknown" : request.requester,
+                                            request.request_id, 0});
+      if (!info.ok()) {
+        SetStatus(info.status(), &reply);
+      } else {
+        reply.version = info->version;
+        reply.maps.push_back(ToLcm(*info));
+        reply.layers = info->layers;
+        reply.message = "saved version " + std::to_string(info->version);
+        node_.Count("saves");
+        node_.Event("saved %s/%s v%lld from %s (%zu layers, %zu obstacles%s) in %.0f ms",
+                    request.site.c_str(), request.map_name.c_str(),
+                    static_cast<long long>(info->version),
+                    save.pull ? ("mapper of " + request.robot).c_str() : "a push",
+                    info->layers.size(), snapshot.obstacles.obstacles.size(),
+                    octomap ? ", octomap" : "", SecondsSince(t0) * 1e3);
+      }
+    }
+  }
+  if (!save.pull) staging_.erase(save.map_name);
+  const Request done_request = request;
+  const Clock::time_point started = save.started;
+  pending_.erase(save.key);  // `save` is gone from here on
+  Finish(done_request, std::move(reply), started);
+  return true;
+}
+
+void MapstoreService::Poll() {
+  // Pending saves: finish, ask again, or give up.
+  std::vector<std::string> keys;
+  for (const auto& [key, save] : pending_) keys.push_back(key);
+  for (const std::string& key : keys) {
+    auto it = pending_.find(key);
+    if (it == pending_.end()) continue;
+    const bool timed_out = SecondsSince(it->second->started) > params_.save_timeout_s;
+    try {
+      TryFinishSave(*it->second, timed_out);
+    } catch (const std::exception& e) {
+      node_.Warn("save", std::string("save failed: ") + e.what());
+      pending_.erase(key);
+    }
+  }
+  // Pushed data nobody asked to save.
+  for (auto it = staging_.begin(); it != staging_.end();) {
+    bool wanted = false;
+    for (const auto& [key, save] : pending_) wanted |= save->map_name == it->first;
+    if (!wanted && SecondsSince(it->second->last) > params_.staging_timeout_s) {
+      node_.CountDropped("abandoned_pushes");
+      it = staging_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+namespace {
+
+// Total cells held by staging areas.
+template <typename Map>
+int64_t StagedCells(const Map& staging) {
+  int64_t total = 0;
+  for (const auto& [name, s] : staging) total += s->cells;
+  return total;
+}
+
+}  // namespace
+
+void MapstoreService::OnPushTile(const cairn::lcmt_grid_tile& tile) {
+  if (tile.map_name.find('/') == std::string::npos) {
+    node_.CountDropped("bad_push_tiles");
+    return;
+  }
+  auto it = staging_.find(tile.map_name);
+  if (it == staging_.end()) {
+    if (StagedCells(staging_) + int64_t{tile.num_cells} > params_.max_staged_cells) {
+      node_.CountDropped("staging_full");
+      node_.Warn("staging_full", "pushed tiles dropped: too much staged data");
+      return;
+    }
+    it = staging_.emplace(tile.map_name, std::make_unique<Staging>()).first;
+  }
+  Staging& staging = *it->second;
+  if (!staging.assembler.OnTile(tile)) {
+    node_.CountDropped("bad_push_tiles");
+    return;
+  }
+  staging.robot = tile.robot;
+  staging.cells += tile.num_cells;
+  staging.last = Clock::now();
+}
+
+void MapstoreService::OnPushManifest(const cairn::lcmt_grid_manifest& manifest) {
+  if (manifest.map_name.find('/') == std::string::npos || manifest.num_tiles < 0 ||
+      manifest.tile_ix.size() != static_cast<size_t>(manifest.num_tiles) ||
+      manifest.tile_iy.size() != static_cast<size_t>(manifest.num_tiles) ||
+      manifest.checksum.size() != static_cast<size_t>(manifest.num_tiles) ||
+      manifest.tile_version.size() != static_cast<size_t>(manifest.num_tiles)) {
+    node_.CountDropped("bad_push_manifests");
+    return;
+  }
+  auto& staging = staging_[manifest.map_name];
+  if (!staging) staging = std::make_unique<Staging>();
+  staging->assembler.OnManifest(manifest);
+  staging->manifests.insert(manifest.layer);
+  staging->last = Clock::now();
+}
+
+void MapstoreService::OnPushObstacles(const cairn::lcmt_obstacle_registry& msg) {
+  auto registry = runtime::FromLcm(msg);
+  if (!registry.ok() || msg.map_name.find('/') == std::string::npos) {
+    node_.CountDropped("bad_push_obstacles");
+    node_.Warn("bad_obstacles", registry.ok() ? "obstacles without a request map name"
+                                              : registry.status().message());
+    return;
+  }
+  auto& staging = staging_[msg.map_name];
+  if (!staging) staging = std::make_unique<Staging>();
+  staging->obstacles = std::move(registry).value();
+  staging->last = Clock::now();
+}
+
+void MapstoreService::OnPushOctomap(const cairn::lcmt_octomap& chunk) {
+  if (chunk.map_name.find('/') == std::string::npos) {
+    node_.CountDropped("bad_push_octomap");
+    return;
+  }
+  auto& staging = staging_[chunk.map_name];
+  if (!staging) staging = std::make_unique<Staging>();
+  if (!staging->octomap.Add(chunk)) node_.CountDropped("bad_push_octomap");
+  staging->last = Clock::now();
+}
+
+void MapstoreService::EnsureMirror(const std::string& robot) {
+  if (mirrors_.count(robot)) return;
+  auto mirror = std::make_unique<LiveMirror>();
+  LiveMirror* m = mirror.get();
+  mirrors_[robot] = std::move(mirror);
+  node_.Subscribe<cairn::lcmt_grid_tile>(
+      channels::ForRobot(robot, channels::kMapTiles), [this, m](const cairn::lcmt_grid_tile& t) {
+        if (!m->assembler.OnTile(t)) node_.CountDropped("bad_mapper_tiles");
+      });
+  node_.Subscribe<cairn::lcmt_occupancy_tile>(
+      channels::ForRobot(robot, channels::kMapOccupancy),
+      [this, m](const cairn::lcmt_occupancy_tile& t) {
+        if (!m->assembler.OnTile(t)) node_.CountDropped("bad_mapper_tiles");
+      });
+  node_.Subscribe<cairn::lcmt_grid_manifest>(
+      channels::ForRobot(robot, channels::kMapManifest), [m](const cairn::lcmt_grid_manifest& g) {
+        m->assembler.OnManifest(g);
+        m->manifest_time[g.layer] = Clock::now();
+      });
+  node_.Subscribe<cairn::lcmt_obstacle_registry>(
+      channels::ForRobot(robot, channels::kMapObstacles),
+      [this, m](const cairn::lcmt_obstacle_registry& r) {
+        auto registry = runtime::FromLcm(r);
+        if (registry.ok()) {
+          m->obstacles = std::move(registry).value();
+          m->obstacles_time = Clock::now();
+        } else {
+          node_.CountDropped("bad_mapper_obstacles");
+        }
+      });
+  node_.Subscribe<cairn::lcmt_octomap>(
+      channels::ForRobot(robot, channels::kMapOctomap), [this, m](const cairn::lcmt_octomap& c) {
+        if (!m->octomap.Add(c)) {
+          node_.CountDropped("bad_mapper_octomap");
+          return;
+        }
+        if (auto whole = m->octomap.Complete()) m->complete_octomap = std::move(whole);
+      });
+  node_.Event("following the live map of %s for pull saves", robot.c_str());
+}
+
+}  // namespace cairn::mapstore

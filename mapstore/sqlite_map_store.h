@@ -1,0 +1,132 @@
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "mapstore/blob_codec.h"
+#include "mapstore/map_store.h"
+#include "mapstore/sqlite_db.h"
+
+/// @file
+/// SqliteMapStore: the map store in one SQLite file (schema in mapstore/schema.h).
+///
+/// - WAL journal: readers never block the writer and the writer never blocks readers.
+/// - Every write is one BEGIN IMMEDIATE transaction, retried while another writer holds the
+///   lock (busy_timeout plus a bounded retry), so two processes saving at once both succeed.
+///   A process killed mid-save leaves the previous versions intact: the save either committed
+///   or never happened.
+/// - Tiles are compressed and checksummed before the transaction starts (in parallel), so the
+///   write lock is held only for the inserts.
+/// - Blobs are content-addressed and never updated; identical tiles of successive versions are
+///   stored once.
+/// - Read-only use (loads, lists, checks) never writes to the file.
+/// - A file that is not a cairn database, or is from a newer schema, is refused with a message;
+///   an older schema is migrated when the store is opened for writing.
+
+namespace cairn::mapstore {
+
+struct SqliteOptions {
+  bool read_only{false};          ///< open without write access (no migration, no creation)
+  bool create_if_missing{true};   ///< create an empty database when the file does not exist
+  int busy_timeout_ms{5000};      ///< how long one statement waits for a lock
+  int write_attempts{10};         ///< BEGIN IMMEDIATE attempts while the database stays busy
+  bool synchronous_full{false};   ///< fsync every commit (default NORMAL: safe against crashes
+                                  ///< of the process, a power cut may lose the newest commits)
+  int tile_size_cells{100};       ///< tile side of newly saved layers
+  int zstd_level{1};              ///< compression level of new blobs
+  int compression_threads{2};     ///< threads compressing/decompressing tiles
+  int cache_size_kib{32768};      ///< SQLite page cache
+  int64_t max_page_count{0};      ///< size quota in pages (0 = none); beyond it writes fail
+                                  ///< with kResourceExhausted like a full disk
+  /// WAL pages after which a commit also checkpoints (SQLite's default is 1000). A long-running
+  /// writer sets it high and calls CheckpointIfIdle() so saves do not pay for checkpoints.
+  int wal_autocheckpoint_pages{1000};
+};
+
+class SqliteMapStore final : public MapStore {
+ public:
+  /// Opens (and creates or migrates) a database. ":memory:" gives a private in-memory database.
+  /// Errors: kCorrupt (not a cairn database), kInvalidArgument (schema newer than this build, or
+  /// an older schema opened read-only), kUnavailable/kNotFound (cannot open the file).
+  static common::Result<std::unique_ptr<SqliteMapStore>> Open(const std::string& path,
+                                                              const SqliteOptions& options = {});
+  ~SqliteMapStore() override;
+
+  common::Result<MapInfo> SaveMap(const MapSnapshot& snapshot, const WriteContext& ctx) override;
+  common::Result<MapInfo> GetMapInfo(const MapRef& ref) const override;
+  common::Result<std::vector<MapInfo>> ListMaps(const MapFilter& filter) const override;
+  common::Result<common::GridMap> LoadLayers(const MapRef& ref,
+                                             const LayerQuery& query) const override;
+  common::Result<common::ObstacleRegistry> LoadObstacles(const MapRef& ref) const override;
+  common::Result<OctomapData> LoadOctomap(const MapRef& ref) const override;
+  common::Status DeleteMap(const MapRef& ref, const WriteContext& ctx) override;
+  common::Status PutProfile(const common::RobotProfile& profile, const WriteContext& ctx) override;
+  common::Result<StoredProfile> GetProfile(const std::string& name) const override;
+  common::Result<std::vector<StoredProfile>> ListProfiles() const override;
+  common::Result<std::optional<DerivedProfile>> FindDerived(
+      const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
+      const LayerQuery& query) const override;
+  common::Result<std::vector<DerivedInfo>> ListDerived(const MapRef& ref) const override;
+  common::Status PutDerived(const MapRef& ref, const DerivedProfile& derived,
+                            const WriteContext& ctx) override;
+  common::Status PutPlaces(const std::string& site, const std::vector<Place>& places,
+                           const WriteContext& ctx) override;
+  common::Result<std::vector<Place>> ListPlaces(const std::string& site) const override;
+  common::Result<std::vector<std::string>> ListSites() const override;
+  common::Result<std::vector<AuditEntry>> ListAudit(int limit) const override;
+  common::Result<std::optional<AuditEntry>> FindRequest(const std::string& actor,
+                                                        int64_t request_id) const override;
+  /// PRAGMA integrity_check, PRAGMA foreign_key_check, the header, and every blob decoded
+  /// against its checksum.
+  common::Result<CheckReport> Check(const ProgressFn& progress = nullptr) const override;
+
+  /// Copies the WAL into the database file (PASSIVE: never waits for readers) when something
+  /// was written and nothing for `idle_s`. Returns true when it checkpointed.
+  bool CheckpointIfIdle(double idle_s = 1.0);
+
+  /// Removes blobs no version or cache refers to (never a referenced one), then VACUUMs.
+  /// Returns the bytes the file shrank by.
+  common::Result<int64_t> Vacuum(const ProgressFn& progress = nullptr);
+  /// Raw stored bytes of every blob referenced by a version's base layers, by "layer/tx/ty":
+  /// lets tests and `cairn-map check` prove that base blobs never change.
+  common::Result<std::map<std::string, std::string>> BaseBlobBytes(const MapRef& ref) const;
+  /// Total stored (compressed) bytes of a version's base layers.
+  common::Result<int64_t> BaseBytes(const MapRef& ref) const;
+
+  const std::string& path() const { return path_; }
+  int schema_version() const { return schema_version_; }
+
+ private:
+  struct VersionRow;
+  SqliteMapStore(std::string path, SqliteOptions options, std::unique_ptr<sqlite::Database> db);
+  common::Status Initialise();
+  common::Result<VersionRow> Resolve(const MapRef& ref) const;
+  common::Result<MapInfo> InfoOf(const VersionRow& row) const;
+  common::Result<int64_t> SiteId(const std::string& site, bool create, int64_t utime);
+    common::Status Audit(const WriteContext& ctx, int64_t utime, const std::string& op,
+                       const std::string& site, const std::string& map, int64_t version,
+                       const std::string& detail);
+  /// Reads the tiles a bound statement yields (tile_ix, tile_iy, codec, raw_size, raw_crc32,
+  /// data) into `layer`, which covers `box` of the full grid and starts all unknown.
+  common::Status ReadTiles(sqlite::Statement* stmt, const std::string& label, int tile_size,
+                           const common::GridGeometry& full, const CellBox& box,
+                           common::Layer* layer) const;
+  /// Writes tiles of layers and returns their blob ids through `insert_tile`.
+  common::Status WriteBlobs(const std::vector<EncodedBlob>& blobs, std::vector<int64_t>* ids);
+  /// Runs `body` inside BEGIN IMMEDIATE ... COMMIT, retrying while the database is busy.
+  common::Status WriteTransaction(const std::function<common::Status()>& body);
+
+  std::string path_;
+  SqliteOptions options_;
+  std::unique_ptr<sqlite::Database> db_;
+  int schema_version_{0};
+  bool dirty_{false};                 // written since the last checkpoint
+  int64_t last_write_utime_{0};
+  mutable std::mutex mutex_;
+};
+
+}  // namespace cairn::mapstore

@@ -1,0 +1,307 @@
+#include "planner/cost_map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+
+#include "common/check.h"
+
+namespace cairn::planner {
+
+using common::CellIndex;
+using common::Pose2;
+using common::Vector2;
+
+namespace {
+
+constexpr double kHalfDiagonal = 0.70710678118654752;  // cells
+// A point at distance d from a cell centre is at most d - 0.5 from the cell's square (the
+// square holds the disc of radius 0.5 around its centre). For a point anywhere in a cell whose
+// centre is d_cc from a blocking cell's centre, the distance to that square is therefore at
+// most d_cc + kHalfDiagonal - 0.5 = d_cc + kInnerSlack.
+constexpr double kInnerSlack = kHalfDiagonal - 0.5;
+constexpr double kEps = 1e-6;
+
+}  // namespace
+
+void CostMapParams::Validate() const {
+  CAIRN_THROW_UNLESS(std::isfinite(lethal_cost) && lethal_cost > 0.0f,
+                     "lethal_cost must be positive, got " << lethal_cost);
+  CAIRN_THROW_UNLESS(std::isfinite(planning_padding_m) && planning_padding_m >= 0.0,
+                     "planning_padding_m must not be negative, got " << planning_padding_m);
+  CAIRN_THROW_UNLESS(std::isfinite(unknown_cost) && unknown_cost >= 0.0f &&
+                         unknown_cost < lethal_cost,
+                     "unknown_cost must lie in [0, lethal_cost), got " << unknown_cost);
+}
+
+CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
+                 const std::vector<Vector2>& footprint_m, const CostMapParams& params)
+    : geometry_(geometry), cost_(std::move(cost)), params_(params) {
+  geometry_.Validate();
+  params_.Validate();
+  CAIRN_THROW_UNLESS(cost_.rows() == geometry_.size_x && cost_.cols() == geometry_.size_y,
+                     "cost layer is " << cost_.rows() << " x " << cost_.cols()
+                                      << " cells but the grid is " << geometry_.size_x << " x "
+                                      << geometry_.size_y);
+  cos_origin_ = std::cos(geometry_.origin.yaw_rad);
+  sin_origin_ = std::sin(geometry_.origin.yaw_rad);
+  // The robot's footprint and the padded one the global planner checks its states with.
+  FootprintRasterizer robot(footprint_m);
+  FootprintRasterizer padded(GrowConvexPolygon(robot.hull_m(), params_.planning_padding_m));
+  for (const FootprintRasterizer* r : {&robot, &padded}) {
+    shapes_.push_back({*r, r->circumscribed_radius_m() / geometry_.resolution_m,
+                       r->inscribed_radius_m() / geometry_.resolution_m});
+  }
+
+  // Blocking and non-free masks, then their distance fields.
+  GridMask blocked(geometry_.size_x, geometry_.size_y);
+  GridMask nonfree(geometry_.size_x, geometry_.size_y);
+  const float* c = cost_.data();
+  uint8_t* b = blocked.data();
+  uint8_t* nf = nonfree.data();
+  const int64_t n = geometry_.num_cells();
+  int min_x = geometry_.size_x, min_y = geometry_.size_y, max_x = -1, max_y = -1;
+  for (int64_t i = 0; i < n; ++i) {
+    const float v = c[i];
+    const bool unknown = std::isnan(v);
+    b[i] = (unknown ? !params_.unknown_is_traversable : v >= params_.lethal_cost) ? 1 : 0;
+    nf[i] = (unknown || v > 0.0f) ? 1 : 0;
+    if (!unknown) {
+      const int ix = static_cast<int>(i % geometry_.size_x);
+      const int iy = static_cast<int>(i / geometry_.size_x);
+      min_x = std::min(min_x, ix);
+      max_x = std::max(max_x, ix);
+      min_y = std::min(min_y, iy);
+      max_y = std::max(max_y, iy);
+    }
+  }
+  if (max_x >= 0) known_cells_ = std::make_pair(CellIndex{min_x, min_y}, CellIndex{max_x, max_y});
+  blocked_distance_ = DistanceTransform(blocked);
+  nonfree_distance_ = DistanceTransform(nonfree);
+}
+
+Vector2 CostMap::ToGridCells(const Vector2& world_m) const {
+  const double dx = world_m.x() - geometry_.origin.x_m;
+  const double dy = world_m.y() - geometry_.origin.y_m;
+  const double inv = 1.0 / geometry_.resolution_m;
+  return {(cos_origin_ * dx + sin_origin_ * dy) * inv, (-sin_origin_ * dx + cos_origin_ * dy) * inv};
+}
+
+bool CostMap::Contains(const Vector2& world_m) const {
+  const Vector2 g = ToGridCells(world_m);
+  return g.x() >= 0.0 && g.y() >= 0.0 && g.x() < geometry_.size_x && g.y() < geometry_.size_y;
+}
+
+float CostMap::CostAt(const Vector2& world_m) const {
+  const Vector2 g = ToGridCells(world_m);
+  if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.x() < geometry_.size_x && g.y() < geometry_.size_y)) {
+    return std::numeric_limits<float>::quiet_NaN();
+  }
+  return cost_(static_cast<int>(g.x()), static_cast<int>(g.y()));
+}
+
+float CostMap::TraversalCostAt(const Vector2& world_m) const {
+  const float v = CostAt(world_m);
+  if (std::isnan(v)) return params_.unknown_cost;
+  return std::min(std::max(v, 0.0f), params_.lethal_cost);
+}
+
+bool CostMap::IsBlockedCell(const CellIndex& cell) const {
+  if (!geometry_.Contains(cell)) return !params_.unknown_is_traversable;
+  const float v = cost_(cell.ix, cell.iy);
+  return std::isnan(v) ? !params_.unknown_is_traversable : v >= params_.lethal_cost;
+}
+
+double CostMap::ClearanceAt(const Vector2& world_m) const {
+  const Vector2 g = ToGridCells(world_m);
+  if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.x() < geometry_.size_x && g.y() < geometry_.size_y)) {
+    return 0.0;
+  }
+  return blocked_distance_(static_cast<int>(g.x()), static_cast<int>(g.y())) *
+         geometry_.resolution_m;
+}
+
+double CostMap::SmoothClearanceAt(const Vector2& world_m) const {
+  const Vector2 g = ToGridCells(world_m);
+  if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.x() < geometry_.size_x && g.y() < geometry_.size_y)) {
+    return 0.0;
+  }
+  // Cell centres sit at half-integer coordinates; clamp at the border.
+  const double fx = std::clamp(g.x() - 0.5, 0.0, geometry_.size_x - 1.0);
+  const double fy = std::clamp(g.y() - 0.5, 0.0, geometry_.size_y - 1.0);
+  const int x0 = std::min(static_cast<int>(fx), geometry_.size_x - 1);
+  const int y0 = std::min(static_cast<int>(fy), geometry_.size_y - 1);
+  const int x1 = std::min(x0 + 1, geometry_.size_x - 1);
+  const int y1 = std::min(y0 + 1, geometry_.size_y - 1);
+  const double tx = fx - x0, ty = fy - y0;
+  const auto& d = blocked_distance_;
+  if (std::isinf(d(x0, y0))) return std::numeric_limits<double>::infinity();
+  const double v = (1 - tx) * (1 - ty) * d(x0, y0) + tx * (1 - ty) * d(x1, y0) +
+                   (1 - tx) * ty * d(x0, y1) + tx * ty * d(x1, y1);
+  return v * geometry_.resolution_m;
+}
+
+CostMap::Quick CostMap::QuickCheck(double x_cells, double y_cells, const Shape& shape) const {
+  if (!(x_cells >= 0.0 && y_cells >= 0.0)) return Quick::kUnknown;
+  const int ix = static_cast<int>(x_cells);
+  const int iy = static_cast<int>(y_cells);
+  // Every cell the footprint can touch must lie inside the grid for the distance fields to
+  // speak for it (cells outside the grid are unknown).
+  const int margin = static_cast<int>(std::ceil(shape.circumscribed_cells)) + 2;
+  if (ix < margin || iy < margin || ix >= geometry_.size_x - margin ||
+      iy >= geometry_.size_y - margin) {
+    return Quick::kUnknown;
+  }
+  // A touched cell's centre lies within the circumscribed radius plus one cell diagonal of the
+  // centre of the robot's cell.
+  const double reach = shape.circumscribed_cells + 2.0 * kHalfDiagonal + kEps;
+  if (nonfree_distance_(ix, iy) > reach) return Quick::kValidFree;
+  const float blocked = blocked_distance_(ix, iy);
+  if (blocked > reach) return Quick::kValid;
+  // A blocking cell this close overlaps the inscribed disc wherever the robot is in its cell.
+  if (blocked + kInnerSlack + kEps < shape.inscribed_cells) return Quick::kInvalid;
+  return Quick::kUnknown;
+}
+
+FootprintCost CostMap::ExactAtGridPose(double x_cells, double y_cells, double yaw_grid_rad,
+                                       const Shape& shape) const {
+  thread_local std::vector<RowSpan> spans;
+  shape.rasterizer.Rasterize(x_cells, y_cells, yaw_grid_rad, geometry_.resolution_m, &spans);
+  FootprintCost out;
+  const int sx = geometry_.size_x;
+  const int sy = geometry_.size_y;
+  const float* data = cost_.data();
+  auto unknown = [&]() {
+    out.touches_unknown = true;
+    if (!params_.unknown_is_traversable) {
+      out.valid = false;
+      out.max_cost = params_.lethal_cost;
+      return false;
+    }
+    out.max_cost = std::max(out.max_cost, params_.unknown_cost);
+    return true;
+  };
+  for (const RowSpan& span : spans) {
+    if (span.iy < 0 || span.iy >= sy) {
+      if (!unknown()) return out;
+      continue;
+    }
+    int lo = span.ix_min, hi = span.ix_max;
+    if (lo < 0 || hi >= sx) {
+      if (!unknown()) return out;
+      lo = std::max(lo, 0);
+      hi = std::min(hi, sx - 1);
+    }
+    const float* row = data + static_cast<int64_t>(span.iy) * sx;
+    for (int ix = lo; ix <= hi; ++ix) {
+      const float v = row[ix];
+      if (std::isnan(v)) {
+        if (!unknown()) return out;
+      } else if (v >= params_.lethal_cost) {
+        out.valid = false;
+        out.max_cost = params_.lethal_cost;
+        return out;
+      } else if (v > out.max_cost) {
+        out.max_cost = v;
+      }
+    }
+  }
+  return out;
+}
+
+FootprintCost CostMap::CheckFootprintExact(const Pose2& pose_world, FootprintKind kind) const {
+  const Vector2 g = ToGridCells(pose_world.position());
+  return ExactAtGridPose(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad),
+                         shapes_[static_cast<int>(kind)]);
+}
+
+FootprintCost CostMap::CheckFootprint(const Pose2& pose_world, FootprintKind kind) const {
+  const Shape& shape = shapes_[static_cast<int>(kind)];
+  const Vector2 g = ToGridCells(pose_world.position());
+  switch (QuickCheck(g.x(), g.y(), shape)) {
+    case Quick::kValidFree:
+      return FootprintCost{};
+    case Quick::kInvalid:
+      return FootprintCost{false, params_.lethal_cost, false};
+    case Quick::kValid:
+    case Quick::kUnknown:
+      break;
+  }
+  return ExactAtGridPose(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad), shape);
+}
+
+bool CostMap::IsValid(const Pose2& pose_world, FootprintKind kind) const {
+  const Shape& shape = shapes_[static_cast<int>(kind)];
+  const Vector2 g = ToGridCells(pose_world.position());
+  switch (QuickCheck(g.x(), g.y(), shape)) {
+    case Quick::kValidFree:
+    case Quick::kValid:
+      return true;
+    case Quick::kInvalid:
+      return false;
+    case Quick::kUnknown:
+      break;
+  }
+  return ExactAtGridPose(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad), shape).valid;
+}
+
+void CostMap::ComputeComponents() const {
+  const int sx = geometry_.size_x;
+  const int sy = geometry_.size_y;
+  const int64_t n = geometry_.num_cells();
+  components_.assign(static_cast<size_t>(n), -1);
+  // A cell is passable when some position inside it keeps the inscribed disc off every
+  // blocking cell. With the origin outside the footprint nothing can be ruled out.
+  const double inscribed = shapes_[0].inscribed_cells;
+  const bool prune = inscribed > 0.0;
+  const double threshold = std::max(0.0, inscribed - kInnerSlack - 1e-3);
+  std::vector<uint8_t> passable(static_cast<size_t>(n), 1);
+  if (prune) {
+    const float* d = blocked_distance_.data();
+    for (int64_t i = 0; i < n; ++i) passable[i] = (d[i] > 0.0f && d[i] >= threshold) ? 1 : 0;
+  }
+  int32_t label = 0;
+  std::vector<int64_t> stack;
+  for (int64_t seed = 0; seed < n; ++seed) {
+    if (!passable[seed] || components_[seed] >= 0) continue;
+    components_[seed] = label;
+    stack.push_back(seed);
+    while (!stack.empty()) {
+      const int64_t i = stack.back();
+      stack.pop_back();
+      const int ix = static_cast<int>(i % sx);
+      const int iy = static_cast<int>(i / sx);
+      for (int dy = -1; dy <= 1; ++dy) {
+        const int ny = iy + dy;
+        if (ny < 0 || ny >= sy) continue;
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = ix + dx;
+          if ((dx == 0 && dy == 0) || nx < 0 || nx >= sx) continue;
+          const int64_t j = nx + static_cast<int64_t>(ny) * sx;
+          if (passable[j] && components_[j] < 0) {
+            components_[j] = label;
+            stack.push_back(j);
+          }
+        }
+      }
+    }
+    ++label;
+  }
+}
+
+int CostMap::ComponentOf(const Vector2& world_m) const {
+  std::call_once(components_once_, [this] { ComputeComponents(); });
+  const Vector2 g = ToGridCells(world_m);
+  if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.x() < geometry_.size_x && g.y() < geometry_.size_y)) {
+    return -1;
+  }
+  return components_[static_cast<int>(g.x()) + static_cast<int64_t>(g.y()) * geometry_.size_x];
+}
+
+bool CostMap::MaybeConnected(const Vector2& a_world_m, const Vector2& b_world_m) const {
+  const int a = ComponentOf(a_world_m);
+  return a >= 0 && a == ComponentOf(b_world_m);
+}
+
+}  // namespace cairn::planner

@@ -1,0 +1,556 @@
+#include "planner/global/global_planner.h"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <sstream>
+
+#include <ompl/base/Goal.h>
+#include <ompl/base/PlannerTerminationCondition.h>
+#include <ompl/base/ProblemDefinition.h>
+#include <ompl/base/SpaceInformation.h>
+#include <ompl/base/StateValidityChecker.h>
+#include <ompl/base/goals/GoalSampleableRegion.h>
+#include <ompl/base/objectives/PathLengthOptimizationObjective.h>
+#include <ompl/base/objectives/StateCostIntegralObjective.h>
+#include <ompl/base/spaces/DubinsStateSpace.h>
+#include <ompl/base/spaces/ReedsSheppStateSpace.h>
+#include <ompl/base/spaces/SE2StateSpace.h>
+#include <ompl/geometric/PathGeometric.h>
+#include <ompl/geometric/PathHybridization.h>
+#include <ompl/geometric/PathSimplifier.h>
+#include <ompl/geometric/SimpleSetup.h>
+#include <ompl/geometric/planners/informedtrees/BITstar.h>
+#include <ompl/geometric/planners/prm/PRMstar.h>
+#include <ompl/geometric/planners/rrt/InformedRRTstar.h>
+#include <ompl/geometric/planners/rrt/RRTConnect.h>
+#include <ompl/geometric/planners/rrt/RRTstar.h>
+#include <ompl/util/Console.h>
+#include <ompl/util/RandomNumbers.h>
+
+#include "common/check.h"
+#include "common/log.h"
+
+namespace cairn::planner {
+
+namespace ob = ompl::base;
+namespace og = ompl::geometric;
+using common::Pose2;
+using common::Vector2;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Shortcut attempts per simplification pass: OMPL's default is the number of states, which
+// for the few long motions of RRTConnect is far too few.
+constexpr unsigned kShortcutSteps = 200;
+
+double SecondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+// OMPL's console output goes to the product log; the note OMPL prints when the seed is set
+// again for the next plan is expected and dropped.
+class OmplLogForwarder : public ompl::msg::OutputHandler {
+ public:
+  void log(const std::string& text, ompl::msg::LogLevel level, const char* /*filename*/,
+           int /*line*/) override {
+    if (text.find("Random number generation already started") != std::string::npos) return;
+    if (level >= ompl::msg::LOG_ERROR) {
+      CAIRN_LOG_ERROR("ompl: %s", text.c_str());
+    } else if (level >= ompl::msg::LOG_WARN) {
+      CAIRN_LOG_WARN("ompl: %s", text.c_str());
+    } else {
+      CAIRN_LOG_DEBUG("ompl: %s", text.c_str());
+    }
+  }
+};
+
+void InstallOmplLogForwarder() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    static OmplLogForwarder forwarder;
+    ompl::msg::useOutputHandler(&forwarder);
+    ompl::msg::setLogLevel(ompl::msg::LOG_WARN);
+  });
+}
+
+// OMPL's SO(2) range is [-pi, pi); WrapAngle returns (-pi, pi].
+double OmplYaw(double yaw_rad) {
+  const double y = common::WrapAngle(yaw_rad);
+  return y >= M_PI ? -M_PI : y;
+}
+
+Pose2 ToPose(const ob::State* state) {
+  const auto* s = state->as<ob::SE2StateSpace::StateType>();
+  return {s->getX(), s->getY(), s->getYaw()};
+}
+
+// A state is valid when its position lies on the grid and the padded footprint clears the
+// layer; near the start and the goal the robot's own footprint is enough.
+class FootprintValidityChecker : public ob::StateValidityChecker {
+ public:
+  FootprintValidityChecker(const ob::SpaceInformationPtr& si, const CostMap& map,
+                           const Vector2& start, const Vector2& goal, double escape_radius_m)
+      : ob::StateValidityChecker(si),
+        map_(map),
+        start_(start),
+        goal_(goal),
+        escape2_(escape_radius_m * escape_radius_m) {}
+  bool isValid(const ob::State* state) const override {
+    const Pose2 p = ToPose(state);
+    if (!map_.Contains(p.position())) return false;
+    const bool near_end = (p.position() - start_).squaredNorm() <= escape2_ ||
+                          (p.position() - goal_).squaredNorm() <= escape2_;
+    return map_.IsValid(p, near_end ? FootprintKind::kRobot : FootprintKind::kPadded);
+  }
+
+ private:
+  const CostMap& map_;
+  Vector2 start_;
+  Vector2 goal_;
+  double escape2_;
+};
+
+// Length plus traversal cost: the integral of 1 + w · cost / 100 along the motion, by the
+// trapezoid rule over samples about one cost cell apart (OMPL's own integration would sample at
+// the much finer validity resolution).
+class TraversalCostObjective : public ob::StateCostIntegralObjective {
+ public:
+  TraversalCostObjective(const ob::SpaceInformationPtr& si, const CostMap& map, double weight)
+      : ob::StateCostIntegralObjective(si, true),
+        map_(map),
+        weight_(weight / 100.0),
+        step_m_(std::max(map.resolution_m(), 0.1)) {
+    description_ = "length plus traversal cost";
+  }
+  ob::Cost stateCost(const ob::State* s) const override {
+    return ob::Cost(1.0 + weight_ * map_.TraversalCostAt(ToPose(s).position()));
+  }
+  ob::Cost motionCost(const ob::State* s1, const ob::State* s2) const override {
+    const double d = si_->distance(s1, s2);
+    const Vector2 a = ToPose(s1).position();
+    const Vector2 b = ToPose(s2).position();
+    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step_m_)));
+    double sum = 0.0;
+    double prev = 1.0 + weight_ * map_.TraversalCostAt(a);
+    for (int k = 1; k <= n; ++k) {
+      const double c = 1.0 + weight_ * map_.TraversalCostAt(a + (b - a) * (double(k) / n));
+      sum += 0.5 * (prev + c);
+      prev = c;
+    }
+    return ob::Cost(d * sum / n);
+  }
+  // Every state costs at least 1 per unit distance, so distance is an admissible heuristic.
+  ob::Cost motionCostHeuristic(const ob::State* s1, const ob::State* s2) const override {
+    return ob::Cost(si_->distance(s1, s2));
+  }
+
+ private:
+  const CostMap& map_;
+  double weight_;
+  double step_m_;
+};
+
+// A goal position with any heading: sampled over the headings whose footprint is valid.
+class PositionGoal : public ob::GoalSampleableRegion {
+ public:
+  PositionGoal(const ob::SpaceInformationPtr& si, const Vector2& goal, std::vector<double> yaws,
+               double tolerance_m)
+      : ob::GoalSampleableRegion(si), goal_(goal), yaws_(std::move(yaws)) {
+    setThreshold(tolerance_m);
+  }
+  double distanceGoal(const ob::State* st) const override {
+    return (ToPose(st).position() - goal_).norm();
+  }
+  void sampleGoal(ob::State* st) const override {
+    auto* s = st->as<ob::SE2StateSpace::StateType>();
+    s->setXY(goal_.x(), goal_.y());
+    s->setYaw(OmplYaw(yaws_[next_++ % yaws_.size()]));
+  }
+  unsigned int maxSampleCount() const override { return static_cast<unsigned>(yaws_.size()); }
+
+ private:
+  Vector2 goal_;
+  std::vector<double> yaws_;
+  mutable size_t next_{0};
+};
+
+ob::PlannerPtr MakePlanner(const std::string& name, const ob::SpaceInformationPtr& si) {
+  if (name == "RRTConnect") return std::make_shared<og::RRTConnect>(si);
+  if (name == "RRTstar") return std::make_shared<og::RRTstar>(si);
+  if (name == "InformedRRTstar") return std::make_shared<og::InformedRRTstar>(si);
+  if (name == "BITstar") return std::make_shared<og::BITstar>(si, "kBITstar");  // k-nearest by default
+  if (name == "PRMstar") return std::make_shared<og::PRMstar>(si);
+  CAIRN_DEMAND(false);  // names are validated in GlobalPlannerParams::Validate
+  return nullptr;
+}
+
+double PositionLength(const std::vector<Pose2>& poses) {
+  double length = 0.0;
+  for (size_t i = 1; i < poses.size(); ++i) {
+    length += (poses[i].position() - poses[i - 1].position()).norm();
+  }
+  return length;
+}
+
+// Every pose of an interpolated path with the robot's own footprint (the padding used while
+// planning covers the space between these poses).
+bool PathStillValid(const CostMap& map, og::PathGeometric& path) {
+  for (const ob::State* s : path.getStates()) {
+    const Pose2 p = ToPose(s);
+    if (!map.Contains(p.position()) || !map.IsValid(p)) return false;
+  }
+  return true;
+}
+
+std::mutex& PlanMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
+}  // namespace
+
+StateSpaceKind StateSpaceKindFromName(const std::string& name) {
+  if (name == "se2") return StateSpaceKind::kSE2;
+  if (name == "dubins") return StateSpaceKind::kDubins;
+  if (name == "reeds_shepp") return StateSpaceKind::kReedsShepp;
+  CAIRN_THROW_UNLESS(false, "unknown state space '" << name << "' (se2, dubins, reeds_shepp)");
+  return StateSpaceKind::kSE2;
+}
+
+const char* StateSpaceKindName(StateSpaceKind kind) {
+  switch (kind) {
+    case StateSpaceKind::kSE2:
+      return "se2";
+    case StateSpaceKind::kDubins:
+      return "dubins";
+    case StateSpaceKind::kReedsShepp:
+      return "reeds_shepp";
+  }
+  return "se2";
+}
+
+const std::vector<std::string>& KnownPlannerNames() {
+  static const std::vector<std::string> names = {"RRTConnect", "RRTstar", "InformedRRTstar",
+                                                 "BITstar", "PRMstar"};
+  return names;
+}
+
+void GlobalPlannerParams::Validate() const {
+  bool known = false;
+  for (const auto& n : KnownPlannerNames()) known = known || n == planner;
+  std::ostringstream names;
+  for (const auto& n : KnownPlannerNames()) names << " " << n;
+  CAIRN_THROW_UNLESS(known, "unknown planner '" << planner << "'; known:" << names.str());
+  CAIRN_THROW_UNLESS(turning_radius_m > 0.0, "turning_radius_m must be positive");
+  CAIRN_THROW_UNLESS(time_budget_s > 0.0, "time_budget_s must be positive");
+  CAIRN_THROW_UNLESS(traversal_cost_weight >= 0.0, "traversal_cost_weight must not be negative");
+  CAIRN_THROW_UNLESS(validity_resolution_m > 0.0, "validity_resolution_m must be positive");
+  CAIRN_THROW_UNLESS(range_m >= 0.0, "range_m must not be negative");
+  CAIRN_THROW_UNLESS(bounds_margin_m >= 0.0, "bounds_margin_m must not be negative");
+  CAIRN_THROW_UNLESS(simplify_time_s >= 0.0, "simplify_time_s must not be negative");
+  CAIRN_THROW_UNLESS(improvement_rounds >= 0, "improvement_rounds must not be negative");
+  CAIRN_THROW_UNLESS(improvement_time_s >= 0.0, "improvement_time_s must not be negative");
+  CAIRN_THROW_UNLESS(escape_radius_m >= 0.0, "escape_radius_m must not be negative");
+  CAIRN_THROW_UNLESS(interpolation_step_m > 0.0, "interpolation_step_m must be positive");
+  CAIRN_THROW_UNLESS(goal_tolerance_m > 0.0, "goal_tolerance_m must be positive");
+  CAIRN_THROW_UNLESS(goal_yaw_samples >= 1, "goal_yaw_samples must be at least 1");
+  CAIRN_THROW_UNLESS(seed != 0, "seed must not be 0 (OMPL would pick a random one)");
+}
+
+GlobalPlanner::GlobalPlanner(GlobalPlannerParams params) : params_(std::move(params)) {
+  params_.Validate();
+  InstallOmplLogForwarder();
+}
+
+PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
+                               const std::atomic<bool>* cancel) const {
+  const auto t0 = Clock::now();
+  PlanResult result;
+  auto finish = [&](PlanStatus status, std::string message) {
+    result.status = status;
+    result.message = std::move(message);
+    result.total_time_s = SecondsSince(t0);
+    return result;
+  };
+  auto cancelled = [&] { return cancel != nullptr && cancel->load(); };
+  const Pose2& start = request.start;
+  const Pose2& goal = request.goal;
+
+  // Cheap outcomes first: bounds, occupied start or goal, cancellation, grid connectivity.
+  const bool finite = std::isfinite(start.x_m) && std::isfinite(start.y_m) &&
+                      std::isfinite(start.yaw_rad) && std::isfinite(goal.x_m) &&
+                      std::isfinite(goal.y_m) && std::isfinite(goal.yaw_rad);
+  if (!finite) return finish(PlanStatus::kOutOfBounds, "start or goal is not finite");
+  if (!map.Contains(start.position())) return finish(PlanStatus::kOutOfBounds, "start is outside the map");
+  if (!map.Contains(goal.position())) return finish(PlanStatus::kOutOfBounds, "goal is outside the map");
+  if (!map.IsValid(start)) return finish(PlanStatus::kStartOccupied, "the footprint at the start is blocked");
+  std::vector<double> goal_yaws;
+  if (request.goal_has_yaw) {
+    if (map.IsValid(goal)) goal_yaws.push_back(goal.yaw_rad);
+  } else {
+    // Try the heading that points from the start first, then evenly spaced ones.
+    const double toward = std::atan2(goal.y_m - start.y_m, goal.x_m - start.x_m);
+    for (int k = 0; k < params_.goal_yaw_samples; ++k) {
+      const double yaw = common::WrapAngle(toward + 2.0 * M_PI * k / params_.goal_yaw_samples);
+      if (map.IsValid({goal.x_m, goal.y_m, yaw})) goal_yaws.push_back(yaw);
+    }
+  }
+  if (goal_yaws.empty()) return finish(PlanStatus::kGoalOccupied, "the footprint at the goal is blocked");
+  if (cancelled()) return finish(PlanStatus::kCancelled, "cancelled");
+  if (params_.grid_precheck && !map.MaybeConnected(start.position(), goal.position())) {
+    return finish(PlanStatus::kNoPath, "the goal is not connected to the start");
+  }
+
+  std::lock_guard<std::mutex> lock(PlanMutex());
+  ompl::RNG::setSeed(params_.seed);
+
+  // State space bounded by the grid's axis-aligned extent in the world.
+  std::shared_ptr<ob::SE2StateSpace> space;
+  switch (params_.state_space) {
+    case StateSpaceKind::kSE2:
+      space = std::make_shared<ob::SE2StateSpace>();
+      break;
+    case StateSpaceKind::kDubins:
+      space = std::make_shared<ob::DubinsStateSpace>(params_.turning_radius_m);
+      break;
+    case StateSpaceKind::kReedsShepp:
+      space = std::make_shared<ob::ReedsSheppStateSpace>(params_.turning_radius_m);
+      break;
+  }
+  const auto& g = map.geometry();
+  ob::RealVectorBounds bounds(2);
+  bounds.setLow(std::numeric_limits<double>::infinity());
+  bounds.setHigh(-std::numeric_limits<double>::infinity());
+  auto include = [&](const Vector2& w) {
+    for (int d = 0; d < 2; ++d) {
+      bounds.low[d] = std::min(bounds.low[d], w[d]);
+      bounds.high[d] = std::max(bounds.high[d], w[d]);
+    }
+  };
+  // The grid's extent in the world (its corners, for a rotated grid).
+  ob::RealVectorBounds grid = bounds;
+  for (const Vector2& corner : {Vector2(0, 0), Vector2(g.length_x_m(), 0),
+                                Vector2(0, g.length_y_m()), Vector2(g.length_x_m(), g.length_y_m())}) {
+    const Vector2 w = g.origin.Transform(corner);
+    for (int d = 0; d < 2; ++d) {
+      grid.low[d] = std::min(grid.low[d], w[d]);
+      grid.high[d] = std::max(grid.high[d], w[d]);
+    }
+  }
+  // Sampled region: known cells, start and goal, grown by the margin, within the grid.
+  include(start.position());
+  include(goal.position());
+  if (const auto known = map.known_cells()) {
+    const double res = g.resolution_m;
+    for (const Vector2& corner :
+         {Vector2(known->first.ix * res, known->first.iy * res),
+          Vector2((known->second.ix + 1) * res, known->first.iy * res),
+          Vector2(known->first.ix * res, (known->second.iy + 1) * res),
+          Vector2((known->second.ix + 1) * res, (known->second.iy + 1) * res)}) {
+      include(g.origin.Transform(corner));
+    }
+  }
+  for (int d = 0; d < 2; ++d) {
+    bounds.low[d] = std::max(grid.low[d], bounds.low[d] - params_.bounds_margin_m);
+    bounds.high[d] = std::min(grid.high[d], bounds.high[d] + params_.bounds_margin_m);
+  }
+  space->setBounds(bounds);
+
+  og::SimpleSetup setup(space);
+  const ob::SpaceInformationPtr si = setup.getSpaceInformation();
+  setup.setStateValidityChecker(std::make_shared<FootprintValidityChecker>(
+      si, map, start.position(), goal.position(), params_.escape_radius_m));
+  si->setStateValidityCheckingResolution(
+      std::min(0.5, params_.validity_resolution_m / space->getMaximumExtent()));
+
+  ob::ScopedState<ob::SE2StateSpace> start_state(space);
+  start_state->setXY(start.x_m, start.y_m);
+  start_state->setYaw(OmplYaw(start.yaw_rad));
+  setup.setStartState(start_state);
+  if (request.goal_has_yaw) {
+    ob::ScopedState<ob::SE2StateSpace> goal_state(space);
+    goal_state->setXY(goal.x_m, goal.y_m);
+    goal_state->setYaw(OmplYaw(goal.yaw_rad));
+    setup.setGoalState(goal_state, params_.goal_tolerance_m);
+  } else {
+    setup.setGoal(std::make_shared<PositionGoal>(si, goal.position(), goal_yaws,
+                                                 params_.goal_tolerance_m));
+  }
+
+  ob::OptimizationObjectivePtr objective;
+  if (params_.traversal_cost_weight > 0.0) {
+    objective = std::make_shared<TraversalCostObjective>(si, map, params_.traversal_cost_weight);
+  } else {
+    objective = std::make_shared<ob::PathLengthOptimizationObjective>(si);
+  }
+  objective->setCostToGoHeuristic(&ob::goalRegionCostToGo);
+  if (params_.stop_at_first_solution) {
+    objective->setCostThreshold(ob::Cost(std::numeric_limits<double>::infinity()));
+  }
+  setup.setOptimizationObjective(objective);
+
+  ob::PlannerPtr planner = MakePlanner(params_.planner, si);
+  if (params_.range_m > 0.0 && planner->params().hasParam("range")) {
+    planner->params().setParam("range", std::to_string(params_.range_m));
+  }
+  setup.setPlanner(planner);
+  setup.setup();
+
+  // Solve within the budget; stop early on cancel or, if asked, at the first exact solution.
+  const double budget = request.time_budget_s > 0.0 ? request.time_budget_s : params_.time_budget_s;
+  ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(budget);
+  if (cancel != nullptr) {
+    ptc = ob::plannerOrTerminationCondition(
+        ptc, ob::PlannerTerminationCondition([cancel] { return cancel->load(); }));
+  }
+  if (params_.stop_at_first_solution) {
+    ptc = ob::plannerOrTerminationCondition(
+        ptc, ob::exactSolnPlannerTerminationCondition(setup.getProblemDefinition()));
+  }
+  const auto solve_t0 = Clock::now();
+  const ob::PlannerStatus status = setup.solve(ptc);
+  result.solve_time_s = SecondsSince(solve_t0);
+
+  if (cancelled()) return finish(PlanStatus::kCancelled, "cancelled");
+  if (status == ob::PlannerStatus::APPROXIMATE_SOLUTION ||
+      (status == ob::PlannerStatus::EXACT_SOLUTION && !setup.haveExactSolutionPath())) {
+    std::ostringstream m;
+    m << "only an approximate solution, " << setup.getProblemDefinition()->getSolutionDifference()
+      << " m short of the goal";
+    return finish(PlanStatus::kApproximate, m.str());
+  }
+  if (status == ob::PlannerStatus::INVALID_START) {
+    return finish(PlanStatus::kStartOccupied, "OMPL rejected the start");
+  }
+  if (status == ob::PlannerStatus::INVALID_GOAL) {
+    return finish(PlanStatus::kGoalOccupied, "OMPL rejected the goal");
+  }
+  if (status != ob::PlannerStatus::EXACT_SOLUTION) {
+    std::ostringstream m;
+    m << "no solution within " << budget << " s (" << status.asString() << ")";
+    return finish(PlanStatus::kTimedOut, m.str());
+  }
+
+  result.solutions = 1;
+  og::PathGeometric raw = setup.getSolutionPath();
+  std::vector<Pose2> raw_poses;
+  for (const ob::State* s : raw.getStates()) raw_poses.push_back(ToPose(s));
+  result.raw_length_m = PositionLength(raw_poses);
+
+  // Shortcutting passes until they stop helping (or the time cap): deterministic for a seed.
+  og::PathSimplifier simplifier(si, setup.getProblemDefinition()->getGoal(), objective);
+  auto simplify = [&](og::PathGeometric* path) {
+    const auto t_start = Clock::now();
+    for (int pass = 0; pass < 8; ++pass) {
+      const double before = path->length();
+      simplifier.reduceVertices(*path, 0, 0, 0.33);
+      simplifier.shortcutPath(*path, kShortcutSteps, kShortcutSteps / 4, 0.33, 0.005);
+      simplifier.collapseCloseVertices(*path);
+      if (path->length() > before - 1e-3 || SecondsSince(t_start) > params_.simplify_time_s) break;
+    }
+  };
+
+  // A few more exact solutions, merged with the first by PathHybridization.
+  og::PathGeometric best = raw;
+  if (params_.simplify_time_s > 0.0) simplify(&best);
+  if (params_.improvement_rounds > 0) {
+    og::PathHybridization hybridization(si, objective);
+    hybridization.recordPath(std::make_shared<og::PathGeometric>(best), false);
+    const auto improve_t0 = Clock::now();
+    for (int round = 0; round < params_.improvement_rounds; ++round) {
+      const double left = params_.improvement_time_s - SecondsSince(improve_t0);
+      if (left <= 0.0 || cancelled()) break;
+      planner->clear();
+      setup.getProblemDefinition()->clearSolutionPaths();
+      ob::PlannerTerminationCondition round_ptc = ob::plannerOrTerminationCondition(
+          ob::timedPlannerTerminationCondition(left),
+          ob::exactSolnPlannerTerminationCondition(setup.getProblemDefinition()));
+      if (cancel != nullptr) {
+        round_ptc = ob::plannerOrTerminationCondition(
+            round_ptc, ob::PlannerTerminationCondition([cancel] { return cancel->load(); }));
+      }
+      if (planner->solve(round_ptc) != ob::PlannerStatus::EXACT_SOLUTION ||
+          !setup.getProblemDefinition()->hasExactSolution()) {
+        continue;
+      }
+      auto path = std::make_shared<og::PathGeometric>(
+          *setup.getProblemDefinition()->getSolutionPath()->as<og::PathGeometric>());
+      if (params_.simplify_time_s > 0.0) simplify(path.get());
+      hybridization.recordPath(path, false);
+      ++result.solutions;
+      if (objective->isCostBetterThan(path->cost(objective), best.cost(objective))) best = *path;
+    }
+    if (cancelled()) return finish(PlanStatus::kCancelled, "cancelled");
+    if (hybridization.pathCount() > 1) {
+      hybridization.computeHybridPath();
+      if (const auto& hybrid = hybridization.getHybridPath()) {
+        og::PathGeometric merged = *hybrid;
+        if (params_.simplify_time_s > 0.0) simplify(&merged);
+        if (objective->isCostBetterThan(merged.cost(objective), best.cost(objective))) {
+          best = merged;
+        }
+      }
+    }
+  }
+
+  // Interpolate and check again; fall back to the planner's own path if needed. States are
+  // spread evenly along every motion by OMPL's metric (position plus weighted heading, or arc
+  // length for Dubins and Reeds-Shepp), never shorter than the position step.
+  auto interpolate = [&](og::PathGeometric& path) {
+    og::PathGeometric out(si);
+    if (path.getStateCount() == 0) return out;
+    out.append(path.getState(0));
+    ob::State* tmp = si->allocState();
+    for (size_t i = 1; i < path.getStateCount(); ++i) {
+      const ob::State* a = path.getState(i - 1);
+      const ob::State* b = path.getState(i);
+      const int n = std::max(1, static_cast<int>(std::ceil(si->distance(a, b) /
+                                                           params_.interpolation_step_m)));
+      for (int k = 1; k < n; ++k) {
+        si->getStateSpace()->interpolate(a, b, static_cast<double>(k) / n, tmp);
+        out.append(tmp);
+      }
+      out.append(b);
+    }
+    si->freeState(tmp);
+    return out;
+  };
+  og::PathGeometric chosen(si);
+  bool have = false;
+  if (params_.simplify_time_s > 0.0 || params_.improvement_rounds > 0) {
+    og::PathGeometric candidate = interpolate(best);
+    if (PathStillValid(map, candidate)) {
+      chosen = candidate;
+      have = true;
+      result.simplified = true;
+    }
+  }
+  if (!have) {
+    og::PathGeometric plain = interpolate(raw);
+    if (!PathStillValid(map, plain)) {
+      return finish(PlanStatus::kNoPath, "the planner's path failed re-validation");
+    }
+    chosen = plain;
+  }
+  for (const ob::State* s : chosen.getStates()) result.poses.push_back(ToPose(s));
+  if (params_.state_space == StateSpaceKind::kSE2) {
+    // A wheeled robot drives along the path: headings follow the direction of travel where
+    // the footprint fits that way (OMPL's validated heading is kept elsewhere).
+    for (size_t i = 0; i + 1 < result.poses.size(); ++i) {
+      const Vector2 d = result.poses[i + 1].position() - result.poses[i].position();
+      if (d.norm() < 1e-6) continue;
+      const Pose2 along{result.poses[i].x_m, result.poses[i].y_m, std::atan2(d.y(), d.x())};
+      if (map.IsValid(along)) result.poses[i] = along;
+    }
+  }
+  result.length_m = PositionLength(result.poses);
+  result.cost = chosen.cost(objective).value();
+  return finish(PlanStatus::kSuccess, "");
+}
+
+}  // namespace cairn::planner

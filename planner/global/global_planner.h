@@ -1,0 +1,126 @@
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/types.h"
+#include "planner/cost_map.h"
+#include "planner/global/plan_status.h"
+
+/// @file
+/// GlobalPlanner: OMPL geometric planning in SE(2) (or Dubins / Reeds-Shepp) on a CostMap.
+///
+/// - States are checked by rasterising the footprint on the cost layer (CostMap::IsValid).
+/// - The objective is path length plus traversal cost: the integral of
+///   1 + traversal_cost_weight · cost / 100 along the path.
+/// - Only an exact solution counts; an approximate one is PlanStatus::kApproximate.
+/// - Before OMPL runs, a grid connectivity check proves "no path" when the goal is not
+///   connected to the start (sampling planners cannot prove infeasibility within a budget).
+/// - States are checked with the footprint grown by CostMapParams::planning_padding_m (except
+///   near the start and the goal), so poses between checked states keep clear as well.
+/// - After the first exact solution, a few more are planned within a small budget and merged
+///   with OMPL's PathHybridization, then shortcut; this trades a few tens of milliseconds for
+///   paths close to the shortest.
+/// - The simplified and interpolated path is checked again, pose by pose with the robot's own
+///   footprint; if it fails, the unsimplified path is used instead.
+
+namespace cairn::planner {
+
+enum class StateSpaceKind { kSE2, kDubins, kReedsShepp };
+
+/// "se2", "dubins", "reeds_shepp". @throws std::invalid_argument for an unknown name.
+StateSpaceKind StateSpaceKindFromName(const std::string& name);
+const char* StateSpaceKindName(StateSpaceKind kind);
+
+struct GlobalPlannerParams {
+  /// OMPL planner: RRTConnect, RRTstar, InformedRRTstar, BITstar or PRMstar.
+  std::string planner{"RRTConnect"};
+  StateSpaceKind state_space{StateSpaceKind::kSE2};
+  /// Dubins and Reeds-Shepp turning radius.
+  double turning_radius_m{0.5};
+  /// Default time budget of one plan.
+  double time_budget_s{1.0};
+  /// Optimising planners stop at their first exact solution instead of using the whole budget.
+  bool stop_at_first_solution{true};
+  /// Weight of the traversal cost against length (0: shortest path).
+  double traversal_cost_weight{1.0};
+  /// Spacing of the states checked along a motion (OMPL's validity checking resolution).
+  double validity_resolution_m{0.05};
+  /// The planner samples the bounding box of the known cells, the start and the goal, grown by
+  /// this margin and clipped to the grid: a mapper's grid is mostly unexplored, and sampling all
+  /// of it starves narrow passages of samples.
+  double bounds_margin_m{5.0};
+  /// Planner range (longest motion added at once); 0 keeps OMPL's default.
+  double range_m{0.0};
+  /// Time cap of the path simplification passes.
+  double simplify_time_s{0.05};
+  /// More exact solutions planned after the first, merged by PathHybridization (0: none) ...
+  int improvement_rounds{4};
+  /// ... within this time after the first solution.
+  double improvement_time_s{0.25};
+  /// States closer than this to the start or the goal are checked without the padding, so a
+  /// robot standing close to an obstacle can still leave (or reach) its spot.
+  double escape_radius_m{0.6};
+  /// Spacing of the returned poses.
+  double interpolation_step_m{0.1};
+  /// Goal position tolerance used by OMPL.
+  double goal_tolerance_m{0.05};
+  /// Headings tried when the goal has no yaw.
+  int goal_yaw_samples{16};
+  /// Run the grid connectivity proof before OMPL.
+  bool grid_precheck{true};
+  /// Seed of OMPL's random number generators (0 is not allowed by OMPL).
+  uint32_t seed{1};
+
+  /// @throws std::invalid_argument naming the bad field (an unknown planner name included).
+  void Validate() const;
+};
+
+struct PlanRequest {
+  common::Pose2 start;
+  common::Pose2 goal;
+  bool goal_has_yaw{false};  ///< else any heading at the goal position will do
+  double time_budget_s{0.0};  ///< 0: the params' budget
+};
+
+struct PlanResult {
+  PlanStatus status{PlanStatus::kNoPath};
+  std::string message;
+  std::vector<common::Pose2> poses;  ///< world frame, start to goal, interpolated
+  double length_m{0.0};              ///< of `poses`
+  double raw_length_m{0.0};          ///< of the planner's path before simplification
+  double cost{0.0};                  ///< objective cost of `poses`
+  double solve_time_s{0.0};          ///< OMPL solve() time to the first exact solution
+  int solutions{0};                  ///< exact solutions found (first plus improvements)
+  double total_time_s{0.0};          ///< checks, solve, simplification and re-validation
+  bool simplified{false};            ///< the simplified path passed re-validation
+
+  bool ok() const { return status == PlanStatus::kSuccess; }
+};
+
+/// Plans one path at a time per process: OMPL's seed generator is global, so plans are
+/// serialised to stay reproducible.
+class GlobalPlanner {
+ public:
+  /// @throws std::invalid_argument for invalid params.
+  explicit GlobalPlanner(GlobalPlannerParams params);
+  GlobalPlanner(const GlobalPlanner&) = delete;
+  GlobalPlanner& operator=(const GlobalPlanner&) = delete;
+
+  /// Plans on `map` (which must outlive the call). `cancel`, when given, is polled; setting it
+  /// ends the plan with kCancelled. Never throws for a bad start or goal: those are statuses.
+  PlanResult Plan(const CostMap& map, const PlanRequest& request,
+                  const std::atomic<bool>* cancel = nullptr) const;
+
+  const GlobalPlannerParams& params() const { return params_; }
+
+ private:
+  GlobalPlannerParams params_;
+};
+
+/// Planner names accepted by GlobalPlannerParams::planner.
+const std::vector<std::string>& KnownPlannerNames();
+
+}  // namespace cairn::planner

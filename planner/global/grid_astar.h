@@ -1,0 +1,38 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/types.h"
+#include "planner/cost_map.h"
+
+/// @file
+/// Grid A*: 8-connected search on the cost layer with the footprint's inscribed disc as the
+/// inflation. It is the benchmark baseline of the OMPL planner and uses the same cost: step
+/// length times (1 + weight · mean cell cost / 100).
+
+namespace cairn::planner {
+
+struct GridAStarParams {
+  /// Multiplies the traversal cost (cost/100) added to each metre travelled.
+  double traversal_cost_weight{1.0};
+  /// A cell is passable when its centre is at least this far (m) from every blocking cell.
+  /// Negative: the footprint's inscribed radius less (half a cell diagonal - half a cell), the
+  /// most permissive inflation that never closes a gap the footprint fits through.
+  double clearance_m{-1.0};
+};
+
+struct GridPath {
+  bool found{false};
+  std::vector<common::Vector2> points_m;  ///< cell centres, world frame, start to goal
+  double length_m{0.0};
+  double cost{0.0};
+  int64_t expanded{0};  ///< cells taken off the open list
+};
+
+/// Searches from the cell holding `start_m` to the cell holding `goal_m`. Not found when
+/// either is outside the grid or impassable, or when they are not connected.
+GridPath GridAStar(const CostMap& map, const common::Vector2& start_m,
+                   const common::Vector2& goal_m, const GridAStarParams& params = {});
+
+}  // namespace cairn::planner

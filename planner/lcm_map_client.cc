@@ -1,0 +1,137 @@
+#include "planner/lcm_map_client.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/channels.h"
+#include "common/check.h"
+
+namespace cairn::planner {
+
+LcmMapClient::LcmMapClient(runtime::Node& node, LcmMapClientParams params,
+                           std::vector<common::Vector2> footprint_m, CostMapParams cost_params)
+    : node_(node),
+      params_(std::move(params)),
+      footprint_m_(std::move(footprint_m)),
+      cost_params_(cost_params) {
+  cost_params_.Validate();
+  FootprintRasterizer check(footprint_m_);  // throws on a bad footprint
+  node_.Subscribe<cairn::lcmt_grid_tile>(
+      channels::ForRobot(params_.robot, channels::kMapTiles),
+      [this](const cairn::lcmt_grid_tile& t) { OnTile(t); });
+  node_.Subscribe<cairn::lcmt_grid_manifest>(
+      channels::ForRobot(params_.robot, channels::kMapManifest),
+      [this](const cairn::lcmt_grid_manifest& m) { OnManifest(m); });
+}
+
+std::shared_ptr<const CostMap> LcmMapClient::Latest() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return latest_;
+}
+
+int64_t LcmMapClient::last_heard_utime() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return heard_utime_;
+}
+
+bool LcmMapClient::Accepts(const std::string& robot, const std::string& map_name,
+                           const std::string& layer) const {
+  if (layer != params_.layer) return false;
+  if (!params_.map_name.empty() && map_name != params_.map_name) return false;
+  return robot.empty() || robot == params_.robot;
+}
+
+void LcmMapClient::OnTile(const cairn::lcmt_grid_tile& tile) {
+  if (!Accepts(tile.robot, tile.map_name, tile.layer)) return;
+  if (!assembler_.OnTile(tile)) {
+    node_.CountDropped("bad_map_tiles");
+    node_.Warn("map_tile", "map tile (" + std::to_string(tile.tile_ix) + ", " +
+                               std::to_string(tile.tile_iy) + ") of " + tile.layer +
+                               " refused (bad checksum or geometry)");
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    heard_utime_ = node_.NowUtime();
+  }
+  MaybeBuild(false);
+}
+
+void LcmMapClient::OnManifest(const cairn::lcmt_grid_manifest& manifest) {
+  if (!Accepts(manifest.robot, manifest.map_name, manifest.layer)) return;
+  if (manifest.num_tiles < 0 || static_cast<int>(manifest.tile_ix.size()) != manifest.num_tiles ||
+      !(manifest.resolution_m > 0.0) || !std::isfinite(manifest.resolution_m) ||
+      manifest.layer_size_x <= 0 || manifest.layer_size_y <= 0 || manifest.tile_size <= 0) {
+    node_.CountDropped("bad_map_manifests");
+    node_.Warn("map_manifest", "malformed manifest for " + manifest.layer + " refused");
+    return;
+  }
+  assembler_.OnManifest(manifest);
+  tile_size_ = manifest.tile_size;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    heard_utime_ = node_.NowUtime();
+  }
+  MaybeBuild(false);
+}
+
+void LcmMapClient::Poll() {
+  const int64_t now = node_.NowUtime();
+  const int64_t version = assembler_.version(params_.layer);
+  if (version == 0 || version == built_version_) return;
+  if (!assembler_.Complete(params_.layer)) {
+    if (now - last_resend_utime_ >= static_cast<int64_t>(params_.resend_interval_s * 1e6)) {
+      if (auto request = assembler_.MakeResendRequest(params_.layer, params_.requester, now)) {
+        node_.Publish(channels::ForRobot(params_.robot, channels::kMapTileResend),
+                      *request);
+        node_.Count("tile_resend_requests");
+        last_resend_utime_ = now;
+      }
+    }
+    if (pending_since_utime_ > 0 &&
+        now - pending_since_utime_ >= static_cast<int64_t>(params_.incomplete_timeout_s * 1e6)) {
+      MaybeBuild(true);
+    }
+  }
+}
+
+void LcmMapClient::MaybeBuild(bool allow_incomplete) {
+  const int64_t version = assembler_.version(params_.layer);
+  if (version == 0 || version == built_version_) return;
+  if (pending_since_utime_ == 0) pending_since_utime_ = node_.NowUtime();
+  if (!allow_incomplete && !assembler_.Complete(params_.layer)) return;
+  auto layer = assembler_.Layer(params_.layer);
+  if (!layer) return;
+  common::Layer& cells = layer->at(params_.layer);
+  if (allow_incomplete && tile_size_ > 0) {
+    // Tiles the mapper announced but we never got: block them rather than read them as
+    // unexplored (which the planners may be allowed to cross).
+    for (const auto& [tx, ty] : assembler_.Missing(params_.layer)) {
+      for (int iy = ty * tile_size_; iy < std::min<int>((ty + 1) * tile_size_, cells.cols()); ++iy) {
+        for (int ix = tx * tile_size_; ix < std::min<int>((tx + 1) * tile_size_, cells.rows()); ++ix) {
+          if (ix >= 0 && iy >= 0) cells(ix, iy) = cost_params_.lethal_cost;
+        }
+      }
+    }
+  }
+  try {
+    auto map = std::make_shared<CostMap>(layer->geometry(), cells, footprint_m_, cost_params_);
+    map->set_stamp(version, node_.NowUtime());
+    std::lock_guard<std::mutex> lock(mutex_);
+    latest_ = std::move(map);
+    built_version_ = version;
+    pending_since_utime_ = 0;
+    ++snapshots_;
+  } catch (const std::exception& e) {
+    node_.CountDropped("bad_map_layers");
+    node_.Warn("map_layer", std::string("cost layer refused: ") + e.what());
+    built_version_ = version;  // do not retry the same bad version
+    pending_since_utime_ = 0;
+  }
+  node_.Count("map_snapshots");
+  if (!allow_incomplete) return;
+  node_.Count("incomplete_map_snapshots");
+  node_.Warn("map_incomplete", "using an incomplete cost layer (missing tiles count as lethal)");
+}
+
+}  // namespace cairn::planner

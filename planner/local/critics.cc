@@ -1,0 +1,109 @@
+#include "planner/local/critics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace cairn::planner {
+
+using common::Pose2;
+using common::Vector2;
+
+namespace {
+
+// Below these magnitudes a command counts as "not moving" on that axis.
+constexpr double kLinearEps = 0.01;   // m/s
+constexpr double kAngularEps = 0.02;  // rad/s
+
+int Sign(double x, double eps) { return x > eps ? 1 : (x < -eps ? -1 : 0); }
+
+}  // namespace
+
+Score ClearanceCritic::Evaluate(const Trajectory& trajectory) const {
+  const CostMap& map = *context().map;
+  const double inscribed = map.footprint().inscribed_radius_m();
+  float worst = 0.0f;
+  double closest = std::numeric_limits<double>::infinity();
+  for (size_t k = 0; k < trajectory.poses.size(); ++k) {
+    const FootprintCost c = map.CheckFootprint(trajectory.poses[k]);
+    if (c.valid) {
+      worst = std::max(worst, c.max_cost);
+      closest = std::min(closest, map.SmoothClearanceAt(trajectory.poses[k].position()));
+      continue;
+    }
+    if (!params_.admissible_braking) return {false, 0.0};
+    const double t_blocked = (k + 1) * params_.sim_step_s;
+    const double stop_s =
+        std::max(std::abs(trajectory.velocity.linear_mps) / params_.acc_lim_x_mps2,
+                 std::abs(trajectory.velocity.angular_radps) / params_.acc_lim_theta_radps2);
+    if (t_blocked <= 0.5 * stop_s + params_.margin_s) return {false, 0.0};
+    const double horizon = trajectory.poses.size() * params_.sim_step_s;
+    return {true, 2.0 + (1.0 - t_blocked / horizon)};
+  }
+  double proximity = 0.0;
+  if (params_.inflation_m > 0.0 && std::isfinite(closest)) {
+    proximity = std::clamp(1.0 - (closest - inscribed) / params_.inflation_m, 0.0, 1.0);
+  }
+  return {true, std::max(static_cast<double>(worst / map.params().lethal_cost), proximity)};
+}
+
+Score PathAlignCritic::Evaluate(const Trajectory& trajectory) const {
+  const CriticContext& ctx = context();
+  if (ctx.path == nullptr || ctx.path->empty() || trajectory.poses.empty()) return {true, 0.0};
+  const Pose2& last = trajectory.poses.back();
+  const Vector2 forward = last.Transform({forward_point_distance_m_, 0.0});
+  return {true, ctx.path->Project(forward, ctx.segment_begin, ctx.segment_end).distance_m};
+}
+
+Score GoalDistCritic::Evaluate(const Trajectory& trajectory) const {
+  if (trajectory.poses.empty()) return {true, 0.0};
+  return {true, (trajectory.poses.back().position() - context().local_goal).norm()};
+}
+
+Score SpeedCritic::Evaluate(const Trajectory& trajectory) const {
+  const double v = trajectory.velocity.linear_mps;
+  if (v >= 0.0) return {true, std::max(0.0, (max_vel_x_mps_ - v) / max_vel_x_mps_)};
+  return {true, 1.0 + (-v) / max_vel_x_mps_};
+}
+
+Score OscillationCritic::Evaluate(const Trajectory& trajectory) const {
+  const int lin = Sign(trajectory.velocity.linear_mps, kLinearEps);
+  const int ang = Sign(trajectory.velocity.angular_radps, kAngularEps);
+  const bool lin_reverses = lin != 0 && last_linear_sign_ != 0 && lin != last_linear_sign_;
+  const bool ang_reverses = ang != 0 && last_angular_sign_ != 0 && ang != last_angular_sign_;
+  if ((linear_flipped_ && lin_reverses) || (angular_flipped_ && ang_reverses)) return {false, 0.0};
+  return {true, (lin_reverses || ang_reverses) ? 1.0 : 0.0};
+}
+
+void OscillationCritic::Commit(const Velocity& sent, const Pose2& pose) {
+  const int lin = Sign(sent.linear_mps, kLinearEps);
+  const int ang = Sign(sent.angular_radps, kAngularEps);
+  if (lin != 0 && last_linear_sign_ != 0 && lin != last_linear_sign_ && !linear_flipped_) {
+    linear_flipped_ = true;
+    if (!angular_flipped_) flip_pose_ = pose;
+  }
+  if (ang != 0 && last_angular_sign_ != 0 && ang != last_angular_sign_ && !angular_flipped_) {
+    angular_flipped_ = true;
+    if (!linear_flipped_) flip_pose_ = pose;
+  }
+  if (lin != 0) last_linear_sign_ = lin;
+  if (ang != 0) last_angular_sign_ = ang;
+  // Enough motion since the first reversal clears the memory.
+  if (linear_flipped_ || angular_flipped_) {
+    const double moved = (pose.position() - flip_pose_.position()).norm();
+    const double turned = std::abs(common::WrapAngle(pose.yaw_rad - flip_pose_.yaw_rad));
+    if (moved > reset_distance_m_ || turned > reset_angle_rad_) {
+      linear_flipped_ = false;
+      angular_flipped_ = false;
+    }
+  }
+}
+
+void OscillationCritic::Reset() {
+  last_linear_sign_ = 0;
+  last_angular_sign_ = 0;
+  linear_flipped_ = false;
+  angular_flipped_ = false;
+}
+
+}  // namespace cairn::planner

@@ -1,0 +1,95 @@
+#pragma once
+
+#include <vector>
+
+#include "common/robot_profile.h"
+#include "common/types.h"
+
+/// @file
+/// The DWA trajectory generator (Nav2 DWB's StandardTrajectoryGenerator shape): a dynamic
+/// window of velocities reachable within one control period under the profile's acceleration
+/// limits, sampled on a grid, each sample simulated at constant velocity over a horizon.
+
+namespace cairn::planner {
+
+/// A base-frame velocity command: forward speed and yaw rate.
+struct Velocity {
+  double linear_mps{0.0};
+  double angular_radps{0.0};
+  bool operator==(const Velocity& o) const {
+    return linear_mps == o.linear_mps && angular_radps == o.angular_radps;
+  }
+};
+
+/// Velocity and acceleration limits (Nav2 vocabulary), from a robot profile.
+struct VelocityLimits {
+  double max_vel_x_mps{0.5};
+  double min_vel_x_mps{-0.1};  ///< most negative forward speed, <= 0
+  double max_vel_theta_radps{1.0};
+  double acc_lim_x_mps2{0.8};
+  double acc_lim_theta_radps2{1.5};
+
+  static VelocityLimits FromProfile(const common::RobotProfile& profile);
+  /// @throws std::invalid_argument naming the bad field.
+  void Validate() const;
+  /// True when `next` may follow `previous` after `period_s` (within `slack` of each limit).
+  bool Allows(const Velocity& previous, const Velocity& next, double period_s,
+              double slack = 1e-9) const;
+};
+
+/// Velocities reachable in one control period: [min, max] per axis.
+struct DynamicWindow {
+  double min_linear_mps{0.0};
+  double max_linear_mps{0.0};
+  double min_angular_radps{0.0};
+  double max_angular_radps{0.0};
+};
+
+struct TrajectoryGeneratorParams {
+  int vx_samples{20};          ///< samples of forward speed across the window
+  int vtheta_samples{20};      ///< samples of yaw rate across the window
+  double sim_time_s{1.7};      ///< horizon each sample is simulated over
+  double sim_step_s{0.1};      ///< spacing of the simulated poses
+  double control_period_s{0.05};  ///< 20 Hz: the window spans what one period can reach
+
+  /// @throws std::invalid_argument naming the bad field.
+  void Validate() const;
+};
+
+/// A sampled command and the poses it leads to (world frame, at sim_step_s, ..., sim_time_s;
+/// the current pose is not included).
+struct Trajectory {
+  Velocity velocity;
+  std::vector<common::Pose2> poses;
+};
+
+class TrajectoryGenerator {
+ public:
+  /// @throws std::invalid_argument for invalid limits or params.
+  TrajectoryGenerator(const VelocityLimits& limits, const TrajectoryGeneratorParams& params);
+
+  /// The window around the last command, clipped to the velocity limits. It never asks for more
+  /// than one period of acceleration away from `last_command` (if `last_command` lies outside
+  /// the limits the window is the nearest reachable speed inside them).
+  DynamicWindow Window(const Velocity& last_command) const;
+  /// vx_samples × vtheta_samples commands spread evenly over the window (fewer when an axis of
+  /// the window is a single value). Zero is included on an axis whenever the window holds it,
+  /// so stopping and driving straight are always candidates.
+  std::vector<Velocity> Samples(const Velocity& last_command) const;
+  /// Poses of a constant-velocity arc from `start` (exact unicycle integration).
+  void Simulate(const common::Pose2& start, const Velocity& velocity, Trajectory* out) const;
+  /// The command that slows down the most within the window (towards zero on both axes).
+  Velocity Brake(const Velocity& last_command) const;
+  /// The command closest to `target` within the window (each axis clamped).
+  Velocity Toward(const Velocity& last_command, const Velocity& target) const;
+
+  const VelocityLimits& limits() const { return limits_; }
+  const TrajectoryGeneratorParams& params() const { return params_; }
+
+ private:
+  VelocityLimits limits_;
+  TrajectoryGeneratorParams params_;
+  int steps_{17};
+};
+
+}  // namespace cairn::planner

@@ -1,0 +1,614 @@
+#include "planner/navigator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "common/check.h"
+
+namespace cairn::planner {
+
+using common::Pose2;
+using common::Vector2;
+
+namespace {
+
+bool IsZero(const Velocity& v) {
+  return std::abs(v.linear_mps) < 1e-9 && std::abs(v.angular_radps) < 1e-9;
+}
+
+std::string Format(const char* format, double value) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), format, value);
+  return buf;
+}
+
+}  // namespace
+
+const char* NavStateName(NavState state) {
+  switch (state) {
+    case NavState::kIdle:
+      return "IDLE";
+    case NavState::kPlanning:
+      return "PLANNING";
+    case NavState::kDriving:
+      return "DRIVING";
+    case NavState::kRecovering:
+      return "RECOVERING";
+    case NavState::kReached:
+      return "REACHED";
+    case NavState::kFailed:
+      return "FAILED";
+    case NavState::kCancelled:
+      return "CANCELLED";
+    case NavState::kStopped:
+      return "STOPPED";
+  }
+  return "UNKNOWN";
+}
+
+const char* NavReasonName(NavReason reason) {
+  switch (reason) {
+    case NavReason::kNone:
+      return "NONE";
+    case NavReason::kSuccess:
+      return "SUCCESS";
+    case NavReason::kStartOccupied:
+      return "START_OCCUPIED";
+    case NavReason::kGoalOccupied:
+      return "GOAL_OCCUPIED";
+    case NavReason::kOutOfBounds:
+      return "OUT_OF_BOUNDS";
+    case NavReason::kNoPath:
+      return "NO_PATH";
+    case NavReason::kTimedOut:
+      return "TIMED_OUT";
+    case NavReason::kCancelled:
+      return "CANCELLED";
+    case NavReason::kApproximate:
+      return "APPROXIMATE";
+    case NavReason::kStaleOdom:
+      return "STALE_ODOM";
+    case NavReason::kStaleMap:
+      return "STALE_MAP";
+    case NavReason::kUnknownPlace:
+      return "UNKNOWN_PLACE";
+    case NavReason::kRecoveryExhausted:
+      return "RECOVERY_EXHAUSTED";
+    case NavReason::kNoMap:
+      return "NO_MAP";
+  }
+  return "UNKNOWN";
+}
+
+NavReason ReasonOf(PlanStatus status) {
+  switch (status) {
+    case PlanStatus::kSuccess:
+      return NavReason::kSuccess;
+    case PlanStatus::kStartOccupied:
+      return NavReason::kStartOccupied;
+    case PlanStatus::kGoalOccupied:
+      return NavReason::kGoalOccupied;
+    case PlanStatus::kOutOfBounds:
+      return NavReason::kOutOfBounds;
+    case PlanStatus::kNoPath:
+      return NavReason::kNoPath;
+    case PlanStatus::kTimedOut:
+      return NavReason::kTimedOut;
+    case PlanStatus::kCancelled:
+      return NavReason::kCancelled;
+    case PlanStatus::kApproximate:
+      return NavReason::kApproximate;
+  }
+  return NavReason::kNone;
+}
+
+void NavigatorParams::Validate() const {
+  CAIRN_THROW_UNLESS(control_period_s > 0.0, "control_period_s must be positive");
+  CAIRN_THROW_UNLESS(xy_goal_tolerance_m > 0.0, "xy_goal_tolerance_m must be positive");
+  CAIRN_THROW_UNLESS(yaw_goal_tolerance_rad > 0.0, "yaw_goal_tolerance_rad must be positive");
+  CAIRN_THROW_UNLESS(max_pose_age_s > 0.0, "max_pose_age_s must be positive");
+  CAIRN_THROW_UNLESS(max_map_age_s > 0.0, "max_map_age_s must be positive");
+  CAIRN_THROW_UNLESS(max_clock_skew_s > 0.0, "max_clock_skew_s must be positive");
+  CAIRN_THROW_UNLESS(lookahead_m > 0.0, "lookahead_m must be positive");
+  CAIRN_THROW_UNLESS(local_path_window_m > 0.0, "local_path_window_m must be positive");
+  CAIRN_THROW_UNLESS(rotate_to_heading_threshold_rad > 0.0,
+                     "rotate_to_heading_threshold_rad must be positive");
+  CAIRN_THROW_UNLESS(max_path_deviation_m > 0.0, "max_path_deviation_m must be positive");
+  CAIRN_THROW_UNLESS(path_check_ahead_m >= 0.0, "path_check_ahead_m must not be negative");
+  CAIRN_THROW_UNLESS(min_replan_interval_s >= 0.0, "min_replan_interval_s must not be negative");
+  CAIRN_THROW_UNLESS(replan_period_s >= 0.0, "replan_period_s must not be negative");
+  CAIRN_THROW_UNLESS(plan_time_budget_s > 0.0, "plan_time_budget_s must be positive");
+  CAIRN_THROW_UNLESS(no_valid_trajectory_patience_s >= 0.0,
+                     "no_valid_trajectory_patience_s must not be negative");
+  CAIRN_THROW_UNLESS(progress_distance_m > 0.0, "progress_distance_m must be positive");
+  CAIRN_THROW_UNLESS(progress_timeout_s > 0.0, "progress_timeout_s must be positive");
+  CAIRN_THROW_UNLESS(recovery_reset_distance_m > 0.0, "recovery_reset_distance_m must be positive");
+  CAIRN_THROW_UNLESS(stop_repeat_cycles >= 0, "stop_repeat_cycles must not be negative");
+  recovery.Validate();
+}
+
+namespace {
+
+DwaParams WithPeriod(DwaParams dwa, double period_s) {
+  dwa.generator.control_period_s = period_s;
+  return dwa;
+}
+
+}  // namespace
+
+Navigator::Navigator(const common::RobotProfile& profile, const NavigatorParams& params,
+                     const DwaParams& dwa, std::vector<Place> places)
+    : profile_(profile),
+      params_(params),
+      limits_(VelocityLimits::FromProfile(profile)),
+      dwa_(limits_, WithPeriod(dwa, params.control_period_s)),
+      recovery_(dwa_.generator(), params.recovery),
+      places_(std::move(places)) {
+  profile_.Validate();
+  params_.Validate();
+  status_.critic_names = dwa_.critic_names();
+  status_.critic_rejections.assign(status_.critic_names.size(), 0);
+}
+
+bool Navigator::active() const {
+  switch (status_.state) {
+    case NavState::kPlanning:
+    case NavState::kDriving:
+    case NavState::kRecovering:
+    case NavState::kStopped:
+      return true;
+    default:
+      return false;
+  }
+}
+
+void Navigator::SetState(NavState state, NavReason reason, const std::string& message) {
+  if (state != status_.state || reason != status_.reason) status_changed_ = true;
+  status_.state = state;
+  status_.reason = reason;
+  status_.message = message;
+}
+
+void Navigator::Fail(NavReason reason, const std::string& message) {
+  SetState(NavState::kFailed, reason, message);
+  goal_.reset();
+  pending_request_ = 0;
+  plan_wanted_ = false;
+  stop_cycles_left_ = params_.stop_repeat_cycles;
+}
+
+void Navigator::ResetGoalState() {
+  goal_pose_.reset();
+  pending_request_ = 0;
+  plan_wanted_ = false;
+  path_ = Path();
+  path_segment_ = 0;
+  path_arc_m_ = 0.0;
+  path_deviation_m_ = 0.0;
+  phase_ = Phase::kFollow;
+  no_valid_since_s_ = -1.0;
+  recovery_index_ = 0;
+  failure_reason_ = NavReason::kNone;
+  status_.progress = 0.0;
+  status_.distance_remaining_m = 0.0;
+  status_.distance_travelled_m = 0.0;
+  status_.replans = 0;
+  status_.recoveries = 0;
+  dwa_.Reset();
+  status_.critic_rejections.assign(status_.critic_names.size(), 0);
+}
+
+void Navigator::SetGoal(const NavGoal& goal, double now_s) {
+  const bool had_plan = pending_request_ != 0;
+  ResetGoalState();
+  status_.goal_id = goal.id;
+  status_changed_ = true;
+  if (had_plan) cancel_plan_pending_ = true;
+  xy_tolerance_m_ = goal.xy_tolerance_m > 0.0 ? goal.xy_tolerance_m : params_.xy_goal_tolerance_m;
+  yaw_tolerance_rad_ =
+      goal.yaw_tolerance_rad > 0.0 ? goal.yaw_tolerance_rad : params_.yaw_goal_tolerance_rad;
+  if (goal.is_place) {
+    if (FindPlace(places_, goal.place) == nullptr) {
+      Fail(NavReason::kUnknownPlace, "unknown place '" + goal.place + "'");
+      return;
+    }
+  } else if (!std::isfinite(goal.pose.x_m) || !std::isfinite(goal.pose.y_m) ||
+             (goal.use_yaw && !std::isfinite(goal.pose.yaw_rad))) {
+    Fail(NavReason::kOutOfBounds, "the goal pose is not finite");
+    return;
+  }
+  goal_ = goal;
+  if (pose_) last_travel_pose_ = pose_;
+  progress_anchor_ = pose_ ? pose_->position() : Vector2::Zero();
+  progress_anchor_s_ = now_s;
+  SetState(NavState::kPlanning, NavReason::kNone,
+           goal.is_place ? "planning to place '" + goal.place + "'" : "planning");
+  plan_wanted_ = true;
+}
+
+void Navigator::Cancel(double /*now_s*/) {
+  if (!active()) return;
+  if (pending_request_ != 0) cancel_plan_pending_ = true;
+  SetState(NavState::kCancelled, NavReason::kCancelled, "cancelled");
+  goal_.reset();
+  pending_request_ = 0;
+  plan_wanted_ = false;
+  stop_cycles_left_ = params_.stop_repeat_cycles;
+}
+
+void Navigator::OnPose(const Pose2& pose, double stamp_s) {
+  if (active() && last_travel_pose_) {
+    status_.distance_travelled_m += (pose.position() - last_travel_pose_->position()).norm();
+  }
+  last_travel_pose_ = pose;
+  pose_ = pose;
+  pose_stamp_s_ = stamp_s;
+}
+
+void Navigator::OnMap(std::shared_ptr<const CostMap> map, double now_s) {
+  map_ = std::move(map);
+  map_rx_s_ = now_s;
+  map_changed_ = true;
+}
+
+void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, double now_s) {
+  if (request_id != pending_request_ || request_id == 0) return;
+  pending_request_ = 0;
+  if (!active()) return;
+  const bool stopped = status_.state == NavState::kStopped;
+  if (result.ok()) {
+    path_ = Path(result.poses);
+    path_cost_ = result.cost;
+    path_segment_ = 0;
+    path_arc_m_ = 0.0;
+    path_changed_pending_ = true;
+    phase_ = Phase::kFollow;
+    no_valid_since_s_ = -1.0;
+    failure_reason_ = NavReason::kNone;
+    if (pose_) progress_anchor_ = pose_->position();
+    progress_anchor_s_ = now_s;
+    UpdatePathProgress();
+    if (stopped) {
+      resume_state_ = NavState::kDriving;
+      resume_reason_ = NavReason::kNone;
+    } else if (status_.state != NavState::kDriving) {
+      std::ostringstream m;
+      m << "driving a " << path_.length_m() << " m path";
+      SetState(NavState::kDriving, NavReason::kNone, m.str());
+    }
+    return;
+  }
+  if (result.status == PlanStatus::kCancelled) return;
+  const NavReason reason = ReasonOf(result.status);
+  const std::string why = std::string("plan failed: ") + PlanStatusName(result.status) +
+                          (result.message.empty() ? "" : " (" + result.message + ")");
+  if (result.status == PlanStatus::kOutOfBounds) {
+    Fail(reason, why);
+    return;
+  }
+  // A failed replan while the current path is still clear: keep driving it.
+  if (status_.state == NavState::kDriving && !path_.empty() && !PathBlockedAhead() &&
+      path_deviation_m_ <= params_.max_path_deviation_m) {
+    status_.message = why + "; keeping the current path";
+    return;
+  }
+  if (stopped) {
+    // Decide once the data is fresh again.
+    resume_state_ = NavState::kPlanning;
+    failure_reason_ = reason;
+    plan_wanted_ = true;
+    return;
+  }
+  StartRecoveryOrFail(reason, why, now_s);
+}
+
+void Navigator::StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s) {
+  failure_reason_ = reason;
+  plan_wanted_ = false;
+  const auto& sequence = params_.recovery.sequence;
+  if (recovery_index_ < sequence.size() && pose_) {
+    const RecoveryKind kind = sequence[recovery_index_++];
+    recovery_.Start(kind, *pose_, now_s);
+    recovery_anchor_ = pose_->position();
+    ++status_.recoveries;
+    SetState(NavState::kRecovering, reason, why + "; recovery: " + RecoveryKindName(kind));
+    return;
+  }
+  Fail(reason == NavReason::kNone ? NavReason::kRecoveryExhausted : reason,
+       why + "; recoveries exhausted");
+}
+
+bool Navigator::ResolveGoal() {
+  if (goal_pose_) return true;
+  if (!goal_) return false;
+  if (!goal_->is_place) {
+    goal_pose_ = goal_->pose;
+    goal_has_yaw_ = goal_->use_yaw;
+    return true;
+  }
+  const Place* place = FindPlace(places_, goal_->place);
+  if (place == nullptr) {
+    Fail(NavReason::kUnknownPlace, "unknown place '" + goal_->place + "'");
+    return false;
+  }
+  const PlaceGoal resolved = ResolvePlace(*place, *map_, params_.place);
+  if (!resolved.found) {
+    StartRecoveryOrFail(NavReason::kGoalOccupied, resolved.message, last_step_s_);
+    return false;
+  }
+  goal_pose_ = resolved.pose;
+  goal_has_yaw_ = false;
+  std::ostringstream m;
+  m << "place '" << place->name << "' resolves to (" << resolved.pose.x_m << ", "
+    << resolved.pose.y_m << "), " << resolved.clearance_m << " m from walls";
+  status_.message = m.str();
+  return true;
+}
+
+void Navigator::UpdatePathProgress() {
+  if (path_.empty() || !pose_) return;
+  // Search a window around the last projection so a path that doubles back cannot capture it.
+  const size_t first = path_segment_ > 5 ? path_segment_ - 5 : 0;
+  const size_t last = path_.IndexAt(path_arc_m_ + 5.0);
+  const PathProjection proj = path_.Project(pose_->position(), first, last);
+  path_segment_ = proj.segment;
+  path_arc_m_ = proj.arc_length_m;
+  path_deviation_m_ = proj.distance_m;
+  status_.distance_remaining_m = path_.length_m() - path_arc_m_ + proj.distance_m;
+  status_.progress = path_.length_m() > 0.0 ? std::clamp(path_arc_m_ / path_.length_m(), 0.0, 1.0) : 1.0;
+}
+
+bool Navigator::PathBlockedAhead() const {
+  if (path_.empty() || !map_) return false;
+  const size_t end = path_.IndexAt(path_arc_m_ + params_.path_check_ahead_m);
+  for (size_t i = path_segment_ + 1; i <= end && i < path_.size(); ++i) {
+    if (!map_->IsValid(path_.poses()[i])) return true;
+  }
+  return false;
+}
+
+Velocity Navigator::Drive(double now_s, StepOutput* out) {
+  const auto& gen = dwa_.generator();
+  const Pose2& pose = *pose_;
+  const Pose2& goal = *goal_pose_;
+  const double to_goal = (pose.position() - goal.position()).norm();
+
+  if (phase_ == Phase::kFollow && to_goal <= xy_tolerance_m_) {
+    if (!goal_has_yaw_) {
+      SetState(NavState::kReached, NavReason::kSuccess, "goal reached");
+      status_.progress = 1.0;
+      goal_.reset();
+      stop_cycles_left_ = params_.stop_repeat_cycles;
+      return gen.Brake(last_command_);
+    }
+    phase_ = Phase::kAlign;
+    status_.message = "turning to the goal heading";
+  }
+  if (phase_ == Phase::kAlign) {
+    const double error = common::WrapAngle(goal.yaw_rad - pose.yaw_rad);
+    if (std::abs(error) <= yaw_tolerance_rad_) {
+      SetState(NavState::kReached, NavReason::kSuccess, "goal reached");
+      status_.progress = 1.0;
+      goal_.reset();
+      stop_cycles_left_ = params_.stop_repeat_cycles;
+      return gen.Brake(last_command_);
+    }
+    const Velocity turn{0.0, std::copysign(limits_.max_vel_theta_radps, error)};
+    if (!MotionClear(map_.get(), pose, turn, params_.recovery.collision_lookahead_s)) {
+      Fail(NavReason::kRecoveryExhausted,
+           "at the goal position, but turning to the goal heading is blocked");
+      return gen.Brake(last_command_);
+    }
+    progress_anchor_s_ = now_s;
+    return RotateInPlaceCommand(gen, last_command_, error, limits_.max_vel_theta_radps);
+  }
+
+  // Re-arm the recoveries once the robot has made real progress after one.
+  if (recovery_index_ > 0 &&
+      (pose.position() - recovery_anchor_).norm() > params_.recovery_reset_distance_m) {
+    recovery_index_ = 0;
+  }
+  // No progress for too long: recover.
+  if ((pose.position() - progress_anchor_).norm() >= params_.progress_distance_m) {
+    progress_anchor_ = pose.position();
+    progress_anchor_s_ = now_s;
+  } else if (now_s - progress_anchor_s_ > params_.progress_timeout_s) {
+    progress_anchor_s_ = now_s;
+    StartRecoveryOrFail(NavReason::kNone,
+                        Format("no progress for %.1f s", params_.progress_timeout_s), now_s);
+    (void)out;
+    return gen.Brake(last_command_);
+  }
+
+  // The local goal: a carrot `lookahead_m` along the path, or the goal itself near the end.
+  Vector2 carrot = goal.position();
+  if (path_arc_m_ + params_.lookahead_m < path_.length_m()) {
+    carrot = path_.PoseAt(path_arc_m_ + params_.lookahead_m).position();
+  }
+  const Vector2 d = carrot - pose.position();
+  const double heading_error = common::WrapAngle(std::atan2(d.y(), d.x()) - pose.yaw_rad);
+  if (std::abs(heading_error) > params_.rotate_to_heading_threshold_rad) {
+    const Velocity turn{0.0, std::copysign(limits_.max_vel_theta_radps, heading_error)};
+    if (MotionClear(map_.get(), pose, turn, params_.recovery.collision_lookahead_s)) {
+      no_valid_since_s_ = -1.0;
+      progress_anchor_s_ = std::max(progress_anchor_s_, now_s - params_.progress_timeout_s / 2);
+      return RotateInPlaceCommand(gen, last_command_, heading_error, limits_.max_vel_theta_radps);
+    }
+  }
+
+  DwaInput in;
+  in.map = map_.get();
+  in.pose = pose;
+  in.last_command = last_command_;
+  in.path = &path_;
+  in.segment_begin = path_segment_;
+  in.segment_end = path_.IndexAt(path_arc_m_ + params_.local_path_window_m);
+  in.local_goal = carrot;
+  const DwaResult r = dwa_.Compute(in);
+  if (!r.found) {
+    if (no_valid_since_s_ < 0.0) no_valid_since_s_ = now_s;
+    if (now_s - no_valid_since_s_ > params_.no_valid_trajectory_patience_s) {
+      no_valid_since_s_ = -1.0;
+      StartRecoveryOrFail(NavReason::kNone, "no valid trajectory", now_s);
+    }
+  } else {
+    no_valid_since_s_ = -1.0;
+  }
+  return r.command;
+}
+
+StepOutput Navigator::Step(double now_s) {
+  StepOutput out;
+  last_step_s_ = now_s;
+  const auto& gen = dwa_.generator();
+  if (cancel_plan_pending_) {
+    out.cancel_plan = true;
+    cancel_plan_pending_ = false;
+  }
+  auto finish = [&](const Velocity& command, bool emergency) {
+    out.command = command;
+    out.emergency_stop = emergency;
+    last_command_ = command;
+    if (pose_) dwa_.Commit(command, *pose_);
+    status_.critic_rejections = dwa_.rejection_counts();
+    if (path_changed_pending_) {
+      out.path_changed = true;
+      path_changed_pending_ = false;
+    }
+    out.status_changed = status_changed_;
+    status_changed_ = false;
+    return out;
+  };
+
+  if (!active()) {
+    // After a goal ends: brake within the limits, then repeat zero a few times, then go quiet.
+    if (!IsZero(last_command_)) return finish(gen.Brake(last_command_), false);
+    if (stop_cycles_left_ > 0) {
+      --stop_cycles_left_;
+      return finish(Velocity{}, false);
+    }
+    if (path_changed_pending_) {
+      out.path_changed = true;
+      path_changed_pending_ = false;
+    }
+    out.status_changed = status_changed_;
+    status_changed_ = false;
+    return out;
+  }
+
+  // Safety: stale or missing inputs stop the robot at once.
+  NavReason stale = NavReason::kNone;
+  std::string why;
+  if (!pose_) {
+    stale = NavReason::kStaleOdom;
+    why = "no pose received yet";
+  } else if (now_s - pose_stamp_s_ > params_.max_pose_age_s) {
+    stale = NavReason::kStaleOdom;
+    why = Format("the pose is %.2f s old", now_s - pose_stamp_s_);
+  } else if (pose_stamp_s_ - now_s > params_.max_clock_skew_s) {
+    stale = NavReason::kStaleOdom;
+    why = Format("the pose is stamped %.2f s in the future", pose_stamp_s_ - now_s);
+  } else if (!map_) {
+    stale = NavReason::kNoMap;
+    why = "no cost layer received yet";
+  } else if (now_s - map_rx_s_ > params_.max_map_age_s) {
+    stale = NavReason::kStaleMap;
+    why = Format("the cost layer is %.2f s old", now_s - map_rx_s_);
+  } else if (map_rx_s_ - now_s > params_.max_clock_skew_s) {
+    stale = NavReason::kStaleMap;
+    why = Format("the cost layer is stamped %.2f s in the future", map_rx_s_ - now_s);
+  }
+  if (stale != NavReason::kNone) {
+    if (status_.state != NavState::kStopped) {
+      resume_state_ = status_.state;
+      resume_reason_ = status_.reason;
+    }
+    SetState(NavState::kStopped, stale, why + ": stopped");
+    // Timers that measure progress do not run while stopped.
+    progress_anchor_s_ = now_s;
+    no_valid_since_s_ = -1.0;
+    return finish(Velocity{}, true);
+  }
+  if (status_.state == NavState::kStopped) {
+    SetState(resume_state_, resume_reason_, "inputs are fresh again: resuming");
+  }
+
+  // Replan when the map changed under the path ahead, the robot strayed, or periodically.
+  UpdatePathProgress();
+  if (status_.state == NavState::kDriving && !path_.empty() && replan_why_.empty()) {
+    if (map_changed_ && PathBlockedAhead()) {
+      replan_why_ = "the map changed under the path";
+    } else if (path_deviation_m_ > params_.max_path_deviation_m) {
+      replan_why_ = Format("%.2f m off the path", path_deviation_m_);
+    } else if (params_.replan_period_s > 0.0 &&
+               now_s - last_plan_request_s_ > params_.replan_period_s) {
+      replan_why_ = "periodic replan";
+    }
+  }
+  map_changed_ = false;
+  if (!replan_why_.empty() && status_.state == NavState::kDriving && pending_request_ == 0 &&
+      now_s - last_plan_request_s_ >= params_.min_replan_interval_s) {
+    ++status_.replans;
+    status_.message = "replanning: " + replan_why_;
+    replan_why_.clear();
+    plan_wanted_ = true;
+  } else if (status_.state != NavState::kDriving) {
+    replan_why_.clear();
+  }
+
+  // Start a plan when one is wanted.
+  if (plan_wanted_ && (status_.state == NavState::kPlanning || status_.state == NavState::kDriving)) {
+    if (!ResolveGoal()) {
+      return finish(gen.Brake(last_command_), false);
+    }
+    plan_wanted_ = false;
+    const double to_goal = (pose_->position() - goal_pose_->position()).norm();
+    if (to_goal <= xy_tolerance_m_) {
+      // Already there: only the heading may be left to do.
+      path_ = Path({*pose_, *goal_pose_});
+      path_changed_pending_ = true;
+      SetState(NavState::kDriving, NavReason::kNone, "at the goal position");
+    } else {
+      PlanJob job;
+      job.request_id = next_request_id_++;
+      job.request.start = *pose_;
+      job.request.goal = *goal_pose_;
+      job.request.goal_has_yaw = goal_has_yaw_;
+      job.request.time_budget_s = params_.plan_time_budget_s;
+      job.map = map_;
+      pending_request_ = job.request_id;
+      last_plan_request_s_ = now_s;
+      if (out.cancel_plan) out.cancel_plan = false;  // the new job supersedes the old one
+      out.plan = std::move(job);
+    }
+  }
+
+  Velocity command;
+  switch (status_.state) {
+    case NavState::kPlanning:
+      command = gen.Brake(last_command_);
+      break;
+    case NavState::kDriving:
+      command = path_.empty() ? gen.Brake(last_command_) : Drive(now_s, &out);
+      break;
+    case NavState::kRecovering: {
+      const RecoveryStep step = recovery_.Step(*pose_, last_command_, map_.get(), now_s);
+      command = step.command;
+      if (step.request_clear_short_term) out.clear_short_term = true;
+      if (step.done) {
+        SetState(NavState::kPlanning, failure_reason_,
+                 std::string("after ") + RecoveryKindName(recovery_.kind()) + " (" + step.note +
+                     "): planning again");
+        plan_wanted_ = true;
+      }
+      break;
+    }
+    default:
+      command = gen.Brake(last_command_);
+      break;
+  }
+  return finish(command, false);
+}
+
+}  // namespace cairn::planner

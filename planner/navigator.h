@@ -1,0 +1,248 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/robot_profile.h"
+#include "common/types.h"
+#include "planner/cost_map.h"
+#include "planner/global/global_planner.h"
+#include "planner/local/dwa_planner.h"
+#include "planner/path.h"
+#include "planner/places.h"
+#include "planner/recovery.h"
+
+/// @file
+/// Navigator: the navigation state machine, pure and clock-free (every call takes the time),
+/// so it runs the same under a unit test's fake time and in cairn-navigator.
+///
+/// The caller feeds it poses, cost-map snapshots, goals and plan results, and calls Step()
+/// once per control period. Step() says what to publish (a velocity command, the path, the
+/// status) and when to start a global plan, which the caller runs (in cairn-navigator on a
+/// worker thread) and hands back with OnPlanResult().
+///
+/// Behaviour:
+/// - A goal is a pose (with or without a heading) or a place name, resolved on the current map
+///   to the free cell of the place farthest from walls.
+/// - Driving follows the path with the DWA local planner; the robot first turns in place when
+///   the path points far from its heading.
+/// - It replans when the map changes under the path ahead or the robot strays from the path.
+/// - When planning fails, no trajectory is valid for a while, or the robot makes no progress,
+///   the recoveries run in order (rotate, back up, wait, clear the short-term layer), each
+///   followed by a new plan; when they are exhausted the goal fails with the last reason.
+/// - Safety: while a goal is active and the pose or the map is older than its limit (or
+///   missing), every cycle commands an immediate stop and the status says why. That stop is
+///   the one command not bound by the acceleration limits; every other command stays inside
+///   the dynamic window of the previous one.
+
+namespace cairn::planner {
+
+/// Navigation states; values equal lcmt_nav_status STATE_* constants.
+enum class NavState : int8_t {
+  kIdle = 0,
+  kPlanning = 1,
+  kDriving = 2,
+  kRecovering = 3,
+  kReached = 4,
+  kFailed = 5,
+  kCancelled = 6,
+  kStopped = 7,
+};
+
+/// Why the navigator is in its state; values equal lcmt_nav_status REASON_* constants. The
+/// plan outcomes map one to one onto PlanStatus.
+enum class NavReason : int8_t {
+  kNone = 0,
+  kSuccess = 1,
+  kStartOccupied = 2,
+  kGoalOccupied = 3,
+  kOutOfBounds = 4,
+  kNoPath = 5,
+  kTimedOut = 6,
+  kCancelled = 7,
+  kApproximate = 8,
+  kStaleOdom = 9,
+  kStaleMap = 10,
+  kUnknownPlace = 11,
+  kRecoveryExhausted = 12,
+  kNoMap = 13,
+};
+
+const char* NavStateName(NavState state);
+const char* NavReasonName(NavReason reason);
+NavReason ReasonOf(PlanStatus status);
+
+struct NavigatorParams {
+  double control_period_s{0.05};        ///< 20 Hz
+  double xy_goal_tolerance_m{0.25};
+  double yaw_goal_tolerance_rad{0.25};
+  double max_pose_age_s{0.5};           ///< older odometry/pose stops the robot
+  double max_map_age_s{0.5};            ///< an older cost layer stops the robot
+  double max_clock_skew_s{1.0};         ///< inputs stamped further in the future count as stale
+  double lookahead_m{1.2};              ///< the DWA's local goal this far along the path
+  double local_path_window_m{3.0};      ///< path the alignment critic looks at
+  double rotate_to_heading_threshold_rad{0.8};  ///< turn in place first above this error
+  double max_path_deviation_m{1.0};     ///< farther from the path: replan
+  double path_check_ahead_m{10.0};      ///< a map change blocking this much path ahead: replan
+  double min_replan_interval_s{1.0};
+  double replan_period_s{0.0};          ///< > 0: also replan this often
+  double plan_time_budget_s{1.0};
+  double no_valid_trajectory_patience_s{1.5};
+  double progress_distance_m{0.2};      ///< must move this far ...
+  double progress_timeout_s{10.0};      ///< ... within this time, else recover
+  double recovery_reset_distance_m{1.0};  ///< driving this far re-arms the first recovery
+  int stop_repeat_cycles{10};           ///< zero commands sent after a goal ends
+  RecoveryParams recovery;
+  PlaceGoalParams place;
+
+  /// @throws std::invalid_argument naming the bad field.
+  void Validate() const;
+};
+
+struct NavGoal {
+  int64_t id{0};
+  bool is_place{false};
+  std::string place;
+  common::Pose2 pose;
+  bool use_yaw{false};
+  double xy_tolerance_m{0.0};      ///< 0: the params' tolerance
+  double yaw_tolerance_rad{0.0};   ///< 0: the params' tolerance
+};
+
+struct NavStatus {
+  int64_t goal_id{0};
+  NavState state{NavState::kIdle};
+  NavReason reason{NavReason::kNone};
+  std::string message;
+  double progress{0.0};               ///< 0..1 along the current path
+  double distance_remaining_m{0.0};   ///< along the path from the robot
+  double distance_travelled_m{0.0};
+  int32_t replans{0};
+  int32_t recoveries{0};
+  std::vector<std::string> critic_names;
+  std::vector<int64_t> critic_rejections;
+};
+
+/// A plan to run: the snapshot and request to hand to GlobalPlanner::Plan.
+struct PlanJob {
+  int64_t request_id{0};
+  PlanRequest request;
+  std::shared_ptr<const CostMap> map;
+};
+
+struct StepOutput {
+  std::optional<Velocity> command;  ///< publish when set
+  bool emergency_stop{false};       ///< the command is a safety stop
+  std::optional<PlanJob> plan;      ///< start this plan (supersedes any running one)
+  bool cancel_plan{false};          ///< cancel the running plan
+  bool clear_short_term{false};     ///< ask the mapper to clear its short-term layer
+  bool path_changed{false};         ///< path() changed (publish it)
+  bool status_changed{false};       ///< state, reason or goal changed (publish the status)
+};
+
+class Navigator {
+ public:
+  /// @throws std::invalid_argument for an invalid profile or params.
+  Navigator(const common::RobotProfile& profile, const NavigatorParams& params,
+            const DwaParams& dwa, std::vector<Place> places = {});
+  Navigator(const Navigator&) = delete;
+  Navigator& operator=(const Navigator&) = delete;
+
+  /// A new goal replaces the current one. A place name that is not known fails at once.
+  void SetGoal(const NavGoal& goal, double now_s);
+  /// Cancels the active goal (no effect when idle).
+  void Cancel(double now_s);
+  /// A robot pose measured at stamp_s.
+  void OnPose(const common::Pose2& pose, double stamp_s);
+  /// A new cost-map snapshot, received at now_s.
+  void OnMap(std::shared_ptr<const CostMap> map, double now_s);
+  /// The map's producer was heard at now_s (a manifest or tile without a new snapshot): the
+  /// current snapshot is still current.
+  void OnMapHeartbeat(double now_s) {
+    if (map_) map_rx_s_ = now_s;
+  }
+  /// The outcome of a PlanJob; results of superseded jobs are ignored.
+  void OnPlanResult(int64_t request_id, const PlanResult& result, double now_s);
+  /// One control cycle.
+  StepOutput Step(double now_s);
+
+  const NavStatus& status() const { return status_; }
+  const Path& path() const { return path_; }
+  double path_cost() const { return path_cost_; }
+  /// The last command returned by Step (zero before the first).
+  const Velocity& last_command() const { return last_command_; }
+  const VelocityLimits& limits() const { return limits_; }
+  const std::vector<Place>& places() const { return places_; }
+  bool active() const;
+
+ private:
+  enum class Phase { kFollow, kAlign };
+  void SetState(NavState state, NavReason reason, const std::string& message);
+  void Fail(NavReason reason, const std::string& message);
+  void RequestPlan(double now_s, const std::string& why);
+  bool ResolveGoal();
+  void StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s);
+  bool PathBlockedAhead() const;
+  void UpdatePathProgress();
+  Velocity Drive(double now_s, StepOutput* out);
+  Velocity Stop(StepOutput* out);
+  void ResetGoalState();
+
+  common::RobotProfile profile_;
+  NavigatorParams params_;
+  VelocityLimits limits_;
+  DwaPlanner dwa_;
+  RecoveryBehaviour recovery_;
+  std::vector<Place> places_;
+
+  // Inputs.
+  std::optional<common::Pose2> pose_;
+  double pose_stamp_s_{0.0};
+  std::optional<common::Pose2> last_travel_pose_;
+  std::shared_ptr<const CostMap> map_;
+  double map_rx_s_{0.0};
+  bool map_changed_{false};
+
+  // Goal.
+  std::optional<NavGoal> goal_;
+  std::optional<common::Pose2> goal_pose_;  // resolved
+  bool goal_has_yaw_{false};
+  double xy_tolerance_m_{0.25};
+  double yaw_tolerance_rad_{0.25};
+
+  // Plan.
+  int64_t next_request_id_{1};
+  int64_t pending_request_{0};
+  bool plan_wanted_{false};
+  double last_plan_request_s_{-1e9};
+  Path path_;
+  double path_cost_{0.0};
+  size_t path_segment_{0};
+  double path_arc_m_{0.0};
+  double path_deviation_m_{0.0};
+
+  // Driving and recovery.
+  Phase phase_{Phase::kFollow};
+  Velocity last_command_;
+  double no_valid_since_s_{-1.0};
+  common::Vector2 progress_anchor_{common::Vector2::Zero()};
+  double progress_anchor_s_{0.0};
+  size_t recovery_index_{0};
+  common::Vector2 recovery_anchor_{common::Vector2::Zero()};
+  NavReason failure_reason_{NavReason::kNone};
+  NavState resume_state_{NavState::kPlanning};
+  NavReason resume_reason_{NavReason::kNone};
+  int stop_cycles_left_{0};
+  std::string replan_why_;
+  bool cancel_plan_pending_{false};
+  bool path_changed_pending_{false};
+  double last_step_s_{0.0};
+
+  NavStatus status_;
+  bool status_changed_{false};
+};
+
+}  // namespace cairn::planner

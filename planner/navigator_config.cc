@@ -1,0 +1,188 @@
+#include "planner/navigator_config.h"
+
+#include <stdexcept>
+
+#include "common/check.h"
+
+namespace cairn::planner {
+
+using common::ConfigError;
+using common::YamlMap;
+
+namespace {
+
+// Reads an enum-valued key through a name parser, reporting a bad name at its line.
+template <typename T, typename Parse>
+void GetNamed(YamlMap& map, const std::string& key, T* out, Parse parse) {
+  if (!map.Has(key)) return;
+  const YAML::Node node = map.Raw(key);
+  try {
+    *out = parse(node.as<std::string>());
+  } catch (const std::invalid_argument& e) {
+    map.Fail(node, e.what());
+  } catch (const YAML::Exception&) {
+    map.Fail(node, "bad value for '" + key + "'");
+  }
+}
+
+void LoadCostMap(YamlMap map, CostMapParams* p) {
+  map.Get("unknown_is_traversable", &p->unknown_is_traversable);
+  map.Get("unknown_cost", &p->unknown_cost);
+  map.Get("lethal_cost", &p->lethal_cost);
+  map.Finish();
+}
+
+void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
+  map.Get("planner", &p->planner);
+  GetNamed(map, "state_space", &p->state_space, StateSpaceKindFromName);
+  map.Get("turning_radius_m", &p->turning_radius_m);
+  map.Get("time_budget_s", &p->time_budget_s);
+  map.Get("stop_at_first_solution", &p->stop_at_first_solution);
+  map.Get("traversal_cost_weight", &p->traversal_cost_weight);
+  map.Get("validity_resolution_m", &p->validity_resolution_m);
+  map.Get("range_m", &p->range_m);
+  map.Get("bounds_margin_m", &p->bounds_margin_m);
+  map.Get("improvement_rounds", &p->improvement_rounds);
+  map.Get("improvement_time_s", &p->improvement_time_s);
+  map.Get("escape_radius_m", &p->escape_radius_m);
+  map.Get("simplify_time_s", &p->simplify_time_s);
+  map.Get("interpolation_step_m", &p->interpolation_step_m);
+  map.Get("goal_tolerance_m", &p->goal_tolerance_m);
+  map.Get("goal_yaw_samples", &p->goal_yaw_samples);
+  map.Get("grid_precheck", &p->grid_precheck);
+  map.Get("seed", &p->seed);
+  map.Finish();
+}
+
+void LoadLocal(YamlMap map, DwaParams* p) {
+  map.Get("vx_samples", &p->generator.vx_samples);
+  map.Get("vtheta_samples", &p->generator.vtheta_samples);
+  map.Get("sim_time_s", &p->generator.sim_time_s);
+  map.Get("sim_step_s", &p->generator.sim_step_s);
+  map.Get("forward_point_distance_m", &p->forward_point_distance_m);
+  map.Get("oscillation_reset_dist_m", &p->oscillation_reset_dist_m);
+  map.Get("oscillation_reset_angle_rad", &p->oscillation_reset_angle_rad);
+  map.Get("admissible_braking", &p->admissible_braking);
+  map.Get("braking_margin_s", &p->braking_margin_s);
+  map.Get("clearance_inflation_m", &p->clearance_inflation_m);
+  YamlMap critics = map.Child("critics");
+  critics.Get("path_align_scale", &p->path_align_scale);
+  critics.Get("goal_dist_scale", &p->goal_dist_scale);
+  critics.Get("clearance_scale", &p->clearance_scale);
+  critics.Get("speed_scale", &p->speed_scale);
+  critics.Get("oscillation_scale", &p->oscillation_scale);
+  critics.Finish();
+  map.Finish();
+}
+
+void LoadRecovery(YamlMap map, RecoveryParams* p) {
+  if (map.Has("sequence")) {
+    const YAML::Node seq = map.Raw("sequence");
+    if (!seq.IsSequence()) map.Fail(seq, "recovery.sequence must be a list");
+    p->sequence.clear();
+    for (const auto& item : seq) {
+      try {
+        p->sequence.push_back(RecoveryKindFromName(item.as<std::string>()));
+      } catch (const std::invalid_argument& e) {
+        map.Fail(item, e.what());
+      } catch (const YAML::Exception&) {
+        map.Fail(item, "a recovery must be a name");
+      }
+    }
+  }
+  map.Get("rotate_angle_rad", &p->rotate_angle_rad);
+  map.Get("rotate_speed_radps", &p->rotate_speed_radps);
+  map.Get("backup_distance_m", &p->backup_distance_m);
+  map.Get("backup_speed_mps", &p->backup_speed_mps);
+  map.Get("wait_s", &p->wait_s);
+  map.Get("clear_wait_s", &p->clear_wait_s);
+  map.Get("behaviour_timeout_s", &p->behaviour_timeout_s);
+  map.Get("collision_lookahead_s", &p->collision_lookahead_s);
+  map.Finish();
+}
+
+void LoadNavigator(YamlMap map, NavigatorParams* p) {
+  map.Get("xy_goal_tolerance_m", &p->xy_goal_tolerance_m);
+  map.Get("yaw_goal_tolerance_rad", &p->yaw_goal_tolerance_rad);
+  map.Get("max_pose_age_s", &p->max_pose_age_s);
+  map.Get("max_map_age_s", &p->max_map_age_s);
+  map.Get("max_clock_skew_s", &p->max_clock_skew_s);
+  map.Get("lookahead_m", &p->lookahead_m);
+  map.Get("local_path_window_m", &p->local_path_window_m);
+  map.Get("rotate_to_heading_threshold_rad", &p->rotate_to_heading_threshold_rad);
+  map.Get("max_path_deviation_m", &p->max_path_deviation_m);
+  map.Get("path_check_ahead_m", &p->path_check_ahead_m);
+  map.Get("min_replan_interval_s", &p->min_replan_interval_s);
+  map.Get("replan_period_s", &p->replan_period_s);
+  map.Get("plan_time_budget_s", &p->plan_time_budget_s);
+  map.Get("no_valid_trajectory_patience_s", &p->no_valid_trajectory_patience_s);
+  map.Get("progress_distance_m", &p->progress_distance_m);
+  map.Get("progress_timeout_s", &p->progress_timeout_s);
+  map.Get("recovery_reset_distance_m", &p->recovery_reset_distance_m);
+  map.Get("stop_repeat_cycles", &p->stop_repeat_cycles);
+  map.Finish();
+}
+
+void LoadPlaceGoal(YamlMap map, PlaceGoalParams* p) {
+  map.Get("max_goal_cost", &p->max_goal_cost);
+  map.Get("yaw_samples", &p->yaw_samples);
+  map.Finish();
+}
+
+}  // namespace
+
+const char* PoseSourceName(PoseSource source) {
+  return source == PoseSource::kOdom ? "odom" : "pose";
+}
+
+PoseSource PoseSourceFromName(const std::string& name) {
+  if (name == "pose") return PoseSource::kPose;
+  if (name == "odom") return PoseSource::kOdom;
+  CAIRN_THROW_UNLESS(false, "unknown pose source '" << name << "' (pose, odom)");
+  return PoseSource::kPose;
+}
+
+void NavigatorConfig::Finalize() {
+  CAIRN_THROW_UNLESS(control_rate_hz > 0.0 && control_rate_hz <= 1000.0,
+                     "control_rate_hz must lie in (0, 1000]");
+  CAIRN_THROW_UNLESS(status_rate_hz > 0.0, "status_rate_hz must be positive");
+  CAIRN_THROW_UNLESS(resend_interval_s > 0.0, "resend_interval_s must be positive");
+  CAIRN_THROW_UNLESS(incomplete_map_timeout_s >= 0.0, "incomplete_map_timeout_s must be >= 0");
+  navigator.control_period_s = 1.0 / control_rate_hz;
+  local_planner.generator.control_period_s = navigator.control_period_s;
+  navigator.plan_time_budget_s = global_planner.time_budget_s;
+  cost_map.Validate();
+  global_planner.Validate();
+  local_planner.Validate();
+  navigator.Validate();
+}
+
+NavigatorConfig LoadNavigatorConfig(YamlMap& root) {
+  NavigatorConfig c;
+  GetNamed(root, "pose_source", &c.pose_source, PoseSourceFromName);
+  root.Get("control_rate_hz", &c.control_rate_hz);
+  root.Get("status_rate_hz", &c.status_rate_hz);
+  root.Get("map_name", &c.map_name);
+  root.Get("resend_interval_s", &c.resend_interval_s);
+  root.Get("incomplete_map_timeout_s", &c.incomplete_map_timeout_s);
+  LoadCostMap(root.Child("cost_map"), &c.cost_map);
+  LoadGlobal(root.Child("global_planner"), &c.global_planner);
+  LoadLocal(root.Child("local_planner"), &c.local_planner);
+  LoadNavigator(root.Child("navigator"), &c.navigator);
+  LoadRecovery(root.Child("recovery"), &c.navigator.recovery);
+  LoadPlaceGoal(root.Child("place_goal"), &c.navigator.place);
+  root.Finish();
+  try {
+    c.Finalize();
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(root.file() + ": " + e.what());
+  }
+  return c;
+}
+
+NavigatorConfig LoadNavigatorConfigFile(const std::string& path) {
+  YamlMap root = YamlMap::LoadFile(path);
+  return LoadNavigatorConfig(root);
+}
+
+}  // namespace cairn::planner

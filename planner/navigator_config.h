@@ -1,0 +1,48 @@
+#pragma once
+
+#include <string>
+
+#include "common/yaml_reader.h"
+#include "planner/cost_map.h"
+#include "planner/global/global_planner.h"
+#include "planner/local/dwa_planner.h"
+#include "planner/navigator.h"
+
+/// @file
+/// Configuration of cairn-navigator (config/navigator/navigator.yaml) and its strict loader.
+
+namespace cairn::planner {
+
+/// Where the robot pose comes from.
+enum class PoseSource { kPose, kOdom };
+
+struct NavigatorConfig {
+  PoseSource pose_source{PoseSource::kPose};  ///< <robot>.POSE (lcmt_pose) or <robot>.ODOM
+  double control_rate_hz{20.0};
+  double status_rate_hz{2.0};
+  /// Accept map tiles of this map name only ("" = any).
+  std::string map_name;
+  /// Ask the mapper again for missing tiles at most this often.
+  double resend_interval_s{0.5};
+  /// Use an incomplete layer (absent tiles unknown) after waiting this long for the rest.
+  double incomplete_map_timeout_s{1.0};
+  CostMapParams cost_map;
+  GlobalPlannerParams global_planner;
+  DwaParams local_planner;
+  NavigatorParams navigator;
+
+  /// Copies the control period into the navigator and the DWA, then validates everything.
+  /// @throws std::invalid_argument naming the bad field.
+  void Finalize();
+};
+
+/// Reads the whole configuration; every key is optional (the defaults above), unknown keys
+/// are errors. @throws common::ConfigError naming the file and line.
+NavigatorConfig LoadNavigatorConfig(common::YamlMap& root);
+NavigatorConfig LoadNavigatorConfigFile(const std::string& path);
+
+const char* PoseSourceName(PoseSource source);
+/// "pose" or "odom". @throws std::invalid_argument otherwise.
+PoseSource PoseSourceFromName(const std::string& name);
+
+}  // namespace cairn::planner

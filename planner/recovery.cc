@@ -1,0 +1,186 @@
+#include "planner/recovery.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "common/check.h"
+
+namespace cairn::planner {
+
+using common::Pose2;
+
+namespace {
+
+constexpr double kDoneAngleRad = 0.05;
+
+std::string Format(const char* format, double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), format, value);
+  return buf;
+}
+
+bool Stopped(const Velocity& v) {
+  return std::abs(v.linear_mps) < 1e-9 && std::abs(v.angular_radps) < 1e-9;
+}
+
+}  // namespace
+
+const char* RecoveryKindName(RecoveryKind kind) {
+  switch (kind) {
+    case RecoveryKind::kRotate:
+      return "rotate";
+    case RecoveryKind::kBackUp:
+      return "back_up";
+    case RecoveryKind::kWait:
+      return "wait";
+    case RecoveryKind::kClearShortTerm:
+      return "clear_short_term";
+  }
+  return "wait";
+}
+
+RecoveryKind RecoveryKindFromName(const std::string& name) {
+  if (name == "rotate") return RecoveryKind::kRotate;
+  if (name == "back_up") return RecoveryKind::kBackUp;
+  if (name == "wait") return RecoveryKind::kWait;
+  if (name == "clear_short_term") return RecoveryKind::kClearShortTerm;
+  CAIRN_THROW_UNLESS(false, "unknown recovery '" << name
+                                                 << "' (rotate, back_up, wait, clear_short_term)");
+  return RecoveryKind::kWait;
+}
+
+void RecoveryParams::Validate() const {
+  CAIRN_THROW_UNLESS(rotate_angle_rad > 0.0, "rotate_angle_rad must be positive");
+  CAIRN_THROW_UNLESS(rotate_speed_radps > 0.0, "rotate_speed_radps must be positive");
+  CAIRN_THROW_UNLESS(backup_distance_m > 0.0, "backup_distance_m must be positive");
+  CAIRN_THROW_UNLESS(backup_speed_mps > 0.0, "backup_speed_mps must be positive");
+  CAIRN_THROW_UNLESS(wait_s >= 0.0, "wait_s must not be negative");
+  CAIRN_THROW_UNLESS(clear_wait_s >= 0.0, "clear_wait_s must not be negative");
+  CAIRN_THROW_UNLESS(behaviour_timeout_s > 0.0, "behaviour_timeout_s must be positive");
+  CAIRN_THROW_UNLESS(collision_lookahead_s > 0.0, "collision_lookahead_s must be positive");
+}
+
+bool MotionClear(const CostMap* map, const Pose2& pose, const Velocity& v, double lookahead_s) {
+  if (map == nullptr) return false;
+  const double step = 0.1;
+  for (double t = step; t <= lookahead_s + 1e-9; t += step) {
+    const double yaw = pose.yaw_rad + v.angular_radps * t;
+    Pose2 p = pose;
+    if (std::abs(v.angular_radps) < 1e-9) {
+      p.x_m += v.linear_mps * t * std::cos(pose.yaw_rad);
+      p.y_m += v.linear_mps * t * std::sin(pose.yaw_rad);
+    } else {
+      const double r = v.linear_mps / v.angular_radps;
+      p.x_m += r * (std::sin(yaw) - std::sin(pose.yaw_rad));
+      p.y_m -= r * (std::cos(yaw) - std::cos(pose.yaw_rad));
+    }
+    p.yaw_rad = common::WrapAngle(yaw);
+    if (!map->IsValid(p)) return false;
+  }
+  return true;
+}
+
+Velocity RotateInPlaceCommand(const TrajectoryGenerator& generator, const Velocity& last_command,
+                              double error_rad, double max_speed_radps) {
+  const double acc = generator.limits().acc_lim_theta_radps2;
+  // Fastest speed from which the remaining angle still suffices to brake.
+  const double braking = std::sqrt(2.0 * acc * std::abs(error_rad));
+  const double speed = std::min({max_speed_radps, generator.limits().max_vel_theta_radps, braking});
+  return generator.Toward(last_command, {0.0, std::copysign(speed, error_rad)});
+}
+
+RecoveryBehaviour::RecoveryBehaviour(const TrajectoryGenerator& generator,
+                                     const RecoveryParams& params)
+    : generator_(generator), params_(params) {
+  params_.Validate();
+}
+
+void RecoveryBehaviour::Start(RecoveryKind kind, const Pose2& pose, double now_s) {
+  kind_ = kind;
+  start_pose_ = pose;
+  last_pose_ = pose;
+  start_s_ = now_s;
+  turned_rad_ = 0.0;
+  clear_sent_ = false;
+  stopping_ = false;
+  stop_note_.clear();
+}
+
+RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_command,
+                                     const CostMap* map, double now_s) {
+  RecoveryStep out;
+  turned_rad_ += std::abs(common::WrapAngle(pose.yaw_rad - last_pose_.yaw_rad));
+  last_pose_ = pose;
+  auto stop = [&](const std::string& note) {
+    stopping_ = true;
+    stop_note_ = note;
+  };
+  if (!stopping_ && now_s - start_s_ > params_.behaviour_timeout_s) stop("timed out");
+
+  if (!stopping_) {
+    switch (kind_) {
+      case RecoveryKind::kRotate: {
+        const double remaining = params_.rotate_angle_rad - turned_rad_;
+        if (remaining <= kDoneAngleRad) {
+          stop(Format("turned %.2f rad", turned_rad_));
+          break;
+        }
+        out.command = RotateInPlaceCommand(generator_, last_command, remaining,
+                                           params_.rotate_speed_radps);
+        if (!MotionClear(map, pose, {0.0, params_.rotate_speed_radps}, params_.collision_lookahead_s)) {
+          stop("rotation blocked");
+        }
+        break;
+      }
+      case RecoveryKind::kBackUp: {
+        const double travelled = (pose.position() - start_pose_.position()).norm();
+        const double reverse = -generator_.limits().min_vel_x_mps;
+        if (travelled >= params_.backup_distance_m) {
+          stop(Format("backed up %.2f m", travelled));
+          break;
+        }
+        if (reverse <= 0.0) {
+          stop("the profile cannot reverse");
+          break;
+        }
+        const Velocity target{-std::min(params_.backup_speed_mps, reverse), 0.0};
+        if (!MotionClear(map, pose, target, params_.collision_lookahead_s)) {
+          stop("backing up is blocked");
+          break;
+        }
+        out.command = generator_.Toward(last_command, target);
+        break;
+      }
+      case RecoveryKind::kWait:
+        out.command = generator_.Brake(last_command);
+        if (now_s - start_s_ >= params_.wait_s) {
+          out.done = Stopped(out.command);
+          if (out.done) out.note = "waited";
+        }
+        return out;
+      case RecoveryKind::kClearShortTerm:
+        if (!clear_sent_) {
+          out.request_clear_short_term = true;
+          clear_sent_ = true;
+        }
+        out.command = generator_.Brake(last_command);
+        if (now_s - start_s_ >= params_.clear_wait_s) {
+          out.done = Stopped(out.command);
+          if (out.done) out.note = "asked the mapper to clear the short-term layer";
+        }
+        return out;
+    }
+  }
+  if (stopping_) {
+    // Brake within the acceleration limits; done once at rest.
+    out.command = generator_.Brake(last_command);
+    if (Stopped(out.command)) {
+      out.done = true;
+      out.note = stop_note_;
+    }
+  }
+  return out;
+}
+
+}  // namespace cairn::planner

@@ -1,0 +1,40 @@
+#include "services/mapping/derive.h"
+
+#include "common/check.h"
+#include "common/layers.h"
+
+namespace cairn::mapping {
+
+// Bump whenever a change to traversability.cc or obstacles.cc could change a derived value.
+const char kMappingCodeVersion[] = "cairn-terrain-1";
+
+DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::RobotProfile& profile,
+                                  const TraversabilityParams& traversability,
+                                  const ObstacleParams& obstacles) {
+  CAIRN_THROW_UNLESS(base.HasLayer(layers::kElevation),
+                     "cannot derive profile layers: the map has no '" << layers::kElevation
+                                                                      << "' layer");
+  profile.Validate();
+  // Work on a copy holding only what derivation reads, so the base map is never touched.
+  common::GridMap work(base.geometry());
+  work.AddLayer(layers::kElevation) = base.at(layers::kElevation);
+  if (base.HasLayer(layers::kGroundBound)) {
+    work.AddLayer(layers::kGroundBound) = base.at(layers::kGroundBound);
+  }
+  ComputeGeometricLayers(&work, traversability);
+  ComputeCostLayer(&work, profile, traversability);
+
+  DerivedLayers out;
+  out.registry = ExtractObstacles(work, obstacles);
+  LabelObstacles(&out.registry, {profile});
+  out.layers = common::GridMap(base.geometry());
+  for (const std::string& name :
+       {std::string(layers::kSlope), std::string(layers::kStepMax), std::string(layers::kRoughness),
+        std::string(layers::kDitchDepth), std::string(layers::kDitchWidth),
+        layers::CostLayer(profile.name)}) {
+    out.layers.AddLayer(name) = work.at(name);
+  }
+  return out;
+}
+
+}  // namespace cairn::mapping

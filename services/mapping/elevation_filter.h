@@ -1,0 +1,58 @@
+#pragma once
+
+#include <cstdint>
+
+#include "common/types.h"
+
+/// @file
+/// The per-cell height filter of the elevation layer (seed 000 section 3.2, after ANYbotics
+/// elevation_mapping): each cell holds a Gaussian height estimate (height, variance) fused from
+/// point measurements with a 1-D Kalman update, Mahalanobis gating and variance limits.
+
+namespace cairn::mapping {
+
+/// Parameters of the height filter and of the laser noise model.
+struct ElevationFilterParams {
+  // Laser noise model (Pomerleau et al. 2012, elevation_mapping's LaserSensorProcessor).
+  double range_noise_m{0.018};     ///< sigma along the beam ("min_radius")
+  double beam_constant_m{0.0015};  ///< lateral sigma at zero range
+  double beam_angle_rad{0.0006};   ///< lateral sigma growth per metre of range (beam divergence)
+
+  /// |z - h| / sqrt(var + var_z) at or above this is another height (another surface).
+  double mahalanobis_threshold{2.5};
+  double multi_height_noise_m2{9e-7};    ///< added to a cell's variance per conflicting point
+  double min_variance_m2{9e-6};          ///< (3 mm)^2: variances below are clamped up
+  double max_variance_m2{0.01};          ///< (10 cm)^2: variances above make the cell unknown
+  /// Blend toward a higher point of the same scan: 0 takes the higher point (upstream default).
+  double increase_height_alpha{0.0};
+
+  /// @throws std::invalid_argument naming a bad field.
+  void Validate() const;
+};
+
+/// Height variance (m²) of a point measured from `sensor_m` at `point_m` (world frame):
+/// sigma_r² along the beam and sigma_lat² = (beam_constant + beam_angle·range)² across it,
+/// projected on the vertical. elevation_mapping put the "normal" sigma on the sensor's z axis
+/// whatever the beam direction, so for a level sensor every point got (1.8 cm)² at any range;
+/// here the noise axes follow the beam, as in the cited model: grazing rays on the ground get
+/// the small lateral sigma, steep ones the range sigma.
+double PointHeightVariance(const common::Vector3& sensor_m, const common::Vector3& point_m,
+                           const ElevationFilterParams& params);
+
+/// What one measurement did to a cell.
+enum class FuseOutcome : int8_t {
+  kInitialized,   ///< the cell was unknown: it takes the measurement
+  kFused,         ///< within the gate: Kalman update
+  kIgnoredLower,  ///< outside the gate, same scan, lower: ignored
+  kRaised,        ///< outside the gate, same scan, higher: height raised toward it
+  kMultiHeight,   ///< outside the gate, earlier scan: variance += multi_height_noise
+};
+
+/// Applies one measurement (z, var_z) to a cell (height, variance). `same_scan` says whether
+/// the cell was last updated by the scan this point belongs to. After the update the variance is
+/// clamped to min_variance; above max_variance the cell becomes unknown (both NaN).
+/// Returns what happened (before the clamp).
+FuseOutcome FuseHeight(float* height_m, float* variance_m2, double z_m, double var_z_m2,
+                       bool same_scan, const ElevationFilterParams& params);
+
+}  // namespace cairn::mapping

@@ -1,0 +1,92 @@
+#include "services/mapping/mapper_core.h"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include "common/layers.h"
+
+namespace cairn::mapping {
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+}  // namespace
+
+void MapperCoreParams::Validate() const {
+  terrain.Validate();
+  if (occupancy_enabled) {
+    occupancy.Validate();
+    band.Validate();
+  }
+  if (octomap_enabled) octomap.Validate();
+}
+
+MapperCore::MapperCore(const MapperCoreParams& params) : params_(params), terrain_(params.terrain) {
+  params_.Validate();
+  if (params_.occupancy_enabled) occupancy_ = std::make_unique<OccupancyGrid>(params_.occupancy);
+  if (params_.octomap_enabled) octomap_ = std::make_unique<OctomapLayer>(params_.octomap);
+}
+
+RevolutionReport MapperCore::ProcessRevolution(const common::LidarRevolution& revolution,
+                                               const RobotContext& robot, double time_s) {
+  using Clock = std::chrono::steady_clock;
+  RevolutionReport report;
+  const auto t0 = Clock::now();
+  report.terrain = terrain_.Integrate(revolution, time_s);
+  const auto t1 = Clock::now();
+  report.derived = terrain_.UpdateDerived(robot);
+  const auto t2 = Clock::now();
+  if (occupancy_) {
+    // The obstacle band is measured from the ground under the robot when the terrain knows it.
+    double ground_z = std::numeric_limits<double>::quiet_NaN();
+    if (robot.xy_m) {
+      common::GridGeometry g;
+      g.resolution_m = params_.terrain.resolution_m;
+      g.size_x = g.size_y = 3;
+      g.origin = {std::floor(robot.xy_m->x() / g.resolution_m - 1) * g.resolution_m,
+                  std::floor(robot.xy_m->y() / g.resolution_m - 1) * g.resolution_m, 0.0};
+      const common::GridMap under = terrain_.Export({layers::kElevation}, g);
+      double sum = 0;
+      int n = 0;
+      for (int64_t i = 0; i < under.at(layers::kElevation).size(); ++i) {
+        const float h = under.at(layers::kElevation).data()[i];
+        if (!std::isnan(h)) {
+          sum += h;
+          ++n;
+        }
+      }
+      if (n > 0) ground_z = sum / n;
+    }
+    const std::vector<PlanarRay> rays =
+        ProjectObstacleBand(revolution, params_.band, ground_z, &report.band);
+    report.occupancy = occupancy_->InsertRays(rays);
+  }
+  const auto t3 = Clock::now();
+  report.elevation_s = Seconds(t0, t1);
+  report.derived_s = Seconds(t1, t2);
+  report.occupancy_s = Seconds(t2, t3);
+  ++revolutions_;
+  return report;
+}
+
+OccupancyInsertStats MapperCore::ProcessScan(const common::LaserScan& scan) {
+  if (!occupancy_) return {};
+  return occupancy_->InsertScan(scan);
+}
+
+OctomapInsertStats MapperCore::InsertOctomap(const common::LidarRevolution& revolution) {
+  if (!octomap_) return {};
+  return octomap_->InsertRevolution(revolution);
+}
+
+void MapperCore::Reset() {
+  terrain_.Clear();
+  if (occupancy_) occupancy_->Clear();
+  if (octomap_) octomap_ = std::make_unique<OctomapLayer>(params_.octomap);
+  revolutions_ = 0;
+}
+
+}  // namespace cairn::mapping

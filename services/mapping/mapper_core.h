@@ -1,0 +1,79 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "common/point_cloud.h"
+#include "services/mapping/occupancy_band.h"
+#include "services/mapping/occupancy_grid.h"
+#include "services/mapping/octomap_layer.h"
+#include "services/mapping/terrain_map.h"
+
+/// @file
+/// MapperCore: every layer one robot's mapper keeps, fed with lidar revolutions and planar
+/// scans whose sensor poses are already resolved. No transport: the LCM service, the offline
+/// replay and the benchmark all drive this class, so they build the same maps.
+
+namespace cairn::mapping {
+
+struct MapperCoreParams {
+  TerrainMapParams terrain;
+  bool occupancy_enabled{true};
+  OccupancyParams occupancy;
+  ObstacleBandParams band;
+  bool octomap_enabled{true};
+  OctomapLayerParams octomap;
+
+  /// @throws std::invalid_argument naming a bad field.
+  void Validate() const;
+};
+
+/// What one revolution did, with the time each stage took (wall clock, seconds).
+struct RevolutionReport {
+  IntegrateStats terrain;
+  DerivedStats derived;
+  ObstacleBandStats band;
+  OccupancyInsertStats occupancy;
+  double elevation_s{0.0};
+  double derived_s{0.0};
+  double occupancy_s{0.0};
+};
+
+class MapperCore {
+ public:
+  /// @throws std::invalid_argument if the params are invalid.
+  explicit MapperCore(const MapperCoreParams& params);
+  MapperCore(const MapperCore&) = delete;
+  MapperCore& operator=(const MapperCore&) = delete;
+
+  /// Elevation, derived terrain layers and the occupancy from the revolution's obstacle band.
+  /// `time_s` stamps last_seen. The OctoMap is separate (InsertOctomap): it costs far more per
+  /// revolution, so callers feed it at their own rate.
+  RevolutionReport ProcessRevolution(const common::LidarRevolution& revolution,
+                                     const RobotContext& robot, double time_s);
+  /// A planar laser scan into the occupancy grid.
+  OccupancyInsertStats ProcessScan(const common::LaserScan& scan);
+  /// A revolution into the OctoMap (no-op when disabled).
+  OctomapInsertStats InsertOctomap(const common::LidarRevolution& revolution);
+
+  TerrainMap& terrain() { return terrain_; }
+  const TerrainMap& terrain() const { return terrain_; }
+  OccupancyGrid* occupancy() { return occupancy_.get(); }
+  const OccupancyGrid* occupancy() const { return occupancy_.get(); }
+  OctomapLayer* octomap() { return octomap_.get(); }
+  const OctomapLayer* octomap() const { return octomap_.get(); }
+  const MapperCoreParams& params() const { return params_; }
+  int64_t revolutions() const { return revolutions_; }
+
+  /// Forgets every measurement (profiles are kept).
+  void Reset();
+
+ private:
+  MapperCoreParams params_;
+  TerrainMap terrain_;
+  std::unique_ptr<OccupancyGrid> occupancy_;
+  std::unique_ptr<OctomapLayer> octomap_;
+  int64_t revolutions_{0};
+};
+
+}  // namespace cairn::mapping

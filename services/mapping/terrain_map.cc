@@ -1,0 +1,631 @@
+#include "services/mapping/terrain_map.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "common/check.h"
+#include "common/layers.h"
+#include "services/mapping/raytrace.h"
+
+namespace cairn::mapping {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+
+// Derived layers that are not cost layers.
+const std::vector<std::string>& GeometricLayers() {
+  static const std::vector<std::string> names{layers::kSlope,      layers::kStepMax,
+                                              layers::kRoughness,  kNormalXLayer,
+                                              kNormalYLayer,       layers::kDitchDepth,
+                                              layers::kDitchWidth};
+  return names;
+}
+const std::vector<std::string>& FeatureLayers() {
+  static const std::vector<std::string> names{kFeatureClassLayer, kFeatureEdgeLayer,
+                                              kFeatureLowLayer, kFeatureHighLayer};
+  return names;
+}
+
+CellRect Grow(const CellRect& r, int m) { return {r.x0 - m, r.y0 - m, r.x1 + m, r.y1 + m}; }
+
+}  // namespace
+
+// One tile: every layer as a GridMap over the tile, plus the filter state that is not
+// published (the unrounded filter height, the last scan per cell, the raw ground bound).
+struct TerrainMap::Tile {
+  common::GridMap layers;
+  std::vector<float> filter_height;
+  std::vector<float> raw_bound;
+  std::vector<float> conflict_bound;  // as raw_bound, from rays ending two or more cells on
+  std::vector<int64_t> scan;
+  float* elevation{nullptr};
+  float* variance{nullptr};
+  float* count{nullptr};
+  float* last_seen{nullptr};
+  float* bound{nullptr};
+  int64_t base_version{0};
+  int64_t derived_version{0};
+};
+
+IntegrateStats& IntegrateStats::operator+=(const IntegrateStats& o) {
+  points += o.points;
+  used += o.used;
+  ignored_lower += o.ignored_lower;
+  nonfinite += o.nonfinite;
+  out_of_range += o.out_of_range;
+  self += o.self;
+  overhang += o.overhang;
+  return *this;
+}
+
+void TerrainMapParams::Validate() const {
+  CAIRN_THROW_UNLESS(std::isfinite(resolution_m) && resolution_m > 0,
+                     "resolution_m must be positive, got " << resolution_m);
+  CAIRN_THROW_UNLESS(tile_size_cells >= 8 && tile_size_cells <= 250,
+                     "tile_size_cells must be in [8, 250], got " << tile_size_cells);
+  filter.Validate();
+  CAIRN_THROW_UNLESS(min_range_m >= 0 && max_range_m > min_range_m,
+                     "need 0 <= min_range_m < max_range_m, got " << min_range_m << ", "
+                                                                 << max_range_m);
+  CAIRN_THROW_UNLESS(max_height_above_sensor_m > 0, "max_height_above_sensor_m must be positive");
+  CAIRN_THROW_UNLESS(self_filter_radius_m >= 0, "self_filter_radius_m must be >= 0");
+  CAIRN_THROW_UNLESS(std::isfinite(ray_bound_length_m), "ray_bound_length_m must be finite");
+  CAIRN_THROW_UNLESS(commit_epsilon_m >= 0 && commit_epsilon_m < 0.05,
+                     "commit_epsilon_m must be in [0, 0.05), got " << commit_epsilon_m);
+  CAIRN_THROW_UNLESS(visibility_tolerance_m >= 0 && max_visibility_conflict_m >= visibility_tolerance_m,
+                     "need 0 <= visibility_tolerance_m <= max_visibility_conflict_m");
+  traversability.Validate();
+  obstacles.Validate();
+}
+
+TerrainMap::TerrainMap(const TerrainMapParams& params) : params_(params) {
+  params_.Validate();
+  // Blocks (the unit of recomputation) divide the tile evenly.
+  block_cells_ = params_.tile_size_cells;
+  for (int b = 25; b >= 5; --b) {
+    if (params_.tile_size_cells % b == 0) {
+      block_cells_ = b;
+      break;
+    }
+  }
+}
+
+TerrainMap::~TerrainMap() = default;
+
+std::vector<std::string> TerrainMap::BaseLayers() {
+  return {layers::kElevation, layers::kElevationVariance, layers::kObservationCount,
+          layers::kLastSeen, layers::kGroundBound};
+}
+
+std::vector<std::string> TerrainMap::DerivedLayers() const {
+  std::vector<std::string> names = GeometricLayers();
+  for (const auto& p : profiles_) names.push_back(layers::CostLayer(p.name));
+  return names;
+}
+
+const common::RobotProfile* TerrainMap::FindProfile(const std::string& name) const {
+  for (const auto& p : profiles_) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
+void TerrainMap::AddProfile(const common::RobotProfile& profile) {
+  profile.Validate();
+  auto it = std::find_if(profiles_.begin(), profiles_.end(),
+                         [&](const auto& p) { return p.name == profile.name; });
+  if (it != profiles_.end()) {
+    *it = profile;
+  } else {
+    profiles_.push_back(profile);
+  }
+  // Its cost layer over every tile.
+  std::vector<CellRect> rects;
+  for (const auto& [key, tile] : tiles_) {
+    const int T = params_.tile_size_cells;
+    rects.push_back({key.first * T, key.second * T, (key.first + 1) * T, (key.second + 1) * T});
+  }
+  std::sort(rects.begin(), rects.end(), [](const CellRect& a, const CellRect& b) {
+    return std::make_pair(a.y0, a.x0) < std::make_pair(b.y0, b.x0);
+  });
+  RobotContext robot;
+  robot.xy_m = last_robot_xy_;
+  RecomputeCosts(rects, robot, {FindProfile(profile.name)});
+}
+
+bool TerrainMap::RemoveProfile(const std::string& name) {
+  auto it = std::find_if(profiles_.begin(), profiles_.end(),
+                         [&](const auto& p) { return p.name == name; });
+  if (it == profiles_.end()) return false;
+  profiles_.erase(it);
+  for (auto& [key, tile] : tiles_) {
+    tile->layers.RemoveLayer(layers::CostLayer(name));
+    ++tile->derived_version;
+  }
+  return true;
+}
+
+TerrainMap::Tile* TerrainMap::GetTile(int tx, int ty) {
+  const Key key{tx, ty};
+  if (last_tile_ != nullptr && key == last_key_) return last_tile_;
+  auto it = tiles_.find(key);
+  if (it == tiles_.end()) {
+    auto tile = std::make_unique<Tile>();
+    tile->layers = common::GridMap(TileGeometry(tx, ty));
+    for (const auto& name : BaseLayers()) tile->layers.AddLayer(name);
+    tile->layers.at(layers::kObservationCount).setZero();
+    const size_t n = static_cast<size_t>(params_.tile_size_cells) * params_.tile_size_cells;
+    tile->filter_height.assign(n, kNaN);
+    tile->raw_bound.assign(n, kNaN);
+    tile->conflict_bound.assign(n, kNaN);
+    tile->scan.assign(n, std::numeric_limits<int64_t>::min());
+    tile->elevation = tile->layers.at(layers::kElevation).data();
+    tile->variance = tile->layers.at(layers::kElevationVariance).data();
+    tile->count = tile->layers.at(layers::kObservationCount).data();
+    tile->last_seen = tile->layers.at(layers::kLastSeen).data();
+    tile->bound = tile->layers.at(layers::kGroundBound).data();
+    it = tiles_.emplace(key, std::move(tile)).first;
+  }
+  last_key_ = key;
+  last_tile_ = it->second.get();
+  return last_tile_;
+}
+
+const TerrainMap::Tile* TerrainMap::FindTile(int tx, int ty) const {
+  auto it = tiles_.find({tx, ty});
+  return it == tiles_.end() ? nullptr : it->second.get();
+}
+
+TerrainMap::Tile* TerrainMap::TileForCell(int64_t cx, int64_t cy, int* lx, int* ly) {
+  const int T = params_.tile_size_cells;
+  const int64_t tx = FloorDiv(cx, T), ty = FloorDiv(cy, T);
+  *lx = static_cast<int>(cx - tx * T);
+  *ly = static_cast<int>(cy - ty * T);
+  return GetTile(static_cast<int>(tx), static_cast<int>(ty));
+}
+
+void TerrainMap::MarkDirty(int64_t cx, int64_t cy) {
+  dirty_blocks_.insert({static_cast<int>(FloorDiv(cx, block_cells_)),
+                        static_cast<int>(FloorDiv(cy, block_cells_))});
+}
+
+common::GridGeometry TerrainMap::TileGeometry(int tx, int ty) const {
+  common::GridGeometry g;
+  g.resolution_m = params_.resolution_m;
+  g.size_x = g.size_y = params_.tile_size_cells;
+  g.origin = {tx * params_.tile_size_cells * params_.resolution_m,
+              ty * params_.tile_size_cells * params_.resolution_m, 0.0};
+  return g;
+}
+
+IntegrateStats TerrainMap::Integrate(const common::LidarRevolution& revolution, double time_s) {
+  IntegrateStats stats;
+  for (const auto& slice : revolution.slices) {
+    stats += Integrate(slice.points, slice.sensor_pose, revolution.revolution, time_s);
+  }
+  return stats;
+}
+
+IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& points,
+                                     const common::Pose3& sensor_pose, int64_t scan_id,
+                                     double time_s) {
+  IntegrateStats stats;
+  stats.points = static_cast<int64_t>(points.size());
+  if (!sensor_pose.position_m.allFinite() || !sensor_pose.orientation.coeffs().allFinite()) {
+    stats.nonfinite = stats.points;
+    return stats;
+  }
+  const Eigen::Matrix3d rotation = sensor_pose.orientation.normalized().toRotationMatrix();
+  const common::Vector3& origin = sensor_pose.position_m;
+  const double res = params_.resolution_m;
+  const float time_f = static_cast<float>(time_s);
+  std::array<int64_t, 256> last_end;
+  last_end.fill(std::numeric_limits<int64_t>::min());
+  for (const auto& p : points) {
+    const common::Vector3 ps(p.x_m, p.y_m, p.z_m);
+    if (!ps.allFinite()) {
+      ++stats.nonfinite;
+      continue;
+    }
+    const double range = ps.norm();
+    if (range < params_.min_range_m || range > params_.max_range_m) {
+      ++stats.out_of_range;
+      continue;
+    }
+    const common::Vector3 pw = origin + rotation * ps;
+    if (params_.self_filter_radius_m > 0 &&
+        (pw.head<2>() - origin.head<2>()).squaredNorm() <
+            params_.self_filter_radius_m * params_.self_filter_radius_m) {
+      ++stats.self;
+      continue;
+    }
+    if (pw.z() > origin.z() + params_.max_height_above_sensor_m) {
+      ++stats.overhang;
+      continue;
+    }
+    const int64_t cx = static_cast<int64_t>(std::floor(pw.x() / res));
+    const int64_t cy = static_cast<int64_t>(std::floor(pw.y() / res));
+    int lx, ly;
+    Tile* tile = TileForCell(cx, cy, &lx, &ly);
+    const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
+    const double var_z = PointHeightVariance(origin, pw, params_.filter);
+    const bool same_scan = tile->scan[i] == scan_id;
+    float h = tile->filter_height[i], var = tile->variance[i];
+    const FuseOutcome outcome = FuseHeight(&h, &var, pw.z(), var_z, same_scan, params_.filter);
+    if (outcome == FuseOutcome::kIgnoredLower) {
+      ++stats.ignored_lower;
+    } else {
+      ++stats.used;
+      tile->filter_height[i] = h;
+      tile->variance[i] = var;
+      tile->scan[i] = scan_id;
+      tile->count[i] += 1.f;
+      tile->last_seen[i] = time_f;
+      ++tile->base_version;
+      CommitHeight(tile, i, cx, cy);
+    }
+    if (params_.ray_bound_length_m > 0 && pw.z() < origin.z()) {
+      // Neighbouring rays of one ring end in the same cell many times over (a dozen per cell
+      // at 5 m): the first of a run records the bound for all of them.
+      const int64_t end_key = (cx << 32) ^ (cy & 0xffffffff);
+      const size_t ring = static_cast<size_t>(p.ring) & 0xff;
+      if (last_end[ring] != end_key) {
+        last_end[ring] = end_key;
+        RecordBound(origin, pw);
+      }
+    }
+  }
+  return stats;
+}
+
+// The published height follows the filter in steps larger than commit_epsilon, except where a
+// ray passed slightly beneath it: such a cell mixes a surface with a gap next to it (range
+// noise spills the rim of a trench into its first cell, a wall's foot into the wall cell) and
+// is published unknown, so the gap keeps its true width. Larger conflicts are thin structures
+// the ray passed beside; they stay.
+void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
+  float h = tile->filter_height[i];
+  const float bound = tile->conflict_bound[i];
+  if (!std::isnan(h) && bound < h - params_.visibility_tolerance_m &&
+      h - bound < params_.max_visibility_conflict_m) {
+    h = kNaN;
+  }
+  float& committed = tile->elevation[i];
+  if (std::isnan(h) != std::isnan(committed) ||
+      (!std::isnan(h) && std::fabs(double(h) - committed) > params_.commit_epsilon_m)) {
+    committed = h;
+    ++tile->base_version;
+    MarkDirty(cx, cy);
+  }
+}
+
+// The last stretch of a downward ray: every cell it crosses before the one of its return gets
+// the ray's height where it leaves that cell as an upper bound of the ground there (under the
+// 2.5-D assumption that a cell's surface is one height).
+void TerrainMap::RecordBound(const common::Vector3& from, const common::Vector3& to) {
+  const common::Vector3 d = to - from;
+  const double length = d.norm();
+  if (!(length > 0)) return;
+  const double start_t = std::max(0.0, 1.0 - params_.ray_bound_length_m / length);
+  const common::Vector3 a = from + start_t * d;
+  const double res = params_.resolution_m;
+  const double x0 = a.x() / res, y0 = a.y() / res, x1 = to.x() / res, y1 = to.y() / res;
+  const int64_t end_x = static_cast<int64_t>(std::floor(x1));
+  const int64_t end_y = static_cast<int64_t>(std::floor(y1));
+  const double dx = x1 - x0, dy = y1 - y0, dz = to.z() - a.z();
+  const double eps = params_.commit_epsilon_m;
+  TraverseCells(x0, y0, x1, y1, [&](int ix, int iy) {
+    if (ix == end_x && iy == end_y) return false;
+    // Parameter along [a, to] where the segment leaves cell (ix, iy).
+    double t_exit = 1.0;
+    if (dx > 0) t_exit = std::min(t_exit, (ix + 1 - x0) / dx);
+    if (dx < 0) t_exit = std::min(t_exit, (ix - x0) / dx);
+    if (dy > 0) t_exit = std::min(t_exit, (iy + 1 - y0) / dy);
+    if (dy < 0) t_exit = std::min(t_exit, (iy - y0) / dy);
+    const float z_exit = static_cast<float>(a.z() + std::clamp(t_exit, 0.0, 1.0) * dz);
+    int lx, ly;
+    Tile* tile = TileForCell(ix, iy, &lx, &ly);
+    const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
+    float& raw = tile->raw_bound[i];
+    if (!(raw <= z_exit)) {
+      raw = z_exit;
+      float& committed = tile->bound[i];
+      if (std::isnan(committed) || raw < committed - eps) {
+        committed = raw;
+        ++tile->base_version;
+        MarkDirty(ix, iy);
+      }
+    }
+    // Only a ray that goes on for more than the next cell can say a surface is not there: one
+    // that ends right after this cell may have hit a face standing in it.
+    float& conflict = tile->conflict_bound[i];
+    if (std::abs(end_x - ix) + std::abs(end_y - iy) >= 2 && !(conflict <= z_exit)) {
+      conflict = z_exit;
+      if (!std::isnan(tile->filter_height[i])) CommitHeight(tile, i, ix, iy);
+    }
+    return true;
+  });
+}
+
+common::GridGeometry TerrainMap::Bounds() const {
+  common::GridGeometry g = AllocatedBounds();
+  if (tiles_.empty()) return g;
+  const double tile_m = params_.tile_size_cells * params_.resolution_m;
+  g.size_x += 2 * params_.tile_size_cells;
+  g.size_y += 2 * params_.tile_size_cells;
+  g.origin.x_m -= tile_m;
+  g.origin.y_m -= tile_m;
+  return g;
+}
+
+common::GridGeometry TerrainMap::AllocatedBounds() const {
+  common::GridGeometry g;
+  g.resolution_m = params_.resolution_m;
+  if (tiles_.empty()) return g;
+  int tx0 = std::numeric_limits<int>::max(), ty0 = tx0;
+  int tx1 = std::numeric_limits<int>::min(), ty1 = tx1;
+  for (const auto& [key, tile] : tiles_) {
+    tx0 = std::min(tx0, key.first);
+    ty0 = std::min(ty0, key.second);
+    tx1 = std::max(tx1, key.first);
+    ty1 = std::max(ty1, key.second);
+  }
+  const int T = params_.tile_size_cells;
+  g.size_x = (tx1 - tx0 + 1) * T;
+  g.size_y = (ty1 - ty0 + 1) * T;
+  g.origin = {tx0 * T * params_.resolution_m, ty0 * T * params_.resolution_m, 0.0};
+  return g;
+}
+
+common::GridMap TerrainMap::Window(const CellRect& r, const std::vector<std::string>& names) const {
+  common::GridGeometry g;
+  g.resolution_m = params_.resolution_m;
+  g.size_x = r.x1 - r.x0;
+  g.size_y = r.y1 - r.y0;
+  g.origin = {r.x0 * params_.resolution_m, r.y0 * params_.resolution_m, 0.0};
+  common::GridMap out(g);
+  for (const auto& name : names) out.AddLayer(name);
+  const int T = params_.tile_size_cells;
+  const int64_t tx0 = FloorDiv(r.x0, T), tx1 = FloorDiv(r.x1 - 1, T);
+  const int64_t ty0 = FloorDiv(r.y0, T), ty1 = FloorDiv(r.y1 - 1, T);
+  for (int64_t ty = ty0; ty <= ty1; ++ty) {
+    for (int64_t tx = tx0; tx <= tx1; ++tx) {
+      const Tile* tile = FindTile(static_cast<int>(tx), static_cast<int>(ty));
+      if (tile == nullptr) continue;
+      const int64_t x0 = std::max<int64_t>(r.x0, tx * T), x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
+      const int64_t y0 = std::max<int64_t>(r.y0, ty * T), y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
+      for (const auto& name : names) {
+        if (!tile->layers.HasLayer(name)) continue;
+        out.at(name).block(x0 - r.x0, y0 - r.y0, x1 - x0, y1 - y0) =
+            tile->layers.at(name).block(x0 - tx * T, y0 - ty * T, x1 - x0, y1 - y0);
+      }
+    }
+  }
+  return out;
+}
+
+void TerrainMap::WriteBack(const common::GridMap& window, int64_t ox, int64_t oy,
+                           const CellRect& r, const std::vector<std::string>& names) {
+  const int T = params_.tile_size_cells;
+  const int64_t tx0 = FloorDiv(r.x0, T), tx1 = FloorDiv(r.x1 - 1, T);
+  const int64_t ty0 = FloorDiv(r.y0, T), ty1 = FloorDiv(r.y1 - 1, T);
+  for (int64_t ty = ty0; ty <= ty1; ++ty) {
+    for (int64_t tx = tx0; tx <= tx1; ++tx) {
+      auto it = tiles_.find({static_cast<int>(tx), static_cast<int>(ty)});
+      if (it == tiles_.end()) continue;
+      Tile* tile = it->second.get();
+      const int64_t x0 = std::max<int64_t>(r.x0, tx * T), x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
+      const int64_t y0 = std::max<int64_t>(r.y0, ty * T), y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
+      for (const auto& name : names) {
+        if (!tile->layers.HasLayer(name)) tile->layers.AddLayer(name);
+        tile->layers.at(name).block(x0 - tx * T, y0 - ty * T, x1 - x0, y1 - y0) =
+            window.at(name).block(x0 - ox, y0 - oy, x1 - x0, y1 - y0);
+      }
+      ++tile->derived_version;
+    }
+  }
+}
+
+std::vector<CellRect> TerrainMap::RectsOfBlocks(const std::set<Key>& blocks) const {
+  // One rectangle per tile: the bounding box of the tile's blocks in the set, restricted to
+  // allocated tiles (derived layers exist only there).
+  const int T = params_.tile_size_cells, B = block_cells_, per_tile = T / B;
+  std::map<Key, CellRect> per;  // ordered: deterministic processing order
+  for (const auto& [bx, by] : blocks) {
+    const int tx = static_cast<int>(FloorDiv(bx, per_tile));
+    const int ty = static_cast<int>(FloorDiv(by, per_tile));
+    if (FindTile(tx, ty) == nullptr) continue;
+    const CellRect b{bx * B, by * B, (bx + 1) * B, (by + 1) * B};
+    auto it = per.find({ty, tx});
+    if (it == per.end()) {
+      per.emplace(Key{ty, tx}, b);
+    } else {
+      it->second = {std::min(it->second.x0, b.x0), std::min(it->second.y0, b.y0),
+                    std::max(it->second.x1, b.x1), std::max(it->second.y1, b.y1)};
+    }
+  }
+  std::vector<CellRect> rects;
+  for (const auto& [key, r] : per) rects.push_back(r);
+  return rects;
+}
+
+void TerrainMap::RecomputeCosts(const std::vector<CellRect>& rects, const RobotContext& robot,
+                                const std::vector<const common::RobotProfile*>& which) {
+  if (which.empty()) return;
+  // The cost of a cell reads the geometric layers of its 4-neighbours and the elevation and
+  // ground bound around it.
+  std::vector<std::string> in{layers::kElevation, layers::kGroundBound};
+  for (const auto& n : GeometricLayers()) in.push_back(n);
+  std::vector<std::string> out;
+  for (const auto* p : which) out.push_back(layers::CostLayer(p->name));
+  constexpr int kMargin = 2;
+  for (const CellRect& r : rects) {
+    const CellRect w = Grow(r, kMargin);
+    common::GridMap window = Window(w, in);
+    const CellRect local{kMargin, kMargin, kMargin + r.x1 - r.x0, kMargin + r.y1 - r.y0};
+    for (const auto* p : which) {
+      ComputeCostLayer(&window, *p, params_.traversability, robot, local);
+    }
+    WriteBack(window, w.x0, w.y0, r, out);
+  }
+}
+
+DerivedStats TerrainMap::UpdateDerived(const RobotContext& robot) {
+  DerivedStats stats;
+  const int B = block_cells_;
+  const int geo_radius = DependencyRadiusCells(params_.traversability, params_.resolution_m);
+  const int dilate = (geo_radius + FeatureRadiusCells() + B - 1) / B;
+  std::set<Key> region;
+  for (const auto& [bx, by] : dirty_blocks_) {
+    for (int dy = -dilate; dy <= dilate; ++dy) {
+      for (int dx = -dilate; dx <= dilate; ++dx) region.insert({bx + dx, by + dy});
+    }
+  }
+  dirty_blocks_.clear();
+  // Cost-only blocks: the blind zone at the robot's previous and current position, and with
+  // IMU compensation the robot's surroundings (the pitch changes every cell's slope there).
+  std::set<Key> cost_region = region;
+  auto add_around = [&](const common::Vector2& xy, double radius_m) {
+    const int64_t cx0 = static_cast<int64_t>(std::floor((xy.x() - radius_m) / params_.resolution_m));
+    const int64_t cx1 = static_cast<int64_t>(std::floor((xy.x() + radius_m) / params_.resolution_m));
+    const int64_t cy0 = static_cast<int64_t>(std::floor((xy.y() - radius_m) / params_.resolution_m));
+    const int64_t cy1 = static_cast<int64_t>(std::floor((xy.y() + radius_m) / params_.resolution_m));
+    for (int64_t by = FloorDiv(cy0, B); by <= FloorDiv(cy1, B); ++by) {
+      for (int64_t bx = FloorDiv(cx0, B); bx <= FloorDiv(cx1, B); ++bx) {
+        cost_region.insert({static_cast<int>(bx), static_cast<int>(by)});
+      }
+    }
+  };
+  const double zone = params_.traversability.blind_zone_half_size_m + params_.resolution_m;
+  if (last_robot_xy_) add_around(*last_robot_xy_, zone);
+  if (robot.xy_m && robot.xy_m->allFinite()) {
+    const bool compensating = params_.traversability.imu_pitch_compensation;
+    add_around(*robot.xy_m, compensating ? params_.max_range_m : zone);
+    last_robot_xy_ = robot.xy_m;
+  }
+
+  // Phase 1: geometric layers of the changed region (each rectangle reads its own margin).
+  const std::vector<CellRect> geo_rects = RectsOfBlocks(region);
+  std::vector<std::string> base_in{layers::kElevation, layers::kGroundBound};
+  for (const CellRect& r : geo_rects) {
+    const CellRect w = Grow(r, geo_radius);
+    common::GridMap window = Window(w, base_in);
+    const CellRect local{geo_radius, geo_radius, geo_radius + r.x1 - r.x0, geo_radius + r.y1 - r.y0};
+    ComputeGeometricLayers(&window, params_.traversability, local);
+    WriteBack(window, w.x0, w.y0, r, GeometricLayers());
+    stats.geometric_cells += static_cast<int64_t>(r.x1 - r.x0) * (r.y1 - r.y0);
+  }
+  // Phase 2: feature layers of the changed region, from the updated geometric layers.
+  std::vector<std::string> feature_in{layers::kElevation, layers::kGroundBound};
+  for (const auto& n : GeometricLayers()) feature_in.push_back(n);
+  const int fm = FeatureRadiusCells() + 1;
+  for (const CellRect& r : geo_rects) {
+    const CellRect w = Grow(r, fm);
+    common::GridMap window = Window(w, feature_in);
+    ComputeFeatureLayers(&window, params_.obstacles, {fm, fm, fm + r.x1 - r.x0, fm + r.y1 - r.y0});
+    WriteBack(window, w.x0, w.y0, r, FeatureLayers());
+  }
+  // Phase 3: cost layers of every profile.
+  std::vector<const common::RobotProfile*> all;
+  for (const auto& p : profiles_) all.push_back(&p);
+  const std::vector<CellRect> cost_rects = RectsOfBlocks(cost_region);
+  RecomputeCosts(cost_rects, robot, all);
+  for (const CellRect& r : cost_rects) {
+    stats.cost_cells += static_cast<int64_t>(r.x1 - r.x0) * (r.y1 - r.y0) * all.size();
+  }
+  return stats;
+}
+
+common::ObstacleRegistry TerrainMap::BuildRegistry() const {
+  if (tiles_.empty()) return {};
+  std::vector<std::string> names{layers::kElevation, layers::kGroundBound, layers::kSlope,
+                                 layers::kDitchDepth, layers::kDitchWidth};
+  for (const auto& n : FeatureLayers()) names.push_back(n);
+  const common::GridMap map = Export(names, AllocatedBounds());
+  common::ObstacleRegistry registry = AssembleObstacles(map, params_.obstacles);
+  LabelObstacles(&registry, profiles_);
+  return registry;
+}
+
+common::GridMap TerrainMap::Export(const std::vector<std::string>& names) const {
+  return Export(names, Bounds());
+}
+
+common::GridMap TerrainMap::Export(const std::vector<std::string>& names,
+                                   const common::GridGeometry& window) const {
+  const double res = params_.resolution_m;
+  CAIRN_THROW_UNLESS(window.resolution_m == res && window.origin.yaw_rad == 0.0,
+                     "export window must share the map's resolution and axes");
+  const double fx = window.origin.x_m / res, fy = window.origin.y_m / res;
+  CAIRN_THROW_UNLESS(std::fabs(fx - std::round(fx)) < 1e-6 && std::fabs(fy - std::round(fy)) < 1e-6,
+                     "export window must be aligned with the map's cells");
+  const std::vector<std::string> known_derived = DerivedLayers();
+  for (const auto& n : names) {
+    const bool ok = std::find(known_derived.begin(), known_derived.end(), n) != known_derived.end() ||
+                    n == layers::kElevation || n == layers::kElevationVariance ||
+                    n == layers::kObservationCount || n == layers::kLastSeen ||
+                    n == layers::kGroundBound ||
+                    std::find(FeatureLayers().begin(), FeatureLayers().end(), n) != FeatureLayers().end();
+    CAIRN_THROW_UNLESS(ok, "the terrain map has no layer '" << n << "'");
+  }
+  const int64_t x0 = std::llround(fx), y0 = std::llround(fy);
+  common::GridMap out = Window({static_cast<int>(x0), static_cast<int>(y0),
+                                static_cast<int>(x0 + window.size_x),
+                                static_cast<int>(y0 + window.size_y)},
+                               names);
+  return out;
+}
+
+std::vector<std::pair<int, int>> TerrainMap::Tiles() const {
+  std::vector<std::pair<int, int>> keys;
+  for (const auto& [key, tile] : tiles_) keys.push_back(key);
+  std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
+    return std::make_pair(a.second, a.first) < std::make_pair(b.second, b.first);
+  });
+  return keys;
+}
+
+const common::GridMap* TerrainMap::TileLayers(int tx, int ty) const {
+  const Tile* t = FindTile(tx, ty);
+  return t ? &t->layers : nullptr;
+}
+
+int64_t TerrainMap::TileBaseVersion(int tx, int ty) const {
+  const Tile* t = FindTile(tx, ty);
+  return t ? t->base_version : -1;
+}
+
+int64_t TerrainMap::TileDerivedVersion(int tx, int ty) const {
+  const Tile* t = FindTile(tx, ty);
+  return t ? t->derived_version : -1;
+}
+
+void TerrainMap::Clear() {
+  tiles_.clear();
+  last_tile_ = nullptr;
+  dirty_blocks_.clear();
+}
+
+int64_t TerrainMap::known_cells() const {
+  int64_t n = 0;
+  for (const auto& [key, tile] : tiles_) {
+    const common::Layer& h = tile->layers.at(layers::kElevation);
+    for (int64_t i = 0; i < h.size(); ++i) n += !std::isnan(h.data()[i]);
+  }
+  return n;
+}
+
+size_t TerrainMap::memory_bytes() const {
+  size_t bytes = 0;
+  for (const auto& [key, tile] : tiles_) {
+    bytes += tile->layers.layer_names().size() * sizeof(float) * tile->filter_height.size();
+    bytes += tile->filter_height.size() * (2 * sizeof(float) + sizeof(int64_t));
+  }
+  return bytes;
+}
+
+}  // namespace cairn::mapping

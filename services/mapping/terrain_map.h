@@ -1,0 +1,198 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "common/grid_map.h"
+#include "common/obstacle.h"
+#include "common/point_cloud.h"
+#include "common/robot_profile.h"
+#include "common/types.h"
+#include "services/mapping/elevation_filter.h"
+#include "services/mapping/obstacles.h"
+#include "services/mapping/traversability.h"
+
+/// @file
+/// TerrainMap: the live terrain layers of one robot's site, growing in tiles as the robot
+/// travels.
+///
+/// Geometry. A site-fixed grid: cell (i, j) covers world [i·res, (i+1)·res) × [j·res, (j+1)·res)
+/// (world axes, origin at the world origin, floor for negative coordinates). Cells are stored in
+/// square tiles of tile_size_cells, allocated when a measurement first lands in them, so memory
+/// follows the explored area, not its bounding box; cell indices are 32-bit, so a square
+/// kilometre (5000 x 5000 cells at 0.2 m) is far inside the addressable range. Export() gives
+/// dense GridMap windows (by default the tile-aligned bounding box of every allocated tile).
+///
+/// Layers per cell:
+/// - base (robot-agnostic): elevation, elevation_variance, observation_count, last_seen_s and
+///   ground_bound (common/layers.h). The elevation layer follows the height filter in steps
+///   larger than commit_epsilon_m, so derived layers are recomputed only where the terrain
+///   changed, never for sub-millimetre filter jitter;
+/// - derived (ComputeGeometricLayers, ComputeFeatureLayers, one ComputeCostLayer per profile),
+///   updated by UpdateDerived() in the blocks around cells whose base layers changed, with
+///   enough margin that every value equals a whole-map computation on the exported base layers.
+///
+/// Not thread-safe: one owner thread.
+
+namespace cairn::mapping {
+
+struct TerrainMapParams {
+  double resolution_m{0.2};
+  int tile_size_cells{100};   ///< also the tile of the published layers
+  ElevationFilterParams filter;
+  double min_range_m{0.4};    ///< closer points (the robot itself) are dropped
+  /// Points closer than this to the sensor horizontally are dropped: the robot's own body and
+  /// the ground under it, which a real sensor cannot see (0 keeps them).
+  double self_filter_radius_m{0.0};
+  double max_range_m{30.0};   ///< farther points are dropped (counted)
+  /// Points higher than this above the sensor are overhangs (tunnel ceilings, canopies) a 2.5-D
+  /// map cannot hold; they are skipped.
+  double max_height_above_sensor_m{1.0};
+  /// Each downward ray records, over this last stretch before its return, the height at which
+  /// it crossed each cell (the ground bound). <= 0 turns the bound off.
+  double ray_bound_length_m{2.0};
+  /// The published elevation (and ground bound) follows the filter in steps larger than this.
+  double commit_epsilon_m{0.003};
+  /// A cell a lidar ray passed beneath by more than visibility_tolerance_m (but less than
+  /// max_visibility_conflict_m) mixes a surface with the gap next to it and is published
+  /// unknown (see CommitHeight).
+  double visibility_tolerance_m{0.03};
+  double max_visibility_conflict_m{0.15};
+  TraversabilityParams traversability;
+  ObstacleParams obstacles;
+
+  /// @throws std::invalid_argument naming a bad field.
+  void Validate() const;
+};
+
+/// What one Integrate() call did with its points.
+struct IntegrateStats {
+  int64_t points{0};
+  int64_t used{0};          ///< changed a cell (initialised, fused, raised, multi-height)
+  int64_t ignored_lower{0};  ///< lower than the cell, same scan
+  int64_t nonfinite{0};     ///< NaN or infinite coordinates: bad input
+  int64_t out_of_range{0};  ///< closer than min_range or farther than max_range
+  int64_t self{0};          ///< within self_filter_radius of the sensor
+  int64_t overhang{0};      ///< above max_height_above_sensor
+  IntegrateStats& operator+=(const IntegrateStats& o);
+};
+
+/// What one UpdateDerived() call recomputed.
+struct DerivedStats {
+  int64_t geometric_cells{0};
+  int64_t cost_cells{0};
+};
+
+class TerrainMap {
+ public:
+  /// @throws std::invalid_argument if the params are invalid.
+  explicit TerrainMap(const TerrainMapParams& params = {});
+  ~TerrainMap();
+  TerrainMap(const TerrainMap&) = delete;
+  TerrainMap& operator=(const TerrainMap&) = delete;
+
+  const TerrainMapParams& params() const { return params_; }
+
+  /// Adds a profile (or replaces the one with the same name) and computes its cost layer over
+  /// the whole map. @throws std::invalid_argument for an invalid profile.
+  void AddProfile(const common::RobotProfile& profile);
+  /// Removes a profile and its cost layer; false if there was none of that name.
+  bool RemoveProfile(const std::string& name);
+  const std::vector<common::RobotProfile>& profiles() const { return profiles_; }
+  const common::RobotProfile* FindProfile(const std::string& name) const;
+
+  /// Fuses points given in the sensor frame, placed in the world with `sensor_pose`. `scan_id`
+  /// names the revolution the points belong to (the filter's same-scan rule); `time_s` stamps
+  /// last_seen_s. Bad points are counted and skipped; a non-finite pose skips every point.
+  IntegrateStats Integrate(const std::vector<common::LidarPoint>& points,
+                           const common::Pose3& sensor_pose, int64_t scan_id, double time_s);
+  /// Every slice of a revolution with its own pose, as one scan.
+  IntegrateStats Integrate(const common::LidarRevolution& revolution, double time_s);
+
+  /// Recomputes the derived layers where the base layers changed since the last call, and the
+  /// cost layers around the robot's previous and current position (blind zone; the whole
+  /// neighbourhood when IMU compensation is on).
+  DerivedStats UpdateDerived(const RobotContext& robot = {});
+
+  /// The obstacle registry of the whole map, with verdicts for every profile.
+  common::ObstacleRegistry BuildRegistry() const;
+
+  /// True until a measurement has landed.
+  bool empty() const { return tiles_.empty(); }
+  /// Tile-aligned bounding box of every allocated tile grown by one empty tile on each side, so
+  /// no known cell lies on the border of an export (an empty geometry when empty()).
+  common::GridGeometry Bounds() const;
+  /// The bounding box of the allocated tiles alone.
+  common::GridGeometry AllocatedBounds() const;
+  /// The geometry of a tile.
+  common::GridGeometry TileGeometry(int tx, int ty) const;
+  /// Dense copy of `layers` over `window` (which must be aligned with this grid's cells and
+  /// axes); cells outside allocated tiles are NaN. @throws std::invalid_argument for a window
+  /// off the grid or an unknown layer.
+  common::GridMap Export(const std::vector<std::string>& layers,
+                         const common::GridGeometry& window) const;
+  /// Over Bounds().
+  common::GridMap Export(const std::vector<std::string>& layers) const;
+
+  /// Base and derived layer names (published and exportable), cost layers included.
+  static std::vector<std::string> BaseLayers();
+  std::vector<std::string> DerivedLayers() const;
+
+  /// Allocated tiles, in (ty, tx) order.
+  std::vector<std::pair<int, int>> Tiles() const;
+  /// A tile's layers (nullptr if not allocated), and counters bumped when its base or derived
+  /// layers change (publishers skip tiles whose counter did not move).
+  const common::GridMap* TileLayers(int tx, int ty) const;
+  int64_t TileBaseVersion(int tx, int ty) const;
+  int64_t TileDerivedVersion(int tx, int ty) const;
+
+  /// Forgets every measurement (profiles are kept).
+  void Clear();
+  /// Cells holding a height.
+  int64_t known_cells() const;
+  /// Approximate memory held by the tiles, bytes.
+  size_t memory_bytes() const;
+
+ private:
+  struct Tile;
+  using Key = std::pair<int, int>;
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      return std::hash<int64_t>()((static_cast<int64_t>(k.first) << 32) ^
+                                  static_cast<uint32_t>(k.second));
+    }
+  };
+
+  Tile* GetTile(int tx, int ty);
+  const Tile* FindTile(int tx, int ty) const;
+  Tile* TileForCell(int64_t cx, int64_t cy, int* lx, int* ly);
+  void MarkDirty(int64_t cx, int64_t cy);
+  void RecordBound(const common::Vector3& from, const common::Vector3& to);
+  void CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy);
+  /// Copies `layers` of the global cell rectangle into a dense map (NaN outside tiles).
+  common::GridMap Window(const CellRect& global, const std::vector<std::string>& layers) const;
+  /// Writes `layers` of `window` (whose cell (0,0) is global `origin_cell`) back for `rect`.
+  void WriteBack(const common::GridMap& window, int64_t origin_x, int64_t origin_y,
+                 const CellRect& rect, const std::vector<std::string>& layers);
+  void RecomputeCosts(const std::vector<CellRect>& rects, const RobotContext& robot,
+                      const std::vector<const common::RobotProfile*>& which);
+  std::vector<CellRect> RectsOfBlocks(const std::set<Key>& blocks) const;
+
+  TerrainMapParams params_;
+  std::vector<common::RobotProfile> profiles_;
+  std::unordered_map<Key, std::unique_ptr<Tile>, KeyHash> tiles_;
+  Tile* last_tile_{nullptr};
+  Key last_key_{0, 0};
+  std::set<Key> dirty_blocks_;  ///< blocks whose base layers changed
+  std::optional<common::Vector2> last_robot_xy_;
+  int block_cells_{25};
+};
+
+}  // namespace cairn::mapping

@@ -1,0 +1,203 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "common/point_cloud.h"
+#include "common/status.h"
+#include "common/types.h"
+#include "simulator/drive.h"
+#include "simulator/mujoco_model.h"
+#include "simulator/ray_caster.h"
+#include "simulator/scenario.h"
+#include "simulator/sensors.h"
+
+/// @file
+/// MujocoSim: the transport-free simulator. It owns the MuJoCo model and data of one scenario,
+/// steps the physics, drives the robots' wheels from velocity commands and produces sensor
+/// readings stamped with simulation time. cairn-sim publishes what it produces.
+
+namespace cairn::sim {
+
+/// Wheel odometry: pose of the base in the odometry frame (which starts at the spawn pose),
+/// and the twist in the base frame.
+struct OdometryReading {
+  int64_t utime{0};
+  std::string robot;
+  common::Pose3 pose;
+  common::Vector3 linear_velocity_mps{common::Vector3::Zero()};
+  common::Vector3 angular_velocity_radps{common::Vector3::Zero()};
+};
+
+/// True pose of the robot base; velocities in the world frame.
+struct GroundTruthReading {
+  int64_t utime{0};
+  std::string robot;
+  common::Pose3 pose;
+  common::Vector3 linear_velocity_mps{common::Vector3::Zero()};
+  common::Vector3 angular_velocity_radps{common::Vector3::Zero()};
+};
+
+/// IMU: orientation of the IMU frame in the world, rates and specific force in the IMU frame.
+struct ImuReading {
+  int64_t utime{0};
+  std::string robot;
+  common::Quaternion orientation{common::Quaternion::Identity()};
+  common::Vector3 angular_velocity_radps{common::Vector3::Zero()};
+  common::Vector3 linear_acceleration_mps2{common::Vector3::Zero()};
+  double orientation_variance_rad2{0.0};
+  double angular_velocity_variance{0.0};
+  double linear_acceleration_variance{0.0};
+};
+
+/// One line of a turret scanner: a planar scan in the line's frame and the pan angle.
+struct TurretLine {
+  common::LaserScan scan;
+  double pan_rad{0.0};
+  int64_t line{0};
+};
+
+/// Everything one or more steps produced.
+struct SimOutputs {
+  std::vector<common::LidarSlice> lidar;
+  std::vector<common::LaserScan> scans;
+  std::vector<TurretLine> turret_lines;
+  std::vector<OdometryReading> odometry;
+  std::vector<GroundTruthReading> poses;
+  std::vector<ImuReading> imu;
+  std::vector<std::string> events;  ///< notable events (watchdog stops), one line each
+
+  void Clear();
+  bool empty() const;
+};
+
+/// Shapes of spawnable objects.
+enum class ObjectShape { kBox, kCylinder, kSphere };
+
+/// A request to spawn an object. Sizes: box half sizes; cylinder radius and half height;
+/// sphere radius. Position is the object's centre in the world.
+struct ObjectSpec {
+  std::string name;
+  ObjectShape shape{ObjectShape::kBox};
+  common::Vector3 size_m{0.1, 0.1, 0.1};
+  common::Vector3 position_m{common::Vector3::Zero()};
+  double yaw_rad{0.0};
+};
+
+/// Time spent and work done, for benchmarks.
+struct SimStats {
+  int64_t physics_steps{0};
+  int64_t rays_cast{0};
+  double physics_s{0.0};
+  double sensors_s{0.0};
+  double ray_s{0.0};
+};
+
+class MujocoSim {
+ public:
+  /// Composes the scenario's world with its robots and the spawn pool, compiles it and places
+  /// the robots. @throws std::runtime_error with MuJoCo's message and the file name for a
+  /// broken MJCF, std::invalid_argument for a robot model that lacks what its sensors need.
+  explicit MujocoSim(const Scenario& scenario);
+  ~MujocoSim();
+  MujocoSim(const MujocoSim&) = delete;
+  MujocoSim& operator=(const MujocoSim&) = delete;
+
+  /// Advances one physics step and appends the readings that fell due to *out.
+  void Step(SimOutputs* out);
+
+  double time_s() const;
+  /// Simulation time in microseconds (the utime of every reading).
+  int64_t utime() const;
+  double timestep_s() const;
+  int64_t physics_steps() const { return stats_.physics_steps; }
+  const SimStats& stats() const { return stats_; }
+  const Scenario& scenario() const { return scenario_; }
+
+  // --- robots ----------------------------------------------------------------------------------
+  std::vector<std::string> robot_ids() const;
+  bool HasRobot(const std::string& id) const;
+  /// A velocity command (base frame) at the current sim time.
+  /// @throws std::invalid_argument for an unknown robot.
+  CommandVerdict Command(const std::string& robot, double linear_mps, double angular_radps);
+  /// Puts a robot at (x, y, yaw), on the surface below when z is absent, at rest; its odometry
+  /// restarts there.
+  common::Status ResetRobot(const std::string& robot, double x_m, double y_m, double yaw_rad,
+                            std::optional<double> z_m = std::nullopt);
+  /// True pose of a robot base. @throws std::invalid_argument for an unknown robot.
+  common::Pose3 RobotPose(const std::string& robot) const;
+  /// Linear velocity of the base in the world frame.
+  common::Vector3 RobotVelocity(const std::string& robot) const;
+  const DriveController& drive(const std::string& robot) const;
+  /// Current odometry estimate (also when the robot has no odometry sensor).
+  common::Pose2 OdometryPose(const std::string& robot) const;
+
+  // --- objects and doors -----------------------------------------------------------------------
+  /// Places a new object (from the spawn pool). kAlreadyExists for a used name,
+  /// kResourceExhausted when the pool is empty, kInvalidArgument for bad sizes or positions.
+  common::Status SpawnObject(const ObjectSpec& spec);
+  /// Moves a spawned object or any mocap body of the world. kNotFound for unknown names.
+  common::Status MoveObject(const std::string& name, const common::Vector3& position_m,
+                            double yaw_rad);
+  /// Removes a spawned object or a mocap body of the world (parked out of reach).
+  common::Status RemoveObject(const std::string& name);
+  /// Opens (to the end of its joint range away from 0, else 90 deg) or closes (to 0) a door.
+  /// Doors are hinge joints named "door_<name>" with a position actuator of the same name; they
+  /// start open. Accepts "<name>" or "door_<name>".
+  common::Status SetDoor(const std::string& name, bool open);
+  /// "robot:<id>", "door:<name>" and "object:<name>" for everything that can be addressed.
+  std::vector<std::string> ListNames() const;
+  std::vector<std::string> DoorNames() const;
+  std::vector<std::string> ObjectNames() const;
+
+  // --- internals for tests and benchmarks ------------------------------------------------------
+  const mjModel* model() const { return model_.get(); }
+  const mjData* data() const { return data_.get(); }
+  const RayScene& ray_scene() const { return *scene_; }
+  /// Casts lidar rays with a plain mj_ray loop instead of the ray caster (benchmark baseline).
+  void set_use_mj_ray(bool use) { use_mj_ray_ = use; }
+  /// The composed MJCF text that was compiled.
+  const std::string& composed_xml() const { return composed_xml_; }
+
+ private:
+  struct Robot;
+  struct Object;
+
+  Robot& FindRobot(const std::string& id);
+  const Robot& FindRobot(const std::string& id) const;
+  void SetupRobot(Robot& robot, int index);
+  double GroundHeight(double x_m, double y_m) const;
+  void PlaceRobot(Robot& robot, double x_m, double y_m, double yaw_rad, std::optional<double> z_m);
+  void ApplyDrive(double now_s, double dt_s, SimOutputs* out);
+  void IntegrateOdometry(double dt_s);
+  void ProduceReadings(SimOutputs* out);
+  void CastLidar(Robot& robot, SimOutputs* out);
+  void CastPlanar(Robot& robot, SimOutputs* out);
+  void CastTurret(Robot& robot, SimOutputs* out);
+  common::Pose3 SitePose(int site) const;
+  void CastPattern(const Robot& robot, const common::Pose3& sensor, const RayPattern& pattern,
+                   int group_begin, int group_end, double max_range_m, std::vector<RayHit>* hits);
+  void SetGeomEnabled(int geom, bool enabled);
+  Object* FindObject(const std::string& name);
+
+  Scenario scenario_;
+  std::string composed_xml_;
+  MjModelPtr model_;
+  MjDataPtr data_;
+  std::unique_ptr<RayScene> scene_;
+  std::unique_ptr<ThreadPool> pool_;
+  std::unique_ptr<RayCaster> caster_;
+  std::vector<std::unique_ptr<Robot>> robots_;
+  std::map<std::string, std::unique_ptr<Object>> objects_;
+  std::vector<int> free_slots_;   ///< spawn pool geoms not in use
+  std::vector<float> intensity_;  ///< per geom, from its colour
+  bool scene_dirty_{true};
+  bool use_mj_ray_{false};
+  SimStats stats_;
+};
+
+}  // namespace cairn::sim

@@ -1,0 +1,653 @@
+#include "simulator/ray_caster.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Geometry>
+
+namespace cairn::sim {
+namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+// Half extents and centre offset of a geom's box in its own frame.
+bool LocalBox(const mjModel* m, int g, double half[3], double offset[3]) {
+  const double* s = m->geom_size + 3 * g;
+  offset[0] = offset[1] = offset[2] = 0.0;
+  switch (m->geom_type[g]) {
+    case mjGEOM_PLANE:
+      return false;
+    case mjGEOM_SPHERE:
+      half[0] = half[1] = half[2] = s[0];
+      return true;
+    case mjGEOM_CAPSULE:
+      half[0] = half[1] = s[0];
+      half[2] = s[1] + s[0];
+      return true;
+    case mjGEOM_CYLINDER:
+      half[0] = half[1] = s[0];
+      half[2] = s[1];
+      return true;
+    case mjGEOM_ELLIPSOID:
+    case mjGEOM_BOX:
+      half[0] = s[0];
+      half[1] = s[1];
+      half[2] = s[2];
+      return true;
+    case mjGEOM_HFIELD: {
+      const double* h = m->hfield_size + 4 * m->geom_dataid[g];
+      half[0] = h[0];
+      half[1] = h[1];
+      half[2] = 0.5 * (h[2] + h[3]);
+      offset[2] = 0.5 * (h[2] - h[3]);
+      return true;
+    }
+    default: {
+      // Meshes and anything else: the bounding sphere MuJoCo computed.
+      const double r = m->geom_rbound[g];
+      half[0] = half[1] = half[2] = r;
+      return true;
+    }
+  }
+}
+
+bool GeomVisible(const mjModel* m, int g) {
+  const int type = m->geom_type[g];
+  if (type == mjGEOM_PLANE || type == mjGEOM_HFIELD) return true;
+  if (m->geom_group[g] >= 4) return false;
+  const int mat = m->geom_matid[g];
+  const float alpha = mat >= 0 ? m->mat_rgba[4 * mat + 3] : m->geom_rgba[4 * g + 3];
+  return alpha > 0.f;
+}
+
+double Narrow(const mjModel* m, const mjData* d, int g, int type, const double origin[3],
+              const double dir[3]) {
+  switch (type) {
+    case mjGEOM_HFIELD:
+      return RayHeightField(m, d, g, origin, dir);
+    case mjGEOM_MESH:
+      return mj_rayMesh(m, d, g, origin, dir);
+    default:
+      return mju_rayGeom(d->geom_xpos + 3 * g, d->geom_xmat + 9 * g, m->geom_size + 3 * g, origin,
+                         dir, type);
+  }
+}
+
+// Slab test of a ray against an axis-aligned box [lo, hi]; returns the entry and exit
+// parameters (entry clamped at 0) or false when it misses.
+bool RaySlab(const double lo[3], const double hi[3], const double p[3], const double v[3],
+             double* t_in, double* t_out, int* entry_axis) {
+  double t0 = 0.0, t1 = kInfinity;
+  *entry_axis = -1;
+  for (int k = 0; k < 3; ++k) {
+    if (std::abs(v[k]) < 1e-15) {
+      if (p[k] < lo[k] || p[k] > hi[k]) return false;
+      continue;
+    }
+    double ta = (lo[k] - p[k]) / v[k];
+    double tb = (hi[k] - p[k]) / v[k];
+    if (ta > tb) std::swap(ta, tb);
+    if (ta > t0) {
+      t0 = ta;
+      *entry_axis = k;
+    }
+    t1 = std::min(t1, tb);
+    if (t0 > t1) return false;
+  }
+  *t_in = t0;
+  *t_out = t1;
+  return true;
+}
+
+// Moller-Trumbore ray-triangle intersection; returns the ray parameter or -1.
+double RayTriangle(const double a[3], const double b[3], const double c[3], const double p[3],
+                   const double v[3]) {
+  const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  const double q[3] = {v[1] * e2[2] - v[2] * e2[1], v[2] * e2[0] - v[0] * e2[2],
+                       v[0] * e2[1] - v[1] * e2[0]};
+  const double det = e1[0] * q[0] + e1[1] * q[1] + e1[2] * q[2];
+  if (std::abs(det) < 1e-15) return -1.0;
+  const double inv = 1.0 / det;
+  const double s[3] = {p[0] - a[0], p[1] - a[1], p[2] - a[2]};
+  const double u = (s[0] * q[0] + s[1] * q[1] + s[2] * q[2]) * inv;
+  if (u < -1e-12 || u > 1.0 + 1e-12) return -1.0;
+  const double r[3] = {s[1] * e1[2] - s[2] * e1[1], s[2] * e1[0] - s[0] * e1[2],
+                       s[0] * e1[1] - s[1] * e1[0]};
+  const double w = (v[0] * r[0] + v[1] * r[1] + v[2] * r[2]) * inv;
+  if (w < -1e-12 || u + w > 1.0 + 1e-12) return -1.0;
+  const double t = (e2[0] * r[0] + e2[1] * r[1] + e2[2] * r[2]) * inv;
+  return t >= 0.0 ? t : -1.0;
+}
+
+}  // namespace
+
+double RayHeightField(const mjModel* m, const mjData* d, int g, const double pnt[3],
+                      const double vec[3]) {
+  const int h = m->geom_dataid[g];
+  const int nrow = m->hfield_nrow[h];
+  const int ncol = m->hfield_ncol[h];
+  const double* size = m->hfield_size + 4 * h;
+  const float* data = m->hfield_data + m->hfield_adr[h];
+  const double* pos = d->geom_xpos + 3 * g;
+  const double* mat = d->geom_xmat + 9 * g;
+
+  // The ray in the height field's frame (geom_xmat is row-major, local = R^T (p - pos)).
+  const double dif[3] = {pnt[0] - pos[0], pnt[1] - pos[1], pnt[2] - pos[2]};
+  double p[3], v[3];
+  for (int i = 0; i < 3; ++i) {
+    p[i] = mat[i] * dif[0] + mat[3 + i] * dif[1] + mat[6 + i] * dif[2];
+    v[i] = mat[i] * vec[0] + mat[3 + i] * vec[1] + mat[6 + i] * vec[2];
+  }
+  const double sx = size[0], sy = size[1], sz = size[2], base = size[3];
+
+  // The base box under the surface.
+  double best = -1.0;
+  double t_in = 0.0, t_out = 0.0;
+  int axis = -1;
+  {
+    const double lo[3] = {-sx, -sy, -base}, hi[3] = {sx, sy, 0.0};
+    // From inside the base a ray meets its far side (as mj_rayHfield reports).
+    if (RaySlab(lo, hi, p, v, &t_in, &t_out, &axis)) best = axis < 0 ? t_out : t_in;
+  }
+  // The box holding the surface; nothing more to find if the ray misses it.
+  const double lo[3] = {-sx, -sy, 0.0}, hi[3] = {sx, sy, sz};
+  if (!RaySlab(lo, hi, p, v, &t_in, &t_out, &axis)) return best;
+  if (best >= 0.0) t_out = std::min(t_out, best);
+  if (t_in > t_out) return best;
+
+  const double dx = 2.0 * sx / (ncol - 1);
+  const double dy = 2.0 * sy / (nrow - 1);
+  auto height = [&](int r, int c) { return static_cast<double>(data[r * ncol + c]) * sz; };
+
+  // Entering through a side wall below the surface edge: the side of the prism is hit.
+  if (t_in > 0.0 && (axis == 0 || axis == 1)) {
+    const double ex = p[0] + t_in * v[0], ey = p[1] + t_in * v[1], ez = p[2] + t_in * v[2];
+    double edge;
+    if (axis == 0) {
+      const int c = v[0] > 0 ? 0 : ncol - 1;
+      const double gy = std::clamp((ey + sy) / dy, 0.0, nrow - 1.0);
+      const int r = std::min(static_cast<int>(gy), nrow - 2);
+      edge = height(r, c) + (height(r + 1, c) - height(r, c)) * (gy - r);
+    } else {
+      const int r = v[1] > 0 ? 0 : nrow - 1;
+      const double gx = std::clamp((ex + sx) / dx, 0.0, ncol - 1.0);
+      const int c = std::min(static_cast<int>(gx), ncol - 2);
+      edge = height(r, c) + (height(r, c + 1) - height(r, c)) * (gx - c);
+    }
+    if (ez <= edge) return best >= 0.0 ? std::min(best, t_in) : t_in;
+  }
+
+  // Walk the cells under the ray's footprint in order (2-D DDA).
+  const double gx0 = (p[0] + t_in * v[0] + sx) / dx;
+  const double gy0 = (p[1] + t_in * v[1] + sy) / dy;
+  int c = std::clamp(static_cast<int>(std::floor(gx0)), 0, ncol - 2);
+  int r = std::clamp(static_cast<int>(std::floor(gy0)), 0, nrow - 2);
+  const int step_c = v[0] > 0 ? 1 : -1;
+  const int step_r = v[1] > 0 ? 1 : -1;
+  const double inf = kInfinity;
+  const double delta_c = std::abs(v[0]) > 1e-15 ? dx / std::abs(v[0]) : inf;
+  const double delta_r = std::abs(v[1]) > 1e-15 ? dy / std::abs(v[1]) : inf;
+  // Ray parameter at which the footprint crosses the next cell boundary in x and in y.
+  double next_c = inf, next_r = inf;
+  if (delta_c < inf) {
+    const double boundary = (v[0] > 0 ? c + 1 : c) * dx - sx;
+    next_c = (boundary - p[0]) / v[0];
+  }
+  if (delta_r < inf) {
+    const double boundary = (v[1] > 0 ? r + 1 : r) * dy - sy;
+    next_r = (boundary - p[1]) / v[1];
+  }
+  double t_cell = t_in;
+  while (true) {
+    const double t_exit = std::min({next_c, next_r, t_out});
+    // Skip the cell when the ray stays above its highest corner.
+    const double z_a = p[2] + t_cell * v[2];
+    const double z_b = p[2] + t_exit * v[2];
+    const double h00 = height(r, c), h01 = height(r, c + 1);
+    const double h10 = height(r + 1, c), h11 = height(r + 1, c + 1);
+    const double top = std::max(std::max(h00, h01), std::max(h10, h11));
+    if (std::min(z_a, z_b) <= top + 1e-9) {
+      const double x0 = c * dx - sx, x1 = (c + 1) * dx - sx;
+      const double y0 = r * dy - sy, y1 = (r + 1) * dy - sy;
+      const double a[3] = {x0, y0, h00}, b[3] = {x1, y1, h11};
+      const double c1[3] = {x1, y0, h01}, c2[3] = {x0, y1, h10};
+      double hit = RayTriangle(a, b, c1, p, v);
+      const double hit2 = RayTriangle(a, b, c2, p, v);
+      if (hit2 >= 0.0 && (hit < 0.0 || hit2 < hit)) hit = hit2;
+      if (hit >= 0.0) return best >= 0.0 ? std::min(best, hit) : hit;
+    }
+    if (t_exit >= t_out) break;
+    if (next_c <= next_r) {
+      c += step_c;
+      t_cell = next_c;
+      next_c += delta_c;
+    } else {
+      r += step_r;
+      t_cell = next_r;
+      next_r += delta_r;
+    }
+    if (c < 0 || c > ncol - 2 || r < 0 || r > nrow - 2) break;
+  }
+  return best;
+}
+
+namespace {
+
+// A geom that a group's rays may hit, relative to the sensor.
+struct Candidate {
+  double min_distance;  ///< from the sensor to the box (plane: along its normal)
+  double lo[3];         ///< box corners minus the sensor position; plane: its unit normal
+  double hi[3];         ///< plane: hi[0] = the sensor's signed distance from it
+  int geom;
+  int type;
+  bool infinite;  ///< a plane
+  bool exact;     ///< an axis-aligned box: the slab test is the exact intersection
+  bool inside;    ///< the sensor is inside the box
+};
+
+// MuJoCo's plane rule (mj_ray): hit the front face only, within the rendered rectangle when
+// the plane has a size.
+double RayPlane(const mjModel* m, const mjData* d, int g, const double p[3], const double v[3]) {
+  const double* pos = d->geom_xpos + 3 * g;
+  const double* r = d->geom_xmat + 9 * g;
+  const double dif[3] = {p[0] - pos[0], p[1] - pos[1], p[2] - pos[2]};
+  const double lz = r[2] * dif[0] + r[5] * dif[1] + r[8] * dif[2];
+  const double vz = r[2] * v[0] + r[5] * v[1] + r[8] * v[2];
+  if (vz > -mjMINVAL) return -1.0;
+  const double x = -lz / vz;
+  if (x < 0.0) return -1.0;
+  const double* size = m->geom_size + 3 * g;
+  if (size[0] > 0.0 || size[1] > 0.0) {
+    const double lx = r[0] * dif[0] + r[3] * dif[1] + r[6] * dif[2];
+    const double ly = r[1] * dif[0] + r[4] * dif[1] + r[7] * dif[2];
+    const double vx = r[0] * v[0] + r[3] * v[1] + r[6] * v[2];
+    const double vy = r[1] * v[0] + r[4] * v[1] + r[7] * v[2];
+    if ((size[0] > 0.0 && std::abs(lx + x * vx) > size[0]) ||
+        (size[1] > 0.0 && std::abs(ly + x * vy) > size[1])) {
+      return -1.0;
+    }
+  }
+  return x;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// RayScene
+
+RayScene::RayScene(const mjModel* model)
+    : model_(model), visible_(model->ngeom, 0), owner_(model->ngeom, -1) {
+  for (int g = 0; g < model->ngeom; ++g) visible_[g] = GeomVisible(model, g) ? 1 : 0;
+}
+
+void RayScene::SetOwner(int geom, int owner) { owner_.at(geom) = owner; }
+
+void RayScene::SetVisible(int geom, bool visible) { visible_.at(geom) = visible ? 1 : 0; }
+
+void RayScene::Update(const mjData* d) {
+  const mjModel* m = model_;
+  bounds_.clear();
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (!visible_[g]) continue;
+    Bound b;
+    b.geom = g;
+    b.type = m->geom_type[g];
+    b.owner = owner_[g];
+    double half[3], offset[3];
+    if (!LocalBox(m, g, half, offset)) {
+      b.infinite = true;
+      bounds_.push_back(b);
+      continue;
+    }
+    // World box of the rotated local box: centre R*offset, half extents |R| * half.
+    const double* p = d->geom_xpos + 3 * g;
+    const double* r = d->geom_xmat + 9 * g;
+    double radius2 = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const double c =
+          p[i] + r[3 * i] * offset[0] + r[3 * i + 1] * offset[1] + r[3 * i + 2] * offset[2];
+      const double e = std::abs(r[3 * i]) * half[0] + std::abs(r[3 * i + 1]) * half[1] +
+                       std::abs(r[3 * i + 2]) * half[2];
+      b.center[i] = c;
+      b.lo[i] = c - e;
+      b.hi[i] = c + e;
+      radius2 += e * e;
+    }
+    b.radius = std::sqrt(radius2);
+    if (b.type != mjGEOM_HFIELD) b.radius = std::min(b.radius, m->geom_rbound[g]);
+    // A box whose axes are the world's (walls, floors, platforms) equals its bounding box, so
+    // the slab test gives the exact hit distance.
+    if (b.type == mjGEOM_BOX) {
+      int unit = 0;
+      for (int i = 0; i < 9; ++i) {
+        const double a = std::abs(r[i]);
+        if (a > 1.0 - 1e-12) {
+          ++unit;
+        } else if (a > 1e-12) {
+          unit = -100;
+        }
+      }
+      b.exact = unit == 3;
+    }
+    bounds_.push_back(b);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// RayPattern
+
+void RayPattern::BuildGroups(int group_size) {
+  groups.clear();
+  group_size = std::max(1, group_size);
+  const int n = static_cast<int>(directions.size());
+  for (int begin = 0; begin < n; begin += group_size) {
+    Group g;
+    g.begin = begin;
+    g.end = std::min(n, begin + group_size);
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (int i = g.begin; i < g.end; ++i) sum += directions[i];
+    g.axis = sum.norm() > 1e-9 ? sum.normalized() : directions[g.begin];
+    // A frame around the axis, and the angular extent of the rays towards its two sides.
+    const Eigen::Vector3d a = g.axis;
+    const Eigen::Vector3d u = a.unitOrthogonal();
+    const Eigen::Vector3d w = a.cross(u);
+    double u_min = 0.0, u_max = 0.0, w_min = 0.0, w_max = 0.0;
+    bool ok = true;
+    for (int i = g.begin; i < g.end; ++i) {
+      const Eigen::Vector3d& d = directions[i];
+      const double along = d.dot(a);
+      if (along <= 1e-6) {
+        ok = false;  // wider than a half space: no pyramid
+        break;
+      }
+      const double au = std::atan2(d.dot(u), along), aw = std::atan2(d.dot(w), along);
+      u_min = std::min(u_min, au);
+      u_max = std::max(u_max, au);
+      w_min = std::min(w_min, aw);
+      w_max = std::max(w_max, aw);
+    }
+    // A small margin keeps rounding from dropping a geom that a boundary ray grazes.
+    constexpr double kMargin = 1e-6;
+    constexpr double kLimit = 1.5;  // about 86 deg: beyond it a side plane means little
+    if (ok && u_max < kLimit && -u_min < kLimit && w_max < kLimit && -w_min < kLimit) {
+      u_min -= kMargin;
+      u_max += kMargin;
+      w_min -= kMargin;
+      w_max += kMargin;
+      // A direction at angle t towards u satisfies d . (-a sin T + u cos T) <= 0 iff t <= T
+      // (whatever its w component), and the mirror for the lower bound; same towards w.
+      g.planes[0] = -a * std::sin(u_max) + u * std::cos(u_max);
+      g.planes[1] = a * std::sin(u_min) - u * std::cos(u_min);
+      g.planes[2] = -a * std::sin(w_max) + w * std::cos(w_max);
+      g.planes[3] = a * std::sin(w_min) - w * std::cos(w_min);
+      g.bounded = true;
+    }
+    groups.push_back(g);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// ThreadPool
+
+ThreadPool::ThreadPool(int threads) {
+  for (int i = 1; i < threads; ++i) workers_.emplace_back([this] { WorkerLoop(); });
+}
+
+ThreadPool::~ThreadPool() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    quit_ = true;
+  }
+  wake_.notify_all();
+  for (auto& w : workers_) w.join();
+}
+
+void ThreadPool::RunTasks() {
+  for (int i = next_.fetch_add(1); i < count_; i = next_.fetch_add(1)) (*task_)(i);
+}
+
+void ThreadPool::WorkerLoop() {
+  uint64_t seen = 0;
+  while (true) {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [&] { return quit_ || generation_ != seen; });
+      if (quit_) return;
+      seen = generation_;
+    }
+    RunTasks();
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      --busy_;
+    }
+    done_.notify_one();
+  }
+}
+
+void ThreadPool::ParallelFor(int count, const std::function<void(int)>& task) {
+  if (workers_.empty() || count <= 1) {
+    for (int i = 0; i < count; ++i) task(i);
+    return;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    task_ = &task;
+    count_ = count;
+    next_ = 0;
+    busy_ = static_cast<int>(workers_.size());
+    ++generation_;
+  }
+  wake_.notify_all();
+  RunTasks();
+  std::unique_lock<std::mutex> lock(mutex_);
+  done_.wait(lock, [&] { return busy_ == 0; });
+  task_ = nullptr;
+}
+
+// ---------------------------------------------------------------------------------------------
+// RayCaster
+
+void RayCaster::Cast(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
+                     const Eigen::Matrix3d& rotation, const RayPattern& pattern, int group_begin,
+                     int group_end, double max_range_m, int exclude_owner, RayHit* hits) const {
+  group_begin = std::max(0, group_begin);
+  group_end = std::min(group_end, static_cast<int>(pattern.groups.size()));
+  const int count = group_end - group_begin;
+  if (count <= 0) return;
+  auto task = [&](int i) {
+    CastGroup(scene, data, origin, rotation, pattern, group_begin + i, max_range_m, exclude_owner,
+              hits);
+  };
+  if (pool_ != nullptr) {
+    pool_->ParallelFor(count, task);
+  } else {
+    for (int i = 0; i < count; ++i) task(i);
+  }
+}
+
+void RayCaster::CastGroup(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
+                          const Eigen::Matrix3d& rotation, const RayPattern& pattern, int group,
+                          double max_range_m, int exclude_owner, RayHit* hits) const {
+  const mjModel* m = scene.model();
+  const RayPattern::Group& g = pattern.groups[group];
+  const double o[3] = {origin.x(), origin.y(), origin.z()};
+
+  // Broad phase for the whole group: geoms whose box meets the group's pyramid within range.
+  Eigen::Vector3d planes_world[4];
+  if (g.bounded) {
+    for (int k = 0; k < 4; ++k) planes_world[k] = rotation * g.planes[k];
+  }
+  thread_local std::vector<Candidate> candidates;
+  candidates.clear();
+  for (const RayScene::Bound& b : scene.bounds()) {
+    if (b.owner >= 0 && b.owner == exclude_owner) continue;
+    if (b.infinite) {
+      // A plane: its distance along its normal bounds every hit from below.
+      const double* p = data->geom_xpos + 3 * b.geom;
+      const double* r = data->geom_xmat + 9 * b.geom;
+      const double dist =
+          std::abs((o[0] - p[0]) * r[2] + (o[1] - p[1]) * r[5] + (o[2] - p[2]) * r[8]);
+      Candidate c;
+      c.min_distance = dist;
+      c.lo[0] = r[2];
+      c.lo[1] = r[5];
+      c.lo[2] = r[8];
+      c.hi[0] = (o[0] - p[0]) * r[2] + (o[1] - p[1]) * r[5] + (o[2] - p[2]) * r[8];
+      c.geom = b.geom;
+      c.type = b.type;
+      c.infinite = true;
+      c.exact = false;
+      c.inside = false;
+      candidates.push_back(c);
+      continue;
+    }
+    double min_d2 = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const double q = std::max(b.lo[i] - o[i], std::max(0.0, o[i] - b.hi[i]));
+      min_d2 += q * q;
+    }
+    const double min_d = std::sqrt(min_d2);
+    if (min_d > max_range_m) continue;
+    if (g.bounded) {
+      // Outside when even the box corner deepest on a plane's inner side is outside it.
+      bool outside = false;
+      for (int k = 0; k < 4 && !outside; ++k) {
+        const Eigen::Vector3d& n = planes_world[k];
+        double s = 0.0;
+        for (int i = 0; i < 3; ++i) s += n[i] * ((n[i] > 0.0 ? b.lo[i] : b.hi[i]) - o[i]);
+        outside = s > 1e-12;
+      }
+      if (outside) continue;
+    }
+    Candidate c;
+    c.min_distance = min_d;
+    c.inside = true;
+    for (int k = 0; k < 3; ++k) {
+      c.lo[k] = b.lo[k] - o[k];
+      c.hi[k] = b.hi[k] - o[k];
+      c.inside = c.inside && c.lo[k] <= 0.0 && c.hi[k] >= 0.0;
+    }
+    c.geom = b.geom;
+    c.type = b.type;
+    c.infinite = false;
+    c.exact = b.exact;
+    candidates.push_back(c);
+  }
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Candidate& a, const Candidate& b) { return a.min_distance < b.min_distance; });
+  // Planes are unbounded: keep them aside and test them for every ray. The rest are boxes;
+  // their vertical extent bounds where a ray can still hit anything.
+  thread_local std::vector<Candidate> planes;
+  planes.clear();
+  double z_low = kInfinity, z_high = -kInfinity;
+  size_t kept = 0;
+  for (const Candidate& c : candidates) {
+    if (c.infinite) {
+      planes.push_back(c);
+      continue;
+    }
+    z_low = std::min(z_low, c.lo[2]);
+    z_high = std::max(z_high, c.hi[2]);
+    candidates[kept++] = c;
+  }
+  candidates.resize(kept);
+
+  // Narrow phase per ray.
+  for (int i = g.begin; i < g.end; ++i) {
+    const Eigen::Vector3d dw = rotation * pattern.directions[i];
+    const double v[3] = {dw.x(), dw.y(), dw.z()};
+    double inv[3];
+    bool negative[3];
+    for (int k = 0; k < 3; ++k) {
+      inv[k] = std::abs(v[k]) > 1e-12 ? 1.0 / v[k] : (v[k] >= 0 ? 1e12 : -1e12);
+      negative[k] = inv[k] < 0.0;
+    }
+    double best = max_range_m;
+    int best_geom = -1;
+    // Tests one candidate and keeps the nearest hit no farther than `best`.
+    auto test = [&](const Candidate& c) {
+      double x;
+      if (c.infinite) {
+        // Only the front face counts; planes met farther than `best` are skipped cheaply.
+        const double vz = c.lo[0] * v[0] + c.lo[1] * v[1] + c.lo[2] * v[2];
+        if (vz > -mjMINVAL || -c.hi[0] / vz > best) return;
+        x = RayPlane(m, data, c.geom, o, v);
+      } else {
+        // Slab test (box relative to the sensor), clipped to [0, best].
+        double t_in = 0.0, t_out = best;
+        for (int k = 0; k < 3; ++k) {
+          const double t_near = (negative[k] ? c.hi[k] : c.lo[k]) * inv[k];
+          const double t_far = (negative[k] ? c.lo[k] : c.hi[k]) * inv[k];
+          if (t_near > t_in) t_in = t_near;
+          if (t_far < t_out) t_out = t_far;
+        }
+        if (t_in > t_out) return;
+        if (!c.exact) {
+          x = Narrow(m, data, c.geom, c.type, o, v);
+        } else if (!c.inside) {
+          x = t_in;
+        } else {
+          // From inside a box a ray meets its far side (as mju_rayGeom reports).
+          x = kInfinity;
+          for (int k = 0; k < 3; ++k) x = std::min(x, (negative[k] ? c.lo[k] : c.hi[k]) * inv[k]);
+        }
+      }
+      if (x >= 0.0 && x <= best) {
+        best = x;
+        best_geom = c.geom;
+      }
+    };
+    // First the geom the neighbouring ray hit: usually the same, and it tightens `best`.
+    int warm = -1;
+    if (i - pattern.warm_stride >= g.begin) warm = hits[i - pattern.warm_stride].geom;
+    if (warm >= 0) {
+      for (const Candidate& c : candidates) {
+        if (c.geom == warm) {
+          test(c);
+          break;
+        }
+      }
+    }
+    for (const Candidate& c : planes) test(c);
+    // Where the ray leaves the boxes' vertical extent: boxes starting farther are out of reach.
+    double reach = max_range_m;
+    if (v[2] > 1e-12) {
+      reach = std::max(0.0, z_high * inv[2]);
+    } else if (v[2] < -1e-12) {
+      reach = std::max(0.0, z_low * inv[2]);
+    }
+    for (const Candidate& c : candidates) {
+      if (c.min_distance > best || c.min_distance > reach) break;
+      if (c.geom != warm) test(c);
+    }
+    hits[i].geom = best_geom;
+    hits[i].range_m = best_geom >= 0 ? best : -1.0;
+  }
+}
+
+void RayCaster::CastWithMjRay(const mjModel* model, const mjData* data,
+                              const Eigen::Vector3d& origin, const Eigen::Matrix3d& rotation,
+                              const RayPattern& pattern, int group_begin, int group_end,
+                              double max_range_m, RayHit* hits) {
+  static const mjtByte kGroups[mjNGROUP] = {1, 1, 1, 0, 0, 0};
+  const double o[3] = {origin.x(), origin.y(), origin.z()};
+  group_end = std::min(group_end, static_cast<int>(pattern.groups.size()));
+  for (int gi = std::max(0, group_begin); gi < group_end; ++gi) {
+    const RayPattern::Group& g = pattern.groups[gi];
+    for (int i = g.begin; i < g.end; ++i) {
+      const Eigen::Vector3d dw = rotation * pattern.directions[i];
+      const double v[3] = {dw.x(), dw.y(), dw.z()};
+      int geom = -1;
+      const double x = mj_ray(model, data, o, v, kGroups, 1, -1, &geom);
+      if (x >= 0.0 && x <= max_range_m) {
+        hits[i] = {x, geom};
+      } else {
+        hits[i] = {-1.0, -1};
+      }
+    }
+  }
+}
+
+}  // namespace cairn::sim

@@ -1,0 +1,100 @@
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <string>
+#include <utility>
+
+#include "cairn/lcmt_sim_control_reply.hpp"
+#include "cairn/lcmt_sim_control_request.hpp"
+#include "cairn/lcmt_velocity_command.hpp"
+
+#include "services/runtime/node.h"
+#include "simulator/mujoco_sim.h"
+
+/// @file
+/// SimService: cairn-sim's LCM face. It paces a MujocoSim against the wall clock, publishes its
+/// readings and SIM.CLOCK, takes velocity commands and answers SIM.CONTROL.
+///
+/// Channels (per robot r): r.LIDAR (slices), r.SCAN, r.TURRET_SCAN, r.ODOM, r.POSE (ground
+/// truth), r.IMU out; r.CMD_VEL in. Fleet: SIM.CLOCK out, SIM.CONTROL in, SIM.CONTROL_REPLY out.
+/// Every message's utime is simulation time.
+
+namespace cairn::sim {
+
+struct SimServiceParams {
+  /// Multiple of real time; 0 runs as fast as the machine allows.
+  double speed{1.0};
+  bool start_paused{false};
+  /// SIM.CLOCK messages per wall second while paused (time stands still but listeners learn it).
+  double paused_clock_rate_hz{10.0};
+  /// When the simulation falls behind its pace by more than this much sim time, it gives up
+  /// catching up (the measured real-time factor then drops below the target).
+  double max_lag_s{0.25};
+  /// Replies remembered for replayed request ids.
+  int reply_cache_size{1024};
+};
+
+class SimService {
+ public:
+  /// Subscribes to every robot's CMD_VEL and to SIM.CONTROL. `node` and `sim` must outlive it.
+  SimService(runtime::Node& node, MujocoSim& sim, SimServiceParams params);
+  SimService(const SimService&) = delete;
+  SimService& operator=(const SimService&) = delete;
+
+  /// Paces, steps and publishes until the node stops (Stop() or a signal). Returns 0.
+  int Run();
+  /// One round of Run(): handles waiting messages, steps as far as the pace allows (a few
+  /// milliseconds of work at most), publishes, and waits up to `max_wait_ms` when ahead.
+  /// Returns false once the node is stopping.
+  bool RunOnce(int max_wait_ms = 10);
+  /// Steps `steps` times regardless of pace or pause and publishes what they produced (tests).
+  void StepAndPublish(int steps);
+  /// Handles every message waiting on the bus without blocking.
+  void HandlePending();
+
+  double speed() const { return speed_; }
+  bool paused() const { return paused_; }
+  double real_time_factor() const { return rtf_; }
+
+  /// Executes a control request (what SIM.CONTROL does, without the bus).
+  cairn::lcmt_sim_control_reply Execute(const cairn::lcmt_sim_control_request& request);
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
+  void OnCommand(const std::string& robot, const cairn::lcmt_velocity_command& msg);
+  void OnControl(const cairn::lcmt_sim_control_request& msg);
+  void StepOnce();
+  void PublishOutputs();
+  void PublishClock();
+  void Reanchor();
+  void UpdateRealTimeFactor();
+
+  runtime::Node& node_;
+  MujocoSim& sim_;
+  SimServiceParams params_;
+  SimOutputs outputs_;
+  double speed_{1.0};
+  bool paused_{false};
+  // Pace: sim time anchor_sim_s_ corresponds to wall time anchor_wall_.
+  Clock::time_point anchor_wall_;
+  double anchor_sim_s_{0.0};
+  int64_t clock_ticks_{0};
+  Clock::time_point last_paused_clock_;
+  // Real-time factor over about a second.
+  Clock::time_point rtf_wall_;
+  double rtf_sim_s_{0.0};
+  double rtf_{0.0};
+  std::map<std::pair<std::string, int64_t>, cairn::lcmt_sim_control_reply> replies_;
+  std::deque<std::pair<std::string, int64_t>> reply_order_;
+  std::map<std::string, double> turret_line_period_s_;
+};
+
+/// "max" or "0" -> 0 (as fast as possible), otherwise a positive finite number.
+/// @throws std::invalid_argument for anything else.
+double ParseSpeed(const std::string& text);
+
+}  // namespace cairn::sim

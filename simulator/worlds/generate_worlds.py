@@ -1,0 +1,622 @@
+#!/usr/bin/env python3
+"""Writes the shipped cairn-sim worlds from one description of their geometry.
+
+    python3 simulator/worlds/generate_worlds.py        # rewrites the files next to this script
+
+Outputs (all in this folder):
+  tunnel.xml, tunnel_lanes.yaml    the traversability lanes of seed 000 and their contract
+  apartment.xml, apartment_places.yaml   the rooms of seed 001 and their polygons
+  arena.xml                        rooms and clutter for 2-D occupancy mapping (seed 003)
+  outdoor.xml, outdoor_terrain.bin heightfield terrain with slopes, rocks and structures
+
+Everything is deterministic (the outdoor terrain uses a fixed seed), so running it again
+reproduces the committed files byte for byte.
+"""
+
+import math
+import os
+import random
+import struct
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+WALL_RGBA = "0.62 0.6 0.56 1"
+FLOOR_RGBA = "0.45 0.45 0.42 1"
+FEATURE_RGBA = "0.7 0.55 0.35 1"
+OBSTACLE_RGBA = "0.55 0.35 0.3 1"
+
+
+def f(x):
+    """Compact fixed-point number formatting for XML attributes."""
+    s = f"{x:.6f}".rstrip("0").rstrip(".")
+    return "0" if s in ("-0", "") else s
+
+
+def box(name, cx, cy, cz, hx, hy, hz, rgba=WALL_RGBA, euler=None, extra=""):
+    e = f' euler="{f(euler[0])} {f(euler[1])} {f(euler[2])}"' if euler else ""
+    return (f'    <geom name="{name}" type="box" size="{f(hx)} {f(hy)} {f(hz)}" '
+            f'pos="{f(cx)} {f(cy)} {f(cz)}"{e} rgba="{rgba}"{extra}/>')
+
+
+def aabb(name, x0, x1, y0, y1, z0, z1, rgba=WALL_RGBA):
+    """A box given by its extent."""
+    return box(name, (x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2,
+               (x1 - x0) / 2, (y1 - y0) / 2, (z1 - z0) / 2, rgba)
+
+
+def ramp(name, x0, z0, slope_deg, rise, y0, y1, rgba=FEATURE_RGBA, down=False):
+    """A solid ramp whose top surface rises `rise` metres at `slope_deg` along +x from (x0, z0)
+    (or falls, when down=True). The box is thick enough to reach below z0 everywhere, so it
+    looks solid from every side. Returns (xml, horizontal length)."""
+    a = math.radians(slope_deg)
+    length = rise / math.tan(a)
+    half_thick = rise / 2 / math.cos(a) + 0.1
+    sign = -1.0 if down else 1.0
+    # Midpoint of the top surface, then down along the surface normal by half the thickness.
+    mx, mz = x0 + length / 2, z0 + (rise / 2 if not down else rise / 2)
+    if down:
+        mz = z0 - rise / 2
+    nx, nz = -sign * math.sin(a), math.cos(a)
+    cx, cz = mx - nx * half_thick, mz - nz * half_thick
+    xml = box(name, cx, (y0 + y1) / 2, cz, length / 2 / math.cos(a), (y1 - y0) / 2, half_thick,
+              rgba, euler=(0, -sign * slope_deg, 0))
+    return xml, length
+
+
+def header(model, comment, extra_option=""):
+    return [f"<!-- {comment} -->",
+            f'<mujoco model="{model}">',
+            '  <compiler angle="degree"/>',
+            f'  <option timestep="0.002"{extra_option}/>',
+            '  <visual><global offwidth="1280" offheight="720"/></visual>']
+
+
+# --------------------------------------------------------------------------------------------
+# tunnel
+
+LANE_WIDTH = 4.0
+WALL_T = 0.2
+WALL_H = 1.5
+LANE_X0 = 3.0     # lanes start here; x in [0, 3] is the shared cross corridor
+LANE_X1 = 24.0    # end wall face
+FEATURE_X = 8.0   # most features start here
+START_X = 4.0
+
+
+def lane_y(k):
+    return k * LANE_WIDTH + LANE_WIDTH / 2
+
+
+def tunnel():
+    lanes = []   # (name, description, feature lines, start, goal, notes)
+    geoms = []
+    n_lanes = 10
+    y_max = n_lanes * LANE_WIDTH
+    # Floor: a plane 0.3 m down (the trench bottom) under decks whose top is z = 0.
+    geoms.append('    <geom name="ground" type="plane" size="60 60 0.1" pos="12 20 -0.3" '
+                 f'rgba="{FLOOR_RGBA}"/>')
+    trench_lane = 7
+    ty0, ty1 = trench_lane * LANE_WIDTH, (trench_lane + 1) * LANE_WIDTH
+    trench_x0, trench_x1 = 10.0, 10.6
+    geoms.append(aabb("deck_south", -1, 25, -1, ty0, -0.3, 0.0, FLOOR_RGBA))
+    geoms.append(aabb("deck_trench_near", -1, trench_x0, ty0, ty1, -0.3, 0.0, FLOOR_RGBA))
+    geoms.append(aabb("deck_trench_far", trench_x1, 25, ty0, ty1, -0.3, 0.0, FLOOR_RGBA))
+    geoms.append(aabb("deck_north", -1, 25, ty1, y_max + 1, -0.3, 0.0, FLOOR_RGBA))
+    # Walls: outer box and the walls between lanes (from the cross corridor to the end wall).
+    geoms.append(aabb("wall_start", -WALL_T, 0.0, -WALL_T / 2, y_max + WALL_T / 2, -0.3, WALL_H))
+    geoms.append(aabb("wall_end", LANE_X1, LANE_X1 + WALL_T, -WALL_T / 2, y_max + WALL_T / 2,
+                      -0.3, WALL_H))
+    geoms.append(aabb("wall_south", -WALL_T, LANE_X1 + WALL_T, -WALL_T / 2, WALL_T / 2, -0.3,
+                      WALL_H))
+    geoms.append(aabb("wall_north", -WALL_T, LANE_X1 + WALL_T, y_max - WALL_T / 2,
+                      y_max + WALL_T / 2, -0.3, WALL_H))
+    for k in range(1, n_lanes):
+        y = k * LANE_WIDTH
+        geoms.append(aabb(f"wall_lane_{k}", LANE_X0, LANE_X1, y - WALL_T / 2, y + WALL_T / 2,
+                          -0.3, WALL_H))
+
+    def inner(k):
+        return k * LANE_WIDTH + WALL_T / 2, (k + 1) * LANE_WIDTH - WALL_T / 2
+
+    # Lane 0: 1 m cube.
+    k = 0
+    yc = lane_y(k)
+    geoms.append(aabb("cube", 9.0, 10.0, yc - 0.5, yc + 0.5, 0.0, 1.0, OBSTACLE_RGBA))
+    lanes.append(dict(lane=k, name="cube", experiment="seed 000 exp 1",
+                      feature="1 x 1 x 1 m cube, x 9.0..10.0, y %s..%s, z 0..1" % (f(yc - .5), f(yc + .5)),
+                      start=(START_X, yc, 0.0), goal=(14.0, yc, 0.0), goal_z=0.0,
+                      traversable_pioneer3at=True,
+                      note="the cube is an obstacle; 1.4 m free on either side of it"))
+
+    # Lane 1: 5 deg ramp to a 0.3 m platform.
+    k = 1
+    yc = lane_y(k)
+    y0, y1 = inner(k)
+    xml, length = ramp("ramp5", FEATURE_X, 0.0, 5.0, 0.3, y0, y1)
+    geoms.append(xml)
+    geoms.append(aabb("ramp5_platform", FEATURE_X + length, LANE_X1, y0, y1, 0.0, 0.3, FEATURE_RGBA))
+    lanes.append(dict(lane=k, name="ramp_5deg", experiment="seed 000 exp 2",
+                      feature="5 deg ramp x 8.0..%s rising 0 -> 0.3 m, then a 0.3 m platform to "
+                              "the end wall, wall to wall" % f(FEATURE_X + length),
+                      start=(START_X, yc, 0.0), goal=(14.0, yc, 0.0), goal_z=0.3,
+                      traversable_pioneer3at=True, note="goal on the platform"))
+
+    # Lane 2: 10 deg ramp to a 0.3 m platform (the only way onto it).
+    k = 2
+    yc = lane_y(k)
+    y0, y1 = inner(k)
+    xml, length = ramp("ramp10", FEATURE_X, 0.0, 10.0, 0.3, y0, y1)
+    geoms.append(xml)
+    geoms.append(aabb("ramp10_platform", FEATURE_X + length, LANE_X1, y0, y1, 0.0, 0.3,
+                      FEATURE_RGBA))
+    lanes.append(dict(lane=k, name="ramp_10deg", experiment="seed 000 exp 3",
+                      feature="10 deg ramp x 8.0..%s rising 0 -> 0.3 m, then a 0.3 m platform to "
+                              "the end wall, wall to wall" % f(FEATURE_X + length),
+                      start=(START_X, yc, 0.0), goal=(14.0, yc, 0.0), goal_z=0.3,
+                      traversable_pioneer3at=False,
+                      note="the platform is reachable only over the 10 deg ramp (its other edges "
+                           "are lane walls); the P3-AT body can climb it, its profile forbids it"))
+
+    # Lane 3: 5 deg then 11 deg ramp.
+    k = 3
+    yc = lane_y(k)
+    y0, y1 = inner(k)
+    rise5 = 2.0 * math.tan(math.radians(5.0))
+    rise11 = 1.5 * math.tan(math.radians(11.0))
+    xml, l5 = ramp("ramp5_11_lower", FEATURE_X, 0.0, 5.0, rise5, y0, y1)
+    geoms.append(xml)
+    xml, l11 = ramp("ramp5_11_upper", FEATURE_X + l5, rise5, 11.0, rise11, y0, y1)
+    geoms.append(xml)
+    top = rise5 + rise11
+    geoms.append(aabb("ramp5_11_platform", FEATURE_X + l5 + l11, LANE_X1, y0, y1, 0.0, top,
+                      FEATURE_RGBA))
+    lanes.append(dict(lane=k, name="ramp_5_then_11deg", experiment="seed 000 exp 7",
+                      feature="5 deg x 8.0..10.0 (0 -> %s m), 11 deg x 10.0..11.5 (-> %s m), "
+                              "platform to the end wall" % (f(rise5), f(top)),
+                      start=(START_X, yc, 0.0), goal=(14.0, yc, 0.0), goal_z=round(top, 4),
+                      traversable_pioneer3at=False,
+                      note="the 11 deg section is the IMU-compensation case"))
+
+    # Lane 4: 1 cm step up.
+    k = 4
+    yc = lane_y(k)
+    y0, y1 = inner(k)
+    geoms.append(aabb("step1cm", 10.0, LANE_X1, y0, y1, 0.0, 0.01, FEATURE_RGBA))
+    lanes.append(dict(lane=k, name="step_1cm", experiment="seed 000 exp 5",
+                      feature="1 cm plate from x 10.0 to the end wall, wall to wall",
+                      start=(START_X, yc, 0.0), goal=(14.0, yc, 0.0), goal_z=0.01,
+                      traversable_pioneer3at=True, note=""))
+
+    # Lane 5: 20 cm step up.
+    k = 5
+    yc = lane_y(k)
+    y0, y1 = inner(k)
+    geoms.append(aabb("step20cm", 10.0, LANE_X1, y0, y1, 0.0, 0.2, FEATURE_RGBA))
+    lanes.append(dict(lane=k, name="step_20cm", experiment="seed 000 exp 6",
+                      feature="20 cm block from x 10.0 to the end wall, wall to wall",
+                      start=(START_X, yc, 0.0), goal=(14.0, yc, 0.0), goal_z=0.2,
+                      traversable_pioneer3at=False,
+                      note="the goal on top is unreachable; the P3-AT body cannot climb it"))
+
+    # Lane 6: 5 deg ramp -> 0.2 m platform -> 20 cm drop.
+    k = 6
+    yc = lane_y(k)
+    y0, y1 = inner(k)
+    xml, length = ramp("drop_ramp", FEATURE_X, 0.0, 5.0, 0.2, y0, y1)
+    geoms.append(xml)
+    px0, px1 = FEATURE_X + length, FEATURE_X + length + 3.0
+    geoms.append(aabb("drop_platform", px0, px1, y0, y1, 0.0, 0.2, FEATURE_RGBA))
+    lanes.append(dict(lane=k, name="drop_20cm", experiment="seed 000 exp 4",
+                      feature="5 deg ramp x 8.0..%s (0 -> 0.2 m), platform x %s..%s at 0.2 m, "
+                              "20 cm drop at x %s, wall to wall" % (f(px0), f(px0), f(px1), f(px1)),
+                      start=(START_X, yc, 0.0), goal=(17.0, yc, 0.0), goal_z=0.0,
+                      traversable_pioneer3at=False,
+                      note="the goal lies past the drop, which is the only way forward"))
+
+    # Lane 7: trench.
+    k = 7
+    yc = lane_y(k)
+    lanes.append(dict(lane=k, name="trench", experiment="derived (seed 000 section 7.3 #28)",
+                      feature="trench x %s..%s (0.6 m wide), 0.3 m deep, wall to wall"
+                              % (f(trench_x0), f(trench_x1)),
+                      start=(START_X, yc, 0.0), goal=(14.0, yc, 0.0), goal_z=0.0,
+                      traversable_pioneer3at=False, note="the bottom is the ground plane at -0.3"))
+
+    # Lane 8: combined scene (20 cm step, 5 deg ramp, 1 cm step, 10 deg ramp).
+    k = 8
+    yc = lane_y(k)
+    y0, y1 = inner(k)
+    ymid = (y0 + y1) / 2
+    geoms.append(aabb("combined_step20cm", 7.0, 8.5, y0, ymid, 0.0, 0.2, OBSTACLE_RGBA))
+    xml, l_up = ramp("combined_ramp5_up", 10.0, 0.0, 5.0, 0.15, y0, y1)
+    geoms.append(xml)
+    geoms.append(aabb("combined_ramp5_top", 10.0 + l_up, 11.0 + l_up, y0, y1, 0.0, 0.15,
+                      FEATURE_RGBA))
+    xml, l_down = ramp("combined_ramp5_down", 11.0 + l_up, 0.15, 5.0, 0.15, y0, y1, down=True)
+    geoms.append(xml)
+    hump_end = 11.0 + l_up + l_down
+    geoms.append(aabb("combined_step1cm", 15.5, LANE_X1, y0, y1, 0.0, 0.01, FEATURE_RGBA))
+    xml, l10 = ramp("combined_ramp10", 17.5, 0.01, 10.0, 0.2, ymid, y1, OBSTACLE_RGBA)
+    geoms.append(xml)
+    geoms.append(aabb("combined_ramp10_platform", 17.5 + l10, 18.5 + l10, ymid, y1, 0.0, 0.21,
+                      OBSTACLE_RGBA))
+    lanes.append(dict(
+        lane=k, name="combined", experiment="seed 000 exp 8",
+        feature=("20 cm block x 7.0..8.5, y %s..%s (south half); 5 deg hump x 10.0..%s "
+                 "(up to 0.15 m, 1 m flat, down), wall to wall; 1 cm plate from x 15.5 to the "
+                 "end wall, wall to wall; 10 deg ramp x 17.5..%s (0.01 -> 0.21 m) and a 1 m "
+                 "platform, y %s..%s (north half)")
+        % (f(y0), f(ymid), f(hump_end), f(17.5 + l10), f(ymid), f(y1)),
+        start=(START_X, yc, 0.0), goal=(21.5, yc, 0.0), goal_z=0.01,
+        traversable_pioneer3at=True,
+        note="pass the 20 cm block on its north side and the 10 deg ramp on its south side; "
+             "crossing the hump and the 1 cm step is required"))
+
+    # Lane 9: demo route: past the cube, over the 1 cm step and up a 5 deg ramp.
+    k = 9
+    yc = lane_y(k)
+    y0, y1 = inner(k)
+    geoms.append(aabb("demo_cube", 7.5, 8.5, y0, y0 + 1.0, 0.0, 1.0, OBSTACLE_RGBA))
+    geoms.append(aabb("demo_step1cm", 11.0, LANE_X1, y0, y1, 0.0, 0.01, FEATURE_RGBA))
+    xml, length = ramp("demo_ramp5", 14.0, 0.01, 5.0, 0.2, y0, y1)
+    geoms.append(xml)
+    geoms.append(aabb("demo_platform", 14.0 + length, LANE_X1, y0, y1, 0.0, 0.21, FEATURE_RGBA))
+    lanes.append(dict(
+        lane=k, name="demo", experiment="demo route",
+        feature=("1 m cube x 7.5..8.5, y %s..%s (against the south wall); 1 cm plate from x "
+                 "11.0; 5 deg ramp x 14.0..%s (0.01 -> 0.21 m); platform to the end wall")
+        % (f(y0), f(y0 + 1.0), f(14.0 + length)),
+        start=(START_X, yc, 0.0), goal=(21.0, yc, 0.0), goal_z=0.21,
+        traversable_pioneer3at=True,
+        note="every feature on the route is traversable for the pioneer3at profile"))
+
+    lines = header("tunnel", "tunnel: the eight traversability experiments of seed 000 in walled "
+                   "lanes, a combined scene and a demo route")
+    lines += [
+        "<!--",
+        "  Generated by generate_worlds.py; coordinates and the lane contract are in",
+        "  tunnel_lanes.yaml and README.md. Lanes run along +x, 4 m apart (lane k between walls",
+        "  at y = 4k and 4k + 4), from a shared cross corridor (x 0..3) to the end wall at x = 24.",
+        "  Floors are decks with their top at z = 0; the ground plane at z = -0.3 is the trench",
+        "  bottom. Walls are 1.5 m high and 0.2 m thick.",
+        "-->",
+        "  <worldbody>",
+        '    <light name="sun" directional="true" pos="12 20 30" dir="0 0 -1"/>',
+    ]
+    lines += geoms
+    lines += ["  </worldbody>", "</mujoco>", ""]
+    write("tunnel.xml", "\n".join(lines))
+
+    # The lane contract.
+    y = ["# Lanes of the tunnel world (generated by generate_worlds.py with tunnel.xml).",
+         "# Poses are world frame: x_m, y_m, yaw_rad of the robot base. goal_z_m is the surface",
+         "# height at the goal. traversable_pioneer3at: whether the pioneer3at profile may",
+         "# reach the goal from the start.",
+         "lanes:"]
+    for lane in lanes:
+        sx, sy, syaw = lane["start"]
+        gx, gy, gyaw = lane["goal"]
+        y += [f"  - lane: {lane['lane']}",
+              f"    name: {lane['name']}",
+              f"    experiment: \"{lane['experiment']}\"",
+              f"    feature: \"{lane['feature']}\"",
+              f"    start: {{x_m: {f(sx)}, y_m: {f(sy)}, yaw_rad: {f(syaw)}}}",
+              f"    goal: {{x_m: {f(gx)}, y_m: {f(gy)}, yaw_rad: {f(gyaw)}}}",
+              f"    goal_z_m: {f(lane['goal_z'])}",
+              f"    traversable_pioneer3at: {'true' if lane['traversable_pioneer3at'] else 'false'}"]
+        if lane["note"]:
+            y.append(f"    note: \"{lane['note']}\"")
+    write("tunnel_lanes.yaml", "\n".join(y) + "\n")
+    return lanes
+
+
+# --------------------------------------------------------------------------------------------
+# apartment
+
+def door(name, hinge_x, hinge_y, width, axis_dir, open_sign=1):
+    """A hinged door leaf along +x (axis_dir 'x') or +y (axis_dir 'y') from its hinge, with a
+    position actuator named like its joint. Returns (body xml, actuator xml)."""
+    leaf = (f'<geom type="box" size="{f(width / 2 - 0.01)} 0.02 1.0" pos="{f(width / 2)} 0 1.01" '
+            f'rgba="0.55 0.4 0.25 1" mass="15"/>')
+    zrot = 0 if axis_dir == "x" else 90
+    rng = "0 100" if open_sign > 0 else "-100 0"
+    body = (f'    <body name="door_{name}_leaf" pos="{f(hinge_x)} {f(hinge_y)} 0" '
+            f'euler="0 0 {zrot}">\n'
+            f'      <joint name="door_{name}" type="hinge" axis="0 0 1" limited="true" '
+            f'range="{rng}" damping="15"/>\n'
+            f'      {leaf}\n'
+            f'    </body>')
+    act = (f'    <position name="door_{name}" joint="door_{name}" kp="60" forcelimited="true" '
+           f'forcerange="-80 80"/>')
+    return body, act
+
+
+def furniture(name, parts, pos, yaw=0.0):
+    """A mocap body (movable through SIM.CONTROL) made of boxes, cylinders and spheres.
+    parts: list of (type, size, local pos, rgba)."""
+    lines = [f'    <body name="{name}" mocap="true" pos="{f(pos[0])} {f(pos[1])} 0" '
+             f'euler="0 0 {f(yaw)}">']
+    for i, (typ, size, p, rgba) in enumerate(parts):
+        lines.append(f'      <geom name="{name}_{i}" type="{typ}" size="{size}" '
+                     f'pos="{f(p[0])} {f(p[1])} {f(p[2])}" rgba="{rgba}"/>')
+    lines.append("    </body>")
+    return "\n".join(lines)
+
+
+def table_parts(lx, ly, h, leg_r, rgba="0.6 0.45 0.3 1"):
+    parts = [("box", f"{f(lx / 2)} {f(ly / 2)} 0.02", (0, 0, h - 0.02), rgba)]
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            parts.append(("cylinder", f"{f(leg_r)} {f((h - 0.04) / 2)}",
+                          (sx * (lx / 2 - 0.05), sy * (ly / 2 - 0.05), (h - 0.04) / 2), rgba))
+    return parts
+
+
+def chair_parts(rgba="0.25 0.25 0.28 1"):
+    parts = [("box", "0.21 0.21 0.015", (0, 0, 0.45), rgba),
+             ("box", "0.015 0.21 0.22", (-0.2, 0, 0.69), rgba)]
+    for sx in (-1, 1):
+        for sy in (-1, 1):
+            parts.append(("cylinder", "0.01 0.22", (sx * 0.18, sy * 0.18, 0.22), "0.7 0.7 0.72 1"))
+    return parts
+
+
+APARTMENT_ROOMS = [
+    # name, polygon (x, y), seed 001 label value
+    ("living_room", [(0.0, 0.0), (6.0, 0.0), (6.0, 4.5), (0.0, 4.5)], 45),
+    ("kitchen", [(6.0, 0.0), (10.0, 0.0), (10.0, 4.5), (6.0, 4.5)], 60),
+    ("corridor", [(0.0, 4.5), (10.0, 4.5), (10.0, 5.7), (0.0, 5.7)], 0),
+    ("bedroom", [(0.0, 5.7), (6.0, 5.7), (6.0, 9.0), (0.0, 9.0)], 15),
+    ("bathroom", [(6.0, 5.7), (10.0, 5.7), (10.0, 9.0), (6.0, 9.0)], 30),
+]
+
+
+def apartment():
+    t = 0.15
+    h = 2.4
+    W, H = 10.0, 9.0
+    g = ['    <geom name="floor" type="plane" size="15 15 0.1" pos="5 4.5 0" '
+         f'rgba="{FLOOR_RGBA}"/>']
+    # Outer walls.
+    g.append(aabb("wall_south", -t, W + t, -t, 0, 0, h))
+    g.append(aabb("wall_north", -t, W + t, H, H + t, 0, h))
+    g.append(aabb("wall_west", -t, 0, 0, H, 0, h))
+    g.append(aabb("wall_east", W, W + t, 0, H, 0, h))
+    # Corridor walls (y = 4.5 and y = 5.7) with door openings 0.9 m wide.
+    doors = []
+    actuators = []
+
+    def wall_with_openings(name, y0, openings):
+        xs = [0.0] + [v for o in openings for v in o] + [W]
+        for i in range(0, len(xs), 2):
+            if xs[i + 1] - xs[i] > 1e-6:
+                g.append(aabb(f"{name}_{i // 2}", xs[i], xs[i + 1], y0, y0 + t, 0, h))
+
+    wall_with_openings("wall_corridor_south", 4.5 - t, [(2.0, 2.9), (7.5, 8.4)])
+    wall_with_openings("wall_corridor_north", 5.7, [(2.0, 2.9), (7.5, 8.4)])
+    # Living room / kitchen wall (x = 6) with an open passage y 1.0..2.2.
+    g.append(aabb("wall_living_kitchen_0", 6.0 - t / 2, 6.0 + t / 2, 0.0, 1.0, 0, h))
+    g.append(aabb("wall_living_kitchen_1", 6.0 - t / 2, 6.0 + t / 2, 2.2, 4.5 - t, 0, h))
+    # Bedroom / bathroom wall (x = 6).
+    g.append(aabb("wall_bedroom_bathroom", 6.0 - t / 2, 6.0 + t / 2, 5.7 + t, H, 0, h))
+    # Doors: hinged at the west end of each opening, swinging into the rooms.
+    for name, hx, hy, sign in [("living_room", 2.0, 4.5 - t / 2, -1),
+                               ("kitchen", 7.5, 4.5 - t / 2, -1),
+                               ("bedroom", 2.0, 5.7 + t / 2, 1),
+                               ("bathroom", 7.5, 5.7 + t / 2, 1)]:
+        body, act = door(name, hx, hy, 0.9, "x", sign)
+        doors.append(body)
+        actuators.append(act)
+    # Fixed furniture.
+    g.append(aabb("kitchen_counter", 9.35, 10.0, 0.0, 4.0, 0, 0.9, "0.8 0.8 0.78 1"))
+    g.append(aabb("fridge", 6.2, 6.9, 3.6, 4.35, 0, 1.8, "0.9 0.9 0.92 1"))
+    g.append(aabb("bed", 0.1, 2.1, 7.3, 8.95, 0, 0.5, "0.5 0.55 0.7 1"))
+    g.append(aabb("wardrobe", 4.4, 5.9, 8.35, 8.95, 0, 2.0, "0.5 0.35 0.2 1"))
+    g.append(aabb("nightstand", 2.2, 2.6, 8.5, 8.95, 0, 0.5, "0.5 0.35 0.2 1"))
+    g.append(aabb("bathtub", 8.2, 9.95, 7.3, 8.95, 0, 0.55, "0.95 0.95 0.95 1"))
+    g.append(aabb("washbasin", 6.2, 6.8, 8.4, 8.95, 0, 0.85, "0.95 0.95 0.95 1"))
+    g.append(aabb("toilet", 9.3, 9.95, 6.0, 6.5, 0, 0.45, "0.95 0.95 0.95 1"))
+    # Movable furniture (mocap bodies).
+    movable = [
+        furniture("sofa", [("box", "1.0 0.45 0.22", (0, 0, 0.22), "0.3 0.4 0.55 1"),
+                           ("box", "1.0 0.1 0.2", (0, 0.35, 0.62), "0.3 0.4 0.55 1")],
+                  (2.5, 0.6)),
+        furniture("armchair", [("box", "0.4 0.4 0.22", (0, 0, 0.22), "0.55 0.3 0.3 1"),
+                               ("box", "0.4 0.1 0.2", (0, 0.3, 0.62), "0.55 0.3 0.3 1")],
+                  (5.0, 0.7)),
+        furniture("coffee_table", table_parts(1.0, 0.5, 0.45, 0.02), (2.5, 1.8)),
+        furniture("shelf", [("box", "0.6 0.18 0.9", (0, 0, 0.9), "0.6 0.45 0.3 1")], (0.8, 4.1)),
+        furniture("kitchen_table", table_parts(1.2, 0.8, 0.75, 0.025), (7.8, 2.0)),
+        furniture("chair_1", chair_parts(), (7.8, 1.3), 90),
+        furniture("chair_2", chair_parts(), (7.8, 2.7), -90),
+        furniture("glass", [("cylinder", "0.035 0.025", (0, 0, 0.025), "0.7 0.85 0.95 1")],
+                  (4.2, 3.2)),
+    ]
+    lines = header("apartment", "apartment: the domestic rooms of seed 001 (living room, kitchen, "
+                   "corridor, bedroom, bathroom) with doors and movable furniture")
+    lines += [
+        "<!--",
+        "  Generated by generate_worlds.py. A 10 x 9 m flat: living room (x 0..6, y 0..4.5) and",
+        "  kitchen (x 6..10, y 0..4.5) joined by an open passage (x = 6, y 1.0..2.2); corridor",
+        "  (y 4.5..5.7); bedroom (x 0..6, y 5.7..9) and bathroom (x 6..10, y 5.7..9). Four",
+        "  hinged doors 0.9 m wide (door_<room>) open from the corridor; cairn-sim opens them at",
+        "  start and SIM.CONTROL opens and closes them. Movable furniture are mocap bodies",
+        "  (sofa, armchair, coffee_table, shelf, kitchen_table, chair_1, chair_2, glass) that",
+        "  SIM.CONTROL can move or remove. Room polygons: apartment_places.yaml.",
+        "-->",
+        "  <worldbody>",
+        '    <light name="sun" directional="true" pos="5 4.5 10" dir="0 0 -1"/>',
+    ]
+    lines += g + doors + movable
+    lines += ["  </worldbody>", "  <actuator>"] + actuators + ["  </actuator>", "</mujoco>", ""]
+    write("apartment.xml", "\n".join(lines))
+
+    y = ["# Semantic places of the apartment world (generated by generate_worlds.py):",
+         "# room name, seed 001 label value and polygon (world frame, metres, counter-clockwise).",
+         "places:"]
+    for name, poly, value in APARTMENT_ROOMS:
+        pts = ", ".join(f"[{f(x)}, {f(yv)}]" for x, yv in poly)
+        y += [f"  - name: {name}", f"    label_value: {value}", f"    polygon: [{pts}]"]
+    write("apartment_places.yaml", "\n".join(y) + "\n")
+
+
+# --------------------------------------------------------------------------------------------
+# arena
+
+def arena():
+    t = 0.15
+    h = 1.0
+    W, H = 12.0, 10.0
+    g = ['    <geom name="floor" type="plane" size="15 15 0.1" pos="6 5 0" '
+         f'rgba="{FLOOR_RGBA}"/>']
+    g.append(aabb("wall_south", -t, W + t, -t, 0, 0, h))
+    g.append(aabb("wall_north", -t, W + t, H, H + t, 0, h))
+    g.append(aabb("wall_west", -t, 0, 0, H, 0, h))
+    g.append(aabb("wall_east", W, W + t, 0, H, 0, h))
+    # Wall at y = 6 with doorways x 2.5..3.5 and 8.5..9.5.
+    g.append(aabb("wall_middle_0", 0, 2.5, 6.0, 6.0 + t, 0, h))
+    g.append(aabb("wall_middle_1", 3.5, 8.5, 6.0, 6.0 + t, 0, h))
+    g.append(aabb("wall_middle_2", 9.5, W, 6.0, 6.0 + t, 0, h))
+    # Wall at x = 5 between the two upper rooms, with a doorway y 7.5..8.5.
+    g.append(aabb("wall_upper_0", 5.0, 5.0 + t, 6.0 + t, 7.5, 0, h))
+    g.append(aabb("wall_upper_1", 5.0, 5.0 + t, 8.5, H, 0, h))
+    # A partial wall making an alcove in the lower right.
+    g.append(aabb("wall_alcove", 8.0, 8.0 + t, 0.0, 3.0, 0, h))
+    # Clutter: armchair at the bottom, balls, a chair in the upper-left room, a table upper right.
+    g.append(aabb("armchair_seat", 3.2, 4.2, 0.3, 1.1, 0, 0.45, "0.55 0.3 0.3 1"))
+    g.append(aabb("armchair_back", 3.2, 4.2, 0.15, 0.3, 0, 0.9, "0.55 0.3 0.3 1"))
+    g.append(aabb("armchair_arm_left", 3.05, 3.2, 0.15, 1.1, 0, 0.65, "0.55 0.3 0.3 1"))
+    g.append(aabb("armchair_arm_right", 4.2, 4.35, 0.15, 1.1, 0, 0.65, "0.55 0.3 0.3 1"))
+    balls = [(1.5, 2.5), (6.5, 1.2), (9.8, 4.5), (5.5, 4.2), (10.8, 1.0), (2.2, 4.8)]
+    for i, (bx, by) in enumerate(balls):
+        g.append(f'    <geom name="ball_{i}" type="sphere" size="0.12" pos="{f(bx)} {f(by)} 0.12" '
+                 'rgba="0.85 0.6 0.1 1"/>')
+    # Chair (thin legs) in the upper-left room, visible through the doorway at x 2.5..3.5.
+    for i, (dx, dy) in enumerate([(-0.2, -0.2), (0.2, -0.2), (-0.2, 0.2), (0.2, 0.2)]):
+        g.append(f'    <geom name="chair_leg_{i}" type="cylinder" size="0.015 0.225" '
+                 f'pos="{f(3.0 + dx)} {f(8.5 + dy)} 0.225" rgba="0.7 0.7 0.72 1"/>')
+    g.append(aabb("chair_seat", 2.75, 3.25, 8.25, 8.75, 0.45, 0.48, "0.3 0.3 0.35 1"))
+    g.append(aabb("chair_back", 2.75, 3.25, 8.72, 8.75, 0.48, 0.9, "0.3 0.3 0.35 1"))
+    # Table in the upper-right room.
+    for i, (dx, dy) in enumerate([(-0.7, -0.4), (0.7, -0.4), (-0.7, 0.4), (0.7, 0.4)]):
+        g.append(f'    <geom name="table_leg_{i}" type="cylinder" size="0.03 0.36" '
+                 f'pos="{f(9.5 + dx)} {f(8.5 + dy)} 0.36" rgba="0.6 0.45 0.3 1"/>')
+    g.append(aabb("table_top", 8.7, 10.3, 8.0, 9.0, 0.72, 0.76, "0.6 0.45 0.3 1"))
+    lines = header("arena", "arena: rooms and clutter for 2-D occupancy mapping (seed 003): "
+                   "armchair, balls, a chair seen through a doorway, a table")
+    lines += [
+        "<!--",
+        "  Generated by generate_worlds.py. A 12 x 10 m area, walls 1 m high: the lower hall",
+        "  (y 0..6) with an alcove (x 8..12, y 0..3 behind a wall at x = 8), a wall at y = 6 with",
+        "  doorways at x 2.5..3.5 and 8.5..9.5, and two upper rooms split at x = 5 with a doorway",
+        "  at y 7.5..8.5. Suggested start: (6, 3), facing +x.",
+        "-->",
+        "  <worldbody>",
+        '    <light name="sun" directional="true" pos="6 5 10" dir="0 0 -1"/>',
+    ]
+    lines += g + ["  </worldbody>", "</mujoco>", ""]
+    write("arena.xml", "\n".join(lines))
+
+
+# --------------------------------------------------------------------------------------------
+# outdoor
+
+def outdoor():
+    n = 121           # samples per side
+    half = 30.0       # half size in metres: 0.5 m between samples
+    rng = random.Random(2002)
+    hills = [(-14, 12, 6.0, 1.6), (12, 15, 7.0, 2.2), (15, -12, 5.0, 1.2), (-12, -15, 8.0, 1.0)]
+    heights = []
+    for r in range(n):
+        y = -half + 2 * half * r / (n - 1)
+        row = []
+        for c in range(n):
+            x = -half + 2 * half * c / (n - 1)
+            z = 0.0
+            for hx, hy, sigma, amp in hills:
+                z += amp * math.exp(-((x - hx) ** 2 + (y - hy) ** 2) / (2 * sigma ** 2))
+            # A long even slope to the east (about 6 deg over x 18..28).
+            if x > 18:
+                z += min(x - 18, 10) * math.tan(math.radians(6.0))
+            # Gentle roughness, flat around the start.
+            d = math.hypot(x, y)
+            if d > 4:
+                z += 0.04 * math.sin(0.9 * x + 0.3 * y) * math.cos(0.7 * y - 0.2 * x)
+            row.append(z)
+        heights.append(row)
+    lo = min(min(row) for row in heights)
+    hi = max(max(row) for row in heights)
+    # MuJoCo's custom height-field format: int32 rows, int32 cols, float32 data, row 0 at -y.
+    with open(os.path.join(HERE, "outdoor_terrain.bin"), "wb") as out:
+        out.write(struct.pack("<ii", n, n))
+        for row in heights:
+            out.write(struct.pack(f"<{n}f", *row))
+    g = ['    <geom name="terrain" type="hfield" hfield="terrain" pos="0 0 0" '
+         'rgba="0.45 0.5 0.35 1"/>']
+    # Rocks.
+    for i in range(14):
+        while True:
+            x, y = rng.uniform(-26, 26), rng.uniform(-26, 26)
+            if math.hypot(x, y) > 5:
+                break
+        s = rng.uniform(0.25, 0.8)
+        g.append(f'    <geom name="rock_{i}" type="ellipsoid" size="{f(s)} {f(s * 0.8)} '
+                 f'{f(s * 0.6)}" pos="{f(x)} {f(y)} {f(terrain_at(heights, n, half, x, y, lo))}" '
+                 f'euler="0 0 {rng.randint(0, 179)}" rgba="0.5 0.48 0.45 1"/>')
+    # A small house, a shed and a wall segment on flat-ish ground, plus trees.
+    def on_ground(name, x0, x1, y0, y1, height, rgba=WALL_RGBA):
+        z0 = min(terrain_at(heights, n, half, x, y, lo) for x in (x0, x1) for y in (y0, y1)) - 0.2
+        return aabb(name, x0, x1, y0, y1, z0, z0 + 0.2 + height, rgba)
+    g.append(on_ground("house_south", -4, 2, -10.2, -10.0, 2.5))
+    g.append(on_ground("house_north", -4, 2, -6.2, -6.0, 2.5))
+    g.append(on_ground("house_west", -4.2, -4, -10.2, -6.0, 2.5))
+    g.append(on_ground("house_east_0", 2, 2.2, -10.2, -8.8, 2.5))
+    g.append(on_ground("house_east_1", 2, 2.2, -7.6, -6.0, 2.5))
+    g.append(on_ground("shed", 6, 8, 4, 6, 2.0, "0.55 0.4 0.3 1"))
+    g.append(on_ground("garden_wall", -10, -2, 5, 5.3, 1.2))
+    for i, (x, y) in enumerate([(4, 12), (-6, 18), (20, 2), (-20, -4), (10, -20)]):
+        z = terrain_at(heights, n, half, x, y, lo)
+        g.append(f'    <geom name="tree_{i}" type="cylinder" size="0.2 2.5" '
+                 f'pos="{f(x)} {f(y)} {f(z + 2.3)}" rgba="0.4 0.3 0.2 1"/>')
+    lines = header("outdoor", "outdoor: 60 x 60 m heightfield terrain with hills, a 6 deg "
+                   "slope, rocks, a house, a shed, a garden wall and trees (seed 002)")
+    lines += [
+        "<!--",
+        f"  Generated by generate_worlds.py. Terrain: outdoor_terrain.bin, {n} x {n} samples",
+        f"  0.5 m apart over x, y in -30..30, heights {f(lo)}..{f(hi)} m (shifted so the lowest",
+        "  point is z = 0). Flat start area around the origin; hills at (-14, 12), (12, 15),",
+        "  (15, -12), (-12, -15); an even 6 deg slope rising east from x = 18 to 28.",
+        "-->",
+        "  <asset>",
+        f'    <hfield name="terrain" file="outdoor_terrain.bin" size="{f(half)} {f(half)} '
+        f'{f(hi - lo)} 0.5"/>',
+        "  </asset>",
+        "  <worldbody>",
+        '    <light name="sun" directional="true" pos="0 0 40" dir="0.2 0.1 -1"/>',
+    ]
+    lines += g + ["  </worldbody>", "</mujoco>", ""]
+    write("outdoor.xml", "\n".join(lines))
+
+
+def terrain_at(heights, n, half, x, y, lo):
+    """Terrain height (relative to the lowest point) at (x, y), bilinear."""
+    cx = (x + half) / (2 * half) * (n - 1)
+    cy = (y + half) / (2 * half) * (n - 1)
+    c0, r0 = int(math.floor(cx)), int(math.floor(cy))
+    c0, r0 = max(0, min(n - 2, c0)), max(0, min(n - 2, r0))
+    tx, ty = cx - c0, cy - r0
+    z = ((1 - tx) * (1 - ty) * heights[r0][c0] + tx * (1 - ty) * heights[r0][c0 + 1] +
+         (1 - tx) * ty * heights[r0 + 1][c0] + tx * ty * heights[r0 + 1][c0 + 1])
+    return z - lo
+
+
+def write(name, text):
+    with open(os.path.join(HERE, name), "w") as out:
+        out.write(text)
+
+
+if __name__ == "__main__":
+    tunnel()
+    apartment()
+    arena()
+    outdoor()

@@ -1,0 +1,211 @@
+// The whole navigation stack as real processes on a private LCM bus: cairn-sim (MuJoCo, the
+// tunnel world of seed 000, one Pioneer 3-AT), cairn-mapper (terrain and cost layers) and
+// cairn-navigator. Lanes, starts and goals: simulator/worlds/tunnel_lanes.yaml.
+
+#include <csignal>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "cairn/lcmt_goal.hpp"
+#include "cairn/lcmt_grid_manifest.hpp"
+#include "cairn/lcmt_nav_status.hpp"
+#include "cairn/lcmt_path.hpp"
+#include "cairn/lcmt_pose.hpp"
+#include "cairn/lcmt_sim_clock.hpp"
+#include "cairn/lcmt_sim_control_reply.hpp"
+#include "cairn/lcmt_sim_control_request.hpp"
+#include "cairn/lcmt_velocity_command.hpp"
+#include "common/channels.h"
+#include "common/robot_profile.h"
+#include "planner/footprint.h"
+#include "services/runtime/conversions.h"
+#include "tests/support/harness.h"
+
+namespace cairn::planner {
+namespace {
+
+namespace ch = cairn::channels;
+using common::Pose2;
+using common::Vector2;
+using testing::Bus;
+using testing::ProcessSet;
+using testing::WaitFor;
+
+constexpr int kStateReached = cairn::lcmt_nav_status::STATE_REACHED;
+constexpr int kStateFailed = cairn::lcmt_nav_status::STATE_FAILED;
+constexpr int kStateStopped = cairn::lcmt_nav_status::STATE_STOPPED;
+constexpr int kStateDriving = cairn::lcmt_nav_status::STATE_DRIVING;
+constexpr int kReasonNoPath = cairn::lcmt_nav_status::REASON_NO_PATH;
+constexpr int kReasonStaleMap = cairn::lcmt_nav_status::REASON_STALE_MAP;
+constexpr char kRobot[] = "p3at";
+
+// Separating-axis test between two convex polygons (touching counts as overlapping).
+bool ConvexOverlap(const std::vector<Vector2>& a, const std::vector<Vector2>& b, double margin) {
+  for (const auto* poly : {&a, &b}) {
+    for (size_t i = 0; i < poly->size(); ++i) {
+      const Vector2 e = (*poly)[(i + 1) % poly->size()] - (*poly)[i];
+      const Vector2 axis = Vector2(-e.y(), e.x()).normalized();
+      double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300;
+      for (const Vector2& v : a) {
+        a0 = std::min(a0, axis.dot(v));
+        a1 = std::max(a1, axis.dot(v));
+      }
+      for (const Vector2& v : b) {
+        b0 = std::min(b0, axis.dot(v));
+        b1 = std::max(b1, axis.dot(v));
+      }
+      if (a1 + margin < b0 || b1 + margin < a0) return false;
+    }
+  }
+  return true;
+}
+
+std::vector<Vector2> Box(double x0, double y0, double x1, double y1) {
+  return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+}
+
+class NavigatorStackTest : public ::testing::Test {
+ protected:
+  NavigatorStackTest() : url_(testing::PrivateLcmUrl()), procs_(url_), bus_(url_) {
+    footprint_ = common::LoadRobotProfileFile(testing::SourcePath("config/profiles/pioneer3at.yaml"))
+                     .footprint_m;
+    bus_.Keep(ch::ForRobot(kRobot, ch::kPose));
+    bus_.Keep(ch::ForRobot(kRobot, ch::kCmdVel));
+    bus_.Keep(ch::ForRobot(kRobot, ch::kMapManifest));
+  }
+
+  // The mapper's shipped configuration with the cost layer published every 0.2 s (more often
+  // than the navigator's 0.5 s age limit) and only the pioneer3at profile.
+  std::string MapperConfig() {
+    std::ifstream in(testing::SourcePath("config/mapping/mapper.yaml"));
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string yaml = text.str();
+    yaml = std::regex_replace(yaml, std::regex("\\npublish_period_s: [0-9.]+"), "\npublish_period_s: 0.2");
+    yaml = std::regex_replace(yaml, std::regex("\\nprofiles: \\[[^\\]]*\\]"), "\nprofiles: [pioneer3at]");
+    const std::string path = procs_.dir() + "/mapper.yaml";
+    std::ofstream(path) << yaml;
+    return path;
+  }
+
+  void StartStack(double x, double y, double yaw_deg) {
+    std::ostringstream robot;
+    robot << kRobot << ":pioneer3at:pioneer3at:" << x << "," << y << "," << yaw_deg;
+    sim_ = &procs_.Start("cairn-sim", {"--world", "tunnel", "--robot", robot.str(), "--speed", "1"});
+    mapper_ = &procs_.Start("cairn-mapper", {"--robot", kRobot, "--config", MapperConfig()});
+    nav_ = &procs_.Start("cairn-navigator", {"--robot", kRobot, "--profile", "pioneer3at"});
+    // Ready when the cost layer is on the bus and the navigator reports.
+    ASSERT_TRUE(WaitFor(
+        [&] {
+          auto m = bus_.Last<cairn::lcmt_grid_manifest>(ch::ForRobot(kRobot, ch::kMapManifest));
+          return CostManifestSeen() && bus_.Health("cairn-navigator", kRobot).has_value();
+        },
+        60.0, [&] { bus_.Pump(20); }))
+        << "the stack did not come up";
+  }
+  bool CostManifestSeen() {
+    for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kMapManifest))) {
+      cairn::lcmt_grid_manifest m;
+      if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) >= 0 &&
+          m.layer == "cost/pioneer3at" && m.num_tiles > 0) {
+        return true;
+      }
+    }
+    return false;
+  }
+
+  void SendGoal(int64_t id, double x, double y) {
+    cairn::lcmt_goal g{};
+    g.robot = kRobot;
+    g.goal_id = id;
+    g.kind = cairn::lcmt_goal::KIND_POSE;
+    g.x_m = x;
+    g.y_m = y;
+    bus_.Publish(ch::ForRobot(kRobot, ch::kGoal), g);
+  }
+  std::optional<cairn::lcmt_nav_status> Status() {
+    return bus_.Last<cairn::lcmt_nav_status>(ch::ForRobot(kRobot, ch::kNavStatus));
+  }
+  bool WaitState(int state, double timeout_s) {
+    return WaitFor([&] {
+      auto s = Status();
+      return s && s->state == state;
+    }, timeout_s, [&] { bus_.Pump(20); });
+  }
+  std::string StatusText() {
+    auto s = Status();
+    if (!s) return "no status";
+    std::ostringstream out;
+    out << "state " << int(s->state) << " reason " << int(s->reason) << ": " << s->message;
+    return out.str();
+  }
+
+  // Ground-truth poses so far.
+  std::vector<cairn::lcmt_pose> Poses() {
+    std::vector<cairn::lcmt_pose> out;
+    for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kPose))) {
+      cairn::lcmt_pose p;
+      if (p.decode(bytes.data(), 0, static_cast<int>(bytes.size())) >= 0) out.push_back(p);
+    }
+    return out;
+  }
+  static Pose2 ToPose2(const cairn::lcmt_pose& p) {
+    const auto pose = runtime::FromLcm(p);
+    return pose.ok() ? pose->ToPose2() : Pose2{};
+  }
+  // The footprint polygon at a pose.
+  std::vector<Vector2> FootprintAt(const Pose2& pose) const {
+    std::vector<Vector2> out;
+    for (const Vector2& v : footprint_) out.push_back(pose.Transform(v));
+    return out;
+  }
+  std::optional<cairn::lcmt_sim_control_reply> SimControl(cairn::lcmt_sim_control_request r) {
+    r.request_id = ++request_id_;
+    r.requester = "navigator_stack_test";
+    bus_.Publish(ch::kSimControl, r);
+    std::optional<cairn::lcmt_sim_control_reply> reply;
+    WaitFor([&] {
+      auto m = bus_.Last<cairn::lcmt_sim_control_reply>(ch::kSimControlReply);
+      if (m && m->request_id == r.request_id) reply = m;
+      return reply.has_value();
+    }, 10.0, [&] { bus_.Pump(20); });
+    return reply;
+  }
+
+  std::string url_;
+  ProcessSet procs_;
+  Bus bus_;
+  std::vector<Vector2> footprint_;
+  testing::ChildProcess* sim_{nullptr};
+  testing::ChildProcess* mapper_{nullptr};
+  testing::ChildProcess* nav_{nullptr};
+  int64_t request_id_{0};
+};
+
+TEST_F(NavigatorStackTest, ReachesTheGoalBehindTheCubeWithoutTouchingIt) {
+  StartStack(4.0, 2.0, 0.0);
+  SendGoal(1, 14.0, 2.0);
+  ASSERT_TRUE(WaitState(kStateReached, 100.0)) << StatusText();
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  const Pose2 last = ToPose2(poses.back());
+  EXPECT_LT(std::hypot(last.x_m - 14.0, last.y_m - 2.0), 0.5);
+  // Ground truth: the footprint never touched the 1 m cube (x 9..10, y 1.5..2.5) nor a lane
+  // wall (y = 0 and y = 4, 0.2 m thick).
+  const auto cube = Box(9.0, 1.5, 10.0, 2.5);
+  double min_x = 1e9;
+  for (const auto& p : poses) {
+    const auto fp = FootprintAt(ToPose2(p));
+    ASSERT_FALSE(ConvexOverlap(fp, cube, 0.0)) << "touched the cube at x " << p.position_m[0];
+    ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, -0.1, 24.0, 0.1), 0.0)) << "touched the south wall";
+    ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, 3.9, 24.0, 4.1), 0.0)) << "touched the lane wall";
+    min_x = std::min(min_x, p.position_m[0]);
+  }
+  EXPECT_GT(min_x, 3.5);
+}
+
+}  // namespace
+}  // namespace cairn::planner

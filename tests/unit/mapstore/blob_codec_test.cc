@@ -1,0 +1,157 @@
+#include "mapstore/blob_codec.h"
+
+#include <cmath>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "mapstore/names.h"
+
+namespace cairn::mapstore {
+namespace {
+
+using common::StatusCode;
+
+std::vector<float> SmoothTerrain(int n) {
+  std::vector<float> v(n);
+  for (int i = 0; i < n; ++i) v[i] = 1.5f + 0.3f * std::sin(i * 0.01f);
+  return v;
+}
+
+TEST(BlobCodecTest, EveryCodecRoundTripsAndKeysByContent) {
+  const std::vector<float> cells = SmoothTerrain(10000);
+  for (Codec codec : {Codec::kRaw, Codec::kZstd, Codec::kZstdShuffle4}) {
+    const EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * 4, codec);
+    auto back = DecodeBlob(codec, blob.data, blob.raw_size, blob.raw_crc32);
+    ASSERT_TRUE(back.ok()) << back.status().ToString();
+    ASSERT_EQ(back->size(), cells.size() * 4);
+    EXPECT_EQ(std::memcmp(back->data(), cells.data(), back->size()), 0);
+    EXPECT_EQ(EncodeBlob(cells.data(), cells.size() * 4, codec).key, blob.key);
+  }
+  std::vector<float> other = cells;
+  other[5000] += 1.f;
+  EXPECT_NE(EncodeBlob(other.data(), other.size() * 4, Codec::kZstd).key,
+            EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstd).key);
+}
+
+TEST(BlobCodecTest, ShufflingHelpsSmoothFloats) {
+  const std::vector<float> cells = SmoothTerrain(10000);
+  const size_t plain = EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstd).data.size();
+  const size_t shuffled =
+      EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstdShuffle4).data.size();
+  EXPECT_LT(shuffled, plain);
+  EXPECT_LT(shuffled, cells.size() * 4 * 6 / 10);
+}
+
+TEST(BlobCodecTest, DamageIsDetected) {
+  const std::vector<float> cells = SmoothTerrain(1000);
+  const EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstdShuffle4);
+  std::string flipped = blob.data;
+  flipped[flipped.size() / 2] ^= 0x5a;
+  auto bad = DecodeBlob(Codec::kZstdShuffle4, flipped, blob.raw_size, blob.raw_crc32);
+  EXPECT_EQ(bad.status().code(), StatusCode::kCorrupt);
+  auto truncated = DecodeBlob(Codec::kZstdShuffle4, blob.data.substr(0, 10), blob.raw_size,
+                              blob.raw_crc32);
+  EXPECT_EQ(truncated.status().code(), StatusCode::kCorrupt);
+  // Loads trust zstd's own content checksum; a full check also compares the stored CRC-32.
+  EXPECT_TRUE(DecodeBlob(Codec::kZstdShuffle4, blob.data, blob.raw_size, blob.raw_crc32 ^ 1).ok());
+  auto wrong_crc = DecodeBlob(Codec::kZstdShuffle4, blob.data, blob.raw_size, blob.raw_crc32 ^ 1,
+                              /*verify_crc=*/true);
+  EXPECT_EQ(wrong_crc.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(wrong_crc.status().message().find("checksum"), std::string::npos);
+  // A flipped byte anywhere in the frame is caught without the CRC pass.
+  for (size_t at = 6; at < blob.data.size(); at += blob.data.size() / 7) {
+    std::string damaged = blob.data;
+    damaged[at] ^= 0x01;
+    EXPECT_EQ(DecodeBlob(Codec::kZstdShuffle4, damaged, blob.raw_size, blob.raw_crc32)
+                  .status()
+                  .code(),
+              StatusCode::kCorrupt)
+        << "byte " << at;
+  }
+  auto raw_crc = DecodeBlob(Codec::kRaw, std::string(12, 'a'), 12, 0);
+  EXPECT_EQ(raw_crc.status().code(), StatusCode::kCorrupt);  // raw blobs always check the CRC
+  auto raw = DecodeBlob(Codec::kRaw, std::string(8, 'a'), 12, 0);
+  EXPECT_EQ(raw.status().code(), StatusCode::kCorrupt);
+  auto codec = DecodeBlob(static_cast<Codec>(17), blob.data, blob.raw_size, blob.raw_crc32);
+  EXPECT_EQ(codec.status().code(), StatusCode::kCorrupt);
+}
+
+TEST(BlobCodecTest, TilesCoverTheGridOnceAndPasteBack) {
+  common::GridGeometry g;
+  g.size_x = 25;
+  g.size_y = 12;
+  const auto tiles = TilesOf(g, 10);
+  ASSERT_EQ(tiles.size(), 6u);
+  EXPECT_EQ(tiles[2].cells_x, 5);
+  EXPECT_EQ(tiles[5].cells_y, 2);
+  common::Layer layer(25, 12);
+  for (int iy = 0; iy < 12; ++iy) {
+    for (int ix = 0; ix < 25; ++ix) layer(ix, iy) = ix * 100.f + iy;
+  }
+  common::Layer copy = common::Layer::Constant(25, 12, NAN);
+  for (const TileSpec& t : tiles) {
+    const std::vector<float> cells = ExtractTile(layer, t);
+    EXPECT_EQ(cells[0], layer(t.x0, t.y0));
+    PasteTile(t, cells.data(), 0, 0, &copy);
+  }
+  EXPECT_TRUE(copy == layer);
+  // A region touches only the tiles it overlaps, and pastes into a cropped layer.
+  const auto some = TilesOf(g, 10, CellBox{12, 3, 18, 11});
+  ASSERT_EQ(some.size(), 2u);
+  common::Layer crop = common::Layer::Constant(6, 8, NAN);
+  for (const TileSpec& t : some) PasteTile(t, ExtractTile(layer, t).data(), 12, 3, &crop);
+  EXPECT_EQ(crop(0, 0), layer(12, 3));
+  EXPECT_EQ(crop(5, 7), layer(17, 10));
+  EXPECT_TRUE(TilesOf(g, 10, CellBox{30, 0, 40, 5}).empty());
+}
+
+TEST(BlobCodecTest, RegistryRoundTripsAndRefusesGarbage) {
+  common::ObstacleRegistry r;
+  r.map_version = 4;
+  common::Obstacle o;
+  o.id = 12;
+  o.kind = common::ObstacleKind::kDitch;
+  o.centroid_m = {1.25, -3.5};
+  o.outline_m = {{0, 0}, {1, 0}, {1, 1}};
+  o.depth_m = NAN;
+  o.verdicts = {{"rover", "h", false, "ditch 0.4 m > 0.3 m"}, {"tank", "k", true, ""}};
+  r.obstacles = {o, o};
+  r.obstacles[1].id = 13;
+  const std::string bytes = SerializeRegistry(r);
+  auto back = ParseRegistry(bytes);
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  ASSERT_EQ(back->obstacles.size(), 2u);
+  EXPECT_EQ(back->map_version, 4);
+  EXPECT_EQ(back->obstacles[1].id, 13);
+  EXPECT_EQ(back->obstacles[0].outline_m, o.outline_m);
+  EXPECT_TRUE(std::isnan(back->obstacles[0].depth_m));
+  EXPECT_EQ(back->obstacles[0].verdicts, o.verdicts);
+  for (size_t cut : {size_t{0}, size_t{3}, bytes.size() / 2, bytes.size() - 1}) {
+    EXPECT_EQ(ParseRegistry(bytes.substr(0, cut)).status().code(), StatusCode::kCorrupt) << cut;
+  }
+  EXPECT_EQ(ParseRegistry(bytes + "x").status().code(), StatusCode::kCorrupt);
+}
+
+TEST(NamesTest, RulesForNames) {
+  for (const char* good : {"corridor", "lab-2", "map_1.v2", "A", "0"}) {
+    EXPECT_TRUE(ValidateName("map name", good).ok()) << good;
+  }
+  for (const std::string& bad : std::vector<std::string>{"", ".", "..", "a..b", "_x", "a/b", "a b", "é", "a\nb",
+                                std::string(65, 'x')}) {
+    const common::Status s = ValidateName("map name", bad);
+    EXPECT_EQ(s.code(), StatusCode::kInvalidArgument) << bad;
+    EXPECT_NE(s.message().find("map name"), std::string::npos);
+  }
+  EXPECT_TRUE(ValidateLayerName("cost/pioneer3at").ok());
+  EXPECT_TRUE(ValidateLayerName("elevation").ok());
+  EXPECT_FALSE(ValidateLayerName("cost/").ok());
+  EXPECT_FALSE(ValidateLayerName("/etc").ok());
+  EXPECT_FALSE(ValidateLayerName("cost/../x").ok());
+  EXPECT_TRUE(ValidatePlaceName("living room").ok());
+  EXPECT_FALSE(ValidatePlaceName(" room").ok());
+  EXPECT_FALSE(ValidatePlaceName("room;drop").ok());
+}
+
+}  // namespace
+}  // namespace cairn::mapstore

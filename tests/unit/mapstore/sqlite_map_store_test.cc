@@ -1,0 +1,443 @@
+// SqliteMapStore behaviour that only a file can show: persistence, refusal of foreign or
+// corrupt files, immutability, read-only use, a full disk, concurrent writers, migration.
+
+#include <sqlite3.h>
+#include <sys/stat.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "common/layers.h"
+#include "mapstore/blob_codec.h"
+#include "mapstore/map_operations.h"
+#include "mapstore/schema.h"
+#include "mapstore/sqlite_map_store.h"
+#include "tests/unit/mapstore/fake_deriver.h"
+
+namespace cairn::mapstore {
+namespace {
+
+namespace fs = std::filesystem;
+using common::StatusCode;
+using testing::FakeDeriver;
+using testing::Profile;
+using testing::SampleSnapshot;
+
+std::string TempDir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::path(CAIRN_BINARY_DIR) / "test-tmp" /
+                       (std::string(info->test_suite_name()) + "." + info->name());
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir.string();
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Runs SQL on a file through a separate raw connection (as another program would).
+void RawExec(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* error = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error);
+  const std::string message = error != nullptr ? error : "";
+  sqlite3_free(error);
+  sqlite3_close(db);
+  ASSERT_EQ(rc, SQLITE_OK) << message;
+}
+
+std::unique_ptr<SqliteMapStore> OpenOrDie(const std::string& path, SqliteOptions options = {}) {
+  auto store = SqliteMapStore::Open(path, options);
+  if (!store.ok()) {
+    ADD_FAILURE() << store.status().ToString();
+    return nullptr;
+  }
+  return std::move(store).value();
+}
+
+const WriteContext kCtx{"unit-test", 0, 0};
+
+SqliteOptions ReadOnly() {
+  SqliteOptions o;
+  o.read_only = true;
+  return o;
+}
+
+TEST(SqliteMapStoreTest, PersistsAcrossReopenInWalMode) {
+  const std::string path = TempDir() + "/site.db";
+  {
+    auto dut = OpenOrDie(path);
+    ASSERT_TRUE(dut);
+    ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor"), kCtx).ok());
+    EXPECT_EQ(dut->schema_version(), schema::kCurrentVersion);
+  }
+  auto dut = OpenOrDie(path);
+  ASSERT_TRUE(dut);
+  auto map = dut->LoadLayers({"lab", "corridor", 0}, {});
+  ASSERT_TRUE(map.ok());
+  EXPECT_FLOAT_EQ(map->at("elevation")(20, 1), 0.5f + 0.001f);
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(raw, "PRAGMA journal_mode", -1, &st, nullptr);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(st, 0)), "wal");
+  sqlite3_finalize(st);
+  sqlite3_close(raw);
+}
+
+TEST(SqliteMapStoreTest, RefusesFilesThatAreNotCairnDatabases) {
+  const std::string dir = TempDir();
+  {
+    std::ofstream text(dir + "/notes.db");
+    text << "this is a shopping list, not a database\n" << std::string(2000, 'x');
+  }
+  auto text = SqliteMapStore::Open(dir + "/notes.db");
+  EXPECT_EQ(text.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(text.status().message().find("not a cairn map database"), std::string::npos)
+      << text.status().message();
+
+  RawExec(dir + "/other.db", "CREATE TABLE songs(title TEXT); INSERT INTO songs VALUES('a');");
+  auto other = SqliteMapStore::Open(dir + "/other.db");
+  EXPECT_EQ(other.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(other.status().message().find("application_id"), std::string::npos);
+  // The foreign file was not modified.
+  RawExec(dir + "/other.db", "SELECT title FROM songs;");
+
+  const std::string newer = dir + "/newer.db";
+  { ASSERT_TRUE(OpenOrDie(newer)); }
+  RawExec(newer, "PRAGMA user_version = 99;");
+  auto future = SqliteMapStore::Open(newer);
+  EXPECT_EQ(future.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(future.status().message().find("newer"), std::string::npos);
+
+  auto missing = SqliteMapStore::Open(dir + "/absent.db", ReadOnly());
+  EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
+  EXPECT_FALSE(fs::exists(dir + "/absent.db"));
+}
+
+TEST(SqliteMapStoreTest, CorruptBlobIsRefusedAndReportedByCheck) {
+  const std::string path = TempDir() + "/site.db";
+  {
+    SqliteOptions small_tiles;
+    small_tiles.tile_size_cells = 16;
+    auto dut = OpenOrDie(path, small_tiles);
+    ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor"), kCtx).ok());
+    ASSERT_TRUE(dut->Check().value().ok);
+  }
+  // Another program damages one stored tile (past the trigger that forbids it).
+  RawExec(path,
+          "DROP TRIGGER blobs_immutable;"
+          "UPDATE blobs SET data = substr(data, 1, 40) || CASE WHEN substr(data, 41, 1) = X'00' "
+          "THEN X'01' ELSE X'00' END || substr(data, 42) WHERE id = (SELECT blob_id FROM layer_tiles "
+          "t JOIN layers l ON l.id = t.layer_id WHERE l.name = 'elevation' AND t.tile_ix = 1 AND "
+          "t.tile_iy = 0);");
+  auto dut = OpenOrDie(path);
+  auto map = dut->LoadLayers({"lab", "corridor", 0}, {{"elevation"}, std::nullopt});
+  EXPECT_EQ(map.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(map.status().message().find("elevation"), std::string::npos) << map.status().message();
+  EXPECT_NE(map.status().message().find("tile (1, 0)"), std::string::npos) << map.status().message();
+  // The other layer still loads, and so does a region away from the bad tile.
+  EXPECT_TRUE(dut->LoadLayers({"lab", "corridor", 0}, {{"observation_count"}, std::nullopt}).ok());
+  EXPECT_TRUE(dut->LoadLayers({"lab", "corridor", 0}, {{"elevation"}, CellBox{0, 0, 10, 10}}).ok());
+  EXPECT_EQ(dut->LoadLayers({"lab", "corridor", 0}, {{"elevation"}, CellBox{0, 0, 20, 10}})
+                .status()
+                .code(),
+            StatusCode::kCorrupt);
+  auto report = dut->Check();
+  ASSERT_TRUE(report.ok());
+  EXPECT_FALSE(report->ok);
+  ASSERT_FALSE(report->problems.empty());
+  EXPECT_NE(report->problems[0].find("blob"), std::string::npos) << report->problems[0];
+}
+
+TEST(SqliteMapStoreTest, StoredBlobsAndVersionsCannotBeRewritten) {
+  const std::string path = TempDir() + "/site.db";
+  auto dut = OpenOrDie(path);
+  ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor"), kCtx).ok());
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+  char* error = nullptr;
+  EXPECT_NE(sqlite3_exec(raw, "UPDATE blobs SET data = X'00'", nullptr, nullptr, &error),
+            SQLITE_OK);
+  EXPECT_NE(std::string(error ? error : "").find("immutable"), std::string::npos);
+  sqlite3_free(error);
+  EXPECT_NE(sqlite3_exec(raw, "UPDATE map_versions SET size_x = 1", nullptr, nullptr, nullptr),
+            SQLITE_OK);
+  EXPECT_NE(sqlite3_exec(raw, "DELETE FROM layer_tiles", nullptr, nullptr, nullptr), SQLITE_OK);
+  sqlite3_close(raw);
+  EXPECT_TRUE(dut->Check().value().ok);
+}
+
+TEST(SqliteMapStoreTest, IdenticalTilesAreStoredOnce) {
+  const std::string path = TempDir() + "/site.db";
+  auto dut = OpenOrDie(path);
+  MapSnapshot s = SampleSnapshot("corridor", 300, 200);
+  ASSERT_TRUE(dut->SaveMap(s, kCtx).ok());
+  const auto blobs_v1 = dut->BaseBlobBytes({"lab", "corridor", 1});
+  ASSERT_TRUE(blobs_v1.ok());
+  // Change one cell: one tile more, not a whole map.
+  s.base.at("elevation")(150, 150) = 42.f;
+  ASSERT_TRUE(dut->SaveMap(s, kCtx).ok());
+  const auto blobs_v2 = dut->BaseBlobBytes({"lab", "corridor", 2});
+  ASSERT_TRUE(blobs_v2.ok());
+  int differing = 0;
+  for (const auto& [key, bytes] : *blobs_v2) differing += blobs_v1->at(key) != bytes;
+  EXPECT_EQ(differing, 1);
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  sqlite3_prepare_v2(raw, "SELECT count(*) FROM blobs", -1, &st, nullptr);
+  ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+  EXPECT_EQ(sqlite3_column_int(st, 0), static_cast<int>(blobs_v1->size()) + 1);
+  sqlite3_finalize(st);
+  sqlite3_close(raw);
+}
+
+TEST(SqliteMapStoreTest, ReadOnlyUseLeavesTheFileUntouched) {
+  const std::string path = TempDir() + "/site.db";
+  const ProfileDeriver deriver = FakeDeriver();
+  {
+    auto dut = OpenOrDie(path);
+    ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor"), kCtx).ok());
+    ASSERT_TRUE(dut->PutProfile(Profile("rover", 12.0, 0.08), kCtx).ok());
+    ASSERT_TRUE(dut->PutProfile(Profile("pioneer3at", 8.0, 0.03), kCtx).ok());
+    ASSERT_TRUE(dut->PutPlaces("lab", {{"hall", {{0, 0}, {1, 0}, {1, 1}}}}, kCtx).ok());
+    ASSERT_TRUE(ShareMap(*dut, deriver, {"lab", "corridor", 0}, "rover", kCtx).ok());
+  }
+  const std::string bytes_before = ReadFile(path);
+  struct stat before {};
+  ASSERT_EQ(stat(path.c_str(), &before), 0);
+  for (bool read_only : {true, false}) {
+    SqliteOptions options;
+    options.read_only = read_only;
+    auto dut = OpenOrDie(path, options);
+    ASSERT_TRUE(dut);
+    ASSERT_TRUE(dut->ListMaps({}).ok());
+    ASSERT_TRUE(dut->ListProfiles().ok());
+    ASSERT_TRUE(dut->ListPlaces("lab").ok());
+    ASSERT_TRUE(dut->ListAudit(10).ok());
+    ASSERT_TRUE(LoadForProfile(*dut, &deriver, {"lab", "corridor", 0}, "rover").ok());
+    ASSERT_TRUE(LoadForProfile(*dut, &deriver, {"lab", "corridor", 0}, "pioneer3at").ok());
+    ASSERT_TRUE(dut->LoadOctomap({"lab", "corridor", 0}).status().code() == StatusCode::kNotFound);
+    ASSERT_TRUE(dut->Check().value().ok);
+  }
+  struct stat after {};
+  ASSERT_EQ(stat(path.c_str(), &after), 0);
+  EXPECT_EQ(after.st_mtim.tv_sec, before.st_mtim.tv_sec);
+  EXPECT_EQ(after.st_mtim.tv_nsec, before.st_mtim.tv_nsec);
+  EXPECT_TRUE(ReadFile(path) == bytes_before);
+  // A read-only store refuses writes with a message.
+  auto ro = OpenOrDie(path, ReadOnly());
+  const common::Status s = ro->PutProfile(Profile("tank", 5.0, 0.01), kCtx);
+  EXPECT_EQ(s.code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(s.message().find("read-only"), std::string::npos);
+}
+
+TEST(SqliteMapStoreTest, FullDiskGivesAClearErrorAndLosesNothing) {
+  const std::string path = TempDir() + "/site.db";
+  int64_t pages = 0;
+  {
+    auto dut = OpenOrDie(path);
+    ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor"), kCtx).ok());
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+    sqlite3_stmt* st = nullptr;
+    sqlite3_prepare_v2(raw, "PRAGMA page_count", -1, &st, nullptr);
+    ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+    pages = sqlite3_column_int64(st, 0);
+    sqlite3_finalize(st);
+    sqlite3_close(raw);
+  }
+  // A quota a few pages above the current size stands in for a full disk (same SQLITE_FULL).
+  SqliteOptions options;
+  options.max_page_count = pages + 3;
+  auto dut = OpenOrDie(path, options);
+  ASSERT_TRUE(dut);
+  MapSnapshot big = SampleSnapshot("big", 400, 400);
+  for (int iy = 0; iy < 400; ++iy) {
+    for (int ix = 0; ix < 400; ++ix) big.base.at("elevation")(ix, iy) = std::sin(ix * 0.37f + iy);
+  }
+  auto r = dut->SaveMap(big, kCtx);
+  ASSERT_EQ(r.status().code(), StatusCode::kResourceExhausted) << r.status().ToString();
+  EXPECT_NE(r.status().message().find("disk is full"), std::string::npos);
+  EXPECT_NE(r.status().message().find("intact"), std::string::npos);
+  // Nothing of the failed save exists; the earlier map loads and the file checks clean.
+  EXPECT_EQ(dut->GetMapInfo({"lab", "big", 0}).status().code(), StatusCode::kNotFound);
+  auto old = dut->LoadLayers({"lab", "corridor", 0}, {});
+  ASSERT_TRUE(old.ok()) << old.status().ToString();
+  EXPECT_FLOAT_EQ(old->at("elevation")(20, 1), 0.501f);
+  EXPECT_TRUE(dut->Check().value().ok);
+}
+
+TEST(SqliteMapStoreTest, TwoWritersAndAReaderOnOneFileAllSucceed) {
+  const std::string path = TempDir() + "/site.db";
+  { ASSERT_TRUE(OpenOrDie(path)); }
+  constexpr int kSaves = 12;
+  std::atomic<int> failures{0};
+  std::atomic<bool> writing{true};
+  std::atomic<int> reads{0};
+  auto writer = [&](const std::string& name) {
+    auto dut = OpenOrDie(path);
+    if (!dut) {
+      ++failures;
+      return;
+    }
+    for (int i = 0; i < kSaves; ++i) {
+      auto r = dut->SaveMap(SampleSnapshot(name, 120, 90, static_cast<float>(i)), kCtx);
+      if (!r.ok()) {
+        ADD_FAILURE() << r.status().ToString();
+        ++failures;
+      }
+    }
+  };
+  std::thread reader([&] {
+    auto dut = OpenOrDie(path, ReadOnly());
+    while (writing) {
+      auto list = dut->ListMaps({"", "", true, false});
+      if (!list.ok()) {
+        ADD_FAILURE() << list.status().ToString();
+        ++failures;
+      }
+      for (const MapInfo& info : list.value()) {
+        auto map = dut->LoadLayers({info.site, info.name, info.version}, {});
+        if (!map.ok()) {
+          ADD_FAILURE() << map.status().ToString();
+          ++failures;
+        }
+      }
+      ++reads;
+    }
+  });
+  std::thread a(writer, "north");
+  std::thread b(writer, "south");
+  a.join();
+  b.join();
+  writing = false;
+  reader.join();
+  EXPECT_EQ(failures, 0);
+  EXPECT_GT(reads, 0);
+  auto dut = OpenOrDie(path);
+  for (const std::string name : {"north", "south"}) {
+    auto versions = dut->ListMaps({"lab", name, true, true});
+    ASSERT_TRUE(versions.ok());
+    ASSERT_EQ(static_cast<int>(versions->size()), kSaves) << name;
+    for (int i = 0; i < kSaves; ++i) {
+      EXPECT_EQ((*versions)[i].version, i + 1);
+      auto map = dut->LoadLayers({"lab", name, i + 1}, {{"elevation"}, std::nullopt});
+      ASSERT_TRUE(map.ok());
+      EXPECT_FLOAT_EQ(map->at("elevation")(5, 5), static_cast<float>(i) + 0.005f);
+    }
+  }
+  EXPECT_TRUE(dut->Check().value().ok);
+}
+
+TEST(SqliteMapStoreTest, VacuumKeepsEverythingReferenced) {
+  const std::string path = TempDir() + "/site.db";
+  auto dut = OpenOrDie(path);
+  ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor", 200, 200), kCtx).ok());
+  ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor", 200, 200, 1.f), kCtx).ok());
+  ASSERT_TRUE(dut->DeleteMap({"lab", "corridor", 1}, kCtx).ok());
+  const auto before = dut->BaseBlobBytes({"lab", "corridor", 2});
+  auto shrunk = dut->Vacuum();
+  ASSERT_TRUE(shrunk.ok()) << shrunk.status().ToString();
+  EXPECT_TRUE(dut->Check().value().ok);
+  EXPECT_EQ(dut->BaseBlobBytes({"lab", "corridor", 2}).value(), before.value());
+  // Soft-deleted versions keep their data.
+  auto listed = dut->ListMaps({"lab", "corridor", true, true});
+  ASSERT_EQ(listed->size(), 2u);
+}
+
+TEST(SqliteMapStoreTest, OpeningTheVersion1FixtureMigratesIt) {
+  const std::string path = TempDir() + "/v1.db";
+  fs::copy_file(std::string(CAIRN_SOURCE_DIR) + "/tests/unit/mapstore/fixtures/v1.db", path);
+
+  // Read-only cannot migrate: a message says what to do.
+  auto ro = SqliteMapStore::Open(path, ReadOnly());
+  EXPECT_EQ(ro.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(ro.status().message().find("schema version 1"), std::string::npos);
+  EXPECT_NE(ro.status().message().find("migrate"), std::string::npos);
+
+  auto dut = OpenOrDie(path);
+  ASSERT_TRUE(dut);
+  EXPECT_EQ(dut->schema_version(), schema::kCurrentVersion);
+  auto info = dut->GetMapInfo({"lab", "corridor", 0});
+  ASSERT_TRUE(info.ok()) << info.status().ToString();
+  EXPECT_EQ(info->version, 1);  // version 2 was deleted in the fixture
+  EXPECT_EQ(info->provenance.source_robot, "rover1");
+  EXPECT_EQ(info->provenance.source_profile, "pioneer3at");
+  EXPECT_EQ(info->provenance.created_utime, 1700000001000000);
+  EXPECT_EQ(info->geometry.size_x, 25);
+  EXPECT_EQ(info->geometry.size_y, 12);
+  EXPECT_DOUBLE_EQ(info->geometry.resolution_m, 0.2);
+  EXPECT_DOUBLE_EQ(info->geometry.origin.x_m, -1.0);
+  EXPECT_EQ(info->tile_size, 10);
+  EXPECT_EQ(info->layers, (std::vector<std::string>{"elevation", "static"}));
+  EXPECT_EQ(info->num_obstacles, 2);
+
+  auto map = dut->LoadLayers({"lab", "corridor", 1}, {});
+  ASSERT_TRUE(map.ok()) << map.status().ToString();
+  for (int iy = 0; iy < 12; ++iy) {
+    for (int ix = 0; ix < 25; ++ix) {
+      const float e = map->at("elevation")(ix, iy);
+      if ((ix == 0 && iy == 0) || (ix >= 20 && iy >= 10)) {
+        EXPECT_TRUE(std::isnan(e)) << ix << "," << iy;
+      } else {
+        EXPECT_FLOAT_EQ(e, 0.01f * ix + 0.02f * iy) << ix << "," << iy;
+      }
+      EXPECT_EQ(map->at("static")(ix, iy), ix == 12 ? 100.f : 0.f);
+    }
+  }
+  auto deleted = dut->GetMapInfo({"lab", "corridor", 2});
+  EXPECT_EQ(deleted.status().code(), StatusCode::kNotFound);
+  auto yard = dut->LoadLayers({"lab", "yard", 0}, {});
+  ASSERT_TRUE(yard.ok());
+  EXPECT_FLOAT_EQ(yard->at("elevation")(4, 4), 0.25f);
+  EXPECT_DOUBLE_EQ(yard->geometry().origin.yaw_rad, 0.5);
+
+  auto obstacles = dut->LoadObstacles({"lab", "corridor", 0});
+  ASSERT_TRUE(obstacles.ok());
+  ASSERT_EQ(obstacles->obstacles.size(), 2u);
+  EXPECT_EQ(obstacles->obstacles[0].kind, common::ObstacleKind::kRamp);
+  EXPECT_NEAR(obstacles->obstacles[0].slope_rad, 10.0 * M_PI / 180.0, 1e-12);
+  EXPECT_TRUE(std::isnan(obstacles->obstacles[0].depth_m));
+  EXPECT_EQ(obstacles->obstacles[1].kind, common::ObstacleKind::kStepUp);
+  EXPECT_DOUBLE_EQ(obstacles->obstacles[1].height_m, 0.05);
+
+  // The profile is re-hashed with today's code so new puts of the same content match it.
+  auto profile = dut->GetProfile("pioneer3at");
+  ASSERT_TRUE(profile.ok()) << profile.status().ToString();
+  const common::RobotProfile shipped = common::LoadRobotProfileFile(
+      std::string(CAIRN_SOURCE_DIR) + "/config/profiles/pioneer3at.yaml");
+  EXPECT_EQ(profile->content_hash, shipped.ContentHash());
+  EXPECT_EQ(profile->profile, shipped);
+
+  auto audit = dut->ListAudit(5);
+  ASSERT_TRUE(audit.ok());
+  ASSERT_FALSE(audit->empty());
+  EXPECT_EQ((*audit)[0].op, "migrate");
+  EXPECT_TRUE(dut->Check().value().ok);
+  // New saves continue the numbering of the migrated map.
+  MapSnapshot next = SampleSnapshot("corridor", 25, 12);
+  auto saved = dut->SaveMap(next, kCtx);
+  ASSERT_TRUE(saved.ok());
+  EXPECT_EQ(saved->version, 3);
+  // Reopening does not migrate twice.
+  dut.reset();
+  auto again = OpenOrDie(path);
+  EXPECT_EQ(again->ListAudit(10).value()[0].op, "save");
+}
+
+}  // namespace
+}  // namespace cairn::mapstore

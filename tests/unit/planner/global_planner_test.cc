@@ -1,0 +1,297 @@
+#include "planner/global/global_planner.h"
+
+#include <atomic>
+#include <chrono>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "planner/global/grid_astar.h"
+#include "tests/unit/planner/test_maps.h"
+
+namespace cairn::planner {
+namespace {
+
+using common::Pose2;
+using common::Vector2;
+using testing::PioneerFootprint;
+using testing::SmallFootprint;
+using testing::TestLayer;
+
+// 20 m × 10 m at 0.1 m with a wall across x = 10 m that has one 1.2 m gap at y in [6, 7.2].
+TestLayer WallWithGap() {
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 7.2, 10.2, 10.0, 100.0f);
+  return layer;
+}
+
+GlobalPlannerParams Params(const std::string& planner = "RRTConnect") {
+  GlobalPlannerParams p;
+  p.planner = planner;
+  p.time_budget_s = 2.0;
+  p.seed = 7;
+  return p;
+}
+
+void ExpectPathValid(const CostMap& map, const PlanResult& r, const Pose2& start, const Pose2& goal) {
+  ASSERT_FALSE(r.poses.empty());
+  EXPECT_LT((r.poses.front().position() - start.position()).norm(), 1e-6);
+  EXPECT_LT((r.poses.back().position() - goal.position()).norm(), 0.06);
+  for (size_t i = 0; i < r.poses.size(); ++i) {
+    ASSERT_TRUE(map.Contains(r.poses[i].position())) << "pose " << i;
+    if (i > 0) {
+      EXPECT_LE((r.poses[i].position() - r.poses[i - 1].position()).norm(), 0.1 + 1e-6) << i;
+    }
+  }
+}
+
+TEST(GlobalPlannerTest, FindsAnExactPathThroughTheGap) {
+  const auto map = WallWithGap().Build(PioneerFootprint());
+  const GlobalPlanner dut(Params());
+  const Pose2 start{2.0, 2.0, 0.0};
+  const Pose2 goal{18.0, 2.0, 0.0};
+  const PlanResult r = dut.Plan(*map, {start, goal, false});
+  ASSERT_EQ(r.status, PlanStatus::kSuccess) << r.message;
+  ExpectPathValid(*map, r, start, goal);
+  // Every returned pose passes the planner's state check (OMPL's headings were re-validated;
+  // the path goes through the gap, never through the wall).
+  bool through_gap = false;
+  for (const Pose2& p : r.poses) {
+    if (std::abs(p.x_m - 10.0) < 0.3) through_gap = through_gap || (p.y_m > 6.0 && p.y_m < 7.2);
+    EXPECT_FALSE(p.x_m > 9.8 && p.x_m < 10.2 && (p.y_m < 6.0 || p.y_m > 7.2));
+  }
+  EXPECT_TRUE(through_gap);
+  // The first solution and the improvement rounds, merged.
+  EXPECT_GT(r.solutions, 1);
+  EXPECT_GE(r.total_time_s, r.solve_time_s);
+  // Every pose keeps the robot's own footprint clear of the wall.
+  for (const Pose2& p : r.poses) EXPECT_TRUE(map->IsValid(p));
+  // Simplification made it no longer than the detour through the gap needs, far below the raw one.
+  EXPECT_LE(r.length_m, r.raw_length_m + 1e-6);
+  EXPECT_LT(r.length_m, 2.0 * std::hypot(8.0, 4.6) * 1.1);
+}
+
+TEST(GlobalPlannerTest, SameSeedSamePath) {
+  const auto map = WallWithGap().Build(PioneerFootprint());
+  GlobalPlannerParams p = Params();
+  p.simplify_time_s = 0.0;  // the simplifier stops on wall time; the planner alone is seeded
+  const GlobalPlanner dut(p);
+  const PlanRequest req{{2.0, 2.0, 0.0}, {18.0, 8.0, 0.0}, false};
+  const PlanResult a = dut.Plan(*map, req);
+  const PlanResult b = dut.Plan(*map, req);
+  ASSERT_TRUE(a.ok() && b.ok());
+  ASSERT_EQ(a.poses.size(), b.poses.size());
+  for (size_t i = 0; i < a.poses.size(); ++i) {
+    EXPECT_DOUBLE_EQ(a.poses[i].x_m, b.poses[i].x_m);
+    EXPECT_DOUBLE_EQ(a.poses[i].y_m, b.poses[i].y_m);
+  }
+  p.seed = 8;
+  const PlanResult c = GlobalPlanner(p).Plan(*map, req);
+  ASSERT_TRUE(c.ok());
+  EXPECT_NE(c.raw_length_m, a.raw_length_m);
+}
+
+TEST(GlobalPlannerTest, PathsKeepThePlanningPaddingAwayFromTheirEnds) {
+  // A 0.9 m gap in a 0.4 m thick wall: the 0.5 m wide robot fits with the 0.05 m padding.
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 6.95, 10.2, 10.0, 100.0f);
+  const auto map = layer.Build(PioneerFootprint());
+  const PlanResult r = GlobalPlanner(Params()).Plan(*map, {{2.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
+  ASSERT_EQ(r.status, PlanStatus::kSuccess) << r.message;
+  for (const Pose2& p : r.poses) {
+    if ((p.position() - Vector2(2.0, 2.0)).norm() < 0.7 || (p.position() - Vector2(18.0, 2.0)).norm() < 0.7) continue;
+    EXPECT_TRUE(map->IsValid(p, FootprintKind::kPadded)) << p.x_m << ", " << p.y_m;
+  }
+  // A robot parked 3 cm from a wall (inside the padding) can still leave.
+  TestLayer tight(100, 100, 0.1);
+  tight.Rect(0.0, 0.0, 10.0, 0.65, 100.0f);
+  const auto tmap = tight.Build(PioneerFootprint());
+  const Pose2 parked{5.0, 0.7 + 0.25 + 0.03, 0.0};
+  ASSERT_TRUE(tmap->IsValid(parked));
+  ASSERT_FALSE(tmap->IsValid(parked, FootprintKind::kPadded));
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*tmap, {parked, {5.0, 6.0, 0.0}, false}).status,
+            PlanStatus::kSuccess);
+}
+
+TEST(GlobalPlannerTest, StartOccupied) {
+  const auto map = WallWithGap().Build(PioneerFootprint());
+  const PlanResult r = GlobalPlanner(Params()).Plan(*map, {{10.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
+  EXPECT_EQ(r.status, PlanStatus::kStartOccupied);
+  // The footprint reaching into the wall is enough: the centre 0.2 m from its face.
+  const PlanResult edge = GlobalPlanner(Params()).Plan(*map, {{9.6, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
+  EXPECT_EQ(edge.status, PlanStatus::kStartOccupied);
+}
+
+TEST(GlobalPlannerTest, GoalOccupied) {
+  const auto map = WallWithGap().Build(PioneerFootprint());
+  const PlanResult r = GlobalPlanner(Params()).Plan(*map, {{2.0, 2.0, 0.0}, {10.0, 3.0, 0.0}, false});
+  EXPECT_EQ(r.status, PlanStatus::kGoalOccupied);
+  // With a yaw, only that heading counts: a 2 m × 0.3 m robot fits along the gap, not across.
+  TestLayer corridor(100, 100, 0.1);
+  corridor.Rect(0.0, 0.0, 10.0, 4.6, 100.0f).Rect(0.0, 5.4, 10.0, 10.0, 100.0f).Rect(0.0, 4.6, 3.0, 5.4, 0.0f);
+  const auto long_robot = corridor.Build(common::RectangleFootprint(2.0, 0.3));
+  const Pose2 start{5.0, 5.0, 0.0};
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*long_robot, {start, {7.0, 5.0, M_PI / 2}, true}).status,
+            PlanStatus::kGoalOccupied);
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*long_robot, {start, {7.0, 5.0, 0.0}, true}).status,
+            PlanStatus::kSuccess);
+}
+
+TEST(GlobalPlannerTest, OutOfBounds) {
+  const auto map = WallWithGap().Build(PioneerFootprint());
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*map, {{2.0, 2.0, 0.0}, {25.0, 2.0, 0.0}, false}).status,
+            PlanStatus::kOutOfBounds);
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*map, {{-1.0, 2.0, 0.0}, {5.0, 2.0, 0.0}, false}).status,
+            PlanStatus::kOutOfBounds);
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*map, {{2.0, 2.0, 0.0}, {NAN, 2.0, 0.0}, false}).status,
+            PlanStatus::kOutOfBounds);
+}
+
+TEST(GlobalPlannerTest, NoPathIsProvedQuicklyWhenTheGoalIsWalledOff) {
+  TestLayer layer = WallWithGap();
+  layer.Rect(9.8, 5.9, 10.2, 7.3, 100.0f);  // close the gap
+  const auto map = layer.Build(PioneerFootprint());
+  GlobalPlannerParams p = Params();
+  p.time_budget_s = 30.0;
+  const PlanResult r = GlobalPlanner(p).Plan(*map, {{2.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
+  EXPECT_EQ(r.status, PlanStatus::kNoPath) << r.message;
+  EXPECT_LT(r.total_time_s, 1.0);  // proved on the grid, not by exhausting the 30 s budget
+}
+
+TEST(GlobalPlannerTest, NoPathWhenTheGapIsNarrowerThanTheRobot) {
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 6.35, 10.2, 10.0, 100.0f);  // 0.3 m gap
+  const auto map = layer.Build(PioneerFootprint());  // 0.5 m wide robot
+  const PlanResult r = GlobalPlanner(Params()).Plan(*map, {{2.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
+  EXPECT_EQ(r.status, PlanStatus::kNoPath) << r.message;
+}
+
+TEST(GlobalPlannerTest, TimedOutWhenTheBudgetIsTooSmall) {
+  // A long maze of narrow passages: connected, but not in a tenth of a millisecond.
+  TestLayer layer(300, 300, 0.1);
+  for (int k = 0; k < 7; ++k) {
+    const double x = 3.0 + 3.8 * k;
+    const bool gap_low = k % 2 == 0;
+    layer.Rect(x, gap_low ? 0.8 : 0.0, x + 0.3, gap_low ? 30.0 : 29.2, 100.0f);
+  }
+  const auto map = layer.Build(SmallFootprint());
+  GlobalPlannerParams p = Params();
+  p.time_budget_s = 1e-4;
+  const PlanResult r = GlobalPlanner(p).Plan(*map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false});
+  EXPECT_EQ(r.status, PlanStatus::kTimedOut) << r.message;
+  // The same problem is solvable with time.
+  p.time_budget_s = 10.0;
+  EXPECT_EQ(GlobalPlanner(p).Plan(*map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false}).status,
+            PlanStatus::kSuccess);
+}
+
+TEST(GlobalPlannerTest, CancelledBeforeAndDuringTheSolve) {
+  TestLayer layer = WallWithGap();
+  layer.Rect(14.0, 0.0, 16.0, 4.0, 100.0f).Rect(14.0, 0.0, 20.0, 0.1, 100.0f);
+  layer.Rect(16.0, 3.9, 20.0, 4.0, 100.0f);  // a closed pocket around the goal
+  const auto map = layer.Build(PioneerFootprint());
+  std::atomic<bool> cancel{true};
+  const PlanRequest req{{2.0, 8.0, 0.0}, {18.0, 2.0, 0.0}, false};
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*map, req, &cancel).status, PlanStatus::kCancelled);
+
+  // Without the grid proof OMPL would search the whole budget; a cancel ends it early.
+  GlobalPlannerParams p = Params();
+  p.grid_precheck = false;
+  p.time_budget_s = 20.0;
+  cancel = false;
+  std::thread canceller([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    cancel = true;
+  });
+  const auto t0 = std::chrono::steady_clock::now();
+  const PlanResult r = GlobalPlanner(p).Plan(*map, req, &cancel);
+  canceller.join();
+  EXPECT_EQ(r.status, PlanStatus::kCancelled);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+}
+
+TEST(GlobalPlannerTest, ApproximateSolutionIsAFailure) {
+  // The goal sits in a closed pocket and the grid proof is off, so the optimising planner
+  // ends its budget with a tree that only comes near the goal.
+  TestLayer layer(100, 100, 0.1);
+  layer.Rect(6.0, 6.0, 9.0, 6.2, 100.0f).Rect(6.0, 8.8, 9.0, 9.0, 100.0f);
+  layer.Rect(6.0, 6.0, 6.2, 9.0, 100.0f).Rect(8.8, 6.0, 9.0, 9.0, 100.0f);
+  const auto map = layer.Build(SmallFootprint());
+  for (const std::string planner : {"RRTstar", "RRTConnect"}) {
+    GlobalPlannerParams p = Params(planner);
+    p.grid_precheck = false;
+    p.time_budget_s = 0.3;
+    const PlanResult r = GlobalPlanner(p).Plan(*map, {{2.0, 2.0, 0.0}, {7.5, 7.5, 0.0}, false});
+    EXPECT_FALSE(r.ok()) << planner;
+    EXPECT_TRUE(r.poses.empty()) << planner;
+    if (planner == "RRTstar") {
+      EXPECT_EQ(r.status, PlanStatus::kApproximate) << r.message;
+    } else {
+      EXPECT_TRUE(r.status == PlanStatus::kApproximate || r.status == PlanStatus::kTimedOut)
+          << PlanStatusName(r.status);
+    }
+  }
+}
+
+TEST(GlobalPlannerTest, EveryNamedPlannerAndStateSpaceSolves) {
+  const auto map = WallWithGap().Build(PioneerFootprint());
+  const Pose2 start{2.0, 2.0, 0.0};
+  const Pose2 goal{18.0, 8.0, 0.0};
+  for (const auto& name : KnownPlannerNames()) {
+    const PlanResult r = GlobalPlanner(Params(name)).Plan(*map, {start, goal, false});
+    ASSERT_EQ(r.status, PlanStatus::kSuccess) << name << ": " << r.message;
+    ExpectPathValid(*map, r, start, goal);
+  }
+  for (const auto kind : {StateSpaceKind::kDubins, StateSpaceKind::kReedsShepp}) {
+    GlobalPlannerParams p = Params();
+    p.state_space = kind;
+    p.turning_radius_m = 0.8;
+    const PlanResult r = GlobalPlanner(p).Plan(*map, {start, {18.0, 8.0, M_PI / 2}, true});
+    ASSERT_EQ(r.status, PlanStatus::kSuccess) << StateSpaceKindName(kind) << ": " << r.message;
+    EXPECT_NEAR(common::WrapAngle(r.poses.back().yaw_rad - M_PI / 2), 0.0, 0.1);
+  }
+}
+
+TEST(GlobalPlannerTest, BadParamsAreRejectedWithTheirName) {
+  GlobalPlannerParams p;
+  p.planner = "RRTfast";
+  try {
+    GlobalPlanner dut(p);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("RRTfast"), std::string::npos);
+  }
+  p = {};
+  p.seed = 0;
+  EXPECT_THROW(GlobalPlanner{p}, std::invalid_argument);
+  EXPECT_THROW(StateSpaceKindFromName("se3"), std::invalid_argument);
+}
+
+TEST(GridAStarTest, ShortestAroundTheWallAndCostAware) {
+  const auto map = WallWithGap().Build(PioneerFootprint());
+  const GridPath p = GridAStar(*map, {2.0, 2.0}, {18.0, 2.0});
+  ASSERT_TRUE(p.found);
+  EXPECT_GT(p.length_m, 16.0);
+  EXPECT_LT(p.length_m, 2.0 * std::hypot(8.0, 4.8) * 1.09);  // octile path through the gap
+  // A graded band across an open map: a high weight makes the path go around it.
+  TestLayer band(200, 100, 0.1);
+  band.Rect(9.0, 0.0, 11.0, 8.0, 90.0f);
+  const auto banded = band.Build(SmallFootprint());
+  GridAStarParams cheap;
+  cheap.traversal_cost_weight = 0.0;
+  GridAStarParams careful;
+  careful.traversal_cost_weight = 10.0;
+  const GridPath straight = GridAStar(*banded, {2.0, 2.0}, {18.0, 2.0}, cheap);
+  const GridPath around = GridAStar(*banded, {2.0, 2.0}, {18.0, 2.0}, careful);
+  ASSERT_TRUE(straight.found && around.found);
+  EXPECT_NEAR(straight.length_m, 16.0, 0.05);
+  EXPECT_GT(around.length_m, 18.0);
+  for (const Vector2& q : around.points_m) EXPECT_FALSE(q.x() > 9.0 && q.x() < 11.0 && q.y() < 8.0);
+  // Not found across a closed wall.
+  TestLayer closed = WallWithGap();
+  closed.Rect(9.8, 5.9, 10.2, 7.3, 100.0f);
+  EXPECT_FALSE(GridAStar(*closed.Build(PioneerFootprint()), {2.0, 2.0}, {18.0, 2.0}).found);
+}
+
+}  // namespace
+}  // namespace cairn::planner

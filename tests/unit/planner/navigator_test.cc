@@ -1,0 +1,342 @@
+#include "planner/navigator.h"
+
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "planner/global/global_planner.h"
+#include "tests/unit/planner/test_maps.h"
+
+namespace cairn::planner {
+namespace {
+
+using common::Pose2;
+using common::Vector2;
+using testing::PioneerFootprint;
+using testing::TestLayer;
+
+// A kinematic robot, a map publisher and a synchronous planner around a Navigator, on fake
+// time: every cycle advances 50 ms.
+class NavSim {
+ public:
+  explicit NavSim(std::shared_ptr<const CostMap> map, NavigatorParams params = {},
+                  std::vector<Place> places = {}, uint32_t seed = 3)
+      : map_(std::move(map)),
+        profile_(testing::PioneerProfile()),
+        nav_(profile_, params, DwaParams{}, std::move(places)),
+        planner_(PlannerParams(seed)) {}
+
+  static GlobalPlannerParams PlannerParams(uint32_t seed) {
+    GlobalPlannerParams p;
+    p.seed = seed;
+    return p;
+  }
+
+  // Runs until `done` holds or `seconds` pass; returns whether `done` held.
+  bool Run(double seconds, const std::function<bool()>& done = nullptr) {
+    const int cycles = static_cast<int>(std::round(seconds / 0.05));
+    for (int k = 0; k < cycles; ++k) {
+      t_ += 0.05;
+      if (feed_pose_) nav_.OnPose(pose_, t_);
+      if (feed_map_ && t_ - last_map_s_ >= 0.2 - 1e-9) {
+        nav_.OnMap(map_, t_);
+        last_map_s_ = t_;
+      }
+      const StepOutput out = nav_.Step(t_);
+      if (out.plan) {
+        ++plans_;
+        last_plan_ = planner_.Plan(*out.plan->map, out.plan->request);
+        nav_.OnPlanResult(out.plan->request_id, last_plan_, t_);
+      }
+      if (out.clear_short_term) ++clears_;
+      if (out.status_changed && (states_.empty() || states_.back() != nav_.status().state)) {
+        states_.push_back(nav_.status().state);
+        if (getenv("NAV_DEBUG")) printf("t=%.2f %s %s %s\n", t_, NavStateName(nav_.status().state), NavReasonName(nav_.status().reason), nav_.status().message.c_str());
+      }
+      if (out.command) {
+        const Velocity v = *out.command;
+        if (out.emergency_stop) {
+          ++emergency_stops_;
+          EXPECT_EQ(v.linear_mps, 0.0);
+          EXPECT_EQ(v.angular_radps, 0.0);
+        } else {
+          EXPECT_TRUE(nav_.limits().Allows(last_sent_, v, 0.05, 1e-9))
+              << "t=" << t_ << ": (" << last_sent_.linear_mps << ", " << last_sent_.angular_radps
+              << ") -> (" << v.linear_mps << ", " << v.angular_radps << ")";
+        }
+        last_sent_ = v;
+        ++commands_;
+        if (!stuck_) {
+          pose_.x_m += v.linear_mps * 0.05 * std::cos(pose_.yaw_rad);
+          pose_.y_m += v.linear_mps * 0.05 * std::sin(pose_.yaw_rad);
+          pose_.yaw_rad = common::WrapAngle(pose_.yaw_rad + v.angular_radps * 0.05);
+        }
+      }
+      if (check_collisions_) {
+        EXPECT_TRUE(map_->IsValid(pose_)) << "collision at t=" << t_;
+      }
+      if (getenv("NAV_DEBUG") && k % 20 == 0) {
+        printf("  t=%.1f pose (%.2f, %.2f, %.2f) cmd (%.2f, %.2f)\n", t_, pose_.x_m, pose_.y_m,
+               pose_.yaw_rad, last_sent_.linear_mps, last_sent_.angular_radps);
+      }
+      if (done && done()) return true;
+    }
+    return false;
+  }
+  bool RunUntilState(double seconds, NavState state) {
+    return Run(seconds, [&] { return nav_.status().state == state; });
+  }
+
+  std::shared_ptr<const CostMap> map_;
+  common::RobotProfile profile_;
+  Navigator nav_;
+  GlobalPlanner planner_;
+  Pose2 pose_{2.0, 2.0, 0.0};
+  double t_{0.0};
+  double last_map_s_{-1.0};
+  bool feed_pose_{true};
+  bool feed_map_{true};
+  bool stuck_{false};
+  bool check_collisions_{true};
+  Velocity last_sent_;
+  PlanResult last_plan_;
+  int plans_{0};
+  int clears_{0};
+  int commands_{0};
+  int emergency_stops_{0};
+  std::vector<NavState> states_;
+};
+
+// 20 m × 10 m, a wall across x = 10 with a gap at y in [6, 7.2].
+TestLayer WallWithGap() {
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 7.2, 10.2, 10.0, 100.0f);
+  return layer;
+}
+
+NavGoal PoseGoal(double x, double y, int64_t id = 1) {
+  NavGoal g;
+  g.id = id;
+  g.pose = {x, y, 0.0};
+  return g;
+}
+
+TEST(NavigatorTest, ReachesAGoalThroughTheGap) {
+  NavSim sim(WallWithGap().Build(PioneerFootprint()));
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kReached)) << sim.nav_.status().message;
+  EXPECT_LT((sim.pose_.position() - Vector2(18.0, 2.0)).norm(), 0.25 + 0.2);
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kSuccess);
+  EXPECT_DOUBLE_EQ(sim.nav_.status().progress, 1.0);
+  EXPECT_GT(sim.nav_.status().distance_travelled_m, 16.0);
+  EXPECT_EQ(sim.nav_.status().recoveries, 0);
+  // After the goal the robot brakes and the navigator falls silent.
+  sim.Run(5.0);
+  EXPECT_EQ(sim.last_sent_.linear_mps, 0.0);
+  const int commands = sim.commands_;
+  sim.Run(1.0);
+  EXPECT_EQ(sim.commands_, commands);
+}
+
+TEST(NavigatorTest, TurnsToTheGoalHeading) {
+  TestLayer open(100, 100, 0.1);
+  NavSim sim(open.Build(PioneerFootprint()));
+  NavGoal g = PoseGoal(6.0, 2.0);
+  g.pose.yaw_rad = M_PI / 2;
+  g.use_yaw = true;
+  g.yaw_tolerance_rad = 0.1;
+  sim.nav_.SetGoal(g, 0.0);
+  ASSERT_TRUE(sim.RunUntilState(60.0, NavState::kReached)) << sim.nav_.status().message;
+  EXPECT_NEAR(common::WrapAngle(sim.pose_.yaw_rad - M_PI / 2), 0.0, 0.1 + 0.05);
+}
+
+TEST(NavigatorTest, CancelStopsWithinTheLimits) {
+  NavSim sim(WallWithGap().Build(PioneerFootprint()));
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  sim.Run(4.0);
+  ASSERT_EQ(sim.nav_.status().state, NavState::kDriving);
+  ASSERT_GT(sim.last_sent_.linear_mps, 0.2);
+  sim.nav_.Cancel(sim.t_);
+  EXPECT_EQ(sim.nav_.status().state, NavState::kCancelled);
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kCancelled);
+  sim.Run(2.0);
+  EXPECT_EQ(sim.last_sent_.linear_mps, 0.0);
+  EXPECT_EQ(sim.emergency_stops_, 0);
+}
+
+TEST(NavigatorTest, StaleOdometryStopsAtOnceAndResumes) {
+  NavSim sim(WallWithGap().Build(PioneerFootprint()));
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  sim.Run(4.0);
+  ASSERT_GT(sim.last_sent_.linear_mps, 0.2);
+  // Odometry stops arriving: within 0.5 s (plus one cycle) the command is an immediate zero.
+  sim.feed_pose_ = false;
+  const double lost = sim.t_;
+  ASSERT_TRUE(sim.Run(1.0, [&] { return sim.emergency_stops_ > 0; }));
+  EXPECT_LE(sim.t_ - lost, 0.5 + 0.05 + 1e-9);
+  EXPECT_GT(sim.t_ - lost, 0.5 - 1e-9);
+  EXPECT_EQ(sim.nav_.status().state, NavState::kStopped);
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kStaleOdom);
+  EXPECT_EQ(sim.last_sent_.linear_mps, 0.0);
+  // Stopped commands keep coming while stale.
+  const int stops = sim.emergency_stops_;
+  sim.Run(1.0);
+  EXPECT_EQ(sim.emergency_stops_, stops + 20);
+  // Fresh odometry again: it resumes driving (accelerating from zero) and arrives.
+  sim.feed_pose_ = true;
+  ASSERT_TRUE(sim.RunUntilState(1.0, NavState::kDriving));
+  ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kReached)) << sim.nav_.status().message;
+}
+
+TEST(NavigatorTest, StaleOrMissingMapStops) {
+  NavSim sim(WallWithGap().Build(PioneerFootprint()));
+  sim.feed_map_ = false;
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  sim.Run(0.1);
+  EXPECT_EQ(sim.nav_.status().state, NavState::kStopped);
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kNoMap);
+  EXPECT_EQ(sim.plans_, 0);
+  sim.feed_map_ = true;
+  sim.Run(4.0);
+  EXPECT_EQ(sim.nav_.status().state, NavState::kDriving);
+  sim.feed_map_ = false;
+  ASSERT_TRUE(sim.RunUntilState(1.0, NavState::kStopped));
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kStaleMap);
+  EXPECT_NE(sim.nav_.status().message.find("cost layer"), std::string::npos);
+}
+
+TEST(NavigatorTest, UnknownPlaceFailsAtOnce) {
+  NavSim sim(WallWithGap().Build(PioneerFootprint()));
+  NavGoal g;
+  g.id = 9;
+  g.is_place = true;
+  g.place = "attic";
+  sim.nav_.SetGoal(g, 0.0);
+  EXPECT_EQ(sim.nav_.status().state, NavState::kFailed);
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kUnknownPlace);
+  EXPECT_EQ(sim.nav_.status().goal_id, 9);
+  sim.Run(1.0);
+  EXPECT_EQ(sim.plans_, 0);
+}
+
+TEST(NavigatorTest, DrivesToAPlace) {
+  std::vector<Place> places = {{"east", {{12.0, 0.0}, {20.0, 0.0}, {20.0, 10.0}, {12.0, 10.0}}}};
+  NavSim sim(WallWithGap().Build(PioneerFootprint()), {}, places);
+  NavGoal g;
+  g.is_place = true;
+  g.place = "east";
+  sim.nav_.SetGoal(g, 0.0);
+  ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kReached)) << sim.nav_.status().message;
+  // The place resolves to its middle (farthest from the map border and the wall).
+  EXPECT_NEAR(sim.pose_.x_m, 15.1, 0.6);
+  EXPECT_NEAR(sim.pose_.y_m, 5.0, 0.6);
+}
+
+TEST(NavigatorTest, ReplansWhenAnObstacleAppearsOnThePath) {
+  TestLayer open(200, 100, 0.1);
+  NavSim sim(open.Build(PioneerFootprint()));
+  sim.pose_ = {2.0, 5.0, 0.0};
+  sim.nav_.SetGoal(PoseGoal(18.0, 5.0), 0.0);
+  sim.Run(3.0);
+  ASSERT_EQ(sim.nav_.status().state, NavState::kDriving);
+  const int plans = sim.plans_;
+  // A crate appears across the straight route ahead.
+  open.Rect(9.0, 3.5, 10.0, 6.5, 100.0f);
+  sim.map_ = open.Build(PioneerFootprint());
+  ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kReached)) << sim.nav_.status().message;
+  EXPECT_GE(sim.nav_.status().replans, 1);
+  EXPECT_GT(sim.plans_, plans);
+}
+
+TEST(NavigatorTest, NoPathRunsEveryRecoveryThenFails) {
+  TestLayer closed = WallWithGap();
+  closed.Rect(9.8, 5.9, 10.2, 7.3, 100.0f);
+  NavSim sim(closed.Build(PioneerFootprint()));
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  ASSERT_TRUE(sim.RunUntilState(120.0, NavState::kFailed)) << sim.nav_.status().message;
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kNoPath);
+  EXPECT_EQ(sim.nav_.status().recoveries, 4);
+  EXPECT_EQ(sim.clears_, 1);
+  EXPECT_EQ(sim.plans_, 5);  // the first plan and one after each recovery
+  EXPECT_EQ(sim.last_plan_.status, PlanStatus::kNoPath);
+  // It never crossed towards the wall.
+  EXPECT_LT(sim.pose_.x_m, 9.0);
+  const auto recovering = std::count(sim.states_.begin(), sim.states_.end(), NavState::kRecovering);
+  EXPECT_EQ(recovering, 4);
+}
+
+TEST(NavigatorTest, NoProgressTriggersRecoveriesAndThenFails) {
+  NavigatorParams p;
+  p.progress_timeout_s = 3.0;
+  NavSim sim(WallWithGap().Build(PioneerFootprint()), p);
+  sim.stuck_ = true;  // the wheels spin, the robot does not move
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kFailed)) << sim.nav_.status().message;
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kRecoveryExhausted);
+  EXPECT_EQ(sim.nav_.status().recoveries, 4);
+}
+
+TEST(NavigatorTest, NewGoalReplacesTheOldOne) {
+  NavSim sim(WallWithGap().Build(PioneerFootprint()));
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0, 1), 0.0);
+  sim.Run(2.0);
+  sim.nav_.SetGoal(PoseGoal(4.0, 8.0, 2), sim.t_);
+  ASSERT_TRUE(sim.RunUntilState(100.0, NavState::kReached));
+  EXPECT_EQ(sim.nav_.status().goal_id, 2);
+  EXPECT_LT((sim.pose_.position() - Vector2(4.0, 8.0)).norm(), 0.5);
+}
+
+TEST(NavigatorTest, ReasonsMapOneToOneOntoPlanStatus) {
+  std::set<int> seen;
+  for (const PlanStatus s : {PlanStatus::kSuccess, PlanStatus::kStartOccupied, PlanStatus::kGoalOccupied,
+                             PlanStatus::kOutOfBounds, PlanStatus::kNoPath, PlanStatus::kTimedOut,
+                             PlanStatus::kCancelled, PlanStatus::kApproximate}) {
+    const NavReason r = ReasonOf(s);
+    EXPECT_STREQ(NavReasonName(r), PlanStatusName(s));
+    seen.insert(static_cast<int>(r));
+  }
+  EXPECT_EQ(seen.size(), 8u);
+}
+
+TEST(NavigatorTest, NoCommandExceedsTheLimitsInRandomSituations) {
+  // Property: over many seeded random worlds, goals, stale-input episodes, cancels and new
+  // goals, every command but the safety stop is reachable from the previous one within the
+  // profile's limits (checked inside NavSim::Run for every command).
+  std::mt19937 rng(99);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int reached = 0;
+  for (int world = 0; world < 12; ++world) {
+    TestLayer layer(120, 120, 0.1);
+    for (int k = 0; k < 8; ++k) {
+      const double x = 2.0 + u(rng) * 9.0, y = 2.0 + u(rng) * 9.0;
+      layer.Rect(x, y, x + 0.3 + u(rng) * 1.5, y + 0.3 + u(rng) * 1.5, k % 3 ? 100.0f : 60.0f);
+    }
+    layer.Rect(0.0, 0.0, 1.2, 1.2, 0.0f);
+    NavSim sim(layer.Build(PioneerFootprint()), {}, {}, 1 + world);
+    sim.pose_ = {0.6, 0.6, u(rng) * 2 * M_PI};
+    sim.check_collisions_ = false;  // random goals may sit in graded or tight spots
+    sim.nav_.SetGoal(PoseGoal(1.0 + u(rng) * 10.0, 1.0 + u(rng) * 10.0), 0.0);
+    for (int episode = 0; episode < 6; ++episode) {
+      sim.Run(2.0 + u(rng) * 4.0);
+      const double r = u(rng);
+      if (r < 0.2) {
+        sim.feed_pose_ = false;
+        sim.Run(0.3 + u(rng));
+        sim.feed_pose_ = true;
+      } else if (r < 0.35) {
+        sim.feed_map_ = false;
+        sim.Run(0.3 + u(rng));
+        sim.feed_map_ = true;
+      } else if (r < 0.45) {
+        sim.nav_.Cancel(sim.t_);
+      } else if (r < 0.6) {
+        sim.nav_.SetGoal(PoseGoal(1.0 + u(rng) * 10.0, 1.0 + u(rng) * 10.0, episode + 2), sim.t_);
+      }
+    }
+    reached += sim.RunUntilState(60.0, NavState::kReached);
+  }
+  EXPECT_GT(reached, 0);
+}
+
+}  // namespace
+}  // namespace cairn::planner

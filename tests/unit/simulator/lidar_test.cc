@@ -1,0 +1,235 @@
+#include <cmath>
+#include <map>
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "simulator/mujoco_sim.h"
+#include "simulator/sensors.h"
+#include "tests/unit/simulator/sim_test_util.h"
+
+namespace cairn::sim {
+namespace {
+
+using testing::FlatWorld;
+using testing::InlineScenario;
+using testing::SimTest;
+
+constexpr double kDeg = M_PI / 180.0;
+
+TEST(LidarLayoutTest, RingAnglesAreExact) {
+  const LidarParams p;  // HDL-32E defaults
+  ASSERT_EQ(p.rings, 32);
+  EXPECT_DOUBLE_EQ(LidarRingElevationRad(p, 0), -30.67 * kDeg);
+  EXPECT_DOUBLE_EQ(LidarRingElevationRad(p, 31), 10.67 * kDeg);
+  const double step_deg = (10.67 + 30.67) / 31.0;  // 1.3335 deg between rings
+  for (int r = 0; r < 32; ++r) {
+    EXPECT_NEAR(LidarRingElevationRad(p, r), (-30.67 + r * step_deg) * kDeg, 1e-12) << r;
+  }
+  // Every ray of the pattern carries exactly its ring's elevation, and each (ring, step) pair
+  // appears once.
+  const LidarPattern pattern = BuildLidarPattern(p);
+  ASSERT_EQ(pattern.rays.directions.size(), 32u * 1800u);
+  std::vector<int> seen(32 * 1800, 0);
+  for (size_t i = 0; i < pattern.rays.directions.size(); ++i) {
+    const Eigen::Vector3d& d = pattern.rays.directions[i];
+    const int r = pattern.ring[i];
+    ASSERT_NEAR(d.norm(), 1.0, 1e-12);
+    ASSERT_NEAR(std::asin(d.z()), LidarRingElevationRad(p, r), 1e-12) << "ray " << i;
+    ++seen[pattern.azimuth_step[i] * 32 + r];
+  }
+  for (int count : seen) ASSERT_EQ(count, 1);
+}
+
+TEST(LidarLayoutTest, AzimuthStepsAreExact) {
+  const LidarParams p;
+  ASSERT_EQ(p.azimuth_steps, 1800);
+  EXPECT_DOUBLE_EQ(LidarAzimuthRad(p, 1), 0.2 * kDeg);
+  EXPECT_DOUBLE_EQ(LidarAzimuthRad(p, 900), M_PI);
+  EXPECT_DOUBLE_EQ(LidarAzimuthRad(p, 1800), 2.0 * M_PI);
+  const LidarPattern pattern = BuildLidarPattern(p);
+  for (size_t i = 0; i < pattern.rays.directions.size(); ++i) {
+    const Eigen::Vector3d& d = pattern.rays.directions[i];
+    double az = std::atan2(d.y(), d.x());
+    if (az < -1e-12) az += 2.0 * M_PI;
+    ASSERT_NEAR(az, pattern.azimuth_step[i] * 0.2 * kDeg, 1e-11) << "ray " << i;
+  }
+}
+
+TEST(LidarLayoutTest, SlicesCoverTheTurnOnce) {
+  for (int slices : {18, 20, 7}) {
+    LidarParams p;
+    p.slices_per_revolution = slices;
+    std::vector<int> owner(p.azimuth_steps, -1);
+    for (int s = 0; s < slices; ++s) {
+      for (int k = LidarSliceBegin(p, s); k < LidarSliceBegin(p, s + 1); ++k) {
+        ASSERT_EQ(owner[k], -1) << "step " << k << " in two slices";
+        owner[k] = s;
+      }
+    }
+    for (int k = 0; k < p.azimuth_steps; ++k) ASSERT_GE(owner[k], 0) << "step " << k;
+    EXPECT_EQ(LidarSliceBegin(p, 0), 0);
+    EXPECT_EQ(LidarSliceBegin(p, slices), p.azimuth_steps);
+    // Slices own contiguous rays; every ray of a slice (and of each of its groups) has an
+    // azimuth step of that slice.
+    const LidarPattern pattern = BuildLidarPattern(p);
+    ASSERT_EQ(pattern.slice_ray_begin.size(), static_cast<size_t>(slices + 1));
+    ASSERT_EQ(pattern.slice_group_begin.size(), static_cast<size_t>(slices + 1));
+    for (int s = 0; s < slices; ++s) {
+      for (int i = pattern.slice_ray_begin[s]; i < pattern.slice_ray_begin[s + 1]; ++i) {
+        ASSERT_EQ(owner[pattern.azimuth_step[i]], s);
+      }
+      const auto& groups = pattern.rays.groups;
+      EXPECT_EQ(groups[pattern.slice_group_begin[s]].begin, pattern.slice_ray_begin[s]);
+      EXPECT_EQ(groups[pattern.slice_group_begin[s + 1] - 1].end, pattern.slice_ray_begin[s + 1]);
+    }
+  }
+}
+
+TEST(LidarLayoutTest, DefaultSliceFitsOneDatagramFriendlyMessage) {
+  const LidarParams p;
+  EXPECT_NO_THROW(p.Validate());
+  const int points = (p.azimuth_steps / p.slices_per_revolution) * p.rings;
+  EXPECT_LE(points * 17, 64 * 1024);
+  LidarParams too_big = p;
+  too_big.slices_per_revolution = 4;
+  EXPECT_THROW(too_big.Validate(), std::invalid_argument);
+}
+
+class LidarSimTest : public SimTest {};
+
+// A closed box room so every lidar ray returns.
+std::string RoomWorld() {
+  return FlatWorld(R"(
+    <geom name="wall_east" type="box" size="0.1 6 2" pos="5.1 0 2"/>
+    <geom name="wall_west" type="box" size="0.1 6 2" pos="-6.1 0 2"/>
+    <geom name="wall_north" type="box" size="6 0.1 2" pos="0 6.1 2"/>
+    <geom name="wall_south" type="box" size="6 0.1 2" pos="0 -6.1 2"/>)");
+}
+
+TEST_F(LidarSimTest, OneRevolutionIsSlicesCoveringTheTurnOnce) {
+  Scenario s = InlineScenario(RoomWorld(), "p3at", "pioneer3at");
+  MujocoSim sim(s);
+  SimOutputs out;
+  // Slices of revolution 0 fall due over the first 0.1 s.
+  while (sim.time_s() < 0.1 + 1e-9) sim.Step(&out);
+  std::map<int, const common::LidarSlice*> by_index;
+  for (const auto& slice : out.lidar) {
+    if (slice.revolution == 0) {
+      EXPECT_TRUE(by_index.emplace(slice.slice_index, &slice).second) << slice.slice_index;
+    }
+  }
+  ASSERT_EQ(by_index.size(), 20u);
+  double expected_start = 0.0;
+  size_t points = 0;
+  for (const auto& [index, slice] : by_index) {
+    EXPECT_EQ(slice->slice_count, 20);
+    EXPECT_NEAR(slice->azimuth_start_rad, expected_start, 1e-12);
+    EXPECT_NEAR(slice->azimuth_end_rad - slice->azimuth_start_rad, 2.0 * M_PI / 20, 1e-12);
+    expected_start = slice->azimuth_end_rad;
+    for (const auto& pt : slice->points) {
+      double az = std::atan2(pt.y_m, pt.x_m);
+      if (az < 0) az += 2.0 * M_PI;
+      // Points lie within their slice (float rounding aside).
+      EXPECT_GE(az, slice->azimuth_start_rad - 1e-5);
+      EXPECT_LT(az, slice->azimuth_end_rad + 1e-5);
+      EXPECT_GE(pt.ring, 0);
+      EXPECT_LT(pt.ring, 32);
+    }
+    points += slice->points.size();
+  }
+  EXPECT_NEAR(expected_start, 2.0 * M_PI, 1e-12);
+  // In a closed room every ray returns (no point is closer than the minimum range).
+  EXPECT_EQ(points, 32u * 1800u);
+  // Slices are stamped with their own time, 5 ms apart.
+  EXPECT_LT(by_index.at(0)->utime, by_index.at(19)->utime);
+}
+
+TEST_F(LidarSimTest, WallAtKnownDistanceReadsWithinNoise) {
+  // Wall face at x = 5.0; the robot at the origin facing it.
+  Scenario s = InlineScenario(RoomWorld(), "p3at", "pioneer3at");
+  MujocoSim sim(s);
+  SimOutputs out;
+  while (sim.time_s() < 0.3) sim.Step(&out);
+  const double sigma = s.robots[0].sensors.lidar->range_noise_sigma_m;
+  ASSERT_GT(sigma, 0.0);
+
+  // Ring 23 is level (+0.0016 deg): its beams towards azimuth ~0 hit the wall face.
+  int n = 0;
+  double sum_error = 0.0;
+  for (const auto& slice : out.lidar) {
+    if (slice.slice_index != 0 && slice.slice_index != 19) continue;
+    const common::Pose3& sensor = slice.sensor_pose;
+    const double distance_to_wall = 5.0 - sensor.position_m.x();
+    for (const auto& pt : slice.points) {
+      if (pt.ring != 23) continue;
+      const double az = std::atan2(pt.y_m, pt.x_m);
+      if (std::abs(az) > 10.0 * kDeg) continue;
+      const double range = std::sqrt(pt.x_m * pt.x_m + pt.y_m * pt.y_m + pt.z_m * pt.z_m);
+      const double expected =
+          distance_to_wall / (std::cos(az) * std::cos(std::asin(pt.z_m / range)));
+      const double error = range - expected;
+      EXPECT_LT(std::abs(error), 5.0 * sigma) << "azimuth " << az;
+      sum_error += error;
+      ++n;
+    }
+  }
+  ASSERT_GT(n, 100);
+  // The mean error shrinks with sqrt(n): unbiased within 4 standard errors.
+  EXPECT_LT(std::abs(sum_error / n), 4.0 * sigma / std::sqrt(n));
+
+  // The planar laser's centre beam also reads the wall within its noise.
+  ASSERT_FALSE(out.scans.empty());
+  const common::LaserScan& scan = out.scans.back();
+  const int centre = static_cast<int>(scan.ranges_m.size() / 2);
+  EXPECT_NEAR(scan.angle_min_rad + centre * scan.angle_increment_rad, 0.0, 1e-6);
+  const double laser_sigma = s.robots[0].sensors.planar_laser->range_noise_sigma_m;
+  EXPECT_NEAR(scan.ranges_m[centre], 5.0 - scan.sensor_pose.position_m.x(), 5.0 * laser_sigma);
+}
+
+TEST_F(LidarSimTest, NoiseFreeLidarIsExact) {
+  Scenario s = InlineScenario(RoomWorld(), "p3at", "pioneer3at");
+  s.robots[0].sensors.lidar->range_noise_sigma_m = 0.0;
+  MujocoSim sim(s);
+  SimOutputs out;
+  while (sim.time_s() < 0.01) sim.Step(&out);
+  ASSERT_FALSE(out.lidar.empty());
+  const auto& slice = out.lidar.front();
+  ASSERT_EQ(slice.slice_index, 0);
+  const double distance_to_wall = 5.0 - slice.sensor_pose.position_m.x();
+  bool found = false;
+  for (const auto& pt : slice.points) {
+    if (pt.ring == 23 && std::abs(pt.y_m) < 1e-6) {
+      // Azimuth 0, elevation 0.0016 deg: range = d / cos(el).
+      EXPECT_NEAR(pt.x_m, distance_to_wall, 1e-5);
+      found = true;
+    }
+  }
+  EXPECT_TRUE(found);
+}
+
+TEST_F(LidarSimTest, RobotDoesNotSeeItselfButSeesOthers) {
+  Scenario s = InlineScenario(FlatWorld(), "a", "pioneer3at");
+  SpawnPose other;
+  other.x_m = 3.0;
+  s.robots.push_back(MakeRobotSpec("b", "pioneer3at", "", other, SimPaths::Default()));
+  s.robots[0].sensors.lidar->range_noise_sigma_m = 0.0;
+  MujocoSim sim(s);
+  SimOutputs out;
+  while (sim.time_s() < 0.1 + 1e-9) sim.Step(&out);
+  size_t near_points = 0, toward_b = 0;
+  for (const auto& slice : out.lidar) {
+    if (slice.robot != "a") continue;
+    for (const auto& pt : slice.points) {
+      const double r = std::hypot(pt.x_m, pt.y_m);
+      if (r < 0.35 && pt.z_m > -0.2) ++near_points;  // would be robot a's own body
+      if (std::abs(std::atan2(pt.y_m, pt.x_m)) < 2 * kDeg && r > 2.5 && r < 3.0 && pt.z_m > -0.3)
+        ++toward_b;
+    }
+  }
+  EXPECT_EQ(near_points, 0u);
+  EXPECT_GT(toward_b, 5u);
+}
+
+}  // namespace
+}  // namespace cairn::sim

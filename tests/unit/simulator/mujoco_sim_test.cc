@@ -1,0 +1,308 @@
+#include "simulator/mujoco_sim.h"
+
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/simulator/sim_test_util.h"
+
+namespace cairn::sim {
+namespace {
+
+using testing::FlatWorld;
+using testing::InlineScenario;
+using testing::SimTest;
+
+constexpr double kDeg = M_PI / 180.0;
+
+// Drives `robot` with (v, w) for `duration_s` of sim time, commanding every step.
+void Drive(MujocoSim& sim, const std::string& robot, double v, double w, double duration_s,
+           SimOutputs* out) {
+  const double end = sim.time_s() + duration_s;
+  while (sim.time_s() < end) {
+    sim.Command(robot, v, w);
+    sim.Step(out);
+  }
+}
+
+// A solid ramp of `slope_deg` from x = 2 rising to a platform `height_m` high that ends at x_end.
+std::string RampWorld(double slope_deg, double height_m, double x_end) {
+  const double a = slope_deg * kDeg;
+  const double length = height_m / std::tan(a);
+  const double half_thick = height_m / 2.0 / std::cos(a) + 0.1;
+  const double cx = 2.0 + length / 2.0 + std::sin(a) * half_thick;
+  const double cz = height_m / 2.0 - std::cos(a) * half_thick;
+  const double platform_half = (x_end - (2.0 + length)) / 2.0;
+  char xml[512];
+  std::snprintf(xml, sizeof(xml),
+                R"(<geom type="box" size="%f 2 %f" pos="%f 0 %f" euler="0 %f 0"/>
+                   <geom type="box" size="%f 2 %f" pos="%f 0 %f"/>)",
+                length / 2.0 / std::cos(a), half_thick, cx, cz, -slope_deg, platform_half,
+                height_m / 2.0, 2.0 + length + platform_half, height_m / 2.0);
+  return FlatWorld(xml);
+}
+
+class PhysicsTest : public SimTest {};
+
+TEST_F(PhysicsTest, Pioneer3AtClimbsFiveAndTenDegreeRamps) {
+  for (double slope : {5.0, 10.0}) {
+    Scenario s = InlineScenario(RampWorld(slope, 0.3, 12.0), "p3at", "pioneer3at");
+    s.robots[0].sensors = SensorSet{};
+    MujocoSim sim(s);
+    SimOutputs out;
+    Drive(sim, "p3at", 0.4, 0.0, 30.0, &out);
+    const common::Pose3 pose = sim.RobotPose("p3at");
+    // On the platform: base at platform height + wheel radius.
+    EXPECT_GT(pose.position_m.x(), 2.0 + 0.3 / std::tan(slope * kDeg) + 0.5) << slope;
+    EXPECT_NEAR(pose.position_m.z(), 0.3 + 0.1075, 0.02) << slope;
+  }
+}
+
+TEST_F(PhysicsTest, Pioneer3AtCannotMountTwentyCentimetreStepButRollsOverOneCentimetre) {
+  for (double step : {0.2, 0.01}) {
+    char box[128];
+    std::snprintf(box, sizeof(box), R"(<geom type="box" size="2 2 %f" pos="4 0 %f"/>)", step / 2,
+                  step / 2);
+    Scenario s = InlineScenario(FlatWorld(box), "p3at", "pioneer3at");
+    s.robots[0].sensors = SensorSet{};
+    MujocoSim sim(s);
+    SimOutputs out;
+    Drive(sim, "p3at", 0.5, 0.0, 12.0, &out);
+    const common::Pose3 pose = sim.RobotPose("p3at");
+    if (step > 0.1) {
+      EXPECT_LT(pose.position_m.x(), 2.0) << "climbed the 20 cm step";
+      EXPECT_LT(pose.position_m.z(), 0.15);
+    } else {
+      EXPECT_GT(pose.position_m.x(), 3.0) << "stuck at the 1 cm step";
+      EXPECT_NEAR(pose.position_m.z(), 0.01 + 0.1075, 0.01);
+    }
+  }
+}
+
+TEST_F(PhysicsTest, Pioneer3AtFallsOffADrop) {
+  // A 0.2 m platform ending at x = 3; the robot starts on it.
+  Scenario s = InlineScenario(FlatWorld(R"(<geom type="box" size="3 2 0.1" pos="0 0 0.1"/>)"),
+                              "p3at", "pioneer3at");
+  s.robots[0].sensors = SensorSet{};
+  MujocoSim sim(s);
+  SimOutputs out;
+  EXPECT_NEAR(sim.RobotPose("p3at").position_m.z(), 0.2 + 0.1075, 0.01);
+  // Driving off the edge it pitches nose-down and tips over the 20 cm drop.
+  double max_nose_down_rad = 0.0;
+  const double end = sim.time_s() + 10.0;
+  while (sim.time_s() < end) {
+    sim.Command("p3at", 0.5, 0.0);
+    sim.Step(&out);
+    max_nose_down_rad = std::max(max_nose_down_rad, -sim.RobotPose("p3at").pitch_rad());
+  }
+  EXPECT_GT(sim.RobotPose("p3at").position_m.x(), 3.0);
+  EXPECT_LT(sim.RobotPose("p3at").position_m.z(), 0.2 + 0.1075 - 0.05);
+  EXPECT_GT(max_nose_down_rad, 30.0 * kDeg);
+}
+
+TEST_F(PhysicsTest, CommandedVelocitiesAreMetOnFlatGround) {
+  for (const char* model : {"pioneer3at", "p3dx", "kobuki"}) {
+    Scenario s = InlineScenario(FlatWorld(), "r", model);
+    s.robots[0].sensors = SensorSet{};
+    MujocoSim sim(s);
+    SimOutputs out;
+    Drive(sim, "r", 0.3, 0.3, 3.0, &out);
+    EXPECT_NEAR(sim.RobotVelocity("r").norm(), 0.3, 0.02) << model;
+    const double yaw0 = sim.RobotPose("r").yaw_rad();
+    Drive(sim, "r", 0.3, 0.3, 1.0, &out);
+    EXPECT_NEAR(common::WrapAngle(sim.RobotPose("r").yaw_rad() - yaw0), 0.3, 0.03) << model;
+  }
+}
+
+class OdometryTest : public SimTest {};
+
+TEST_F(OdometryTest, DriftIsZeroWithNoiseOff) {
+  // Differential drives roll without slipping: with no slip noise, odometry follows the true
+  // path of a 3 m S-curve to within a centimetre and a degree.
+  for (const char* model : {"p3dx", "kobuki"}) {
+    Scenario s = InlineScenario(FlatWorld(), "r", model, 1.0, -2.0, 0.5);
+    ASSERT_TRUE(s.robots[0].sensors.odometry.has_value());
+    ASSERT_EQ(s.robots[0].sensors.odometry->slip_noise_ratio, 0.0);
+    MujocoSim sim(s);
+    SimOutputs out;
+    Drive(sim, "r", 0.3, 0.3, 5.0, &out);
+    Drive(sim, "r", 0.3, -0.3, 5.0, &out);
+    const common::Pose3 truth = sim.RobotPose("r");
+    const common::Pose2 odom = sim.OdometryPose("r");
+    EXPECT_NEAR(odom.x_m, truth.position_m.x(), 0.01) << model;
+    EXPECT_NEAR(odom.y_m, truth.position_m.y(), 0.01) << model;
+    EXPECT_NEAR(common::WrapAngle(odom.yaw_rad - truth.yaw_rad()), 0.0, 1.0 * kDeg) << model;
+    // The published readings carry the same estimate.
+    ASSERT_FALSE(out.odometry.empty());
+    EXPECT_NEAR(out.odometry.back().pose.position_m.x(), odom.x_m, 0.01);
+  }
+}
+
+TEST_F(OdometryTest, SlipNoiseMakesItDrift) {
+  Scenario s = InlineScenario(FlatWorld(), "r", "p3dx");
+  s.robots[0].sensors.odometry->slip_noise_ratio = 0.2;
+  MujocoSim sim(s);
+  SimOutputs out;
+  Drive(sim, "r", 0.3, 0.0, 10.0, &out);
+  const common::Pose3 truth = sim.RobotPose("r");
+  const common::Pose2 odom = sim.OdometryPose("r");
+  const double error =
+      std::hypot(odom.x_m - truth.position_m.x(), odom.y_m - truth.position_m.y()) +
+      std::abs(common::WrapAngle(odom.yaw_rad - truth.yaw_rad()));
+  EXPECT_GT(error, 0.02);
+}
+
+class DriveSimTest : public SimTest {};
+
+TEST_F(DriveSimTest, WatchdogStopsARobotThatIsNoLongerCommanded) {
+  Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
+  s.robots[0].sensors = SensorSet{};
+  MujocoSim sim(s);
+  SimOutputs out;
+  Drive(sim, "r", 0.5, 0.0, 2.0, &out);
+  EXPECT_NEAR(sim.RobotVelocity("r").x(), 0.5, 0.03);
+  // Commands stop: for 0.5 s the robot keeps going...
+  while (sim.time_s() < 2.45) sim.Step(&out);
+  EXPECT_NEAR(sim.RobotVelocity("r").x(), 0.5, 0.03);
+  EXPECT_TRUE(out.events.empty());
+  // ... then the watchdog stops it (within its deceleration limit).
+  while (sim.time_s() < 4.0) sim.Step(&out);
+  EXPECT_LT(sim.RobotVelocity("r").norm(), 0.01);
+  EXPECT_TRUE(sim.drive("r").watchdog_active());
+  ASSERT_EQ(out.events.size(), 1u);
+  EXPECT_NE(out.events[0].find("watchdog"), std::string::npos);
+}
+
+TEST_F(DriveSimTest, NanCommandsAreDroppedAndOverLimitCommandsClamped) {
+  Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
+  s.robots[0].sensors = SensorSet{};
+  MujocoSim sim(s);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(sim.Command("r", nan, 0.0), CommandVerdict::kDropped);
+  EXPECT_EQ(sim.Command("r", 0.2, std::numeric_limits<double>::infinity()),
+            CommandVerdict::kDropped);
+  SimOutputs out;
+  for (int i = 0; i < 200; ++i) {
+    sim.Command("r", nan, nan);
+    sim.Step(&out);
+  }
+  EXPECT_LT(sim.RobotVelocity("r").norm(), 1e-3);  // never moved
+  EXPECT_EQ(sim.Command("r", 5.0, 0.0), CommandVerdict::kClamped);
+  EXPECT_EQ(sim.drive("r").target_linear_mps(), 0.5);  // pioneer3at profile limit
+  EXPECT_THROW(sim.Command("nobody", 0.1, 0.0), std::invalid_argument);
+}
+
+TEST_F(DriveSimTest, ResetPutsTheRobotAtRestAndRestartsOdometry) {
+  Scenario s = InlineScenario(FlatWorld(), "r", "p3dx");
+  MujocoSim sim(s);
+  SimOutputs out;
+  Drive(sim, "r", 0.3, 0.2, 2.0, &out);
+  ASSERT_TRUE(sim.ResetRobot("r", 4.0, -3.0, 1.0).ok());
+  EXPECT_NEAR(sim.RobotPose("r").position_m.x(), 4.0, 1e-9);
+  EXPECT_NEAR(sim.RobotPose("r").yaw_rad(), 1.0, 1e-9);
+  EXPECT_NEAR(sim.OdometryPose("r").x_m, 4.0, 1e-9);
+  while (sim.time_s() < 3.0) sim.Step(&out);
+  EXPECT_NEAR(sim.RobotPose("r").position_m.x(), 4.0, 0.01);
+  EXPECT_NEAR(sim.RobotPose("r").position_m.z(), 0.0975, 0.005);
+  EXPECT_EQ(sim.ResetRobot("nobody", 0, 0, 0).code(), common::StatusCode::kNotFound);
+  EXPECT_EQ(sim.ResetRobot("r", std::nan(""), 0, 0).code(), common::StatusCode::kInvalidArgument);
+}
+
+class SensorRatesTest : public SimTest {};
+
+TEST_F(SensorRatesTest, EverySensorAtItsRate) {
+  Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
+  s.robots[0].sensors.turret = TurretParams{};
+  MujocoSim sim(s);
+  SimOutputs out;
+  while (sim.time_s() < 2.0 - 1e-9) sim.Step(&out);
+  EXPECT_EQ(out.lidar.size(), 2u * 10u * 20u);  // 10 Hz x 20 slices for 2 s
+  EXPECT_EQ(out.scans.size(), 20u);
+  EXPECT_EQ(out.turret_lines.size(), 100u);
+  EXPECT_EQ(out.odometry.size(), 100u);
+  EXPECT_EQ(out.poses.size(), 100u);
+  EXPECT_EQ(out.imu.size(), 200u);
+  // Readings carry sim time.
+  EXPECT_EQ(out.poses.back().utime, sim.utime());
+  EXPECT_EQ(out.poses.front().utime, 20000);
+}
+
+TEST_F(SensorRatesTest, ImuReadsGravityAtRest) {
+  Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
+  MujocoSim sim(s);
+  SimOutputs out;
+  while (sim.time_s() < 1.0) sim.Step(&out);
+  ASSERT_FALSE(out.imu.empty());
+  const ImuReading& imu = out.imu.back();
+  EXPECT_NEAR(imu.linear_acceleration_mps2.z(), 9.81, 0.1);
+  EXPECT_NEAR(imu.angular_velocity_radps.norm(), 0.0, 0.02);
+  EXPECT_NEAR(imu.orientation.angularDistance(common::Quaternion::Identity()), 0.0, 0.02);
+}
+
+TEST_F(SensorRatesTest, TurretSweepsThePanRange) {
+  Scenario s = InlineScenario(FlatWorld(R"(<geom type="box" size="0.1 3 2" pos="4 0 2"/>)"), "r",
+                              "pioneer3at");
+  s.robots[0].sensors = SensorSet{};
+  TurretParams turret;
+  turret.range_noise_sigma_m = 0.0;
+  s.robots[0].sensors.turret = turret;
+  MujocoSim sim(s);
+  SimOutputs out;
+  while (sim.time_s() < 7.3) sim.Step(&out);  // 360 lines at 50 Hz
+  ASSERT_GE(out.turret_lines.size(), 360u);
+  EXPECT_NEAR(out.turret_lines[0].pan_rad, 0.0, 1e-12);
+  EXPECT_NEAR(out.turret_lines[1].pan_rad, 0.5 * kDeg, 1e-12);
+  EXPECT_NEAR(out.turret_lines[359].pan_rad, 179.5 * kDeg, 1e-9);
+  EXPECT_NEAR(out.turret_lines[360].pan_rad, 0.0, 1e-12);  // next sweep
+  // At pan 0 the beam at +90 deg points along the turret's x axis, at the wall 4 m ahead.
+  const common::LaserScan& scan = out.turret_lines[0].scan;
+  const int beam =
+      static_cast<int>(std::lround((M_PI / 2 - scan.angle_min_rad) / scan.angle_increment_rad));
+  const common::Vector3 end = scan.sensor_pose.Transform(
+      common::Vector3(std::cos(scan.angle_min_rad + beam * scan.angle_increment_rad),
+                      std::sin(scan.angle_min_rad + beam * scan.angle_increment_rad), 0.0) *
+      scan.ranges_m[beam]);
+  EXPECT_NEAR(end.x(), 3.9, 1e-3);
+}
+
+class DeterminismTest : public SimTest {};
+
+TEST_F(DeterminismTest, SameSeedSameRunDifferentSeedDifferentNoise) {
+  auto run = [](uint64_t seed) {
+    Scenario s = InlineScenario(FlatWorld(R"(<geom type="box" size="0.5 0.5 0.5" pos="3 1 0.5"/>)"),
+                                "r", "pioneer3at");
+    s.seed = seed;
+    s.robots[0].sensors.odometry->slip_noise_ratio = 0.05;
+    s.robots[0].commands = {{0.0, 2.0, 0.4, 0.3}, {2.0, 1.0, 0.2, -0.5}};
+    MujocoSim sim(s);
+    SimOutputs out;
+    while (sim.time_s() < 3.0) sim.Step(&out);
+    return out;
+  };
+  const SimOutputs a = run(11), b = run(11), c = run(12);
+  ASSERT_EQ(a.poses.size(), b.poses.size());
+  for (size_t i = 0; i < a.poses.size(); ++i) {
+    ASSERT_EQ(a.poses[i].pose.position_m, b.poses[i].pose.position_m) << i;
+    ASSERT_EQ(a.poses[i].pose.orientation.coeffs(), b.poses[i].pose.orientation.coeffs()) << i;
+  }
+  EXPECT_GT(a.poses.back().pose.position_m.norm(), 0.5);  // it did move
+  ASSERT_EQ(a.lidar.size(), b.lidar.size());
+  bool lidar_differs_with_seed = false;
+  for (size_t i = 0; i < a.lidar.size(); ++i) {
+    ASSERT_EQ(a.lidar[i].points.size(), b.lidar[i].points.size());
+    for (size_t k = 0; k < a.lidar[i].points.size(); ++k) {
+      ASSERT_EQ(a.lidar[i].points[k].x_m, b.lidar[i].points[k].x_m);
+      ASSERT_EQ(a.lidar[i].points[k].z_m, b.lidar[i].points[k].z_m);
+    }
+    if (!c.lidar[i].points.empty() && !a.lidar[i].points.empty() &&
+        c.lidar[i].points[0].x_m != a.lidar[i].points[0].x_m) {
+      lidar_differs_with_seed = true;
+    }
+  }
+  EXPECT_TRUE(lidar_differs_with_seed);
+  EXPECT_NE(a.odometry.back().pose.position_m, c.odometry.back().pose.position_m);
+}
+
+}  // namespace
+}  // namespace cairn::sim

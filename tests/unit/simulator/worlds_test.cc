@@ -1,0 +1,173 @@
+// The shipped worlds: they load with robots, and their geometry matches what README.md and
+// tunnel_lanes.yaml promise (the contract the mapper, navigator and demo tests rely on).
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "common/yaml_reader.h"
+#include "simulator/mujoco_sim.h"
+#include "simulator/places.h"
+#include "tests/unit/simulator/sim_test_util.h"
+
+namespace cairn::sim {
+namespace {
+
+using testing::SimTest;
+
+// Height of the surface below (x, y) as the sensors see it, and the geom there.
+double SurfaceZ(const MujocoSim& sim, double x, double y, int* geom = nullptr) {
+  static const mjtByte kGroups[mjNGROUP] = {1, 1, 1, 0, 0, 0};
+  const double p[3] = {x, y, 20.0}, v[3] = {0, 0, -1};
+  int g = -1;
+  const double d = mj_ray(sim.model(), sim.data(), p, v, kGroups, 1, -1, &g);
+  if (geom) *geom = g;
+  return d >= 0 ? 20.0 - d : -1e9;
+}
+
+Scenario WorldOnly(const std::string& world) {
+  const SimPaths paths = SimPaths::Default();
+  Scenario s;
+  s.world = world;
+  s.world_path = paths.WorldPath(world);
+  return s;
+}
+
+class WorldsTest : public SimTest {};
+
+TEST_F(WorldsTest, EveryShippedWorldHostsEveryRobot) {
+  const SimPaths paths = SimPaths::Default();
+  for (const std::string& world : paths.ShippedWorlds()) {
+    Scenario s = WorldOnly(world);
+    SpawnPose at;
+    // Free floor in each world (the apartment's living room, the arena's hall).
+    at.x_m = world == "tunnel" ? 4.0 : world == "apartment" ? 1.5 : world == "arena" ? 5.0 : 0.0;
+    at.y_m = world == "tunnel" ? 6.0 : world == "apartment" ? 3.0 : world == "arena" ? 3.0 : 0.0;
+    int k = 0;
+    for (const std::string& model : paths.ShippedRobots()) {
+      SpawnPose p = at;
+      p.x_m += 1.0 * k++;
+      s.robots.push_back(MakeRobotSpec(model + "_1", model, "", p, paths));
+    }
+    SCOPED_TRACE(world);
+    MujocoSim sim(s);
+    SimOutputs out;
+    while (sim.time_s() < 0.5) sim.Step(&out);
+    for (const std::string& id : sim.robot_ids()) {
+      // Resting on the floor, upright.
+      EXPECT_LT(sim.RobotVelocity(id).norm(), 0.05) << id;
+      EXPECT_GT(sim.RobotPose(id).orientation.toRotationMatrix()(2, 2), 0.98) << id;
+    }
+  }
+}
+
+TEST_F(WorldsTest, TunnelLanesMatchTheirContract) {
+  Scenario s = WorldOnly("tunnel");
+  MujocoSim sim(s);
+  common::YamlMap doc =
+      common::YamlMap::LoadFile(SimPaths::Default().data_dir + "/worlds/tunnel_lanes.yaml");
+  YAML::Node lanes = doc.Raw("lanes");
+  ASSERT_EQ(lanes.size(), 10u);
+  for (const auto& lane : lanes) {
+    const std::string name = lane["name"].as<std::string>();
+    SCOPED_TRACE(name);
+    const double sx = lane["start"]["x_m"].as<double>(), sy = lane["start"]["y_m"].as<double>();
+    const double gx = lane["goal"]["x_m"].as<double>(), gy = lane["goal"]["y_m"].as<double>();
+    EXPECT_NEAR(SurfaceZ(sim, sx, sy), 0.0, 1e-9);  // starts on the floor
+    EXPECT_NEAR(SurfaceZ(sim, gx, gy), lane["goal_z_m"].as<double>(), 1e-3);
+    // Lanes are 4 m apart with walls between them.
+    const int k = lane["lane"].as<int>();
+    EXPECT_NEAR(sy, 4.0 * k + 2.0, 1e-9);
+    EXPECT_GT(SurfaceZ(sim, 12.0, 4.0 * k), 1.4);        // wall on the south side
+    EXPECT_GT(SurfaceZ(sim, 12.0, 4.0 * k + 4.0), 1.4);  // and on the north side
+  }
+  // Feature heights along the lanes (x, y) -> z.
+  const double tan5 = std::tan(5.0 * M_PI / 180.0), tan10 = std::tan(10.0 * M_PI / 180.0);
+  EXPECT_NEAR(SurfaceZ(sim, 9.5, 2.0), 1.0, 1e-9);           // cube top
+  EXPECT_NEAR(SurfaceZ(sim, 9.0, 6.0), 1.0 * tan5, 1e-5);    // 5 deg ramp
+  EXPECT_NEAR(SurfaceZ(sim, 9.0, 10.0), 1.0 * tan10, 1e-5);  // 10 deg ramp
+  EXPECT_NEAR(SurfaceZ(sim, 10.8, 14.0), 2.0 * tan5 + 0.8 * std::tan(11.0 * M_PI / 180.0), 1e-5);
+  EXPECT_NEAR(SurfaceZ(sim, 12.0, 18.0), 0.01, 1e-9);  // 1 cm step
+  EXPECT_NEAR(SurfaceZ(sim, 12.0, 22.0), 0.20, 1e-9);  // 20 cm step
+  EXPECT_NEAR(SurfaceZ(sim, 12.0, 26.0), 0.20, 1e-9);  // drop platform
+  EXPECT_NEAR(SurfaceZ(sim, 14.0, 26.0), 0.0, 1e-9);   // past the drop
+  EXPECT_NEAR(SurfaceZ(sim, 10.3, 30.0), -0.3, 1e-9);  // trench bottom
+  EXPECT_NEAR(SurfaceZ(sim, 9.9, 30.0), 0.0, 1e-9);    // trench rim
+  EXPECT_NEAR(SurfaceZ(sim, 7.5, 33.0), 0.2, 1e-9);    // combined: 20 cm block
+  EXPECT_NEAR(SurfaceZ(sim, 7.5, 35.0), 0.0, 1e-9);    // ... and its bypass
+  EXPECT_NEAR(SurfaceZ(sim, 8.0, 37.0), 1.0, 1e-9);    // demo cube
+  EXPECT_NEAR(SurfaceZ(sim, 20.0, 38.0), 0.21, 1e-9);  // demo platform
+  // The 10 deg platform is enclosed: lane walls on both sides reach the end wall.
+  EXPECT_GT(SurfaceZ(sim, 23.0, 8.0), 1.4);
+  EXPECT_GT(SurfaceZ(sim, 23.0, 12.0), 1.4);
+  EXPECT_GT(SurfaceZ(sim, 24.05, 10.0), 1.4);
+}
+
+TEST_F(WorldsTest, ApartmentRoomsDoorsAndPlaces) {
+  Scenario s = WorldOnly("apartment");
+  MujocoSim sim(s);
+  EXPECT_EQ(sim.DoorNames(),
+            (std::vector<std::string>{"living_room", "kitchen", "bedroom", "bathroom"}));
+  for (const char* furniture : {"sofa", "kitchen_table", "chair_1", "chair_2", "glass", "shelf"}) {
+    const auto names = sim.ObjectNames();
+    EXPECT_NE(std::find(names.begin(), names.end(), furniture), names.end()) << furniture;
+  }
+  const std::vector<Place> places =
+      LoadPlacesFile(SimPaths::Default().data_dir + "/worlds/apartment_places.yaml");
+  std::vector<std::string> names;
+  for (const Place& p : places) names.push_back(p.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"living_room", "kitchen", "corridor", "bedroom",
+                                             "bathroom"}));
+  for (const Place& p : places) {
+    SCOPED_TRACE(p.name);
+    ASSERT_GE(p.polygon_m.size(), 3u);
+    // The centre of each room is floor inside it.
+    common::Vector2 c = common::Vector2::Zero();
+    for (const auto& v : p.polygon_m) c += v;
+    c /= static_cast<double>(p.polygon_m.size());
+    EXPECT_TRUE(p.Contains(c));
+    int geom = -1;
+    const double z = SurfaceZ(sim, c.x(), c.y(), &geom);
+    EXPECT_LT(z, 1.0);  // not a wall
+  }
+  EXPECT_EQ(PlaceAt(places, {7.0, 1.0}), "kitchen");
+  EXPECT_EQ(PlaceAt(places, {1.0, 8.0}), "bedroom");
+  EXPECT_EQ(PlaceAt(places, {50.0, 50.0}), "");
+}
+
+TEST_F(WorldsTest, OutdoorTerrainIsTheGeneratedHeightField) {
+  Scenario s = WorldOnly("outdoor");
+  MujocoSim sim(s);
+  const int terrain = mj_name2id(sim.model(), mjOBJ_GEOM, "terrain");
+  ASSERT_GE(terrain, 0);
+  // Heights the generator computes for these points (generate_worlds.py, relative to the
+  // lowest point): the flat start, two hill tops, the east slope; rows run along +y.
+  EXPECT_NEAR(SurfaceZ(sim, 0.0, 0.0), 0.156, 0.005);
+  EXPECT_NEAR(SurfaceZ(sim, 12.0, 15.0), 2.230, 0.005);
+  EXPECT_NEAR(SurfaceZ(sim, -20.0, 15.0), 0.902, 0.005);
+  EXPECT_NEAR(SurfaceZ(sim, 20.0, -12.0), 1.011, 0.005);
+  EXPECT_NEAR(SurfaceZ(sim, 26.0, 0.0), 0.892, 0.005);
+  // Our height-field rays agree with MuJoCo's on the real terrain.
+  for (double x = -25.0; x <= 25.0; x += 2.5) {
+    for (double y = -25.0; y <= 25.0; y += 2.5) {
+      const double p[3] = {x, y, 30.0}, v[3] = {0.1, -0.05, -1.0 / std::sqrt(1.0125)};
+      const double ours = RayHeightField(sim.model(), sim.data(), terrain, p, v);
+      const double theirs = mj_rayHfield(sim.model(), sim.data(), terrain, p, v);
+      ASSERT_NEAR(ours, theirs, 1e-9) << x << ", " << y;
+    }
+  }
+}
+
+TEST_F(WorldsTest, ArenaHasRoomsAndClutter) {
+  Scenario s = WorldOnly("arena");
+  MujocoSim sim(s);
+  EXPECT_NEAR(SurfaceZ(sim, 6.0, 3.0), 0.0, 1e-9);   // open hall
+  EXPECT_NEAR(SurfaceZ(sim, 6.0, 6.07), 1.0, 1e-9);  // the wall between hall and rooms
+  EXPECT_NEAR(SurfaceZ(sim, 3.0, 6.07), 0.0, 1e-9);  // its doorway
+  EXPECT_NEAR(SurfaceZ(sim, 9.5, 8.5), 0.76, 1e-9);  // the table
+  EXPECT_NEAR(SurfaceZ(sim, 1.5, 2.5), 0.24, 1e-9);  // a ball
+  EXPECT_NEAR(SurfaceZ(sim, 3.7, 0.7), 0.45, 1e-9);  // the armchair seat
+}
+
+}  // namespace
+}  // namespace cairn::sim
