@@ -1,17 +1,17 @@
 #include "mapstore/blob_codec.h"
 
-#include "common/robot_profile.h"
-
 #include <zlib.h>
 #include <zstd.h>
+
+#include "common/robot_profile.h"
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <atomic>
 #include <cstring>
 #include <exception>
 #include <memory>
@@ -158,13 +158,13 @@ namespace {
 // One zstd context per thread: creating one per blob costs more than compressing a tile.
 ZSTD_CCtx* ThreadCompressor() {
   thread_local std::unique_ptr<ZSTD_CCtx, size_t (*)(ZSTD_CCtx*)> ctx(ZSTD_createCCtx(),
-                                                                       ZSTD_freeCCtx);
+                                                                      ZSTD_freeCCtx);
   return ctx.get();
 }
 
 ZSTD_DCtx* ThreadDecompressor() {
   thread_local std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(),
-                                                                       ZSTD_freeDCtx);
+                                                                      ZSTD_freeDCtx);
   return ctx.get();
 }
 
@@ -222,8 +222,8 @@ EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level
       blob.data.resize(n);
       uint32_t frame_checksum = 0;
       std::memcpy(&frame_checksum, blob.data.data() + n - 4, 4);
-      blob.key = Hex32(blob.raw_crc32) + "-" + Hex32(frame_checksum) + "-" +
-                 std::to_string(size) + "z";
+      blob.key =
+          Hex32(blob.raw_crc32) + "-" + Hex32(frame_checksum) + "-" + std::to_string(size) + "z";
       return blob;
     }
     default:
@@ -251,7 +251,8 @@ common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t 
       }
       uint8_t* target = out;
       if (codec == Codec::kZstdShuffle4) {
-        if (raw_size % 4 != 0) return common::CorruptError("shuffled blob size not a multiple of 4");
+        if (raw_size % 4 != 0)
+          return common::CorruptError("shuffled blob size not a multiple of 4");
         std::vector<uint8_t>& scratch = ThreadScratch();
         scratch.resize(static_cast<size_t>(raw_size));
         target = scratch.data();
@@ -335,7 +336,8 @@ bool AllUnknown(const std::vector<float>& cells) {
 void PasteTile(const TileSpec& tile, const float* cells, int offset_ix, int offset_iy,
                common::Layer* layer) {
   const int lx0 = std::max(tile.x0, offset_ix);
-  const int lx1 = std::min<int>(tile.x0 + tile.cells_x, offset_ix + static_cast<int>(layer->rows()));
+  const int lx1 =
+      std::min<int>(tile.x0 + tile.cells_x, offset_ix + static_cast<int>(layer->rows()));
   if (lx1 <= lx0) return;
   for (int y = 0; y < tile.cells_y; ++y) {
     const int gy = tile.y0 + y;
@@ -413,9 +415,8 @@ common::Result<common::ObstacleRegistry> ParseRegistry(const std::string& bytes)
     std::string outline;
     uint32_t verdicts = 0;
     bool ok = r.Get(&o.id) && r.Get(&kind) && r.Get(&cx) && r.Get(&cy) && r.Get(&o.slope_rad) &&
-              r.Get(&o.height_m) && r.Get(&o.width_m) && r.Get(&o.length_m) &&
-              r.Get(&o.depth_m) && r.Get(&o.area_m2) && r.Get(&o.num_cells) &&
-              r.GetString(&outline) && r.Get(&verdicts);
+              r.Get(&o.height_m) && r.Get(&o.width_m) && r.Get(&o.length_m) && r.Get(&o.depth_m) &&
+              r.Get(&o.area_m2) && r.Get(&o.num_cells) && r.GetString(&outline) && r.Get(&verdicts);
     if (!ok || kind < 1 || kind > 5 || verdicts > r.remaining() / 13) {
       return common::CorruptError("truncated or malformed obstacle registry");
     }

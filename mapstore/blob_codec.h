@@ -19,9 +19,9 @@ namespace cairn::mapstore {
 
 /// Stored codec of a blob (a column of the blobs table: never renumber).
 enum class Codec : int {
-  kRaw = 0,            ///< bytes as they are
-  kZstd = 1,           ///< zstd frame
-  kZstdShuffle4 = 2,   ///< 4-byte elements split into byte planes, then zstd
+  kRaw = 0,           ///< bytes as they are
+  kZstd = 1,          ///< zstd frame
+  kZstdShuffle4 = 2,  ///< 4-byte elements split into byte planes, then zstd
 };
 
 /// A blob ready to store.

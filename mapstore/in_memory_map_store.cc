@@ -85,8 +85,7 @@ Result<const InMemoryMapStore::Version*> InMemoryMapStore::Resolve(const MapRef&
   }
   const Version& v = (*versions)[ref.version - 1];
   if (v.info.deleted) {
-    return common::NotFoundError(label + " version " + std::to_string(ref.version) +
-                                 " is deleted");
+    return common::NotFoundError(label + " version " + std::to_string(ref.version) + " is deleted");
   }
   return &v;
 }
@@ -244,9 +243,10 @@ Result<std::vector<StoredProfile>> InMemoryMapStore::ListProfiles() const {
   return out;
 }
 
-Result<std::optional<DerivedProfile>> InMemoryMapStore::FindDerived(
-    const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
-    const LayerQuery& query) const {
+Result<std::optional<DerivedProfile>> InMemoryMapStore::FindDerived(const MapRef& ref,
+                                                                    const std::string& profile_hash,
+                                                                    const std::string& code_version,
+                                                                    const LayerQuery& query) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto v = Resolve(ref);
   if (!v.ok()) return v.status();

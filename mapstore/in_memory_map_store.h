@@ -31,9 +31,10 @@ class InMemoryMapStore final : public MapStore {
   common::Status PutProfile(const common::RobotProfile& profile, const WriteContext& ctx) override;
   common::Result<StoredProfile> GetProfile(const std::string& name) const override;
   common::Result<std::vector<StoredProfile>> ListProfiles() const override;
-  common::Result<std::optional<DerivedProfile>> FindDerived(
-      const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
-      const LayerQuery& query) const override;
+  common::Result<std::optional<DerivedProfile>> FindDerived(const MapRef& ref,
+                                                            const std::string& profile_hash,
+                                                            const std::string& code_version,
+                                                            const LayerQuery& query) const override;
   common::Result<std::vector<DerivedInfo>> ListDerived(const MapRef& ref) const override;
   common::Status PutDerived(const MapRef& ref, const DerivedProfile& derived,
                             const WriteContext& ctx) override;

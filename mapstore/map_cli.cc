@@ -1,7 +1,5 @@
 #include "mapstore/map_cli.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -12,6 +10,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include "common/flags.h"
 #include "common/layers.h"
@@ -194,8 +194,8 @@ int CmdShow(int argc, char** argv) {
   summary.Add({"map", info->site + "/" + info->name + " version " + std::to_string(info->version)});
   summary.Add({"created", Time(info->provenance.created_utime)});
   summary.Add({"source robot", info->provenance.source_robot});
-  summary.Add({"source profile", info->provenance.source_profile + " " +
-                                     info->provenance.source_profile_hash});
+  summary.Add({"source profile",
+               info->provenance.source_profile + " " + info->provenance.source_profile_hash});
   summary.Add({"code version", info->provenance.code_version});
   summary.Add({"grid", std::to_string(g.size_x) + " x " + std::to_string(g.size_y) + " cells of " +
                            Fmt("%.3g", g.resolution_m) + " m (" + Fmt("%.1f", g.length_x_m()) +

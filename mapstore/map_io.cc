@@ -1,8 +1,5 @@
 #include "mapstore/map_io.h"
 
-#include <png.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -16,6 +13,8 @@
 
 #include <octomap/AbstractOcTree.h>
 #include <octomap/OcTree.h>
+#include <png.h>
+#include <unistd.h>
 
 #include "common/layers.h"
 #include "common/yaml_reader.h"
@@ -53,31 +52,56 @@ struct Glyph {
 };
 
 constexpr Glyph kFont[] = {
-    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}}, {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
-    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}}, {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
-    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}}, {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
-    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}}, {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
-    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}}, {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
-    {'A', {0x0E, 0x11, 0x11, 0x11, 0x1F, 0x11, 0x11}}, {'B', {0x1E, 0x11, 0x11, 0x1E, 0x11, 0x11, 0x1E}},
-    {'C', {0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E}}, {'D', {0x1C, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1C}},
-    {'E', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F}}, {'F', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x10}},
-    {'G', {0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F}}, {'H', {0x11, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
-    {'I', {0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E}}, {'J', {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C}},
-    {'K', {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11}}, {'L', {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F}},
-    {'M', {0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11}}, {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
-    {'O', {0x0E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}}, {'P', {0x1E, 0x11, 0x11, 0x1E, 0x10, 0x10, 0x10}},
-    {'Q', {0x0E, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0D}}, {'R', {0x1E, 0x11, 0x11, 0x1E, 0x14, 0x12, 0x11}},
-    {'S', {0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E}}, {'T', {0x1F, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
-    {'U', {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}}, {'V', {0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04}},
-    {'W', {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A}}, {'X', {0x11, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x11}},
-    {'Y', {0x11, 0x11, 0x11, 0x0A, 0x04, 0x04, 0x04}}, {'Z', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1F}},
-    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}}, {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
-    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}}, {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1F}},
-    {':', {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00}}, {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
-    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}}, {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
-    {'>', {0x08, 0x04, 0x02, 0x01, 0x02, 0x04, 0x08}}, {'<', {0x02, 0x04, 0x08, 0x10, 0x08, 0x04, 0x02}},
-    {'=', {0x00, 0x00, 0x1F, 0x00, 0x1F, 0x00, 0x00}}, {',', {0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08}},
-    {'+', {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00}}, {' ', {0, 0, 0, 0, 0, 0, 0}},
+    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}},
+    {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
+    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}},
+    {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
+    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}},
+    {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
+    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}},
+    {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
+    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}},
+    {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
+    {'A', {0x0E, 0x11, 0x11, 0x11, 0x1F, 0x11, 0x11}},
+    {'B', {0x1E, 0x11, 0x11, 0x1E, 0x11, 0x11, 0x1E}},
+    {'C', {0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E}},
+    {'D', {0x1C, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1C}},
+    {'E', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F}},
+    {'F', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x10}},
+    {'G', {0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F}},
+    {'H', {0x11, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
+    {'I', {0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E}},
+    {'J', {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C}},
+    {'K', {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11}},
+    {'L', {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F}},
+    {'M', {0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11}},
+    {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
+    {'O', {0x0E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}},
+    {'P', {0x1E, 0x11, 0x11, 0x1E, 0x10, 0x10, 0x10}},
+    {'Q', {0x0E, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0D}},
+    {'R', {0x1E, 0x11, 0x11, 0x1E, 0x14, 0x12, 0x11}},
+    {'S', {0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E}},
+    {'T', {0x1F, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
+    {'U', {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}},
+    {'V', {0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04}},
+    {'W', {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A}},
+    {'X', {0x11, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x11}},
+    {'Y', {0x11, 0x11, 0x11, 0x0A, 0x04, 0x04, 0x04}},
+    {'Z', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1F}},
+    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}},
+    {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
+    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}},
+    {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1F}},
+    {':', {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00}},
+    {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
+    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}},
+    {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
+    {'>', {0x08, 0x04, 0x02, 0x01, 0x02, 0x04, 0x08}},
+    {'<', {0x02, 0x04, 0x08, 0x10, 0x08, 0x04, 0x02}},
+    {'=', {0x00, 0x00, 0x1F, 0x00, 0x1F, 0x00, 0x00}},
+    {',', {0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08}},
+    {'+', {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00}},
+    {' ', {0, 0, 0, 0, 0, 0, 0}},
 };
 
 struct Rgb {
@@ -129,6 +153,26 @@ class Canvas {
     }
     return x;
   }
+  /// A line of the given thickness (Bresenham, square pen).
+  void Line(int x0, int y0, int x1, int y1, Rgb c, int thickness = 1) {
+    const int dx = std::abs(x1 - x0), dy = -std::abs(y1 - y0);
+    const int sx = x0 < x1 ? 1 : -1, sy = y0 < y1 ? 1 : -1;
+    int err = dx + dy;
+    const int half = thickness / 2;
+    for (int guard = 0; guard < 100000; ++guard) {
+      Fill(x0 - half, y0 - half, thickness, thickness, c);
+      if (x0 == x1 && y0 == y1) break;
+      const int e2 = 2 * err;
+      if (e2 >= dy) {
+        err += dy;
+        x0 += sx;
+      }
+      if (e2 <= dx) {
+        err += dx;
+        y0 += sy;
+      }
+    }
+  }
   const std::vector<uint8_t>& pixels() const { return pixels_; }
 
  private:
@@ -151,8 +195,8 @@ Rgb OccupancyColour(float percent) {
 
 // A perceptual blue-green-yellow ramp (viridis-like) for continuous layers.
 Rgb RampColour(float t) {
-  static constexpr Rgb kStops[] = {{68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98},
-                                   {253, 231, 37}};
+  static constexpr Rgb kStops[] = {
+      {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
   t = std::clamp(t, 0.f, 1.f) * 4.f;
   const int i = std::min(3, static_cast<int>(t));
   const float f = t - i;
@@ -180,8 +224,8 @@ Result<std::string> EncodePng(const Canvas& canvas) {
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
   for (int y = 0; y < canvas.height(); ++y) {
-    png_write_row(png, const_cast<png_bytep>(&canvas.pixels()[static_cast<size_t>(y) *
-                                                                canvas.width() * 3]));
+    png_write_row(
+        png, const_cast<png_bytep>(&canvas.pixels()[static_cast<size_t>(y) * canvas.width() * 3]));
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
@@ -312,9 +356,12 @@ bool ReadPgmInt(const std::string& data, size_t* pos, int* value) {
 
 const char* PgmModeName(PgmMode mode) {
   switch (mode) {
-    case PgmMode::kTrinary: return "trinary";
-    case PgmMode::kScale: return "scale";
-    case PgmMode::kRaw: return "raw";
+    case PgmMode::kTrinary:
+      return "trinary";
+    case PgmMode::kScale:
+      return "scale";
+    case PgmMode::kRaw:
+      return "raw";
   }
   return "?";
 }
@@ -450,11 +497,13 @@ Result<std::vector<std::string>> WriteRosMap(const std::string& folder, const st
           break;
         case PgmMode::kScale:
           if (!std::isnan(v)) {
-            pixel = static_cast<uint8_t>(std::lround(255.0 * (1.0 - std::clamp(v, 0.f, 100.f) / 100.0)));
+            pixel = static_cast<uint8_t>(
+                std::lround(255.0 * (1.0 - std::clamp(v, 0.f, 100.f) / 100.0)));
           }
           break;
         case PgmMode::kRaw:
-          pixel = std::isnan(v) ? 255 : static_cast<uint8_t>(std::lround(std::clamp(v, 0.f, 100.f)));
+          pixel =
+              std::isnan(v) ? 255 : static_cast<uint8_t>(std::lround(std::clamp(v, 0.f, 100.f)));
           break;
       }
       pgm[header + static_cast<size_t>(row) * w + ix] = static_cast<char>(pixel);
@@ -494,7 +543,8 @@ Result<RosMap> ReadRosMap(const std::string& yaml_path) {
     return InvalidArgumentError(e.what());
   }
   auto parsed_mode = PgmModeFromName(mode);
-  if (!parsed_mode.ok()) return InvalidArgumentError(yaml_path + ": " + parsed_mode.status().message());
+  if (!parsed_mode.ok())
+    return InvalidArgumentError(yaml_path + ": " + parsed_mode.status().message());
   map.options.mode = *parsed_mode;
   if (origin.size() != 3 || !std::isfinite(origin[0]) || !std::isfinite(origin[1]) ||
       !std::isfinite(origin[2])) {
@@ -507,10 +557,9 @@ Result<RosMap> ReadRosMap(const std::string& yaml_path) {
 
   // The image must sit in the YAML's folder (or below it).
   std::error_code ec;
-  const fs::path base = fs::canonical(fs::path(yaml_path).parent_path().empty()
-                                          ? fs::path(".")
-                                          : fs::path(yaml_path).parent_path(),
-                                      ec);
+  const fs::path base = fs::canonical(
+      fs::path(yaml_path).parent_path().empty() ? fs::path(".") : fs::path(yaml_path).parent_path(),
+      ec);
   const fs::path image_path = fs::weakly_canonical(base / image, ec);
   const std::string rel = fs::relative(image_path, base, ec).string();
   if (ec || rel.empty() || rel.rfind("..", 0) == 0 || fs::path(image).is_absolute()) {
@@ -544,7 +593,8 @@ Result<RosMap> ReadRosMap(const std::string& yaml_path) {
           return InvalidArgumentError(map.image_path + ": truncated PGM data");
         }
       } else {
-        if (pos >= data->size()) return InvalidArgumentError(map.image_path + ": truncated PGM data");
+        if (pos >= data->size())
+          return InvalidArgumentError(map.image_path + ": truncated PGM data");
         pixel = static_cast<uint8_t>((*data)[pos++]);
       }
       pixel = pixel * 255 / maxval;
@@ -579,6 +629,14 @@ Result<RosMap> ReadRosMap(const std::string& yaml_path) {
 
 Result<std::string> WritePng(const std::string& folder, const std::string& stem,
                              const common::GridMap& map, const std::string& layer) {
+  PngOverlay none;
+  none.min_pixels = 320;
+  return WritePng(folder, stem, map, layer, none);
+}
+
+Result<std::string> WritePng(const std::string& folder, const std::string& stem,
+                             const common::GridMap& map, const std::string& layer,
+                             const PngOverlay& overlay) {
   Status s = ValidateName("file stem", stem);
   if (!s.ok()) return s;
   if (!map.HasLayer(layer)) return common::NotFoundError("no layer '" + layer + "'");
@@ -599,9 +657,10 @@ Result<std::string> WritePng(const std::string& folder, const std::string& stem,
     hi = std::max(hi, v);
   }
   const int w = map.size_x(), h = map.size_y();
-  const int scale = std::clamp(320 / std::max(w, h), 1, 8);
-  const int legend_h = 52;
-  const int canvas_w = std::max(w * scale, 300);
+  const int scale = std::clamp(overlay.min_pixels / std::max(1, std::max(w, h)), 1, 8);
+  const bool has_overlay = !overlay.path_m.empty() || !overlay.obstacles.empty();
+  const int legend_h = has_overlay || !overlay.caption.empty() ? 92 : 52;
+  const int canvas_w = std::max(w * scale, has_overlay ? 560 : 300);
   Canvas canvas(canvas_w, h * scale + legend_h);
   for (int iy = 0; iy < h; ++iy) {
     for (int ix = 0; ix < w; ++ix) {
@@ -617,6 +676,40 @@ Result<std::string> WritePng(const std::string& folder, const std::string& stem,
       canvas.Fill(ix * scale, (h - 1 - iy) * scale, scale, scale, c);
     }
   }
+  // Overlay: obstacles (outline and label) and the path, in world coordinates.
+  auto to_pixel = [&](const common::Vector2& p) {
+    const common::Vector2 c = map.geometry().ContinuousIndexOf(p);
+    return std::make_pair(static_cast<int>(std::lround(c.x() * scale)),
+                          static_cast<int>(std::lround((h - c.y()) * scale)));
+  };
+  constexpr Rgb kPath{20, 90, 230}, kCrossable{0, 150, 60}, kBlocked{215, 25, 30}, kNoVerdict{90, 90, 90};
+  for (const auto& o : overlay.obstacles) {
+    Rgb colour = kNoVerdict;
+    if (const auto* v = o.VerdictFor(overlay.verdict_profile)) colour = v->crossable ? kCrossable : kBlocked;
+    for (size_t i = 0; i < o.outline_m.size(); ++i) {
+      const auto a = to_pixel(o.outline_m[i]);
+      const auto b = to_pixel(o.outline_m[(i + 1) % o.outline_m.size()]);
+      canvas.Line(a.first, a.second, b.first, b.second, colour, 2);
+    }
+    std::string kind = common::ObstacleKindName(o.kind);
+    for (auto& ch : kind) ch = ch == '_' ? ' ' : ch;
+    const auto c = to_pixel(o.centroid_m);
+    const std::string label = std::to_string(o.id) + " " + kind;
+    canvas.Fill(c.first - 1, c.second - 1, static_cast<int>(label.size()) * 6 + 2, 9, {255, 255, 255});
+    canvas.Text(c.first, c.second, label, colour);
+  }
+  for (size_t i = 1; i < overlay.path_m.size(); ++i) {
+    const auto a = to_pixel(overlay.path_m[i - 1]);
+    const auto b = to_pixel(overlay.path_m[i]);
+    canvas.Line(a.first, a.second, b.first, b.second, kPath, 3);
+  }
+  if (!overlay.path_m.empty()) {
+    const auto s = to_pixel(overlay.path_m.front());
+    const auto e = to_pixel(overlay.path_m.back());
+    canvas.Fill(s.first - 4, s.second - 4, 9, 9, kPath);
+    canvas.Frame(e.first - 6, e.second - 6, 13, 13, kPath);
+    canvas.Frame(e.first - 5, e.second - 5, 11, 11, kPath);
+  }
   // Legend: the layer and resolution, then swatches or a colour bar.
   const int y0 = h * scale + 6;
   char title[160];
@@ -625,10 +718,11 @@ Result<std::string> WritePng(const std::string& folder, const std::string& stem,
   canvas.Text(4, y0, title, kBlack);
   const int y1 = y0 + 14;
   int x = 4;
+  int row_y = y1;
   auto swatch = [&](Rgb c, const std::string& label) {
-    canvas.Fill(x, y1, 12, 12, c);
-    canvas.Frame(x, y1, 12, 12, kBlack);
-    x = canvas.Text(x + 16, y1 + 3, label, kBlack) + 10;
+    canvas.Fill(x, row_y, 12, 12, c);
+    canvas.Frame(x, row_y, 12, 12, kBlack);
+    x = canvas.Text(x + 16, row_y + 3, label, kBlack) + 10;
   };
   if (occupancy) {
     swatch(OccupancyColour(0.f), "FREE");
@@ -645,7 +739,25 @@ Result<std::string> WritePng(const std::string& folder, const std::string& stem,
     x = canvas.Text(x + 104, y1 + 3, hi_text, kBlack) + 10;
     swatch(kUnknownColour, "UNKNOWN");
   }
-  canvas.Text(4, y1 + 20, "CAIRN MAP STORE", {90, 90, 90});
+  // Second legend row (overlay), caption, signature.
+  int y2 = y1 + 20;
+  if (has_overlay) {
+    x = 4;
+    row_y = y2;
+    if (!overlay.path_m.empty()) swatch(kPath, "DRIVEN PATH");
+    if (!overlay.obstacles.empty()) {
+      swatch(kCrossable, "CROSSABLE" + (overlay.verdict_profile.empty()
+                                            ? std::string()
+                                            : " BY " + overlay.verdict_profile));
+      swatch(kBlocked, "NOT CROSSABLE");
+    }
+    y2 += 18;
+  }
+  if (!overlay.caption.empty()) {
+    canvas.Text(4, y2, overlay.caption, kBlack);
+    y2 += 12;
+  }
+  canvas.Text(4, y2, "CAIRN MAP STORE", {90, 90, 90});
   auto png = EncodePng(canvas);
   if (!png.ok()) return png.status();
   if (!(s = WriteFileAtomically(*path, *png)).ok()) return s;
@@ -667,8 +779,8 @@ Result<std::string> WriteObstaclesCsv(const std::string& folder, const std::stri
     }
     for (const auto& v : o.verdicts) {
       verdicts += (verdicts.empty() ? "" : ";") + EscapeItem(v.profile) + "|" +
-                  EscapeItem(v.profile_hash) + "|" + (v.crossable ? "crossable" : "blocked") +
-                  "|" + EscapeItem(v.reason);
+                  EscapeItem(v.profile_hash) + "|" + (v.crossable ? "crossable" : "blocked") + "|" +
+                  EscapeItem(v.reason);
     }
     out << o.id << "," << common::ObstacleKindName(o.kind) << "," << Fmt(o.centroid_m.x()) << ","
         << Fmt(o.centroid_m.y()) << "," << Fmt(o.slope_rad) << "," << Fmt(o.height_m) << ","

@@ -70,6 +70,22 @@ common::Result<RosMap> ReadRosMap(const std::string& yaml_path);
 common::Result<std::string> WritePng(const std::string& folder, const std::string& stem,
                                      const common::GridMap& map, const std::string& layer);
 
+/// What can be drawn over a rendered layer (world frame).
+struct PngOverlay {
+  std::vector<common::Vector2> path_m;        ///< a driven or planned path (blue)
+  std::vector<common::Obstacle> obstacles;    ///< outlined and labelled "<id> <KIND>"
+  /// Colours each obstacle by this profile's verdict: green crossable, red not (grey: no
+  /// verdict or empty).
+  std::string verdict_profile;
+  std::string caption;                        ///< a line under the legend
+  int min_pixels{900};                        ///< the larger side is scaled up to about this
+};
+
+/// WritePng with an overlay.
+common::Result<std::string> WritePng(const std::string& folder, const std::string& stem,
+                                     const common::GridMap& map, const std::string& layer,
+                                     const PngOverlay& overlay);
+
 /// <stem>.csv: one obstacle per row.
 common::Result<std::string> WriteObstaclesCsv(const std::string& folder, const std::string& stem,
                                               const common::ObstacleRegistry& registry);

@@ -60,8 +60,8 @@ Result<DerivedProfile> Derive(const MapStore& store, const ProfileDeriver& deriv
     out = deriver.derive(*base, profile.profile);
   } catch (const std::invalid_argument& e) {
     return common::InvalidArgumentError("map '" + info.site + "/" + info.name +
-                                        "' cannot be derived for profile '" +
-                                        profile.profile.name + "': " + e.what());
+                                        "' cannot be derived for profile '" + profile.profile.name +
+                                        "': " + e.what());
   } catch (const std::exception& e) {
     return common::InternalError(std::string("derivation failed: ") + e.what());
   }
@@ -140,7 +140,8 @@ Result<ProfileView> LoadForProfile(const MapStore& store, const ProfileDeriver* 
   }
   if (base_wanted.empty()) {
     const common::GridGeometry& g = info->geometry;
-    const CellBox box = query.region ? ClipBox(*query.region, g) : CellBox{0, 0, g.size_x, g.size_y};
+    const CellBox box =
+        query.region ? ClipBox(*query.region, g) : CellBox{0, 0, g.size_x, g.size_y};
     if (box.empty()) return common::InvalidArgumentError("the region does not overlap the map");
     view.layers = common::GridMap(SubGeometry(g, box));
   } else {
@@ -161,8 +162,9 @@ Result<ProfileView> LoadForProfile(const MapStore& store, const ProfileDeriver* 
     return common::UnavailableError("no derivation is available to serve profile '" + profile +
                                     "'");
   }
-  auto cached = store.FindDerived(exact, stored->content_hash, deriver->code_version,
-                                  {all ? std::vector<std::string>{} : derived_wanted, query.region});
+  auto cached =
+      store.FindDerived(exact, stored->content_hash, deriver->code_version,
+                        {all ? std::vector<std::string>{} : derived_wanted, query.region});
   if (!cached.ok()) return cached.status();
   DerivedProfile derived;
   if (cached->has_value()) {
@@ -280,11 +282,10 @@ Result<MapDiff> DiffVersions(const MapStore& store, const MapRef& a, const MapRe
   auto ib = store.GetMapInfo(b);
   if (!ib.ok()) return ib.status();
   if (ia->geometry != ib->geometry) {
-    return common::InvalidArgumentError("the two maps have different geometries (" +
-                                        std::to_string(ia->geometry.size_x) + "x" +
-                                        std::to_string(ia->geometry.size_y) + " vs " +
-                                        std::to_string(ib->geometry.size_x) + "x" +
-                                        std::to_string(ib->geometry.size_y) + ")");
+    return common::InvalidArgumentError(
+        "the two maps have different geometries (" + std::to_string(ia->geometry.size_x) + "x" +
+        std::to_string(ia->geometry.size_y) + " vs " + std::to_string(ib->geometry.size_x) + "x" +
+        std::to_string(ib->geometry.size_y) + ")");
   }
   MapDiff diff;
   diff.a_label = Label(*ia);
@@ -338,7 +339,8 @@ Result<MapDiff> DiffVersions(const MapStore& store, const MapRef& a, const MapRe
     std::string what;
     auto cmp = [&](const char* field, double va, double vb) {
       const bool same = (std::isnan(va) && std::isnan(vb)) || std::abs(va - vb) <= 1e-9;
-      if (!same) what += std::string(what.empty() ? "" : ", ") + field + " " + Num(va) + " -> " + Num(vb);
+      if (!same)
+        what += std::string(what.empty() ? "" : ", ") + field + " " + Num(va) + " -> " + Num(vb);
     };
     if (x.kind != o->kind) {
       what = std::string("kind ") + common::ObstacleKindName(x.kind) + " -> " +
@@ -384,8 +386,8 @@ Result<MapDiff> DiffProfiles(const MapStore& store, const ProfileDeriver* derive
     if (x.crossable != y.crossable) {
       diff.obstacles.push_back(
           {o.id, std::string(common::ObstacleKindName(o.kind)) + ": " + profile_a + " " +
-                     (x.crossable ? "crossable" : "blocked (" + x.reason + ")") + ", " +
-                     profile_b + " " + (y.crossable ? "crossable" : "blocked (" + y.reason + ")")});
+                     (x.crossable ? "crossable" : "blocked (" + x.reason + ")") + ", " + profile_b +
+                     " " + (y.crossable ? "crossable" : "blocked (" + y.reason + ")")});
     }
   }
   return diff;

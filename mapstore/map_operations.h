@@ -36,13 +36,13 @@ common::Result<ProfileView> LoadForProfile(const MapStore& store, const ProfileD
 /// Result of sharing a map with a profile.
 struct ShareResult {
   MapInfo info;
-  DerivedProfile derived;                 ///< the target profile's layers and verdicts
-  std::string source_profile;             ///< the profile the map was made with
+  DerivedProfile derived;      ///< the target profile's layers and verdicts
+  std::string source_profile;  ///< the profile the map was made with
   /// Obstacles whose verdict for the target differs from the source profile's; each carries
   /// both verdicts (source first, then target). An obstacle with no known source verdict is
   /// included when the target cannot cross it.
   std::vector<common::Obstacle> changed;
-  bool was_cached{false};                 ///< the derivation was already in the cache
+  bool was_cached{false};  ///< the derivation was already in the cache
 };
 
 /// Derives the target profile's layers (or takes them from the cache), caches them, and
@@ -56,7 +56,7 @@ struct LayerDiff {
   std::string layer_a;
   std::string layer_b;
   int64_t cells_compared{0};
-  int64_t cells_different{0};  ///< known/unknown changes count; NaN equals NaN
+  int64_t cells_different{0};               ///< known/unknown changes count; NaN equals NaN
   std::vector<common::CellIndex> examples;  ///< the first few differing cells
 };
 

@@ -111,9 +111,9 @@ struct LayerQuery {
 
 /// Which maps to list.
 struct MapFilter {
-  std::string site;             ///< empty = every site
-  std::string name;             ///< empty = every map
-  bool all_versions{false};     ///< false: the latest version of each map only
+  std::string site;          ///< empty = every site
+  std::string name;          ///< empty = every map
+  bool all_versions{false};  ///< false: the latest version of each map only
   bool include_deleted{false};
 };
 
@@ -152,9 +152,9 @@ struct DerivedInfo {
 
 /// Who changes the store, for the audit log.
 struct WriteContext {
-  std::string actor;       ///< "cairn-map", a requester name, ...
-  int64_t request_id{0};   ///< the request that caused the change (0 = none)
-  int64_t utime{0};        ///< 0 = now (wall clock)
+  std::string actor;      ///< "cairn-map", a requester name, ...
+  int64_t request_id{0};  ///< the request that caused the change (0 = none)
+  int64_t utime{0};       ///< 0 = now (wall clock)
 };
 
 /// One line of the audit log.

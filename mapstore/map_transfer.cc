@@ -17,7 +17,8 @@ namespace {
 
 std::string LowerExtension(const std::string& path) {
   std::string ext = fs::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
@@ -41,7 +42,8 @@ Result<std::string> DefaultExportLayer(const MapInfo& info, const std::string& f
       if (has(l)) return std::string(l);
     }
     return common::InvalidArgumentError(
-        "map '" + info.name + "' has no occupancy layer to export as a ROS map; name a --layer "
+        "map '" + info.name +
+        "' has no occupancy layer to export as a ROS map; name a --layer "
         "or a --profile (its cost layer)");
   }
   if (has(layers::kElevation)) return std::string(layers::kElevation);
@@ -54,9 +56,8 @@ Result<std::vector<std::string>> ExportMap(const MapStore& store, const ProfileD
   auto info = store.GetMapInfo(options.ref);
   if (!info.ok()) return info.status();
   const MapRef exact{info->site, info->name, info->version};
-  std::string stem = options.stem.empty()
-                         ? info->name + "_v" + std::to_string(info->version)
-                         : options.stem;
+  std::string stem =
+      options.stem.empty() ? info->name + "_v" + std::to_string(info->version) : options.stem;
   const std::string& format = options.format;
   if (format == "ros" || format == "png") {
     std::string layer = options.layer;
@@ -156,16 +157,15 @@ Result<MapInfo> ImportMap(MapStore& store, const ImportOptions& options, const W
     }
     snapshot.base.AddLayer(options.layer) = ros->occupancy;
     if (snapshot.provenance.parameters.empty()) {
-      snapshot.provenance.parameters = std::string("mode: ") + io::PgmModeName(ros->options.mode) +
-                                       "\noccupied_thresh: " +
-                                       std::to_string(ros->options.occupied_thresh) +
-                                       "\nfree_thresh: " + std::to_string(ros->options.free_thresh) +
-                                       "\n";
+      snapshot.provenance.parameters =
+          std::string("mode: ") + io::PgmModeName(ros->options.mode) +
+          "\noccupied_thresh: " + std::to_string(ros->options.occupied_thresh) +
+          "\nfree_thresh: " + std::to_string(ros->options.free_thresh) + "\n";
     }
   } else if (ext == ".bt" || ext == ".ot" || ext == ".csv") {
     if (!latest.ok()) {
-      return common::NotFoundError("no map '" + options.site + "/" + options.name +
-                                   "' to import " + ext + " data into (import a grid map first)");
+      return common::NotFoundError("no map '" + options.site + "/" + options.name + "' to import " +
+                                   ext + " data into (import a grid map first)");
     }
     if (!(s = start_from_latest()).ok()) return s;
     if (ext == ".csv") {

@@ -17,14 +17,14 @@ struct ExportOptions {
   MapRef ref;
   /// "ros" (YAML + PGM, mode from `ros.mode`), "png", "bt", "ot" or "csv".
   std::string format{"ros"};
-  std::string folder;   ///< files are written here and nowhere else
+  std::string folder;  ///< files are written here and nowhere else
   /// ros/png: the layer to write. Default: cost/<profile> when a profile is given, else for ros
   /// the first of final, static, occupancy, occupancy_logodds, long_term, short_term, and for
   /// png elevation (or the first layer).
   std::string layer;
   std::string profile;  ///< derive this profile's layers (and, for csv, its verdicts)
   io::RosMapOptions ros;
-  std::string stem;     ///< file stem; default "<map>_v<version>" (+ "_<layer>" for ros/png)
+  std::string stem;  ///< file stem; default "<map>_v<version>" (+ "_<layer>" for ros/png)
 };
 
 /// Writes the files and returns their paths. kNotFound for an unknown map, layer or profile,

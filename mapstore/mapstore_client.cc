@@ -1,13 +1,15 @@
 #include "mapstore/mapstore_client.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <thread>
 
+#include <unistd.h>
+
 #include "cairn/lcmt_obstacle_registry.hpp"
+
 #include "common/channels.h"
+#include "mapstore/tile_wire.h"
 #include "services/runtime/conversions.h"
 
 namespace cairn::mapstore {
@@ -35,13 +37,20 @@ int64_t WallUtimeNow() {
 Status StatusOfReply(const cairn::lcmt_mapstore_reply& reply) {
   using R = cairn::lcmt_mapstore_reply;
   switch (reply.status) {
-    case R::STATUS_OK: return Status::Ok();
-    case R::STATUS_NOT_FOUND: return common::NotFoundError(reply.message);
-    case R::STATUS_INVALID: return common::InvalidArgumentError(reply.message);
-    case R::STATUS_CORRUPT: return common::CorruptError(reply.message);
-    case R::STATUS_BUSY: return common::UnavailableError(reply.message);
-    case R::STATUS_CONFLICT: return common::AlreadyExistsError(reply.message);
-    default: return common::InternalError(reply.message);
+    case R::STATUS_OK:
+      return Status::Ok();
+    case R::STATUS_NOT_FOUND:
+      return common::NotFoundError(reply.message);
+    case R::STATUS_INVALID:
+      return common::InvalidArgumentError(reply.message);
+    case R::STATUS_CORRUPT:
+      return common::CorruptError(reply.message);
+    case R::STATUS_BUSY:
+      return common::UnavailableError(reply.message);
+    case R::STATUS_CONFLICT:
+      return common::AlreadyExistsError(reply.message);
+    default:
+      return common::InternalError(reply.message);
   }
 }
 
@@ -65,7 +74,8 @@ struct MapstoreClient::Push {
 
 MapstoreClient::MapstoreClient(lcm::LCM& lcm, std::string requester, MapstoreClientOptions options)
     : lcm_(lcm), requester_(std::move(requester)), options_(options) {
-  subscriptions_.push_back(lcm_.subscribe(channels::kMapstoreReply, &MapstoreClient::OnReply, this));
+  subscriptions_.push_back(
+      lcm_.subscribe(channels::kMapstoreReply, &MapstoreClient::OnReply, this));
   subscriptions_.push_back(lcm_.subscribe(channels::kMapstoreTiles, &MapstoreClient::OnTile, this));
   subscriptions_.push_back(
       lcm_.subscribe(channels::kMapstoreManifest, &MapstoreClient::OnManifest, this));
@@ -73,7 +83,8 @@ MapstoreClient::MapstoreClient(lcm::LCM& lcm, std::string requester, MapstoreCli
       lcm_.subscribe(channels::kMapstoreOctomap, &MapstoreClient::OnOctomap, this));
   subscriptions_.push_back(
       lcm_.subscribe(channels::kMapstorePushTileResend, &MapstoreClient::OnPushResend, this));
-  counter_ = ((WallUtimeNow() / 1000000) & 0x7fffff) << 40 | (static_cast<int64_t>(getpid()) & 0xfffff) << 20;
+  counter_ = ((WallUtimeNow() / 1000000) & 0x7fffff) << 40 |
+             (static_cast<int64_t>(getpid()) & 0xfffff) << 20;
 }
 
 MapstoreClient::~MapstoreClient() {
@@ -128,7 +139,7 @@ void MapstoreClient::OnPushResend(const lcm::ReceiveBuffer*, const std::string&,
 }
 
 void MapstoreClient::PublishPaced(const cairn::lcmt_grid_tile& tile) {
-  lcm_.publish(channels::kMapstorePushTiles, &tile);
+  PublishTile(lcm_, channels::kMapstorePushTiles, tile);
   if (++paced_ % std::max(1, options_.tiles_per_burst) == 0 && options_.burst_pause_ms > 0) {
     std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options_.burst_pause_ms));
   }
@@ -195,9 +206,8 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snaps
   }
   if (snapshot.octomap) {
     const std::string& bytes = snapshot.octomap->bytes;
-    const int32_t count =
-        static_cast<int32_t>(std::max<size_t>(1, (bytes.size() + kOctomapChunkBytes - 1) /
-                                                     kOctomapChunkBytes));
+    const int32_t count = static_cast<int32_t>(
+        std::max<size_t>(1, (bytes.size() + kOctomapChunkBytes - 1) / kOctomapChunkBytes));
     const int64_t crc = runtime::Crc32(bytes.data(), bytes.size());
     for (int32_t i = 0; i < count; ++i) {
       cairn::lcmt_octomap c{};
@@ -223,9 +233,8 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snaps
   return reply;
 }
 
-Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site,
-                                                    const std::string& map, int64_t version,
-                                                    const std::string& profile,
+Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site, const std::string& map,
+                                                    int64_t version, const std::string& profile,
                                                     const std::vector<std::string>& layers) {
   cairn::lcmt_mapstore_request request{};
   request.request_id = NextRequestId();
@@ -253,6 +262,7 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site,
   }
   Loaded loaded;
   loaded.reply = *reply;
+  incoming_->last_progress = Clock::now();  // the tiles follow the reply
   // Collect the tiles, asking again for what does not arrive.
   auto complete = [&]() {
     for (const std::string& layer : reply->layers) {
@@ -267,23 +277,26 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site,
     }
     return true;
   };
+  auto last_ask = Clock::now();
   while (!complete()) {
     if (Since(start) > options_.total_timeout_s) {
       incoming_.reset();
       return common::UnavailableError("tiles of '" + map + "' did not all arrive");
     }
-    if (Since(incoming_->last_progress) > options_.resend_interval_s) {
+    const double quiet = Since(incoming_->last_progress);
+    if (quiet > options_.resend_interval_s && Since(last_ask) > options_.resend_interval_s) {
+      // Quiet for a while: ask for what is missing. A layer whose manifest never came is asked
+      // for whole, after a longer silence.
+      const bool long_quiet = quiet > 5 * options_.resend_interval_s;
       for (const std::string& layer : reply->layers) {
         std::optional<cairn::lcmt_tile_resend_request> r;
         if (incoming_->manifests.count(layer)) {
           r = incoming_->assembler.MakeResendRequest(layer, requester_, WallUtimeNow());
-        } else {
+        } else if (long_quiet) {
           cairn::lcmt_tile_resend_request all{};
           all.utime = WallUtimeNow();
           all.requester = requester_;
           all.layer = layer;
-          all.layer_version = 0;
-          all.num_tiles = 0;
           r = all;
         }
         if (!r) continue;
@@ -291,20 +304,18 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site,
         lcm_.publish(channels::kMapstoreTileResend, &*r);
         ++loaded.resend_requests;
       }
-      if (want_octomap && (!incoming_->has_octomap_head ||
-                           static_cast<int32_t>(incoming_->octomap_chunks.size()) !=
-                               incoming_->octomap_head.chunk_count)) {
+      if (want_octomap && long_quiet &&
+          (!incoming_->has_octomap_head || static_cast<int32_t>(incoming_->octomap_chunks.size()) !=
+                                               incoming_->octomap_head.chunk_count)) {
         cairn::lcmt_tile_resend_request r{};
         r.utime = WallUtimeNow();
         r.requester = requester_;
         r.map_name = incoming_->map_name;
         r.layer = "#octomap";
-        r.layer_version = 0;
-        r.num_tiles = 0;
         lcm_.publish(channels::kMapstoreTileResend, &r);
         ++loaded.resend_requests;
       }
-      incoming_->last_progress = Clock::now();
+      last_ask = Clock::now();
     }
     lcm_.handleTimeout(5);
   }
@@ -316,7 +327,8 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site,
       loaded.layers = common::GridMap(grid->geometry());
       first = false;
     }
-    if (grid->geometry() == loaded.layers.geometry()) loaded.layers.AddLayer(layer) = grid->at(layer);
+    if (grid->geometry() == loaded.layers.geometry())
+      loaded.layers.AddLayer(layer) = grid->at(layer);
   }
   for (const auto& m : reply->obstacles) {
     auto o = runtime::FromLcm(m);

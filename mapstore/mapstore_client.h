@@ -15,6 +15,7 @@
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_octomap.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
+
 #include "common/status.h"
 #include "mapstore/map_store.h"
 #include "services/runtime/tiler.h"
@@ -30,7 +31,7 @@ namespace cairn::mapstore {
 struct MapstoreClientOptions {
   double reply_timeout_s{2.0};     ///< re-send the request (same id) after this much silence
   double total_timeout_s{60.0};    ///< give up after this
-  double resend_interval_s{0.1};   ///< ask for missing tiles after this long without progress
+  double resend_interval_s{0.02};  ///< ask for missing tiles after this long without progress
   int tile_size{100};              ///< cells per side of pushed tiles
   int tiles_per_burst{2};          ///< pushed tiles sent back to back before a short pause
   double burst_pause_ms{0.1};      ///< lets the store's receive buffer drain (UDP drops the rest)
@@ -51,8 +52,9 @@ class MapstoreClient {
   /// kUnavailable when no reply came in time. The reply's own status is not interpreted.
   common::Result<cairn::lcmt_mapstore_reply> Call(cairn::lcmt_mapstore_request request);
 
-  /// Push save of a snapshot: layers, obstacles and OctoMap, then OP_SAVE. `source_profile`
-  /// names the profile the map was made with.
+  /// Push save of a snapshot: its layers, obstacles and OctoMap, then OP_SAVE carrying its
+  /// provenance (source profile, code version, parameters; the tiles carry the source robot).
+  /// Answers the store's resend requests while it waits for the reply.
   common::Result<cairn::lcmt_mapstore_reply> Save(const MapSnapshot& snapshot);
 
   struct Loaded {
@@ -72,7 +74,8 @@ class MapstoreClient {
   struct Incoming;
   void OnReply(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_mapstore_reply* m);
   void OnTile(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_grid_tile* m);
-  void OnManifest(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_grid_manifest* m);
+  void OnManifest(const lcm::ReceiveBuffer*, const std::string&,
+                  const cairn::lcmt_grid_manifest* m);
   void OnOctomap(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_octomap* m);
   void OnPushResend(const lcm::ReceiveBuffer*, const std::string&,
                     const cairn::lcmt_tile_resend_request* m);

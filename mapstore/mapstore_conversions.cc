@@ -37,7 +37,8 @@ cairn::lcmt_place ToLcm(const Place& place) {
 common::Result<Place> FromLcm(const cairn::lcmt_place& m) {
   if (m.num_vertices < 0 || m.x_m.size() != static_cast<size_t>(m.num_vertices) ||
       m.y_m.size() != static_cast<size_t>(m.num_vertices)) {
-    return common::InvalidArgumentError("place '" + m.name + "': vertex arrays disagree with num_vertices");
+    return common::InvalidArgumentError("place '" + m.name +
+                                        "': vertex arrays disagree with num_vertices");
   }
   Place p;
   p.name = m.name;

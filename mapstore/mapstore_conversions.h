@@ -2,6 +2,7 @@
 
 #include "cairn/lcmt_map_info.hpp"
 #include "cairn/lcmt_place.hpp"
+
 #include "common/status.h"
 #include "mapstore/map_store.h"
 

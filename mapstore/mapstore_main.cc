@@ -38,6 +38,7 @@ void LoadParams(const std::string& path, cairn::mapstore::MapstoreServiceParams*
     s.Get("max_reply_obstacles", &service->max_reply_obstacles);
     s.Get("tiles_per_burst", &service->tiles_per_burst);
     s.Get("burst_pause_ms", &service->burst_pause_ms);
+    s.Get("worker_threads", &service->worker_threads);
     s.Finish();
   }
   if (root.Has("database")) {
@@ -50,6 +51,7 @@ void LoadParams(const std::string& path, cairn::mapstore::MapstoreServiceParams*
     d.Get("compression_threads", &sqlite->compression_threads);
     d.Get("cache_size_kib", &sqlite->cache_size_kib);
     d.Get("max_page_count", &sqlite->max_page_count);
+    d.Get("wal_autocheckpoint_pages", &sqlite->wal_autocheckpoint_pages);
     d.Finish();
   }
   root.Finish();
@@ -65,6 +67,7 @@ int main(int argc, char** argv) {
   std::string config;
   std::string lcm_url;
   std::string files_root;
+  int recv_buffer_bytes = 4 << 20;
   cairn::common::FlagParser flags(
       "cairn-mapstore",
       "Keeps maps for every robot profile in one SQLite file and serves them over LCM: save "
@@ -75,6 +78,8 @@ int main(int argc, char** argv) {
   flags.AddString("files-root", &files_root,
                   "folder that OP_EXPORT/OP_IMPORT paths are relative to (overrides the config)");
   flags.AddString("lcm-url", &lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm ttl=0)");
+  flags.AddInt("recv-buffer-bytes", &recv_buffer_bytes,
+               "UDP receive buffer asked for when the URL names none (capped by the kernel)");
   flags.AddHelpSection(
       "Channels",
       "in:  MAPSTORE.REQUEST, MAPSTORE.TILE_RESEND, MAPSTORE.PUSH.{TILES,MANIFEST,OBSTACLES,"
@@ -87,6 +92,7 @@ int main(int argc, char** argv) {
 
   cairn::mapstore::MapstoreServiceParams params;
   cairn::mapstore::SqliteOptions options;
+  options.wal_autocheckpoint_pages = 16384;  // 128 MB of WAL at most between idle checkpoints
   if (!config.empty()) {
     try {
       LoadParams(config, &params, &options);
@@ -108,8 +114,15 @@ int main(int argc, char** argv) {
 
   cairn::runtime::NodeOptions node_options;
   node_options.process_name = "cairn-mapstore";
-  node_options.lcm_url = lcm_url;
   try {
+    // Maps arrive as bursts of tiles: ask for a large receive buffer unless the URL names one
+    // (the kernel caps it at net.core.rmem_max; resend requests cover what a small one drops).
+    node_options.lcm_url = cairn::runtime::ResolveLcmUrl(lcm_url);
+    if (node_options.lcm_url.rfind("udpm://", 0) == 0 &&
+        node_options.lcm_url.find("recv_buf_size=") == std::string::npos) {
+      node_options.lcm_url += (node_options.lcm_url.find('?') == std::string::npos ? "?" : "&") +
+                              std::string("recv_buf_size=") + std::to_string(recv_buffer_bytes);
+    }
     cairn::runtime::Node node(node_options);
 #ifdef CAIRN_HAVE_MAPPING
     cairn::mapstore::ProfileDeriver deriver = cairn::mapstore::MappingDeriver();
@@ -118,6 +131,9 @@ int main(int argc, char** argv) {
     CAIRN_LOG_WARN("built without the mapping core: profile layers cannot be derived");
 #endif
     cairn::mapstore::MapstoreService service(node, **store, deriver, params);
+    // Saves do not pay for checkpoints: the WAL is copied into the file when the store is idle.
+    cairn::mapstore::SqliteMapStore* sqlite = store->get();
+    node.AddTimer(1.0, [sqlite] { sqlite->CheckpointIfIdle(2.0); });
     node.SetState(cairn::runtime::HealthState::kReady);
     node.Event("serving %s (schema %d) on %s", db.c_str(), (*store)->schema_version(),
                node.url().c_str());

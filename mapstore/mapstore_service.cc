@@ -6,12 +6,14 @@
 #include <thread>
 
 #include "cairn/lcmt_map_control_request.hpp"
+
 #include "common/channels.h"
 #include "common/layers.h"
 #include "mapstore/map_operations.h"
 #include "mapstore/map_transfer.h"
 #include "mapstore/mapstore_conversions.h"
 #include "mapstore/names.h"
+#include "mapstore/tile_wire.h"
 #include "services/runtime/conversions.h"
 
 namespace cairn::mapstore {
@@ -37,8 +39,7 @@ double SecondsSince(std::chrono::steady_clock::time_point t) {
 // Profile-specific layers the store never saves: it derives them per profile itself.
 bool IsDerivedLayer(const std::string& name) {
   return layers::IsCostLayer(name) || name == layers::kSlope || name == layers::kStepMax ||
-         name == layers::kRoughness || name == layers::kDitchDepth ||
-         name == layers::kDitchWidth;
+         name == layers::kRoughness || name == layers::kDitchDepth || name == layers::kDitchWidth;
 }
 
 // Chunks of one OctoMap version being reassembled.
@@ -90,8 +91,8 @@ std::vector<cairn::lcmt_octomap> OctomapChunksOf(const OctomapData& octomap,
                                                  const std::string& map_name, int64_t utime) {
   std::vector<cairn::lcmt_octomap> out;
   const size_t total = octomap.bytes.size();
-  const int32_t count = static_cast<int32_t>(std::max<size_t>(1, (total + kOctomapChunkBytes - 1) /
-                                                                     kOctomapChunkBytes));
+  const int32_t count = static_cast<int32_t>(
+      std::max<size_t>(1, (total + kOctomapChunkBytes - 1) / kOctomapChunkBytes));
   const int64_t crc = runtime::Crc32(octomap.bytes.data(), total);
   for (int32_t i = 0; i < count; ++i) {
     cairn::lcmt_octomap c{};
@@ -137,17 +138,25 @@ Result<common::GridMap> CollectLayers(const runtime::LayerAssembler& assembler,
 
 int8_t ReplyStatus(const Status& status) {
   switch (status.code()) {
-    case common::StatusCode::kOk: return Reply::STATUS_OK;
-    case common::StatusCode::kNotFound: return Reply::STATUS_NOT_FOUND;
-    case common::StatusCode::kInvalidArgument: return Reply::STATUS_INVALID;
-    case common::StatusCode::kCorrupt: return Reply::STATUS_CORRUPT;
-    case common::StatusCode::kUnavailable: return Reply::STATUS_BUSY;
-    case common::StatusCode::kAlreadyExists: return Reply::STATUS_CONFLICT;
-    default: return Reply::STATUS_ERROR;
+    case common::StatusCode::kOk:
+      return Reply::STATUS_OK;
+    case common::StatusCode::kNotFound:
+      return Reply::STATUS_NOT_FOUND;
+    case common::StatusCode::kInvalidArgument:
+      return Reply::STATUS_INVALID;
+    case common::StatusCode::kCorrupt:
+      return Reply::STATUS_CORRUPT;
+    case common::StatusCode::kUnavailable:
+      return Reply::STATUS_BUSY;
+    case common::StatusCode::kAlreadyExists:
+      return Reply::STATUS_CONFLICT;
+    default:
+      return Reply::STATUS_ERROR;
   }
 }
 
 struct MapstoreService::Outgoing {
+  std::mutex sending;  // one send of this payload at a time
   std::string map_name;
   std::string robot;
   std::unique_ptr<runtime::LayerTiler> tiler;
@@ -158,6 +167,7 @@ struct MapstoreService::Outgoing {
 };
 
 struct MapstoreService::Staging {
+  std::string invalid;  // why pushed data were refused (the save fails with INVALID)
   runtime::LayerAssembler assembler;
   std::set<std::string> manifests;
   std::optional<common::ObstacleRegistry> obstacles;
@@ -174,9 +184,11 @@ struct MapstoreService::PendingSave {
   bool pull{false};
   Clock::time_point started{Clock::now()};
   Clock::time_point next_resend{Clock::now()};
+  int resend_rounds{0};
 };
 
 struct MapstoreService::LiveMirror {
+  std::string map_name{"live"};  // the mapper's map, as its manifests name it
   runtime::LayerAssembler assembler;
   std::map<std::string, Clock::time_point> manifest_time;
   std::optional<common::ObstacleRegistry> obstacles;
@@ -188,8 +200,7 @@ struct MapstoreService::LiveMirror {
 MapstoreService::MapstoreService(runtime::Node& node, MapStore& store, ProfileDeriver deriver,
                                  MapstoreServiceParams params)
     : node_(node), store_(store), deriver_(std::move(deriver)), params_(std::move(params)) {
-  node_.Subscribe<Request>(channels::kMapstoreRequest,
-                           [this](const Request& r) { OnRequest(r); });
+  node_.Subscribe<Request>(channels::kMapstoreRequest, [this](const Request& r) { OnRequest(r); });
   node_.Subscribe<cairn::lcmt_grid_tile>(channels::kMapstorePushTiles,
                                          [this](const cairn::lcmt_grid_tile& t) { OnPushTile(t); });
   node_.Subscribe<cairn::lcmt_grid_manifest>(
@@ -204,10 +215,29 @@ MapstoreService::MapstoreService(runtime::Node& node, MapStore& store, ProfileDe
       channels::kMapstoreTileResend,
       [this](const cairn::lcmt_tile_resend_request& r) { OnResend(r); });
   node_.AddTimer(0.05, [this] { Poll(); });
-  node_.AddTimer(0.002, [this] { PollJobs(); });
+  for (int i = 0; i < std::max(1, params_.worker_threads); ++i) {
+    workers_.emplace_back([this] { WorkerLoop(); });
+  }
 }
 
-MapstoreService::~MapstoreService() = default;
+MapstoreService::~MapstoreService() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  work_ready_.notify_all();
+  for (auto& w : workers_) w.join();
+}
+
+int64_t MapstoreService::pending_saves() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return static_cast<int64_t>(pending_.size());
+}
+
+int64_t MapstoreService::running_jobs() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return static_cast<int64_t>(busy_keys_.size());
+}
 
 std::string MapstoreService::RequestKey(const Request& request) const {
   return request.requester + "#" + std::to_string(request.request_id);
@@ -226,9 +256,12 @@ void MapstoreService::SetStatus(const Status& status, Reply* reply) {
   }
 }
 
-void MapstoreService::Publish(const Reply& reply) { node_.Publish(channels::kMapstoreReply, reply); }
+void MapstoreService::Publish(const Reply& reply) {
+  node_.Publish(channels::kMapstoreReply, reply);
+}
 
 void MapstoreService::OnRequest(const Request& request) {
+  std::unique_lock<std::mutex> lock(mutex_);
   const std::string key = RequestKey(request);
   auto cached = replies_.find(key);
   if (cached != replies_.end()) {
@@ -236,13 +269,14 @@ void MapstoreService::OnRequest(const Request& request) {
     node_.Count("replayed_requests");
     Publish(cached->second);
     auto out = outgoing_.find(std::to_string(request.request_id) + "/" + request.map_name);
-    if (out != outgoing_.end()) Resend(*out->second, nullptr);
+    if (out != outgoing_.end()) {
+      std::shared_ptr<Outgoing> payload = out->second;
+      lock.unlock();
+      Resend(*payload, nullptr);
+    }
     return;
   }
-  if (pending_.count(key)) return;  // still collecting tiles for this save
-  for (const auto& job : jobs_) {
-    if (RequestKey(job->request) == key) return;  // still working on it
-  }
+  if (pending_.count(key) || busy_keys_.count(key)) return;  // still working on it
 
   const auto started = Clock::now();
   Reply reply{};
@@ -265,24 +299,25 @@ void MapstoreService::OnRequest(const Request& request) {
   if (done) Finish(request, std::move(reply), started);
 }
 
-void MapstoreService::Finish(const Request& request, Reply reply, Clock::time_point started) {
-  reply.duration_us = static_cast<int64_t>(SecondsSince(started) * 1e6);
-  reply.num_maps = static_cast<int32_t>(reply.maps.size());
-  reply.num_profiles = static_cast<int32_t>(reply.profiles.size());
-  reply.num_places = static_cast<int32_t>(reply.places.size());
-  reply.num_obstacles = static_cast<int32_t>(reply.obstacles.size());
-  reply.num_layers = static_cast<int32_t>(reply.layers.size());
+void MapstoreService::CacheReply(const Request& request, Reply* reply, Clock::time_point started) {
+  reply->duration_us = static_cast<int64_t>(SecondsSince(started) * 1e6);
+  reply->num_maps = static_cast<int32_t>(reply->maps.size());
+  reply->num_profiles = static_cast<int32_t>(reply->profiles.size());
+  reply->num_places = static_cast<int32_t>(reply->places.size());
+  reply->num_obstacles = static_cast<int32_t>(reply->obstacles.size());
+  reply->num_layers = static_cast<int32_t>(reply->layers.size());
   const std::string key = RequestKey(request);
-  replies_[key] = reply;
+  replies_[key] = *reply;
   reply_order_.push_back(key);
   while (static_cast<int>(reply_order_.size()) > params_.reply_cache_size) {
     replies_.erase(reply_order_.front());
     reply_order_.pop_front();
   }
+}
+
+void MapstoreService::Finish(const Request& request, Reply reply, Clock::time_point started) {
+  CacheReply(request, &reply, started);
   Publish(reply);
-  // The payload follows the reply that announces it.
-  auto out = outgoing_.find(std::to_string(request.request_id) + "/" + request.map_name);
-  if (out != outgoing_.end() && reply.status == Reply::STATUS_OK) Resend(*out->second, nullptr);
 }
 
 bool MapstoreService::Handle(const Request& request, Reply* reply) {
@@ -308,8 +343,9 @@ bool MapstoreService::Handle(const Request& request, Reply* reply) {
       job->request = request;
       job->started = Clock::now();
       job->reply = *reply;
-      jobs_.push_back(std::move(job));
-      PollJobs();  // starts it now when a worker is free
+      busy_keys_.insert(RequestKey(request));
+      queue_.push_back(std::move(job));
+      work_ready_.notify_one();
       return false;
     }
     case Request::OP_LIST_MAPS: {
@@ -417,12 +453,24 @@ MapstoreService::JobResult MapstoreService::RunJob(const Request& request, Reply
   out.reply = std::move(reply);
   try {
     switch (request.op) {
-      case Request::OP_LOAD: JobLoad(request, &out); break;
-      case Request::OP_SHARE: JobShare(request, &out); break;
-      case Request::OP_LOAD_OBSTACLES: JobLoadObstacles(request, &out); break;
-      case Request::OP_EXPORT: JobExport(request, &out); break;
-      case Request::OP_IMPORT: JobImport(request, &out); break;
-      default: out.status = common::InternalError("not a worker request"); break;
+      case Request::OP_LOAD:
+        JobLoad(request, &out);
+        break;
+      case Request::OP_SHARE:
+        JobShare(request, &out);
+        break;
+      case Request::OP_LOAD_OBSTACLES:
+        JobLoadObstacles(request, &out);
+        break;
+      case Request::OP_EXPORT:
+        JobExport(request, &out);
+        break;
+      case Request::OP_IMPORT:
+        JobImport(request, &out);
+        break;
+      default:
+        out.status = common::InternalError("not a worker request");
+        break;
     }
   } catch (const std::exception& e) {
     out.status = common::InternalError(std::string("internal error: ") + e.what());
@@ -482,8 +530,8 @@ void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
   }
   reply->message = std::to_string(reply->layers.size()) + " layers" +
                    (request.profile.empty() ? std::string()
-                                            : view.from_cache ? ", derived layers from the cache"
-                                                              : ", derived now (not cached)") +
+                    : view.from_cache       ? ", derived layers from the cache"
+                                            : ", derived now (not cached)") +
                    (out->octomap ? ", OctoMap follows" : "");
 }
 
@@ -495,10 +543,9 @@ void MapstoreService::JobShare(const Request& request, JobResult* out) const {
     return;
   }
   const auto t0 = Clock::now();
-  auto shared = ShareMap(store_, deriver_, {site, request.map_name, request.version},
-                         request.profile,
-                         {request.requester.empty() ? "unknown" : request.requester,
-                          request.request_id, 0});
+  auto shared =
+      ShareMap(store_, deriver_, {site, request.map_name, request.version}, request.profile,
+               {request.requester.empty() ? "unknown" : request.requester, request.request_id, 0});
   if (!shared.ok()) {
     out->status = shared.status();
     return;
@@ -517,10 +564,10 @@ void MapstoreService::JobShare(const Request& request, JobResult* out) const {
                 request.profile.c_str(), shared->was_cached ? "from the cache" : "derived");
   reply->message = buf;
   if (!shared->was_cached) {
-    std::snprintf(buf, sizeof(buf), "shared %s/%s v%lld with %s: derived in %.0f ms, %zu verdicts differ",
-                  site.c_str(), request.map_name.c_str(),
-                  static_cast<long long>(shared->info.version), request.profile.c_str(),
-                  SecondsSince(t0) * 1e3, shared->changed.size());
+    std::snprintf(
+        buf, sizeof(buf), "shared %s/%s v%lld with %s: derived in %.0f ms, %zu verdicts differ",
+        site.c_str(), request.map_name.c_str(), static_cast<long long>(shared->info.version),
+        request.profile.c_str(), SecondsSince(t0) * 1e3, shared->changed.size());
     out->event = buf;
   }
 }
@@ -630,9 +677,9 @@ void MapstoreService::JobImport(const Request& request, JobResult* out) const {
   options.path = *path;
   options.provenance.source_robot = request.robot;
   options.provenance.source_profile = request.profile;
-  auto info = ImportMap(store_, options,
-                        {request.requester.empty() ? "unknown" : request.requester,
-                         request.request_id, 0});
+  auto info =
+      ImportMap(store_, options,
+                {request.requester.empty() ? "unknown" : request.requester, request.request_id, 0});
   if (!info.ok()) {
     out->status = info.status();
     return;
@@ -645,70 +692,73 @@ void MapstoreService::JobImport(const Request& request, JobResult* out) const {
                std::to_string(info->version);
 }
 
-void MapstoreService::ApplyJob(Job& job, JobResult result) {
-  Reply reply = std::move(result.reply);
-  SetStatus(result.status, &reply);
-  if (!result.counter.empty()) node_.Count(result.counter);
-  if (result.status.ok()) {
-    const std::string map_name = std::to_string(job.request.request_id) + "/" + job.request.map_name;
-    if (result.layers) reply.num_tiles = SendLayers(map_name, *result.layers, result.robot);
-    if (result.octomap) SendOctomap(map_name, *result.octomap);
-    if (!result.event.empty()) node_.Event("%s", result.event.c_str());
+void MapstoreService::WorkerLoop() {
+  while (true) {
+    std::unique_ptr<Job> job;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      work_ready_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      if (stopping_) return;
+      job = std::move(queue_.front());
+      queue_.pop_front();
+    }
+    // The work and the tiling of the payload run without the lock ...
+    JobResult result = RunJob(job->request, job->reply);
+    Reply reply = std::move(result.reply);
+    std::shared_ptr<Outgoing> payload;
+    if (result.status.ok() && (result.layers || result.octomap)) {
+      payload = MakeOutgoing(std::to_string(job->request.request_id) + "/" + job->request.map_name,
+                             result);
+      for (const auto& batch : payload->first_send) {
+        reply.num_tiles += static_cast<int32_t>(batch.tiles.size());
+      }
+    }
+    SetStatus(result.status, &reply);
+    if (!result.counter.empty()) node_.Count(result.counter);
+    {
+      // ... the bookkeeping with it ...
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (payload) KeepOutgoing(payload);
+      CacheReply(job->request, &reply, job->started);
+      busy_keys_.erase(RequestKey(job->request));
+    }
+    // ... and the sending after it: the reply, then the payload it announces.
+    Publish(reply);
+    if (payload) Resend(*payload, nullptr);
+    if (result.status.ok() && !result.event.empty()) node_.Event("%s", result.event.c_str());
   }
-  Finish(job.request, std::move(reply), job.started);
 }
 
-void MapstoreService::PollJobs() {
-  // Finished jobs reply in the order they finish; queued ones start while workers are free.
-  for (auto it = jobs_.begin(); it != jobs_.end();) {
-    Job& job = **it;
-    if (job.running &&
-        job.result.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
-      std::unique_ptr<Job> done = std::move(*it);
-      it = jobs_.erase(it);
-      ApplyJob(*done, done->result.get());
-    } else {
-      ++it;
+std::shared_ptr<MapstoreService::Outgoing> MapstoreService::MakeOutgoing(
+    const std::string& map_name, const JobResult& result) const {
+  auto out = std::make_shared<Outgoing>();
+  out->map_name = map_name;
+  out->robot = result.robot;
+  out->octomap = result.octomap;
+  if (result.layers) {
+    out->tiler =
+        std::make_unique<runtime::LayerTiler>(result.robot, map_name, params_.reply_tile_size);
+    const int64_t utime = node_.NowUtime();
+    for (const std::string& name : result.layers->layer_names()) {
+      out->first_send.push_back(
+          out->tiler->Update(*result.layers, name, runtime::TileEncoding::kFloat, utime, true));
+      out->layers.push_back(name);
+      out->cells += result.layers->geometry().num_cells();
     }
   }
-  int running = 0;
-  for (const auto& job : jobs_) running += job->running;
-  for (auto& job : jobs_) {
-    if (running >= std::max(1, params_.worker_threads)) break;
-    if (job->running) continue;
-    job->running = true;
-    ++running;
-    job->result = std::async(std::launch::async,
-                             [this, request = job->request, reply = job->reply]() {
-                               return RunJob(request, reply);
-                             });
-  }
+  return out;
 }
 
-int MapstoreService::SendLayers(const std::string& map_name, const common::GridMap& layers,
-                                const std::string& robot) {
-  auto out = std::make_unique<Outgoing>();
-  out->map_name = map_name;
-  out->robot = robot;
-  out->tiler = std::make_unique<runtime::LayerTiler>(robot, map_name, params_.reply_tile_size);
-  int tiles = 0;
-  const int64_t utime = node_.NowUtime();
-  for (const std::string& name : layers.layer_names()) {
-    auto batch = out->tiler->Update(layers, name, runtime::TileEncoding::kFloat, utime, true);
-    tiles += static_cast<int>(batch.tiles.size());
-    out->first_send.push_back(std::move(batch));
-    out->layers.push_back(name);
-    out->cells += layers.geometry().num_cells();
-  }
-  // Keep the tiler for resends; the oldest payloads go first when memory runs short.
+void MapstoreService::KeepOutgoing(std::shared_ptr<Outgoing> out) {
+  // Kept for resends; the oldest payloads go first when memory runs short.
   outgoing_cells_ += out->cells;
-  auto existing = outgoing_.find(map_name);
+  auto existing = outgoing_.find(out->map_name);
   if (existing != outgoing_.end()) {
     outgoing_cells_ -= existing->second->cells;
     existing->second = std::move(out);
   } else {
-    outgoing_[map_name] = std::move(out);
-    outgoing_order_.push_back(map_name);
+    outgoing_order_.push_back(out->map_name);
+    outgoing_[out->map_name] = std::move(out);
   }
   while (outgoing_cells_ > params_.max_kept_reply_cells && outgoing_order_.size() > 1) {
     auto victim = outgoing_.find(outgoing_order_.front());
@@ -718,29 +768,22 @@ int MapstoreService::SendLayers(const std::string& map_name, const common::GridM
     }
     outgoing_order_.pop_front();
   }
-  return tiles;
-}
-
-void MapstoreService::SendOctomap(const std::string& map_name, const OctomapData& octomap) {
-  auto it = outgoing_.find(map_name);
-  if (it == outgoing_.end()) {
-    auto out = std::make_unique<Outgoing>();
-    out->map_name = map_name;
-    it = outgoing_.emplace(map_name, std::move(out)).first;
-    outgoing_order_.push_back(map_name);
-  }
-  it->second->octomap = octomap;
 }
 
 void MapstoreService::Resend(Outgoing& out, const cairn::lcmt_tile_resend_request* request) {
   // A null request sends the whole payload: every layer's manifest and tiles, then the OctoMap.
+  std::lock_guard<std::mutex> sending(out.sending);
   int sent = 0;
   auto publish_batch = [&](const runtime::LayerTiler::Batch& batch) {
     node_.Publish(channels::kMapstoreManifest, batch.manifest);
     for (const auto& tile : batch.tiles) {
-      node_.Publish(channels::kMapstoreTiles, tile);
+      if (!PublishTile(node_.lcm(), channels::kMapstoreTiles, tile)) {
+        node_.Warn("publish_tiles", "could not publish reply tiles");
+      }
+      node_.Count("tiles_sent");
       if (++sent % std::max(1, params_.tiles_per_burst) == 0 && params_.burst_pause_ms > 0) {
-        std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
+        std::this_thread::sleep_for(
+            std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
       }
     }
   };
@@ -773,10 +816,15 @@ void MapstoreService::Resend(Outgoing& out, const cairn::lcmt_tile_resend_reques
 }
 
 void MapstoreService::OnResend(const cairn::lcmt_tile_resend_request& request) {
-  auto it = outgoing_.find(request.map_name);
-  if (it == outgoing_.end()) return;  // not ours, or forgotten
+  std::shared_ptr<Outgoing> payload;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = outgoing_.find(request.map_name);
+    if (it == outgoing_.end()) return;  // not ours, or forgotten
+    payload = it->second;
+  }
   node_.Count("tile_resend_requests");
-  Resend(*it->second, &request);
+  Resend(*payload, &request);
 }
 
 bool MapstoreService::StartSave(const Request& request, Reply* reply) {
@@ -863,7 +911,8 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
       }
       if (SecondsSince(save.started) < params_.pull_settle_s) return false;
     }
-    if (wanted.empty()) missing.push_back("any layer (is the mapper of '" + request.robot + "' running?)");
+    if (wanted.empty())
+      missing.push_back("any layer (is the mapper of '" + request.robot + "' running?)");
     for (const std::string& layer : wanted) {
       auto it = mirror.manifest_time.find(layer);
       const bool fresh = it != mirror.manifest_time.end() && it->second >= save.started;
@@ -876,11 +925,12 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
         cairn::lcmt_tile_resend_request all{};
         all.utime = utime;
         all.requester = kActor;
-        all.robot = request.robot;
-        all.map_name = "live";
         all.layer = layer;
         r = all;
       }
+      // Mappers answer requests naming their robot and map.
+      r->robot = request.robot;
+      r->map_name = mirror.map_name;
       resends.push_back(*r);
     }
     // Obstacles published after the request, or (a mapper without any) none after a while.
@@ -898,10 +948,20 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
       if (request.expect_octomap) missing.push_back(kResendOctomap);
     } else {
       Staging& staging = *it->second;
+      if (!staging.invalid.empty()) {
+        SetStatus(common::InvalidArgumentError(staging.invalid), &reply);
+        staging_.erase(it);
+        const Request done_request = request;
+        const Clock::time_point started = save.started;
+        pending_.erase(save.key);
+        Finish(done_request, std::move(reply), started);
+        return true;
+      }
       assembler = &staging.assembler;
       push_robot = staging.robot;
       for (const std::string& layer : wanted) {
-        if (!staging.manifests.count(layer) || !assembler->Complete(layer)) missing.push_back(layer);
+        if (!staging.manifests.count(layer) || !assembler->Complete(layer))
+          missing.push_back(layer);
       }
       obstacles = staging.obstacles;
       octomap = staging.octomap.Complete();
@@ -942,20 +1002,54 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
             save.pull ? channels::ForRobot(request.robot, channels::kMapTileResend)
                       : std::string(channels::kMapstorePushTileResend);
         for (const auto& r : resends) node_.Publish(channel, r);
-        save.next_resend = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                              std::chrono::duration<double>(params_.resend_interval_s));
+        if (!resends.empty()) ++save.resend_rounds;
+        save.next_resend =
+            Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                               std::chrono::duration<double>(params_.resend_interval_s));
       }
       return false;
     }
   } else {
-    // Everything is here: store it.
-    auto base = CollectLayers(*assembler, wanted);
-    if (!base.ok()) {
-      SetStatus(base.status(), &reply);
-    } else {
+    // Everything is here: store it. A map holds layers of one grid; layers of another grid
+    // (a mapper's finer 2-D occupancy) become companion maps "<map>-<first layer>".
+    const double waited_ms = SecondsSince(save.started) * 1e3;
+    std::vector<std::vector<std::string>> groups;
+    std::vector<common::GridGeometry> group_geometry;
+    for (const std::string& layer : wanted) {
+      auto grid = assembler->Layer(layer);
+      if (!grid) continue;
+      size_t g = 0;
+      while (g < groups.size() && group_geometry[g] != grid->geometry()) ++g;
+      if (g == groups.size()) {
+        groups.emplace_back();
+        group_geometry.push_back(grid->geometry());
+      }
+      groups[g].push_back(layer);
+    }
+    // The group holding the elevation is the map itself.
+    for (size_t g = 1; g < groups.size(); ++g) {
+      if (std::find(groups[g].begin(), groups[g].end(), layers::kElevation) != groups[g].end()) {
+        std::swap(groups[0], groups[g]);
+      }
+    }
+    const WriteContext ctx{request.requester.empty() ? "unknown" : request.requester,
+                           request.request_id, 0};
+    std::string companions;
+    Status failed;
+    for (size_t g = 0; g < groups.size() && failed.ok(); ++g) {
+      auto base = CollectLayers(*assembler, groups[g]);
+      if (!base.ok()) {
+        failed = base.status();
+        break;
+      }
       MapSnapshot snapshot;
       snapshot.site = request.site;
       snapshot.name = request.map_name;
+      if (g > 0) {
+        std::string suffix = groups[g].front();
+        std::replace(suffix.begin(), suffix.end(), '/', '_');
+        snapshot.name = request.map_name + "-" + suffix;
+      }
       snapshot.base = std::move(base).value();
       snapshot.provenance.source_robot =
           save.pull ? request.robot : (push_robot.empty() ? request.requester : push_robot);
@@ -966,29 +1060,44 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
         auto p = store_.GetProfile(request.profile);
         if (p.ok()) snapshot.provenance.source_profile_hash = p->content_hash;
       }
-      if (ValidateName("robot", snapshot.provenance.source_robot).code() != common::StatusCode::kOk) {
+      if (ValidateName("robot", snapshot.provenance.source_robot).code() !=
+          common::StatusCode::kOk) {
         snapshot.provenance.source_robot.clear();
       }
-      if (obstacles) snapshot.obstacles = *obstacles;
-      if (octomap) snapshot.octomap = *octomap;
+      if (g == 0 && obstacles) snapshot.obstacles = *obstacles;
+      if (g == 0 && octomap) snapshot.octomap = *octomap;
       const auto t0 = Clock::now();
-      auto info = store_.SaveMap(snapshot, {request.requester.empty() ? "unknown" : request.requester,
-                                            request.request_id, 0});
+      // Companion maps are not request replays: only the main save carries the request id.
+      auto info = store_.SaveMap(snapshot, g == 0 ? ctx : WriteContext{ctx.actor, 0, 0});
       if (!info.ok()) {
-        SetStatus(info.status(), &reply);
-      } else {
-        reply.version = info->version;
-        reply.maps.push_back(ToLcm(*info));
-        reply.layers = info->layers;
-        reply.message = "saved version " + std::to_string(info->version);
-        node_.Count("saves");
-        node_.Event("saved %s/%s v%lld from %s (%zu layers, %zu obstacles%s) in %.0f ms",
-                    request.site.c_str(), request.map_name.c_str(),
-                    static_cast<long long>(info->version),
-                    save.pull ? ("mapper of " + request.robot).c_str() : "a push",
-                    info->layers.size(), snapshot.obstacles.obstacles.size(),
-                    octomap ? ", octomap" : "", SecondsSince(t0) * 1e3);
+        failed = info.status();
+        break;
       }
+      node_.Count("saves");
+      node_.Event(
+          "saved %s/%s v%lld from %s (%zu layers, %zu obstacles%s): waited %.0f ms "
+          "for data (%d resend rounds), stored in %.0f ms",
+          request.site.c_str(), snapshot.name.c_str(), static_cast<long long>(info->version),
+          save.pull ? ("mapper of " + request.robot).c_str() : "a push", info->layers.size(),
+          snapshot.obstacles.obstacles.size(), snapshot.octomap ? ", octomap" : "", waited_ms,
+          save.resend_rounds, SecondsSince(t0) * 1e3);
+      if (g == 0) {
+        reply.version = info->version;
+        reply.layers = info->layers;
+      } else {
+        companions += (companions.empty() ? "" : ", ") + snapshot.name + " v" +
+                      std::to_string(info->version) + " (" + std::to_string(info->layers.size()) +
+                      " layers of another grid)";
+      }
+      reply.maps.push_back(ToLcm(*info));
+    }
+    if (!failed.ok()) {
+      SetStatus(failed, &reply);
+    } else if (groups.empty()) {
+      SetStatus(common::InternalError("no layer to save"), &reply);
+    } else {
+      reply.message = "saved version " + std::to_string(reply.version) +
+                      (companions.empty() ? "" : "; also " + companions);
     }
   }
   if (!save.pull) staging_.erase(save.map_name);
@@ -1000,6 +1109,7 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
 }
 
 void MapstoreService::Poll() {
+  std::lock_guard<std::mutex> lock(mutex_);
   // Pending saves: finish, ask again, or give up.
   std::vector<std::string> keys;
   for (const auto& [key, save] : pending_) keys.push_back(key);
@@ -1040,6 +1150,7 @@ int64_t StagedCells(const Map& staging) {
 }  // namespace
 
 void MapstoreService::OnPushTile(const cairn::lcmt_grid_tile& tile) {
+  std::lock_guard<std::mutex> lock(mutex_);
   if (tile.map_name.find('/') == std::string::npos) {
     node_.CountDropped("bad_push_tiles");
     return;
@@ -1064,6 +1175,7 @@ void MapstoreService::OnPushTile(const cairn::lcmt_grid_tile& tile) {
 }
 
 void MapstoreService::OnPushManifest(const cairn::lcmt_grid_manifest& manifest) {
+  std::lock_guard<std::mutex> lock(mutex_);
   if (manifest.map_name.find('/') == std::string::npos || manifest.num_tiles < 0 ||
       manifest.tile_ix.size() != static_cast<size_t>(manifest.num_tiles) ||
       manifest.tile_iy.size() != static_cast<size_t>(manifest.num_tiles) ||
@@ -1080,20 +1192,25 @@ void MapstoreService::OnPushManifest(const cairn::lcmt_grid_manifest& manifest) 
 }
 
 void MapstoreService::OnPushObstacles(const cairn::lcmt_obstacle_registry& msg) {
-  auto registry = runtime::FromLcm(msg);
-  if (!registry.ok() || msg.map_name.find('/') == std::string::npos) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (msg.map_name.find('/') == std::string::npos) {
     node_.CountDropped("bad_push_obstacles");
-    node_.Warn("bad_obstacles", registry.ok() ? "obstacles without a request map name"
-                                              : registry.status().message());
     return;
   }
   auto& staging = staging_[msg.map_name];
   if (!staging) staging = std::make_unique<Staging>();
+  auto registry = runtime::FromLcm(msg);
+  if (!registry.ok()) {
+    node_.CountDropped("bad_push_obstacles");
+    staging->invalid = "pushed obstacles: " + registry.status().message();
+    return;
+  }
   staging->obstacles = std::move(registry).value();
   staging->last = Clock::now();
 }
 
 void MapstoreService::OnPushOctomap(const cairn::lcmt_octomap& chunk) {
+  std::lock_guard<std::mutex> lock(mutex_);
   if (chunk.map_name.find('/') == std::string::npos) {
     node_.CountDropped("bad_push_octomap");
     return;
@@ -1109,39 +1226,41 @@ void MapstoreService::EnsureMirror(const std::string& robot) {
   auto mirror = std::make_unique<LiveMirror>();
   LiveMirror* m = mirror.get();
   mirrors_[robot] = std::move(mirror);
-  node_.Subscribe<cairn::lcmt_grid_tile>(
-      channels::ForRobot(robot, channels::kMapTiles), [this, m](const cairn::lcmt_grid_tile& t) {
-        if (!m->assembler.OnTile(t)) node_.CountDropped("bad_mapper_tiles");
-      });
-  node_.Subscribe<cairn::lcmt_occupancy_tile>(
-      channels::ForRobot(robot, channels::kMapOccupancy),
-      [this, m](const cairn::lcmt_occupancy_tile& t) {
-        if (!m->assembler.OnTile(t)) node_.CountDropped("bad_mapper_tiles");
-      });
-  node_.Subscribe<cairn::lcmt_grid_manifest>(
-      channels::ForRobot(robot, channels::kMapManifest), [m](const cairn::lcmt_grid_manifest& g) {
-        m->assembler.OnManifest(g);
-        m->manifest_time[g.layer] = Clock::now();
-      });
-  node_.Subscribe<cairn::lcmt_obstacle_registry>(
-      channels::ForRobot(robot, channels::kMapObstacles),
-      [this, m](const cairn::lcmt_obstacle_registry& r) {
-        auto registry = runtime::FromLcm(r);
-        if (registry.ok()) {
-          m->obstacles = std::move(registry).value();
-          m->obstacles_time = Clock::now();
-        } else {
-          node_.CountDropped("bad_mapper_obstacles");
-        }
-      });
-  node_.Subscribe<cairn::lcmt_octomap>(
-      channels::ForRobot(robot, channels::kMapOctomap), [this, m](const cairn::lcmt_octomap& c) {
-        if (!m->octomap.Add(c)) {
-          node_.CountDropped("bad_mapper_octomap");
-          return;
-        }
-        if (auto whole = m->octomap.Complete()) m->complete_octomap = std::move(whole);
-      });
+  node_.Subscribe<cairn::lcmt_grid_tile>(channels::ForRobot(robot, channels::kMapTiles),
+                                         [this, m](const cairn::lcmt_grid_tile& t) {
+                                           if (!m->assembler.OnTile(t))
+                                             node_.CountDropped("bad_mapper_tiles");
+                                         });
+  node_.Subscribe<cairn::lcmt_occupancy_tile>(channels::ForRobot(robot, channels::kMapOccupancy),
+                                              [this, m](const cairn::lcmt_occupancy_tile& t) {
+                                                if (!m->assembler.OnTile(t))
+                                                  node_.CountDropped("bad_mapper_tiles");
+                                              });
+  node_.Subscribe<cairn::lcmt_grid_manifest>(channels::ForRobot(robot, channels::kMapManifest),
+                                             [m](const cairn::lcmt_grid_manifest& g) {
+                                               m->assembler.OnManifest(g);
+                                               m->manifest_time[g.layer] = Clock::now();
+                                               if (!g.map_name.empty()) m->map_name = g.map_name;
+                                             });
+  node_.Subscribe<cairn::lcmt_obstacle_registry>(channels::ForRobot(robot, channels::kMapObstacles),
+                                                 [this, m](const cairn::lcmt_obstacle_registry& r) {
+                                                   auto registry = runtime::FromLcm(r);
+                                                   if (registry.ok()) {
+                                                     m->obstacles = std::move(registry).value();
+                                                     m->obstacles_time = Clock::now();
+                                                   } else {
+                                                     node_.CountDropped("bad_mapper_obstacles");
+                                                   }
+                                                 });
+  node_.Subscribe<cairn::lcmt_octomap>(channels::ForRobot(robot, channels::kMapOctomap),
+                                       [this, m](const cairn::lcmt_octomap& c) {
+                                         if (!m->octomap.Add(c)) {
+                                           node_.CountDropped("bad_mapper_octomap");
+                                           return;
+                                         }
+                                         if (auto whole = m->octomap.Complete())
+                                           m->complete_octomap = std::move(whole);
+                                       });
   node_.Event("following the live map of %s for pull saves", robot.c_str());
 }
 

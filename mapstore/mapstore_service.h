@@ -1,14 +1,16 @@
 #pragma once
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <deque>
-#include <future>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "cairn/lcmt_grid_manifest.hpp"
@@ -19,6 +21,7 @@
 #include "cairn/lcmt_occupancy_tile.hpp"
 #include "cairn/lcmt_octomap.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
+
 #include "mapstore/map_store.h"
 #include "services/runtime/node.h"
 #include "services/runtime/tiler.h"
@@ -53,19 +56,19 @@ namespace cairn::mapstore {
 
 struct MapstoreServiceParams {
   std::string files_root{"var/mapstore-files"};  ///< OP_EXPORT/OP_IMPORT paths stay below it
-  double save_timeout_s{20.0};          ///< a save gives up waiting for tiles after this
-  double resend_interval_s{0.2};        ///< asks again for missing tiles this often
-  double staging_timeout_s{30.0};       ///< pushed data without a request are dropped after this
-  double pull_settle_s{0.5};            ///< a pull without named layers waits this long for more
-  int reply_cache_size{512};            ///< replies kept for replays
+  double save_timeout_s{20.0};                   ///< a save gives up waiting for tiles after this
+  double resend_interval_s{0.05};                ///< asks again for missing tiles this often
+  double staging_timeout_s{30.0};  ///< pushed data without a request are dropped after this
+  double pull_settle_s{0.5};       ///< a pull without named layers waits this long for more
+  int reply_cache_size{512};       ///< replies kept for replays
   int64_t max_kept_reply_cells{64'000'000};  ///< reply tiles kept for resends (cells)
   int64_t max_staged_cells{128'000'000};     ///< pushed tiles held at once (cells)
-  int reply_tile_size{100};             ///< cells per side of reply tiles
-  int max_reply_obstacles{1500};        ///< obstacles carried in one reply (bus size limit)
-  int tiles_per_burst{2};               ///< reply tiles sent back to back before a short pause
-  double burst_pause_ms{0.1};           ///< the pause between bursts: UDP drops what a
-                                        ///< receiver's socket buffer (~200 KB) cannot hold
-  int worker_threads{2};                ///< loads, shares, exports and imports run on these
+  int reply_tile_size{100};                  ///< cells per side of reply tiles
+  int max_reply_obstacles{1500};             ///< obstacles carried in one reply (bus size limit)
+  int tiles_per_burst{2};                    ///< reply tiles sent back to back before a short pause
+  double burst_pause_ms{0.1};                ///< the pause between bursts: UDP drops what a
+                                             ///< receiver's socket buffer (~200 KB) cannot hold
+  int worker_threads{2};                     ///< loads, shares, exports and imports run on these
 };
 
 class MapstoreService {
@@ -80,12 +83,11 @@ class MapstoreService {
 
   /// Checks pending saves (timeouts, resend requests); called from a node timer.
   void Poll();
-  /// Publishes the replies of finished worker jobs and starts queued ones; called from a
-  /// node timer.
-  void PollJobs();
 
-  int64_t pending_saves() const { return static_cast<int64_t>(pending_.size()); }
-  int64_t running_jobs() const { return static_cast<int64_t>(jobs_.size()); }
+  /// Saves waiting for their data.
+  int64_t pending_saves() const;
+  /// Worker requests queued or running.
+  int64_t running_jobs() const;
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -107,8 +109,6 @@ class MapstoreService {
     cairn::lcmt_mapstore_request request;
     std::chrono::steady_clock::time_point started;
     cairn::lcmt_mapstore_reply reply;
-    std::future<JobResult> result;
-    bool running{false};
   };
 
   void OnRequest(const cairn::lcmt_mapstore_request& request);
@@ -122,23 +122,31 @@ class MapstoreService {
   /// reply is deferred (a save waiting for tiles).
   bool Handle(const cairn::lcmt_mapstore_request& request, cairn::lcmt_mapstore_reply* reply);
   // Worker jobs: they use only the store, the deriver and the parameters (never the node).
-  JobResult RunJob(const cairn::lcmt_mapstore_request& request, cairn::lcmt_mapstore_reply reply) const;
+  JobResult RunJob(const cairn::lcmt_mapstore_request& request,
+                   cairn::lcmt_mapstore_reply reply) const;
   void JobLoad(const cairn::lcmt_mapstore_request& request, JobResult* out) const;
   void JobShare(const cairn::lcmt_mapstore_request& request, JobResult* out) const;
   void JobLoadObstacles(const cairn::lcmt_mapstore_request& request, JobResult* out) const;
   void JobExport(const cairn::lcmt_mapstore_request& request, JobResult* out) const;
   void JobImport(const cairn::lcmt_mapstore_request& request, JobResult* out) const;
-  void ApplyJob(Job& job, JobResult result);
+  void WorkerLoop();
   bool StartSave(const cairn::lcmt_mapstore_request& request, cairn::lcmt_mapstore_reply* reply);
   /// Tries to finish a pending save; true when it replied (saved or failed).
   bool TryFinishSave(PendingSave& save, bool timed_out);
+  /// Caches a finished reply for replays, publishes it, then its payload (if any). Called with
+  /// mutex_ held.
   void Finish(const cairn::lcmt_mapstore_request& request, cairn::lcmt_mapstore_reply reply,
               Clock::time_point started);
+  /// Fills the reply's counts and duration and caches it for replays (mutex_ held).
+  void CacheReply(const cairn::lcmt_mapstore_request& request, cairn::lcmt_mapstore_reply* reply,
+                  Clock::time_point started);
   void Publish(const cairn::lcmt_mapstore_reply& reply);
-  /// Sends layers (and an OctoMap) as the payload of a reply; returns the tile count.
-  int SendLayers(const std::string& map_name, const common::GridMap& layers,
-                 const std::string& robot);
-  void SendOctomap(const std::string& map_name, const OctomapData& octomap);
+  /// Tiles a reply's payload (no lock needed).
+  std::shared_ptr<Outgoing> MakeOutgoing(const std::string& map_name,
+                                         const JobResult& result) const;
+  /// Keeps a payload for resends, forgetting the oldest ones beyond the memory bound (mutex_ held).
+  void KeepOutgoing(std::shared_ptr<Outgoing> out);
+  /// Publishes a payload: everything (request == nullptr) or what a resend request names.
   void Resend(Outgoing& out, const cairn::lcmt_tile_resend_request* request);
   void EnsureMirror(const std::string& robot);
   /// Resolves a path of a request below files_root; kInvalidArgument when it would leave it.
@@ -151,11 +159,15 @@ class MapstoreService {
   ProfileDeriver deriver_;
   MapstoreServiceParams params_;
 
+  // Guards everything below: handlers run on the node's thread, finished requests are applied
+  // by the worker threads.
+  mutable std::mutex mutex_;
   // Replies by request key, oldest first, for replays.
   std::map<std::string, cairn::lcmt_mapstore_reply> replies_;
   std::deque<std::string> reply_order_;
-  // Reply payloads kept for resends, by map_name "<request_id>/<map>".
-  std::map<std::string, std::unique_ptr<Outgoing>> outgoing_;
+  // Reply payloads kept for resends, by map_name "<request_id>/<map>". Shared: a worker may
+  // still be sending one the store already forgot.
+  std::map<std::string, std::shared_ptr<Outgoing>> outgoing_;
   std::deque<std::string> outgoing_order_;
   int64_t outgoing_cells_{0};
   // Pushed data by map_name, and saves waiting for data, by request key.
@@ -163,8 +175,12 @@ class MapstoreService {
   std::map<std::string, std::unique_ptr<PendingSave>> pending_;
   // The live maps of robots the store pulled from.
   std::map<std::string, std::unique_ptr<LiveMirror>> mirrors_;
-  // Heavy requests, by request key, in arrival order.
-  std::deque<std::unique_ptr<Job>> jobs_;
+  // Heavy requests waiting for a worker, and the keys of those queued or running.
+  std::deque<std::unique_ptr<Job>> queue_;
+  std::set<std::string> busy_keys_;
+  std::condition_variable work_ready_;
+  bool stopping_{false};
+  std::vector<std::thread> workers_;
 };
 
 /// Maps a core status to a reply status constant.

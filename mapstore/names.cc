@@ -58,8 +58,8 @@ common::Status ValidateLayerName(const std::string& name) {
   size_t start = 0;
   while (true) {
     const size_t slash = name.find('/', start);
-    const std::string part = name.substr(start, slash == std::string::npos ? std::string::npos
-                                                                          : slash - start);
+    const std::string part =
+        name.substr(start, slash == std::string::npos ? std::string::npos : slash - start);
     common::Status s = ValidateName("layer name part", part);
     if (!s.ok()) {
       return common::InvalidArgumentError("layer name " + Quote(name) + ": " + s.message());

@@ -1,10 +1,10 @@
 #include "mapstore/sqlite_db.h"
 
-#include <sqlite3.h>
-
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+
+#include <sqlite3.h>
 
 namespace cairn::mapstore::sqlite {
 

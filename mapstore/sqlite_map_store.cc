@@ -1,7 +1,5 @@
 #include "mapstore/sqlite_map_store.h"
 
-#include <sqlite3.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,6 +7,8 @@
 #include <filesystem>
 #include <set>
 #include <thread>
+
+#include <sqlite3.h>
 
 #include "mapstore/names.h"
 #include "mapstore/schema.h"
@@ -35,8 +35,10 @@ constexpr char kTileColumns[] = "t.tile_ix, t.tile_iy, b.codec, b.raw_size, b.ra
 Status WriteError(const Status& s, const std::string& what) {
   if (s.code() == common::StatusCode::kResourceExhausted) {
     return common::ResourceExhaustedError(
-        what + ": the disk is full (or the database quota is reached); nothing of this change "
-               "was written and everything committed before is intact (" + s.message() + ")");
+        what +
+        ": the disk is full (or the database quota is reached); nothing of this change "
+        "was written and everything committed before is intact (" +
+        s.message() + ")");
   }
   if (s.code() == common::StatusCode::kUnavailable) {
     return common::UnavailableError(what + ": the database stayed locked by another writer (" +
@@ -84,8 +86,9 @@ SqliteMapStore::~SqliteMapStore() = default;
 Result<std::unique_ptr<SqliteMapStore>> SqliteMapStore::Open(const std::string& path,
                                                              const SqliteOptions& options) {
   if (options.tile_size_cells <= 0 || options.tile_size_cells > 250) {
-    return common::InvalidArgumentError("tile_size_cells must be in 1..250 (a tile must fit one "
-                                        "message on the bus)");
+    return common::InvalidArgumentError(
+        "tile_size_cells must be in 1..250 (a tile must fit one "
+        "message on the bus)");
   }
   const bool memory = path == ":memory:";
   if (path.empty()) return common::InvalidArgumentError("no database path given");
@@ -101,8 +104,7 @@ Result<std::unique_ptr<SqliteMapStore>> SqliteMapStore::Open(const std::string& 
   }
   auto db = sqlite::Database::Open(path, options.read_only, options.create_if_missing);
   if (!db.ok()) return db.status();
-  std::unique_ptr<SqliteMapStore> store(
-      new SqliteMapStore(path, options, std::move(db).value()));
+  std::unique_ptr<SqliteMapStore> store(new SqliteMapStore(path, options, std::move(db).value()));
   Status s = store->Initialise();
   if (!s.ok()) return s;
   return store;
@@ -131,10 +133,10 @@ Status SqliteMapStore::Initialise() {
     return not_cairn(buf);
   }
   if (*version > schema::kCurrentVersion) {
-    return common::InvalidArgumentError(
-        "'" + path_ + "' has schema version " + std::to_string(*version) +
-        ", newer than this build's " + std::to_string(schema::kCurrentVersion) +
-        "; use a newer cairn");
+    return common::InvalidArgumentError("'" + path_ + "' has schema version " +
+                                        std::to_string(*version) + ", newer than this build's " +
+                                        std::to_string(schema::kCurrentVersion) +
+                                        "; use a newer cairn");
   }
   if (options_.read_only) {
     if (empty) return common::InvalidArgumentError("'" + path_ + "' is an empty database");
@@ -168,7 +170,8 @@ Status SqliteMapStore::Initialise() {
                 std::to_string(options_.cache_size_kib));
   if (!s.ok()) return s;
   if (!memory) {
-    s = db_->Exec("PRAGMA wal_autocheckpoint = " + std::to_string(options_.wal_autocheckpoint_pages));
+    s = db_->Exec("PRAGMA wal_autocheckpoint = " +
+                  std::to_string(options_.wal_autocheckpoint_pages));
     if (!s.ok()) return s;
   }
   if (options_.max_page_count > 0) {
@@ -226,10 +229,9 @@ Result<SqliteMapStore::VersionRow> SqliteMapStore::Resolve(const MapRef& ref) co
   if (ref.version < 0) return common::InvalidArgumentError("map version must be >= 0 (0 = latest)");
   sqlite::Statement st = db_->Prepare(
       std::string(kVersionSelect) +
-      (ref.version == 0
-           ? "WHERE s.name = ? AND m.name = ? AND v.deleted_utime IS NULL "
-             "ORDER BY v.version DESC LIMIT 1"
-           : "WHERE s.name = ? AND m.name = ? AND v.version = ?"));
+      (ref.version == 0 ? "WHERE s.name = ? AND m.name = ? AND v.deleted_utime IS NULL "
+                          "ORDER BY v.version DESC LIMIT 1"
+                        : "WHERE s.name = ? AND m.name = ? AND v.version = ?"));
   st.Bind(1, ref.site).Bind(2, ref.name);
   if (ref.version != 0) st.Bind(3, ref.version);
   if (!st.Step()) {
@@ -292,7 +294,8 @@ Result<MapInfo> SqliteMapStore::InfoOf(const VersionRow& row) const {
       "SELECT (SELECT count(*) FROM obstacles WHERE map_version_id = ?1), "
       "(SELECT count(*) FROM octomaps WHERE map_version_id = ?1)");
   counts.Bind(1, row.id);
-  if (!counts.Step()) return counts.status().ok() ? common::InternalError("count") : counts.status();
+  if (!counts.Step())
+    return counts.status().ok() ? common::InternalError("count") : counts.status();
   info.num_obstacles = static_cast<int>(counts.Int(0));
   info.has_octomap = counts.Int(1) > 0;
   return info;
@@ -311,7 +314,8 @@ Result<int64_t> SqliteMapStore::SiteId(const std::string& site, bool create, int
   return db_->LastInsertRowId();
 }
 
-Status SqliteMapStore::WriteBlobs(const std::vector<EncodedBlob>& blobs, std::vector<int64_t>* ids) {
+Status SqliteMapStore::WriteBlobs(const std::vector<EncodedBlob>& blobs,
+                                  std::vector<int64_t>* ids) {
   sqlite::Statement find = db_->Prepare("SELECT id FROM blobs WHERE key = ?");
   sqlite::Statement insert = db_->Prepare(
       "INSERT INTO blobs(key, codec, raw_size, raw_crc32, data) VALUES(?, ?, ?, ?, ?)");
@@ -394,9 +398,8 @@ Result<MapInfo> SqliteMapStore::SaveMap(const MapSnapshot& snapshot, const Write
 
   std::lock_guard<std::mutex> lock(mutex_);
   const int64_t now = WallUtime();
-  const int64_t created = snapshot.provenance.created_utime != 0
-                              ? snapshot.provenance.created_utime
-                              : now;
+  const int64_t created =
+      snapshot.provenance.created_utime != 0 ? snapshot.provenance.created_utime : now;
   const int64_t audit_utime = ctx.utime != 0 ? ctx.utime : now;
   int64_t version = 0;
   s = WriteTransaction([&]() -> Status {
@@ -486,10 +489,9 @@ Result<MapInfo> SqliteMapStore::SaveMap(const MapSnapshot& snapshot, const Write
       if (!(st = oc.Run()).ok()) return st;
     }
     return Audit(ctx, audit_utime, "save", snapshot.site, snapshot.name, version,
-                 std::to_string(layer_names.size()) + " layers, " +
-                     std::to_string(stored.size()) + " tiles, " +
-                     std::to_string(snapshot.obstacles.obstacles.size()) + " obstacles" +
-                     (snapshot.octomap ? ", octomap" : ""));
+                 std::to_string(layer_names.size()) + " layers, " + std::to_string(stored.size()) +
+                     " tiles, " + std::to_string(snapshot.obstacles.obstacles.size()) +
+                     " obstacles" + (snapshot.octomap ? ", octomap" : ""));
   });
   if (!s.ok()) return WriteError(s, label);
   auto row = Resolve({snapshot.site, snapshot.name, version});
@@ -509,10 +511,9 @@ Result<std::vector<MapInfo>> SqliteMapStore::ListMaps(const MapFilter& filter) c
   Status s;
   if (!filter.site.empty() && !(s = ValidateName("site name", filter.site)).ok()) return s;
   if (!filter.name.empty() && !(s = ValidateName("map name", filter.name)).ok()) return s;
-  sqlite::Statement st = db_->Prepare(
-      std::string(kVersionSelect) +
-      "WHERE (?1 = '' OR s.name = ?1) AND (?2 = '' OR m.name = ?2) "
-      "ORDER BY s.name, m.name, v.version");
+  sqlite::Statement st = db_->Prepare(std::string(kVersionSelect) +
+                                      "WHERE (?1 = '' OR s.name = ?1) AND (?2 = '' OR m.name = ?2) "
+                                      "ORDER BY s.name, m.name, v.version");
   st.Bind(1, filter.site).Bind(2, filter.name);
   std::vector<VersionRow> rows;
   while (st.Step()) {
@@ -556,9 +557,9 @@ Result<std::vector<MapInfo>> SqliteMapStore::ListMaps(const MapFilter& filter) c
   return out;
 }
 
-Status SqliteMapStore::ReadTiles(sqlite::Statement* stmt, const std::string& label,
-                                 int tile_size, const common::GridGeometry& full,
-                                 const CellBox& box, common::Layer* layer) const {
+Status SqliteMapStore::ReadTiles(sqlite::Statement* stmt, const std::string& label, int tile_size,
+                                 const common::GridGeometry& full, const CellBox& box,
+                                 common::Layer* layer) const {
   std::vector<RawTile> raw;
   while (stmt->Step()) {
     RawTile t;
@@ -576,8 +577,8 @@ Status SqliteMapStore::ReadTiles(sqlite::Statement* stmt, const std::string& lab
   std::vector<Status> errors(raw.size());
   ParallelFor(raw.size(), options_.compression_threads, [&](size_t i) {
     const RawTile& t = raw[i];
-    const std::string where = label + " tile (" + std::to_string(t.tile_ix) + ", " +
-                              std::to_string(t.tile_iy) + ")";
+    const std::string where =
+        label + " tile (" + std::to_string(t.tile_ix) + ", " + std::to_string(t.tile_iy) + ")";
     if (t.tile_ix < 0 || t.tile_iy < 0 || t.tile_ix >= tiles_x || t.tile_iy >= tiles_y) {
       errors[i] = common::CorruptError(where + " lies outside the grid");
       return;
@@ -591,9 +592,9 @@ Status SqliteMapStore::ReadTiles(sqlite::Statement* stmt, const std::string& lab
     spec.cells_y = std::min(tile_size, full.size_y - spec.y0);
     const int64_t expected = int64_t{spec.cells_x} * spec.cells_y * sizeof(float);
     if (t.raw_size != expected) {
-      errors[i] = common::CorruptError(where + " has " + std::to_string(t.raw_size) +
-                                       " bytes for " +
-                                       std::to_string(spec.cells_x * spec.cells_y) + " cells");
+      errors[i] =
+          common::CorruptError(where + " has " + std::to_string(t.raw_size) + " bytes for " +
+                               std::to_string(spec.cells_x * spec.cells_y) + " cells");
       return;
     }
     thread_local std::vector<float> cells;
@@ -639,16 +640,17 @@ Result<common::GridMap> SqliteMapStore::LoadLayers(const MapRef& ref,
   if (box.empty()) return common::InvalidArgumentError("the region does not overlap the map");
   common::GridMap map(SubGeometry(row->geometry, box));
   const int ts = row->tile_size;
-  sqlite::Statement st = db_->Prepare(
-      std::string("SELECT ") + kTileColumns +
-      " FROM layer_tiles t JOIN blobs b ON b.id = t.blob_id WHERE t.layer_id = ? AND "
-      "t.tile_iy BETWEEN ? AND ? AND t.tile_ix BETWEEN ? AND ?");
+  sqlite::Statement st =
+      db_->Prepare(std::string("SELECT ") + kTileColumns +
+                   " FROM layer_tiles t JOIN blobs b ON b.id = t.blob_id WHERE t.layer_id = ? AND "
+                   "t.tile_iy BETWEEN ? AND ? AND t.tile_ix BETWEEN ? AND ?");
   for (const std::string& name : wanted) {
     st.Reset();
     st.Bind(1, layer_ids[name]).Bind(2, box.min_iy / ts).Bind(3, (box.max_iy - 1) / ts);
     st.Bind(4, box.min_ix / ts).Bind(5, (box.max_ix - 1) / ts);
-    Status read = ReadTiles(&st, "layer '" + name + "' of map '" + row->site + "/" + row->name +
-                                     "' version " + std::to_string(row->version),
+    Status read = ReadTiles(&st,
+                            "layer '" + name + "' of map '" + row->site + "/" + row->name +
+                                "' version " + std::to_string(row->version),
                             ts, row->geometry, box, &map.AddLayer(name));
     if (!read.ok()) return read;
   }
@@ -745,8 +747,7 @@ Status SqliteMapStore::DeleteMap(const MapRef& ref, const WriteContext& ctx) {
     Status r = st.Run();
     if (!r.ok()) return r;
     changed = db_->Changes();
-    return Audit(ctx, ctx.utime != 0 ? ctx.utime : now, "delete", row->site, row->name,
-                 ref.version,
+    return Audit(ctx, ctx.utime != 0 ? ctx.utime : now, "delete", row->site, row->name, ref.version,
                  ref.version == 0 ? std::to_string(changed) + " versions" : "one version");
   });
   if (!s.ok()) return WriteError(s, "deleting map '" + ref.site + "/" + ref.name + "'");
@@ -769,7 +770,8 @@ Status SqliteMapStore::PutProfile(const common::RobotProfile& profile, const Wri
   const int64_t now = WallUtime();
   s = WriteTransaction([&]() -> Status {
     // Going back to an earlier content makes that content the newest again.
-    sqlite::Statement drop = db_->Prepare("DELETE FROM profiles WHERE name = ? AND content_hash = ?");
+    sqlite::Statement drop =
+        db_->Prepare("DELETE FROM profiles WHERE name = ? AND content_hash = ?");
     drop.Bind(1, profile.name).Bind(2, hash);
     Status r = drop.Run();
     if (!r.ok()) return r;
@@ -803,8 +805,8 @@ Result<StoredProfile> SqliteMapStore::GetProfile(const std::string& name) const 
   try {
     out.profile = common::LoadRobotProfileString(st.Text(0), "stored profile " + name);
   } catch (const std::exception& e) {
-    return common::CorruptError(std::string("stored profile '") + name + "' does not load: " +
-                                e.what());
+    return common::CorruptError(std::string("stored profile '") + name +
+                                "' does not load: " + e.what());
   }
   out.content_hash = st.Text(1);
   out.updated_utime = st.Int(2);
@@ -828,9 +830,10 @@ Result<std::vector<StoredProfile>> SqliteMapStore::ListProfiles() const {
   return out;
 }
 
-Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(
-    const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
-    const LayerQuery& query) const {
+Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& ref,
+                                                                  const std::string& profile_hash,
+                                                                  const std::string& code_version,
+                                                                  const LayerQuery& query) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
   if (!row.ok()) return row.status();
@@ -954,8 +957,8 @@ Status SqliteMapStore::PutDerived(const MapRef& ref, const DerivedProfile& deriv
     return common::InternalError(e.what());
   }
   const std::string registry_bytes = SerializeRegistry(derived.registry);
-  const EncodedBlob registry_blob = EncodeBlob(registry_bytes.data(), registry_bytes.size(),
-                                               Codec::kZstd, options_.zstd_level);
+  const EncodedBlob registry_blob =
+      EncodeBlob(registry_bytes.data(), registry_bytes.size(), Codec::kZstd, options_.zstd_level);
   std::vector<EncodedBlob> stored;
   std::vector<size_t> index;
   for (size_t i = 0; i < blobs.size(); ++i) {
@@ -980,7 +983,8 @@ Status SqliteMapStore::PutDerived(const MapRef& ref, const DerivedProfile& deriv
         "INSERT INTO derived(map_version_id, profile_hash, code_version, profile_name, "
         "created_utime, size_x, size_y, registry_blob_id) VALUES(?, ?, ?, ?, ?, ?, ?, ?)");
     d.Bind(1, row.id).Bind(2, derived.profile_hash).Bind(3, derived.code_version);
-    d.Bind(4, derived.profile_name).Bind(5, derived.created_utime != 0 ? derived.created_utime : now);
+    d.Bind(4, derived.profile_name)
+        .Bind(5, derived.created_utime != 0 ? derived.created_utime : now);
     d.Bind(6, row.geometry.size_x).Bind(7, row.geometry.size_y).Bind(8, registry_id[0]);
     if (!(r = d.Run()).ok()) return r;
     const int64_t derived_id = db_->LastInsertRowId();
@@ -1060,8 +1064,8 @@ Result<std::vector<Place>> SqliteMapStore::ListPlaces(const std::string& site) c
     Place p;
     p.name = st.Text(0);
     auto polygon = ParsePolygon(st.Blob(1));
-    if (!polygon.ok()) return common::CorruptError("place '" + p.name + "': " +
-                                                   polygon.status().message());
+    if (!polygon.ok())
+      return common::CorruptError("place '" + p.name + "': " + polygon.status().message());
     p.polygon_m = std::move(polygon).value();
     out.push_back(std::move(p));
   }
@@ -1112,8 +1116,8 @@ Result<std::vector<AuditEntry>> SqliteMapStore::ListAudit(int limit) const {
 Result<std::optional<AuditEntry>> SqliteMapStore::FindRequest(const std::string& actor,
                                                               int64_t request_id) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  sqlite::Statement st = db_->Prepare(std::string(kAuditSelect) +
-                                      "WHERE actor = ? AND request_id = ? ORDER BY id DESC LIMIT 1");
+  sqlite::Statement st = db_->Prepare(
+      std::string(kAuditSelect) + "WHERE actor = ? AND request_id = ? ORDER BY id DESC LIMIT 1");
   st.Bind(1, actor).Bind(2, request_id);
   if (st.Step()) return std::optional<AuditEntry>(ReadAudit(st));
   if (!st.status().ok()) return st.status();
@@ -1186,7 +1190,8 @@ Result<CheckReport> SqliteMapStore::Check(const ProgressFn& progress) const {
   while (st.Step()) {
     auto decoded = DecodeBlob(static_cast<Codec>(st.Int(1)), st.Blob(4), st.Int(2),
                               static_cast<uint32_t>(st.Int(3)), /*verify_crc=*/true);
-    if (!decoded.ok()) problem("blob " + std::to_string(st.Int(0)) + ": " + decoded.status().message());
+    if (!decoded.ok())
+      problem("blob " + std::to_string(st.Int(0)) + ": " + decoded.status().message());
     ++report.blobs_checked;
     if (progress && (report.blobs_checked % 64 == 0)) {
       progress(n > 0 ? static_cast<double>(report.blobs_checked) / n : 1.0, "blobs");

@@ -30,18 +30,18 @@
 namespace cairn::mapstore {
 
 struct SqliteOptions {
-  bool read_only{false};          ///< open without write access (no migration, no creation)
-  bool create_if_missing{true};   ///< create an empty database when the file does not exist
-  int busy_timeout_ms{5000};      ///< how long one statement waits for a lock
-  int write_attempts{10};         ///< BEGIN IMMEDIATE attempts while the database stays busy
-  bool synchronous_full{false};   ///< fsync every commit (default NORMAL: safe against crashes
-                                  ///< of the process, a power cut may lose the newest commits)
-  int tile_size_cells{100};       ///< tile side of newly saved layers
-  int zstd_level{1};              ///< compression level of new blobs
-  int compression_threads{2};     ///< threads compressing/decompressing tiles
-  int cache_size_kib{32768};      ///< SQLite page cache
-  int64_t max_page_count{0};      ///< size quota in pages (0 = none); beyond it writes fail
-                                  ///< with kResourceExhausted like a full disk
+  bool read_only{false};         ///< open without write access (no migration, no creation)
+  bool create_if_missing{true};  ///< create an empty database when the file does not exist
+  int busy_timeout_ms{5000};     ///< how long one statement waits for a lock
+  int write_attempts{10};        ///< BEGIN IMMEDIATE attempts while the database stays busy
+  bool synchronous_full{false};  ///< fsync every commit (default NORMAL: safe against crashes
+                                 ///< of the process, a power cut may lose the newest commits)
+  int tile_size_cells{100};      ///< tile side of newly saved layers
+  int zstd_level{1};             ///< compression level of new blobs
+  int compression_threads{2};    ///< threads compressing/decompressing tiles
+  int cache_size_kib{32768};     ///< SQLite page cache
+  int64_t max_page_count{0};     ///< size quota in pages (0 = none); beyond it writes fail
+                                 ///< with kResourceExhausted like a full disk
   /// WAL pages after which a commit also checkpoints (SQLite's default is 1000). A long-running
   /// writer sets it high and calls CheckpointIfIdle() so saves do not pay for checkpoints.
   int wal_autocheckpoint_pages{1000};
@@ -67,9 +67,10 @@ class SqliteMapStore final : public MapStore {
   common::Status PutProfile(const common::RobotProfile& profile, const WriteContext& ctx) override;
   common::Result<StoredProfile> GetProfile(const std::string& name) const override;
   common::Result<std::vector<StoredProfile>> ListProfiles() const override;
-  common::Result<std::optional<DerivedProfile>> FindDerived(
-      const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
-      const LayerQuery& query) const override;
+  common::Result<std::optional<DerivedProfile>> FindDerived(const MapRef& ref,
+                                                            const std::string& profile_hash,
+                                                            const std::string& code_version,
+                                                            const LayerQuery& query) const override;
   common::Result<std::vector<DerivedInfo>> ListDerived(const MapRef& ref) const override;
   common::Status PutDerived(const MapRef& ref, const DerivedProfile& derived,
                             const WriteContext& ctx) override;
@@ -107,7 +108,7 @@ class SqliteMapStore final : public MapStore {
   common::Result<VersionRow> Resolve(const MapRef& ref) const;
   common::Result<MapInfo> InfoOf(const VersionRow& row) const;
   common::Result<int64_t> SiteId(const std::string& site, bool create, int64_t utime);
-    common::Status Audit(const WriteContext& ctx, int64_t utime, const std::string& op,
+  common::Status Audit(const WriteContext& ctx, int64_t utime, const std::string& op,
                        const std::string& site, const std::string& map, int64_t version,
                        const std::string& detail);
   /// Reads the tiles a bound statement yields (tile_ix, tile_iy, codec, raw_size, raw_crc32,
@@ -124,7 +125,7 @@ class SqliteMapStore final : public MapStore {
   SqliteOptions options_;
   std::unique_ptr<sqlite::Database> db_;
   int schema_version_{0};
-  bool dirty_{false};                 // written since the last checkpoint
+  bool dirty_{false};  // written since the last checkpoint
   int64_t last_write_utime_{0};
   mutable std::mutex mutex_;
 };

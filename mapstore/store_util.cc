@@ -17,7 +17,8 @@ bool HasInfinity(const common::Layer& layer) {
   const uint32_t* bits = reinterpret_cast<const uint32_t*>(layer.data());
   const size_t n = static_cast<size_t>(layer.size());
   uint32_t found = 0;
-  for (size_t i = 0; i < n; ++i) found |= static_cast<uint32_t>((bits[i] & 0x7fffffffu) == 0x7f800000u);
+  for (size_t i = 0; i < n; ++i)
+    found |= static_cast<uint32_t>((bits[i] & 0x7fffffffu) == 0x7f800000u);
   return found != 0;
 }
 

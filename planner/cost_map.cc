@@ -30,9 +30,9 @@ void CostMapParams::Validate() const {
                      "lethal_cost must be positive, got " << lethal_cost);
   CAIRN_THROW_UNLESS(std::isfinite(planning_padding_m) && planning_padding_m >= 0.0,
                      "planning_padding_m must not be negative, got " << planning_padding_m);
-  CAIRN_THROW_UNLESS(std::isfinite(unknown_cost) && unknown_cost >= 0.0f &&
-                         unknown_cost < lethal_cost,
-                     "unknown_cost must lie in [0, lethal_cost), got " << unknown_cost);
+  CAIRN_THROW_UNLESS(
+      std::isfinite(unknown_cost) && unknown_cost >= 0.0f && unknown_cost < lethal_cost,
+      "unknown_cost must lie in [0, lethal_cost), got " << unknown_cost);
 }
 
 CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
@@ -85,7 +85,8 @@ Vector2 CostMap::ToGridCells(const Vector2& world_m) const {
   const double dx = world_m.x() - geometry_.origin.x_m;
   const double dy = world_m.y() - geometry_.origin.y_m;
   const double inv = 1.0 / geometry_.resolution_m;
-  return {(cos_origin_ * dx + sin_origin_ * dy) * inv, (-sin_origin_ * dx + cos_origin_ * dy) * inv};
+  return {(cos_origin_ * dx + sin_origin_ * dy) * inv,
+          (-sin_origin_ * dx + cos_origin_ * dy) * inv};
 }
 
 bool CostMap::Contains(const Vector2& world_m) const {
@@ -165,7 +166,8 @@ CostMap::Quick CostMap::QuickCheck(double x_cells, double y_cells, const Shape& 
 }
 
 FootprintCost CostMap::ExactAtGridPose(double x_cells, double y_cells, double yaw_grid_rad,
-                                       const Shape& shape) const {
+                                       const Shape& shape,
+                                       const std::vector<int64_t>* ignored) const {
   thread_local std::vector<RowSpan> spans;
   shape.rasterizer.Rasterize(x_cells, y_cells, yaw_grid_rad, geometry_.resolution_m, &spans);
   FootprintCost out;
@@ -196,6 +198,11 @@ FootprintCost CostMap::ExactAtGridPose(double x_cells, double y_cells, double ya
     const float* row = data + static_cast<int64_t>(span.iy) * sx;
     for (int ix = lo; ix <= hi; ++ix) {
       const float v = row[ix];
+      if (ignored != nullptr && !ignored->empty() &&
+          std::binary_search(ignored->begin(), ignored->end(),
+                             ix + static_cast<int64_t>(span.iy) * sx)) {
+        continue;
+      }
       if (std::isnan(v)) {
         if (!unknown()) return out;
       } else if (v >= params_.lethal_cost) {
@@ -214,6 +221,30 @@ FootprintCost CostMap::CheckFootprintExact(const Pose2& pose_world, FootprintKin
   const Vector2 g = ToGridCells(pose_world.position());
   return ExactAtGridPose(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad),
                          shapes_[static_cast<int>(kind)]);
+}
+
+std::vector<int64_t> CostMap::BlockingCellsUnder(const Pose2& pose_world) const {
+  std::vector<RowSpan> spans;
+  const Vector2 g = ToGridCells(pose_world.position());
+  shapes_[0].rasterizer.Rasterize(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad),
+                                  geometry_.resolution_m, &spans);
+  std::vector<int64_t> cells;
+  for (const RowSpan& span : spans) {
+    if (span.iy < 0 || span.iy >= geometry_.size_y) continue;
+    for (int ix = std::max(0, span.ix_min); ix <= std::min(span.ix_max, geometry_.size_x - 1);
+         ++ix) {
+      if (IsBlockedCell({ix, span.iy}))
+        cells.push_back(ix + static_cast<int64_t>(span.iy) * geometry_.size_x);
+    }
+  }
+  std::sort(cells.begin(), cells.end());
+  return cells;
+}
+
+FootprintCost CostMap::CheckFootprintIgnoring(const Pose2& pose_world,
+                                              const std::vector<int64_t>& ignored_cells) const {
+  const Vector2 g = ToGridCells(pose_world.position());
+  return ExactAtGridPose(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad), shapes_[0], &ignored_cells);
 }
 
 FootprintCost CostMap::CheckFootprint(const Pose2& pose_world, FootprintKind kind) const {
@@ -288,6 +319,34 @@ void CostMap::ComputeComponents() const {
     }
     ++label;
   }
+}
+
+const std::vector<int32_t>& CostMap::RidgeCells() const {
+  std::call_once(ridges_once_, [this] {
+    const int sx = geometry_.size_x;
+    const int sy = geometry_.size_y;
+    const float* d = blocked_distance_.data();
+    const double passable = std::max(0.0, shapes_[0].inscribed_cells - kInnerSlack - 1e-3);
+    const float far = static_cast<float>(10.0 / geometry_.resolution_m);
+    static const int kDx[4] = {1, 0, 1, 1};
+    static const int kDy[4] = {0, 1, 1, -1};
+    for (int iy = 1; iy + 1 < sy; ++iy) {
+      for (int ix = 1; ix + 1 < sx; ++ix) {
+        const int64_t i = ix + static_cast<int64_t>(iy) * sx;
+        const float v = d[i];
+        if (!(v > 0.0f) || v < passable || v >= far) continue;
+        for (int k = 0; k < 4; ++k) {
+          const float a = d[i + kDx[k] + static_cast<int64_t>(kDy[k]) * sx];
+          const float b = d[i - kDx[k] - static_cast<int64_t>(kDy[k]) * sx];
+          if (v >= a && v >= b && (v > a || v > b)) {
+            ridges_.push_back(static_cast<int32_t>(i));
+            break;
+          }
+        }
+      }
+    }
+  });
+  return ridges_;
 }
 
 int CostMap::ComponentOf(const Vector2& world_m) const {

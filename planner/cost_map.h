@@ -42,8 +42,8 @@ enum class FootprintKind { kRobot = 0, kPadded = 1 };
 
 /// The cost of a footprint placed at a pose.
 struct FootprintCost {
-  bool valid{true};          ///< false when it touches a lethal or a blocking unknown cell
-  float max_cost{0.0f};      ///< highest cell cost under it; unknown counts as unknown_cost
+  bool valid{true};      ///< false when it touches a lethal or a blocking unknown cell
+  float max_cost{0.0f};  ///< highest cell cost under it; unknown counts as unknown_cost
   bool touches_unknown{false};
 };
 
@@ -99,6 +99,14 @@ class CostMap {
   FootprintCost CheckFootprintExact(const common::Pose2& pose_world,
                                     FootprintKind kind = FootprintKind::kRobot) const;
 
+  /// Linear indices (sorted) of the in-grid blocking cells the robot's footprint touches at a
+  /// pose: what a robot that finds itself "in collision" on the map (a new obstacle under it, a
+  /// wall grown by a cell) has to move away from.
+  std::vector<int64_t> BlockingCellsUnder(const common::Pose2& pose_world) const;
+  /// CheckFootprintExact with the given cells (sorted linear indices) counted as free.
+  FootprintCost CheckFootprintIgnoring(const common::Pose2& pose_world,
+                                       const std::vector<int64_t>& ignored_cells) const;
+
   /// Distance (m) from the cell holding the point to the nearest blocking cell, between cell
   /// centres; 0 outside the grid, +infinity when nothing blocks.
   double ClearanceAt(const common::Vector2& world_m) const;
@@ -120,6 +128,12 @@ class CostMap {
     return known_cells_;
   }
 
+  /// Cells on the ridges of the distance field (the medial axis of free space): passable cells
+  /// at least as far from blocking cells as their neighbours on both sides along some axis or
+  /// diagonal, and closer than 10 m to one. Linear indices, computed once, on first use.
+  /// Sampling them puts states in the middle of corridors and doors (MAPRM's idea).
+  const std::vector<int32_t>& RidgeCells() const;
+
   /// Component label of the cell holding a point; -1 when impassable or outside.
   int ComponentOf(const common::Vector2& world_m) const;
 
@@ -134,7 +148,8 @@ class CostMap {
     double inscribed_cells{0.0};
   };
   FootprintCost ExactAtGridPose(double x_cells, double y_cells, double yaw_grid_rad,
-                                const Shape& shape) const;
+                                const Shape& shape,
+                                const std::vector<int64_t>* ignored = nullptr) const;
   enum class Quick { kValidFree, kValid, kInvalid, kUnknown };
   Quick QuickCheck(double x_cells, double y_cells, const Shape& shape) const;
   void ComputeComponents() const;
@@ -153,6 +168,8 @@ class CostMap {
   // Connectivity labels, built lazily (only the global planner needs them).
   mutable std::once_flag components_once_;
   mutable std::vector<int32_t> components_;
+  mutable std::once_flag ridges_once_;
+  mutable std::vector<int32_t> ridges_;
 };
 
 }  // namespace cairn::planner

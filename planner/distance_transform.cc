@@ -72,7 +72,8 @@ Eigen::MatrixXf DistanceTransform(const GridMask& mask) {
   std::vector<float> z(n + 1);
   float* data = out.data();
   // Along x (contiguous), then along y (stride sx).
-  for (int iy = 0; iy < sy; ++iy) Transform1d(data + static_cast<size_t>(iy) * sx, sx, 1, &d, &v, &z);
+  for (int iy = 0; iy < sy; ++iy)
+    Transform1d(data + static_cast<size_t>(iy) * sx, sx, 1, &d, &v, &z);
   for (int ix = 0; ix < sx; ++ix) Transform1d(data + ix, sy, sx, &d, &v, &z);
   for (int i = 0; i < sx * sy; ++i) data[i] = std::sqrt(data[i]);
   return out;

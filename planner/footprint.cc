@@ -82,7 +82,8 @@ FootprintRasterizer::FootprintRasterizer(const std::vector<Vector2>& polygon_m) 
   CAIRN_THROW_UNLESS(hull_m_.size() <= kMaxHullVertices,
                      "footprint hull has " << hull_m_.size() << " vertices, at most "
                                            << kMaxHullVertices << " are supported");
-  for (const Vector2& v : hull_m_) circumscribed_radius_m_ = std::max(circumscribed_radius_m_, v.norm());
+  for (const Vector2& v : hull_m_)
+    circumscribed_radius_m_ = std::max(circumscribed_radius_m_, v.norm());
   // Inscribed radius: distance from the origin to the nearest hull edge, if the origin is inside.
   double inscribed = std::numeric_limits<double>::infinity();
   bool inside = true;

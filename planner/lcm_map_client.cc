@@ -16,9 +16,8 @@ LcmMapClient::LcmMapClient(runtime::Node& node, LcmMapClientParams params,
       cost_params_(cost_params) {
   cost_params_.Validate();
   FootprintRasterizer check(footprint_m_);  // throws on a bad footprint
-  node_.Subscribe<cairn::lcmt_grid_tile>(
-      channels::ForRobot(params_.robot, channels::kMapTiles),
-      [this](const cairn::lcmt_grid_tile& t) { OnTile(t); });
+  node_.Subscribe<cairn::lcmt_grid_tile>(channels::ForRobot(params_.robot, channels::kMapTiles),
+                                         [this](const cairn::lcmt_grid_tile& t) { OnTile(t); });
   node_.Subscribe<cairn::lcmt_grid_manifest>(
       channels::ForRobot(params_.robot, channels::kMapManifest),
       [this](const cairn::lcmt_grid_manifest& m) { OnManifest(m); });
@@ -82,8 +81,7 @@ void LcmMapClient::Poll() {
   if (!assembler_.Complete(params_.layer)) {
     if (now - last_resend_utime_ >= static_cast<int64_t>(params_.resend_interval_s * 1e6)) {
       if (auto request = assembler_.MakeResendRequest(params_.layer, params_.requester, now)) {
-        node_.Publish(channels::ForRobot(params_.robot, channels::kMapTileResend),
-                      *request);
+        node_.Publish(channels::ForRobot(params_.robot, channels::kMapTileResend), *request);
         node_.Count("tile_resend_requests");
         last_resend_utime_ = now;
       }
@@ -107,8 +105,10 @@ void LcmMapClient::MaybeBuild(bool allow_incomplete) {
     // Tiles the mapper announced but we never got: block them rather than read them as
     // unexplored (which the planners may be allowed to cross).
     for (const auto& [tx, ty] : assembler_.Missing(params_.layer)) {
-      for (int iy = ty * tile_size_; iy < std::min<int>((ty + 1) * tile_size_, cells.cols()); ++iy) {
-        for (int ix = tx * tile_size_; ix < std::min<int>((tx + 1) * tile_size_, cells.rows()); ++ix) {
+      for (int iy = ty * tile_size_; iy < std::min<int>((ty + 1) * tile_size_, cells.cols());
+           ++iy) {
+        for (int ix = tx * tile_size_; ix < std::min<int>((tx + 1) * tile_size_, cells.rows());
+             ++ix) {
           if (ix >= 0 && iy >= 0) cells(ix, iy) = cost_params_.lethal_cost;
         }
       }

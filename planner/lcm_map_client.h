@@ -8,6 +8,7 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
+
 #include "planner/cost_map.h"
 #include "planner/map_source.h"
 #include "services/runtime/node.h"
@@ -22,8 +23,8 @@ namespace cairn::planner {
 
 struct LcmMapClientParams {
   std::string robot;
-  std::string layer;        ///< "cost/<profile>"
-  std::string map_name;     ///< accept only this map name ("" = any)
+  std::string layer;     ///< "cost/<profile>"
+  std::string map_name;  ///< accept only this map name ("" = any)
   std::string requester{"cairn-navigator"};
   double resend_interval_s{0.5};
   /// Build a snapshot from an incomplete version after this long; the cells of tiles that are
@@ -52,7 +53,8 @@ class LcmMapClient : public MapSource {
   int64_t snapshots() const { return snapshots_; }
 
  private:
-  bool Accepts(const std::string& robot, const std::string& map_name, const std::string& layer) const;
+  bool Accepts(const std::string& robot, const std::string& map_name,
+               const std::string& layer) const;
   void MaybeBuild(bool allow_incomplete);
 
   runtime::Node& node_;

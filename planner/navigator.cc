@@ -118,6 +118,8 @@ void NavigatorParams::Validate() const {
   CAIRN_THROW_UNLESS(path_check_ahead_m >= 0.0, "path_check_ahead_m must not be negative");
   CAIRN_THROW_UNLESS(min_replan_interval_s >= 0.0, "min_replan_interval_s must not be negative");
   CAIRN_THROW_UNLESS(replan_period_s >= 0.0, "replan_period_s must not be negative");
+  CAIRN_THROW_UNLESS(replace_path_ratio > 0.0 && replace_path_ratio <= 1.0,
+                     "replace_path_ratio must lie in (0, 1]");
   CAIRN_THROW_UNLESS(plan_time_budget_s > 0.0, "plan_time_budget_s must be positive");
   CAIRN_THROW_UNLESS(no_valid_trajectory_patience_s >= 0.0,
                      "no_valid_trajectory_patience_s must not be negative");
@@ -180,6 +182,7 @@ void Navigator::Fail(NavReason reason, const std::string& message) {
 
 void Navigator::ResetGoalState() {
   goal_pose_.reset();
+  periodic_replan_ = false;
   pending_request_ = 0;
   plan_wanted_ = false;
   path_ = Path();
@@ -257,6 +260,18 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
   pending_request_ = 0;
   if (!active()) return;
   const bool stopped = status_.state == NavState::kStopped;
+  const bool periodic = periodic_replan_;
+  periodic_replan_ = false;
+  if (result.ok() && periodic && status_.state == NavState::kDriving && !path_.empty() &&
+      !PathBlockedAhead()) {
+    // Keep the current path unless the new one costs clearly less than what is left of it.
+    const double left = path_.length_m() > 0.0
+                            ? path_cost_ * (path_.length_m() - path_arc_m_) / path_.length_m()
+                            : 0.0;
+    if (result.cost >= params_.replace_path_ratio * left) return;
+    ++status_.replans;
+    status_.message = "periodic replan found a better path";
+  }
   if (result.ok()) {
     path_ = Path(result.poses);
     path_cost_ = result.cost;
@@ -356,7 +371,8 @@ void Navigator::UpdatePathProgress() {
   path_arc_m_ = proj.arc_length_m;
   path_deviation_m_ = proj.distance_m;
   status_.distance_remaining_m = path_.length_m() - path_arc_m_ + proj.distance_m;
-  status_.progress = path_.length_m() > 0.0 ? std::clamp(path_arc_m_ / path_.length_m(), 0.0, 1.0) : 1.0;
+  status_.progress =
+      path_.length_m() > 0.0 ? std::clamp(path_arc_m_ / path_.length_m(), 0.0, 1.0) : 1.0;
 }
 
 bool Navigator::PathBlockedAhead() const {
@@ -549,8 +565,12 @@ StepOutput Navigator::Step(double now_s) {
   map_changed_ = false;
   if (!replan_why_.empty() && status_.state == NavState::kDriving && pending_request_ == 0 &&
       now_s - last_plan_request_s_ >= params_.min_replan_interval_s) {
-    ++status_.replans;
-    status_.message = "replanning: " + replan_why_;
+    // A periodic replan only replaces the path when it is clearly better (OnPlanResult).
+    periodic_replan_ = replan_why_ == "periodic replan";
+    if (!periodic_replan_) {
+      ++status_.replans;
+      status_.message = "replanning: " + replan_why_;
+    }
     replan_why_.clear();
     plan_wanted_ = true;
   } else if (status_.state != NavState::kDriving) {
@@ -558,7 +578,8 @@ StepOutput Navigator::Step(double now_s) {
   }
 
   // Start a plan when one is wanted.
-  if (plan_wanted_ && (status_.state == NavState::kPlanning || status_.state == NavState::kDriving)) {
+  if (plan_wanted_ &&
+      (status_.state == NavState::kPlanning || status_.state == NavState::kDriving)) {
     if (!ResolveGoal()) {
       return finish(gen.Brake(last_command_), false);
     }

@@ -76,25 +76,27 @@ const char* NavReasonName(NavReason reason);
 NavReason ReasonOf(PlanStatus status);
 
 struct NavigatorParams {
-  double control_period_s{0.05};        ///< 20 Hz
+  double control_period_s{0.05};  ///< 20 Hz
   double xy_goal_tolerance_m{0.25};
   double yaw_goal_tolerance_rad{0.25};
-  double max_pose_age_s{0.5};           ///< older odometry/pose stops the robot
-  double max_map_age_s{0.5};            ///< an older cost layer stops the robot
-  double max_clock_skew_s{1.0};         ///< inputs stamped further in the future count as stale
-  double lookahead_m{1.2};              ///< the DWA's local goal this far along the path
-  double local_path_window_m{3.0};      ///< path the alignment critic looks at
+  double max_pose_age_s{0.5};       ///< older odometry/pose stops the robot
+  double max_map_age_s{0.5};        ///< an older cost layer stops the robot
+  double max_clock_skew_s{1.0};     ///< inputs stamped further in the future count as stale
+  double lookahead_m{1.2};          ///< the DWA's local goal this far along the path
+  double local_path_window_m{3.0};  ///< path the alignment critic looks at
   double rotate_to_heading_threshold_rad{0.8};  ///< turn in place first above this error
-  double max_path_deviation_m{1.0};     ///< farther from the path: replan
-  double path_check_ahead_m{10.0};      ///< a map change blocking this much path ahead: replan
+  double max_path_deviation_m{1.0};             ///< farther from the path: replan
+  double path_check_ahead_m{10.0};  ///< a map change blocking this much path ahead: replan
   double min_replan_interval_s{1.0};
-  double replan_period_s{0.0};          ///< > 0: also replan this often
+  double replan_period_s{5.0};     ///< > 0: also replan this often ...
+  double replace_path_ratio{0.9};  ///< ... and switch when the new path costs less than this
+                                   ///< fraction of what is left of the current one
   double plan_time_budget_s{1.0};
   double no_valid_trajectory_patience_s{1.5};
-  double progress_distance_m{0.2};      ///< must move this far ...
-  double progress_timeout_s{10.0};      ///< ... within this time, else recover
+  double progress_distance_m{0.2};        ///< must move this far ...
+  double progress_timeout_s{10.0};        ///< ... within this time, else recover
   double recovery_reset_distance_m{1.0};  ///< driving this far re-arms the first recovery
-  int stop_repeat_cycles{10};           ///< zero commands sent after a goal ends
+  int stop_repeat_cycles{10};             ///< zero commands sent after a goal ends
   RecoveryParams recovery;
   PlaceGoalParams place;
 
@@ -108,8 +110,8 @@ struct NavGoal {
   std::string place;
   common::Pose2 pose;
   bool use_yaw{false};
-  double xy_tolerance_m{0.0};      ///< 0: the params' tolerance
-  double yaw_tolerance_rad{0.0};   ///< 0: the params' tolerance
+  double xy_tolerance_m{0.0};     ///< 0: the params' tolerance
+  double yaw_tolerance_rad{0.0};  ///< 0: the params' tolerance
 };
 
 struct NavStatus {
@@ -117,8 +119,8 @@ struct NavStatus {
   NavState state{NavState::kIdle};
   NavReason reason{NavReason::kNone};
   std::string message;
-  double progress{0.0};               ///< 0..1 along the current path
-  double distance_remaining_m{0.0};   ///< along the path from the robot
+  double progress{0.0};              ///< 0..1 along the current path
+  double distance_remaining_m{0.0};  ///< along the path from the robot
   double distance_travelled_m{0.0};
   int32_t replans{0};
   int32_t recoveries{0};
@@ -237,6 +239,7 @@ class Navigator {
   NavReason resume_reason_{NavReason::kNone};
   int stop_cycles_left_{0};
   std::string replan_why_;
+  bool periodic_replan_{false};
   bool cancel_plan_pending_{false};
   bool path_changed_pending_{false};
   double last_step_s_{0.0};

@@ -42,6 +42,8 @@ void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
   map.Get("validity_resolution_m", &p->validity_resolution_m);
   map.Get("range_m", &p->range_m);
   map.Get("bounds_margin_m", &p->bounds_margin_m);
+  map.Get("aligned_heading_fraction", &p->aligned_heading_fraction);
+  map.Get("ridge_sample_fraction", &p->ridge_sample_fraction);
   map.Get("improvement_rounds", &p->improvement_rounds);
   map.Get("improvement_time_s", &p->improvement_time_s);
   map.Get("escape_radius_m", &p->escape_radius_m);
@@ -50,6 +52,7 @@ void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
   map.Get("goal_tolerance_m", &p->goal_tolerance_m);
   map.Get("goal_yaw_samples", &p->goal_yaw_samples);
   map.Get("grid_precheck", &p->grid_precheck);
+  map.Get("start_rescue_radius_m", &p->start_rescue_radius_m);
   map.Get("seed", &p->seed);
   map.Finish();
 }
@@ -114,6 +117,7 @@ void LoadNavigator(YamlMap map, NavigatorParams* p) {
   map.Get("path_check_ahead_m", &p->path_check_ahead_m);
   map.Get("min_replan_interval_s", &p->min_replan_interval_s);
   map.Get("replan_period_s", &p->replan_period_s);
+  map.Get("replace_path_ratio", &p->replace_path_ratio);
   map.Get("plan_time_budget_s", &p->plan_time_budget_s);
   map.Get("no_valid_trajectory_patience_s", &p->no_valid_trajectory_patience_s);
   map.Get("progress_distance_m", &p->progress_distance_m);

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "cairn/lcmt_velocity_command.hpp"
+
 #include "common/channels.h"
 #include "common/flags.h"
 #include "common/log.h"
@@ -58,8 +59,10 @@ int main(int argc, char** argv) {
                        "       <robot>.MAP.MANIFEST, SIM.CLOCK\n"
                        "writes <robot>.CMD_VEL, <robot>.PATH, <robot>.NAV_STATUS,\n"
                        "       <robot>.MAP.TILE_RESEND, <robot>.MAP.CONTROL, HEALTH");
-  flags.AddHelpSection("Planners", "RRTConnect, RRTstar, InformedRRTstar, BITstar, PRMstar "
-                                   "(global_planner.planner); state spaces se2, dubins, reeds_shepp");
+  flags.AddHelpSection(
+      "Planners",
+      "RRTConnect, RRTstar, InformedRRTstar, BITstar, PRMstar, RRT "
+      "(global_planner.planner); state spaces se2, dubins (with RRT), reeds_shepp");
   const int rc = flags.Parse(argc, argv);
   if (rc >= 0) return rc;
   if (robot.empty()) {

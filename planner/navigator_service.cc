@@ -5,6 +5,7 @@
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_path.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
+
 #include "common/channels.h"
 #include "common/check.h"
 #include "common/layers.h"
@@ -42,8 +43,8 @@ NavigatorService::NavigatorService(runtime::Node& node, NavigatorConfig config,
       robot_(node.options().robot),
       navigator_(profile_, config_.navigator, config_.local_planner, std::move(places)),
       planner_(config_.global_planner),
-      map_client_(node, MapClientParams(node.options().robot, profile_, config_), profile_.footprint_m,
-                  config_.cost_map) {
+      map_client_(node, MapClientParams(node.options().robot, profile_, config_),
+                  profile_.footprint_m, config_.cost_map) {
   CAIRN_THROW_UNLESS(!robot_.empty(), "the navigator needs a robot name");
   map_control_requests_ = runtime::Node::WallUtime();  // request ids unique across restarts
   node_.Subscribe<cairn::lcmt_goal>(ch::ForRobot(robot_, ch::kGoal),
@@ -59,14 +60,16 @@ NavigatorService::NavigatorService(runtime::Node& node, NavigatorConfig config,
   node_.AddTimer(1.0 / config_.control_rate_hz, [this] { Tick(); });
   node_.AddTimer(1.0 / config_.status_rate_hz, [this] { PublishStatus(); });
   node_.SetState(runtime::HealthState::kReady, "waiting for a goal");
-  node_.Event("navigating %s as %s on layer %s with %s (%s), DWA %dx%d over %.1f s at %.0f Hz, pose from %s",
-              robot_.c_str(), profile_.name.c_str(), layers::CostLayer(profile_.name).c_str(),
-              config_.global_planner.planner.c_str(),
-              StateSpaceKindName(config_.global_planner.state_space),
-              config_.local_planner.generator.vx_samples,
-              config_.local_planner.generator.vtheta_samples,
-              config_.local_planner.generator.sim_time_s, config_.control_rate_hz,
-              ch::ForRobot(robot_, config_.pose_source == PoseSource::kOdom ? ch::kOdom : ch::kPose).c_str());
+  node_.Event(
+      "navigating %s as %s on layer %s with %s (%s), DWA %dx%d over %.1f s at %.0f Hz, pose from "
+      "%s",
+      robot_.c_str(), profile_.name.c_str(), layers::CostLayer(profile_.name).c_str(),
+      config_.global_planner.planner.c_str(),
+      StateSpaceKindName(config_.global_planner.state_space),
+      config_.local_planner.generator.vx_samples, config_.local_planner.generator.vtheta_samples,
+      config_.local_planner.generator.sim_time_s, config_.control_rate_hz,
+      ch::ForRobot(robot_, config_.pose_source == PoseSource::kOdom ? ch::kOdom : ch::kPose)
+          .c_str());
 }
 
 NavigatorService::~NavigatorService() {
@@ -128,8 +131,8 @@ void NavigatorService::HandlePlanResults(double now_s) {
     node_.Count("plans");
     if (!r.ok()) node_.Count(std::string("plan_") + PlanStatusName(r.status));
     if (r.status != PlanStatus::kCancelled) {
-      node_.Event("plan %lld: %s in %.0f ms%s%s", static_cast<long long>(id), PlanStatusName(r.status),
-                  r.total_time_s * 1e3,
+      node_.Event("plan %lld: %s in %.0f ms%s%s", static_cast<long long>(id),
+                  PlanStatusName(r.status), r.total_time_s * 1e3,
                   r.ok() ? (", " + std::to_string(r.length_m).substr(0, 6) + " m").c_str() : "",
                   r.message.empty() ? "" : (" (" + r.message + ")").c_str());
     }
@@ -268,8 +271,8 @@ void NavigatorService::OnGoal(const cairn::lcmt_goal& msg) {
     navigator_.Cancel(now_s);
     return;
   }
-  if (!Finite(msg.xy_tolerance_m) || msg.xy_tolerance_m < 0.0 ||
-      !Finite(msg.yaw_tolerance_rad) || msg.yaw_tolerance_rad < 0.0) {
+  if (!Finite(msg.xy_tolerance_m) || msg.xy_tolerance_m < 0.0 || !Finite(msg.yaw_tolerance_rad) ||
+      msg.yaw_tolerance_rad < 0.0) {
     RefuseGoal(msg, "tolerances must be finite and not negative");
     return;
   }
@@ -284,8 +287,9 @@ void NavigatorService::OnGoal(const cairn::lcmt_goal& msg) {
     }
     goal.pose = {msg.x_m, msg.y_m, msg.use_yaw ? common::WrapAngle(msg.yaw_rad) : 0.0};
     goal.use_yaw = msg.use_yaw;
-    node_.Event("goal %lld: pose (%.2f, %.2f%s)", static_cast<long long>(msg.goal_id), msg.x_m,
-                msg.y_m, msg.use_yaw ? (", " + std::to_string(msg.yaw_rad).substr(0, 5) + " rad").c_str() : "");
+    node_.Event(
+        "goal %lld: pose (%.2f, %.2f%s)", static_cast<long long>(msg.goal_id), msg.x_m, msg.y_m,
+        msg.use_yaw ? (", " + std::to_string(msg.yaw_rad).substr(0, 5) + " rad").c_str() : "");
   } else if (msg.kind == cairn::lcmt_goal::KIND_PLACE) {
     if (msg.place.empty()) {
       RefuseGoal(msg, "the place name is empty");

@@ -14,6 +14,7 @@
 #include "cairn/lcmt_nav_status.hpp"
 #include "cairn/lcmt_odometry.hpp"
 #include "cairn/lcmt_pose.hpp"
+
 #include "common/robot_profile.h"
 #include "planner/global/global_planner.h"
 #include "planner/lcm_map_client.h"

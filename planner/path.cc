@@ -14,7 +14,8 @@ using common::Vector2;
 Path::Path(std::vector<Pose2> poses) : poses_(std::move(poses)) {
   cumulative_m_.resize(poses_.size(), 0.0);
   for (size_t i = 1; i < poses_.size(); ++i) {
-    cumulative_m_[i] = cumulative_m_[i - 1] + (poses_[i].position() - poses_[i - 1].position()).norm();
+    cumulative_m_[i] =
+        cumulative_m_[i - 1] + (poses_[i].position() - poses_[i - 1].position()).norm();
   }
 }
 

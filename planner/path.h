@@ -12,9 +12,9 @@ namespace cairn::planner {
 
 /// Where a point falls on a path.
 struct PathProjection {
-  size_t segment{0};          ///< index of the segment's first pose
-  double arc_length_m{0.0};   ///< arc length of the projected point from the path start
-  double distance_m{0.0};     ///< distance from the point to the path
+  size_t segment{0};         ///< index of the segment's first pose
+  double arc_length_m{0.0};  ///< arc length of the projected point from the path start
+  double distance_m{0.0};    ///< distance from the point to the path
   common::Vector2 point_m{common::Vector2::Zero()};
 };
 

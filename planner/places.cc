@@ -40,11 +40,12 @@ std::vector<Place> ParsePlaces(const YAML::Node& root, const std::string& where)
     Place place;
     place.name = entry.Require<std::string>("name");
     if (place.name.empty()) entry.Fail(list[i], ctx + ": empty name");
-    if (!names.insert(place.name).second) entry.Fail(list[i], "duplicate place '" + place.name + "'");
+    if (!names.insert(place.name).second)
+      entry.Fail(list[i], "duplicate place '" + place.name + "'");
     YAML::Node polygon = entry.Raw("polygon");
     if (!polygon || !polygon.IsSequence() || polygon.size() < 3) {
-      entry.Fail(polygon ? polygon : list[i], "place '" + place.name +
-                                                  "' needs a polygon of at least 3 [x, y] vertices");
+      entry.Fail(polygon ? polygon : list[i],
+                 "place '" + place.name + "' needs a polygon of at least 3 [x, y] vertices");
     }
     for (const auto& v : polygon) {
       if (!v.IsSequence() || v.size() != 2) entry.Fail(v, "a polygon vertex must be [x, y]");

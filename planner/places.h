@@ -37,9 +37,9 @@ struct PlaceGoalParams {
 
 struct PlaceGoal {
   bool found{false};
-  common::Pose2 pose;        ///< cell centre; the yaw is a valid heading there
-  double clearance_m{0.0};   ///< distance to the nearest lethal, unknown or off-map cell
-  std::string message;       ///< why nothing was found
+  common::Pose2 pose;       ///< cell centre; the yaw is a valid heading there
+  double clearance_m{0.0};  ///< distance to the nearest lethal, unknown or off-map cell
+  std::string message;      ///< why nothing was found
 };
 
 /// Among known cells inside the place whose cost is below max_goal_cost and where the

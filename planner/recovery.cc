@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "common/check.h"
 
@@ -45,8 +46,8 @@ RecoveryKind RecoveryKindFromName(const std::string& name) {
   if (name == "back_up") return RecoveryKind::kBackUp;
   if (name == "wait") return RecoveryKind::kWait;
   if (name == "clear_short_term") return RecoveryKind::kClearShortTerm;
-  CAIRN_THROW_UNLESS(false, "unknown recovery '" << name
-                                                 << "' (rotate, back_up, wait, clear_short_term)");
+  CAIRN_THROW_UNLESS(false,
+                     "unknown recovery '" << name << "' (rotate, back_up, wait, clear_short_term)");
   return RecoveryKind::kWait;
 }
 
@@ -63,6 +64,9 @@ void RecoveryParams::Validate() const {
 
 bool MotionClear(const CostMap* map, const Pose2& pose, const Velocity& v, double lookahead_s) {
   if (map == nullptr) return false;
+  // A robot already touching blocking cells may move as long as it touches no others.
+  const std::vector<int64_t> escaping =
+      map->IsValid(pose) ? std::vector<int64_t>{} : map->BlockingCellsUnder(pose);
   const double step = 0.1;
   for (double t = step; t <= lookahead_s + 1e-9; t += step) {
     const double yaw = pose.yaw_rad + v.angular_radps * t;
@@ -76,7 +80,9 @@ bool MotionClear(const CostMap* map, const Pose2& pose, const Velocity& v, doubl
       p.y_m -= r * (std::cos(yaw) - std::cos(pose.yaw_rad));
     }
     p.yaw_rad = common::WrapAngle(yaw);
-    if (!map->IsValid(p)) return false;
+    const bool valid =
+        escaping.empty() ? map->IsValid(p) : map->CheckFootprintIgnoring(p, escaping).valid;
+    if (!valid) return false;
   }
   return true;
 }
@@ -126,9 +132,10 @@ RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_com
           stop(Format("turned %.2f rad", turned_rad_));
           break;
         }
-        out.command = RotateInPlaceCommand(generator_, last_command, remaining,
-                                           params_.rotate_speed_radps);
-        if (!MotionClear(map, pose, {0.0, params_.rotate_speed_radps}, params_.collision_lookahead_s)) {
+        out.command =
+            RotateInPlaceCommand(generator_, last_command, remaining, params_.rotate_speed_radps);
+        if (!MotionClear(map, pose, {0.0, params_.rotate_speed_radps},
+                         params_.collision_lookahead_s)) {
           stop("rotation blocked");
         }
         break;

@@ -25,7 +25,7 @@ RecoveryKind RecoveryKindFromName(const std::string& name);
 struct RecoveryParams {
   std::vector<RecoveryKind> sequence{RecoveryKind::kRotate, RecoveryKind::kBackUp,
                                      RecoveryKind::kWait, RecoveryKind::kClearShortTerm};
-  double rotate_angle_rad{1.57};      ///< how far "rotate" turns (Nav2 Spin default)
+  double rotate_angle_rad{1.57};  ///< how far "rotate" turns (Nav2 Spin default)
   double rotate_speed_radps{0.6};
   double backup_distance_m{0.3};
   double backup_speed_mps{0.1};
@@ -53,8 +53,8 @@ class RecoveryBehaviour {
   /// Starts `kind` from `pose` at time now_s (seconds).
   void Start(RecoveryKind kind, const common::Pose2& pose, double now_s);
   /// Advances it. `map` may be null (motions then stop at once).
-  RecoveryStep Step(const common::Pose2& pose, const Velocity& last_command,
-                    const CostMap* map, double now_s);
+  RecoveryStep Step(const common::Pose2& pose, const Velocity& last_command, const CostMap* map,
+                    double now_s);
   RecoveryKind kind() const { return kind_; }
 
  private:
@@ -71,7 +71,8 @@ class RecoveryBehaviour {
 };
 
 /// True when driving at constant `velocity` from `pose` keeps the footprint valid for
-/// `lookahead_s` (checked every 0.1 s). False without a map.
+/// `lookahead_s` (checked every 0.1 s). When the footprint at `pose` already touches blocking
+/// cells, those count as free (the robot may move away from them). False without a map.
 bool MotionClear(const CostMap* map, const common::Pose2& pose, const Velocity& velocity,
                  double lookahead_s);
 

@@ -521,24 +521,25 @@ void MujocoSim::ProduceReadings(SimOutputs* out) {
   const double now = data_->time;
   const int64_t utime = ToUtime(now);
 
-  // Which sensors fall due at this step.
-  bool any_due = false;
+  // Which sensors fall due at this step. Ray sensors need the poses of everything at `now`
+  // (mj_step leaves the positions of the step's start in x*); the others read qpos, qvel and
+  // sensordata directly.
+  bool any_due = false, rays_due = false;
   for (const auto& r : robots_) {
     if (r->lidar) {
       const auto& p = r->lidar->params;
       const double next =
           static_cast<double>(r->lidar->slices_done + 1) / (p.rate_hz * p.slices_per_revolution);
-      any_due |= next <= now + 1e-9;
+      rays_due |= next <= now + 1e-9;
     }
-    any_due |= (r->planar && r->planar->schedule.Due(now)) ||
-               (r->turret && r->turret->schedule.Due(now)) ||
-               (r->imu && r->imu->schedule.Due(now)) ||
+    rays_due |=
+        (r->planar && r->planar->schedule.Due(now)) || (r->turret && r->turret->schedule.Due(now));
+    any_due |= (r->imu && r->imu->schedule.Due(now)) ||
                (r->has_odometry && r->odom_schedule.Due(now)) ||
                (r->has_pose && r->pose_schedule.Due(now));
   }
-  if (!any_due) return;
-  // Sensors see the state at `now`: mj_step left positions of the step's start in x*.
-  mj_kinematics(model_.get(), data_.get());
+  if (!any_due && !rays_due) return;
+  if (rays_due) mj_kinematics(model_.get(), data_.get());
 
   for (auto& r : robots_) {
     if (r->lidar) CastLidar(*r, out);

@@ -92,6 +92,7 @@ SimService::SimService(runtime::Node& node, MujocoSim& sim, SimServiceParams par
   }
   node_.Subscribe<Request>(channels::kSimControl, [this](const Request& msg) { OnControl(msg); });
   Reanchor();
+  warnings_reported_ = MujocoWarningCount();
   rtf_wall_ = Clock::now();
   rtf_sim_s_ = sim_.time_s();
   last_paused_clock_ = Clock::now();
@@ -311,7 +312,13 @@ void SimService::StepOnce() {
   const bool tick = ticks > clock_ticks_;
   clock_ticks_ = ticks;
   PublishOutputs();
-  if (tick) PublishClock();
+  if (tick) {
+    const Clock::time_point now = Clock::now();
+    if (Seconds(now - last_clock_) >= 1.0 / params_.max_clock_rate_hz) {
+      last_clock_ = now;
+      PublishClock();
+    }
+  }
 }
 
 void SimService::StepAndPublish(int steps) {
@@ -365,6 +372,12 @@ bool SimService::RunOnce(int max_wait_ms) {
     }
   }
   if (steps > 0) node_.Count("physics_steps", steps);
+  // MuJoCo's warnings go to the log through the hooks; HEALTH counts them.
+  const int64_t warnings = MujocoWarningCount();
+  if (warnings > warnings_reported_) {
+    node_.Count("mujoco_warnings", warnings - warnings_reported_);
+    warnings_reported_ = warnings;
+  }
   return !node_.stopping();
 }
 

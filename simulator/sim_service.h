@@ -30,6 +30,9 @@ struct SimServiceParams {
   bool start_paused{false};
   /// SIM.CLOCK messages per wall second while paused (time stands still but listeners learn it).
   double paused_clock_rate_hz{10.0};
+  /// At most this many SIM.CLOCK messages per wall second when running fast (listeners only
+  /// need the latest time).
+  double max_clock_rate_hz{200.0};
   /// When the simulation falls behind its pace by more than this much sim time, it gives up
   /// catching up (the measured real-time factor then drops below the target).
   double max_lag_s{0.25};
@@ -84,6 +87,7 @@ class SimService {
   double anchor_sim_s_{0.0};
   int64_t clock_ticks_{0};
   Clock::time_point last_paused_clock_;
+  Clock::time_point last_clock_;
   // Real-time factor over about a second.
   Clock::time_point rtf_wall_;
   double rtf_sim_s_{0.0};
@@ -91,6 +95,7 @@ class SimService {
   std::map<std::pair<std::string, int64_t>, cairn::lcmt_sim_control_reply> replies_;
   std::deque<std::pair<std::string, int64_t>> reply_order_;
   std::map<std::string, double> turret_line_period_s_;
+  int64_t warnings_reported_{0};
 };
 
 /// "max" or "0" -> 0 (as fast as possible), otherwise a positive finite number.

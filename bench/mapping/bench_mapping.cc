@@ -70,13 +70,15 @@ common::RobotProfile Profile(const std::string& name) {
 }
 
 // Revolutions of the simulated HDL-32E on a P3-AT driving along lane `lane_y` of the tunnel.
-std::vector<common::LidarRevolution> RecordTunnel(int revolutions, double lane_y, double speed_mps) {
+std::vector<common::LidarRevolution> RecordTunnel(int revolutions, double lane_y,
+                                                  double speed_mps) {
   const sim::SimPaths paths = sim::SimPaths::Default();
   sim::Scenario scenario;
   scenario.world = "tunnel";
   scenario.world_path = paths.WorldPath("tunnel");
   scenario.seed = 7;
-  sim::RobotSpec robot = sim::MakeRobotSpec("p1", "pioneer3at", "", {4.0, lane_y, 0.0, std::nullopt}, paths);
+  sim::RobotSpec robot =
+      sim::MakeRobotSpec("p1", "pioneer3at", "", {4.0, lane_y, 0.0, std::nullopt}, paths);
   robot.commands.push_back({0.3, 1000.0, speed_mps, 0.0});
   robot.sensors.planar_laser.reset();
   robot.sensors.odometry.reset();
@@ -99,7 +101,8 @@ std::vector<common::LidarRevolution> RecordTunnel(int revolutions, double lane_y
   }
   std::vector<common::LidarRevolution> list;
   for (auto& [n, rev] : by_number) {
-    if (rev.complete() && static_cast<int>(list.size()) < revolutions) list.push_back(std::move(rev));
+    if (rev.complete() && static_cast<int>(list.size()) < revolutions)
+      list.push_back(std::move(rev));
   }
   return list;
 }
@@ -121,9 +124,9 @@ common::GridMap BigTerrain(uint64_t seed) {
       const int bx = ix % 100, by = iy % 100;                    // a 20 m feature cell
       if (bx >= 20 && bx < 35 && by >= 20 && by < 60) z += (bx - 20) * 0.2 * std::tan(0.17);
       if (bx >= 35 && bx < 45 && by >= 20 && by < 60) z += 15 * 0.2 * std::tan(0.17);
-      if (bx >= 60 && bx < 70 && by >= 20 && by < 30) z += 0.2;       // block
-      if (bx >= 60 && bx < 65 && by >= 50 && by < 55) z += 1.0;       // object
-      if (by >= 80 && by < 83 && bx >= 10 && bx < 90) {               // trench
+      if (bx >= 60 && bx < 70 && by >= 20 && by < 30) z += 0.2;  // block
+      if (bx >= 60 && bx < 65 && by >= 50 && by < 55) z += 1.0;  // object
+      if (by >= 80 && by < 83 && bx >= 10 && bx < 90) {          // trench
         h(ix, iy) = NAN;
         bound(ix, iy) = static_cast<float>(z - 0.2);
         continue;
@@ -202,10 +205,11 @@ int Main(int argc, char** argv) {
   const double median_ms = Median(total_ms);
   std::printf("%zu revolutions, %.0f points each on average, %zu obstacles at the end\n",
               revs.size(), mean_points, obstacles);
-  std::printf("stage medians (CPU): elevation %.2f ms, derived layers (2 profiles) %.2f ms, "
-              "registry %.2f ms, occupancy %.2f ms; total p90 %.2f ms; wall median %.2f ms\n",
-              Median(elevation_ms), Median(derived_ms), Median(registry_ms), Median(occupancy_ms),
-              Percentile(total_ms, 0.9), Median(wall_ms));
+  std::printf(
+      "stage medians (CPU): elevation %.2f ms, derived layers (2 profiles) %.2f ms, "
+      "registry %.2f ms, occupancy %.2f ms; total p90 %.2f ms; wall median %.2f ms\n",
+      Median(elevation_ms), Median(derived_ms), Median(registry_ms), Median(occupancy_ms),
+      Percentile(total_ms, 0.9), Median(wall_ms));
   Report({"mapping.pipeline_per_revolution.median", median_ms, "ms",
           "seed 000 cost map (6-8 s, published)", 7000.0, false, "<= 10 ms", median_ms <= 10.0});
   // elevation_mapping: ~0.5 s per 3,000-point cloud, i.e. about 6,000 points/s.
@@ -224,8 +228,9 @@ int Main(int argc, char** argv) {
   mapping::ComputeFeatureLayers(&big, op, mapping::CellRect::All(big));
   const common::ObstacleRegistry features = mapping::AssembleObstacles(big, op);
   const double g2 = CpuMs();
-  std::printf("once per 1000 x 1000 map: geometric layers %.0f ms, registry features (%zu) %.0f ms\n",
-              g1 - g0, features.obstacles.size(), g2 - g1);
+  std::printf(
+      "once per 1000 x 1000 map: geometric layers %.0f ms, registry features (%zu) %.0f ms\n",
+      g1 - g0, features.obstacles.size(), g2 - g1);
   const common::RobotProfile rover = Profile("rover");
   std::vector<double> rederive_ms, cost_ms;
   for (int k = 0; k < repeats; ++k) {

@@ -8,15 +8,6 @@
 //   and in the store core (target <= 5 ms);
 // - database size per square kilometre at 0.2 m, beside raw float32.
 
-#include <arpa/inet.h>
-#include <fcntl.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <spawn.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -26,10 +17,19 @@
 #include <string>
 #include <vector>
 
+#include <arpa/inet.h>
+#include <fcntl.h>
 #include <lcm/lcm-cpp.hpp>
+#include <netinet/in.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "cairn/lcmt_mapstore_request.hpp"
 
 #include "bench/support/figure.h"
-#include "cairn/lcmt_mapstore_request.hpp"
 #include "common/flags.h"
 #include "common/layers.h"
 #include "common/robot_profile.h"
@@ -137,7 +137,8 @@ int main(int argc, char** argv) {
   fs::create_directories(dir);
   const std::string db = (dir / "bench.db").string();
   const std::string url = "udpm://239.255.76.67:" + std::to_string(FreePort()) + "?ttl=0";
-  const std::string exe = (fs::canonical("/proc/self/exe").parent_path() / "cairn-mapstore").string();
+  const std::string exe =
+      (fs::canonical("/proc/self/exe").parent_path() / "cairn-mapstore").string();
   const std::string log = (dir / "cairn-mapstore.log").string();
 
   // The service, as its own process.
@@ -171,7 +172,8 @@ int main(int argc, char** argv) {
     ping.op = cairn::lcmt_mapstore_request::OP_LIST_PROFILES;
     auto reply = client.Call(ping);
     if (!reply.ok()) {
-      std::fprintf(stderr, "cairn-mapstore did not answer: %s\n", reply.status().ToString().c_str());
+      std::fprintf(stderr, "cairn-mapstore did not answer: %s\n",
+                   reply.status().ToString().c_str());
       stop_service();
       return 1;
     }
@@ -277,13 +279,14 @@ int main(int argc, char** argv) {
       auto rover = (*service_db)->GetProfile("rover");
       for (int r = 0; r < runs && rover.ok(); ++r) {
         const auto t0 = Clock::now();
-        auto hit = (*service_db)->FindDerived({"bench", "terrain", last_version}, rover->content_hash,
+        auto hit = (*service_db)
+                       ->FindDerived({"bench", "terrain", last_version}, rover->content_hash,
 #ifdef CAIRN_HAVE_MAPPING
-                                              mapstore::MappingDeriver().code_version,
+                                     mapstore::MappingDeriver().code_version,
 #else
-                                              "",
+                                     "",
 #endif
-                                              {{"cost/rover"}, std::nullopt});
+                                     {{"cost/rover"}, std::nullopt});
         if (hit.ok() && hit->has_value()) core_cached_ms.push_back(Ms(t0));
       }
     }
@@ -305,8 +308,8 @@ int main(int argc, char** argv) {
   Report({"mapstore.cached_cost_layer.store_core", Median(core_cached_ms), "ms",
           "derivation for a new profile (share, rover)", derive_ms, false, "<= 5 ms",
           Median(core_cached_ms) <= 5.0});
-  Report({"mapstore.db_size_per_km2_at_0.2m", mb_per_km2, "MB/km2",
-          "raw float32, 4 layers", raw_mb_per_km2, false, "reported", true});
+  Report({"mapstore.db_size_per_km2_at_0.2m", mb_per_km2, "MB/km2", "raw float32, 4 layers",
+          raw_mb_per_km2, false, "reported", true});
   std::printf("(load resend requests over %d runs: %d; service log: %s)\n", runs, resends,
               log.c_str());
   if (!keep) {

@@ -43,7 +43,8 @@ double Ms(Clock::time_point a, Clock::time_point b) {
 double Percentile(std::vector<double> v, double p) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());
-  const size_t i = std::min(v.size() - 1, static_cast<size_t>(std::floor(p * (v.size() - 1) + 0.5)));
+  const size_t i =
+      std::min(v.size() - 1, static_cast<size_t>(std::floor(p * (v.size() - 1) + 0.5)));
   return v[i];
 }
 
@@ -62,8 +63,10 @@ void BenchDwa(const cairn::common::RobotProfile& profile) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   auto box = [&](double x0, double y0, double x1, double y1, float v) {
-    for (int iy = std::max(0, int(y0 / g.resolution_m)); iy < std::min(g.size_y, int(y1 / g.resolution_m)); ++iy) {
-      for (int ix = std::max(0, int(x0 / g.resolution_m)); ix < std::min(g.size_x, int(x1 / g.resolution_m)); ++ix) {
+    for (int iy = std::max(0, int(y0 / g.resolution_m));
+         iy < std::min(g.size_y, int(y1 / g.resolution_m)); ++iy) {
+      for (int ix = std::max(0, int(x0 / g.resolution_m));
+           ix < std::min(g.size_x, int(x1 / g.resolution_m)); ++ix) {
         cost(ix, iy) = v;
       }
     }
@@ -87,7 +90,8 @@ void BenchDwa(const cairn::common::RobotProfile& profile) {
     planner::DwaInput in;
     in.map = &map;
     in.pose = pose;
-    in.last_command = {u(rng) * profile.max_vel_x_mps, (u(rng) - 0.5) * 2 * profile.max_vel_theta_radps};
+    in.last_command = {u(rng) * profile.max_vel_x_mps,
+                       (u(rng) - 0.5) * 2 * profile.max_vel_theta_radps};
     in.path = &path;
     in.segment_begin = 0;
     in.segment_end = 1;
@@ -133,7 +137,8 @@ GridMap BenchWorld(uint32_t seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int k = 0; k < 150; ++k) {
-    const double x = u(rng) * 96.0, y = u(rng) * 96.0, w = 1.0 + u(rng) * 3.0, d = 1.0 + u(rng) * 3.0;
+    const double x = u(rng) * 96.0, y = u(rng) * 96.0, w = 1.0 + u(rng) * 3.0,
+                 d = 1.0 + u(rng) * 3.0;
     if (x + w > 43.0 && x < 60.0) continue;  // keep the ramp band clean
     for (int iy = int(y / 0.1); iy < std::min(1000, int((y + d) / 0.1)); ++iy) {
       for (int ix = int(x / 0.1); ix < std::min(1000, int((x + w) / 0.1)); ++ix) h(ix, iy) = 1.0f;
@@ -156,9 +161,10 @@ void BenchOmpl(const cairn::common::RobotProfile& profile) {
   const auto d2 = Clock::now();
   int ramp_lethal = 0;
   for (double x = 45.5; x < 57.5; x += 0.5) ramp_lethal += map.CostAt({x, 35.0}) >= 100.0f;
-  std::printf("world: cost layer derived in %.0f ms, distance fields and labels in %.0f ms; "
-              "%d of 24 samples across the ramp band are lethal for %s\n",
-              Ms(d0, d1), Ms(d1, d2), ramp_lethal, profile.name.c_str());
+  std::printf(
+      "world: cost layer derived in %.0f ms, distance fields and labels in %.0f ms; "
+      "%d of 24 samples across the ramp band are lethal for %s\n",
+      Ms(d0, d1), Ms(d1, d2), ramp_lethal, profile.name.c_str());
 
   std::mt19937 rng(2026);
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -203,10 +209,11 @@ void BenchOmpl(const cairn::common::RobotProfile& profile) {
   const double rate = 100.0 * success / runs;
   const double ratio = Percentile(ratios, 0.5);
   std::printf("queries: %d solvable ones (%d unsolvable draws skipped)\n", runs, skipped);
-  std::printf("OMPL: %d/%d exact; first solution p90 %.1f ms; with simplification median %.1f ms; "
-              "length ratio to A* p90 %.3f, max %.3f\n",
-              success, runs, Percentile(first_ms, 0.9), Percentile(total_ms, 0.5),
-              Percentile(ratios, 0.9), Percentile(ratios, 1.0));
+  std::printf(
+      "OMPL: %d/%d exact; first solution p90 %.1f ms; with simplification median %.1f ms; "
+      "length ratio to A* p90 %.3f, max %.3f\n",
+      success, runs, Percentile(first_ms, 0.9), Percentile(total_ms, 0.5), Percentile(ratios, 0.9),
+      Percentile(ratios, 1.0));
   Report(Figure{"planner.ompl.first_solution_median", first, "ms", "grid A* (same run)",
                 Percentile(astar_ms, 0.5), false, "<= 50 ms", first <= 50.0});
   Report(Figure{"planner.ompl.success_rate", rate, "%", "-", NAN, true, ">= 99 %", rate >= 99.0});

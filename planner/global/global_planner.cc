@@ -1,10 +1,12 @@
 #include "planner/global/global_planner.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include <ompl/base/Goal.h>
@@ -25,6 +27,7 @@
 #include <ompl/geometric/planners/informedtrees/BITstar.h>
 #include <ompl/geometric/planners/prm/PRMstar.h>
 #include <ompl/geometric/planners/rrt/InformedRRTstar.h>
+#include <ompl/geometric/planners/rrt/RRT.h>
 #include <ompl/geometric/planners/rrt/RRTConnect.h>
 #include <ompl/geometric/planners/rrt/RRTstar.h>
 #include <ompl/util/Console.h>
@@ -32,6 +35,7 @@
 
 #include "common/check.h"
 #include "common/log.h"
+#include "planner/global/dubins_space.h"
 
 namespace cairn::planner {
 
@@ -115,6 +119,73 @@ class FootprintValidityChecker : public ob::StateValidityChecker {
   double escape2_;
 };
 
+// SE(2) samples for narrow passages. A share of the positions comes from the ridge cells of
+// the distance field (the middle of corridors and doors, MAPRM's medial-axis idea), and a share
+// of the headings follows the free space: perpendicular to the gradient of the distance to the
+// nearest blocking cell, either way round, with a little noise. The rest is uniform. A narrow
+// passage admits only states near its middle with headings close to its direction; uniform
+// samples would rarely land there.
+class FreeSpaceSE2Sampler : public ob::StateSampler {
+ public:
+  FreeSpaceSE2Sampler(const ob::StateSpace* space, const CostMap& map, double ridge_fraction,
+                      double aligned_fraction)
+      : ob::StateSampler(space),
+        map_(map),
+        ridge_fraction_(ridge_fraction),
+        aligned_fraction_(aligned_fraction),
+        fallback_(space->allocDefaultStateSampler()) {
+    // Ridge cells inside the sampled bounds.
+    const auto& b = space_->as<ob::SE2StateSpace>()->getBounds();
+    const auto& g = map.geometry();
+    for (const int32_t i : map.RidgeCells()) {
+      const Vector2 c =
+          g.CenterOf({static_cast<int>(i % g.size_x), static_cast<int>(i / g.size_x)});
+      if (c.x() >= b.low[0] && c.x() <= b.high[0] && c.y() >= b.low[1] && c.y() <= b.high[1]) {
+        ridges_.push_back(c);
+      }
+    }
+  }
+  void sampleUniform(ob::State* state) override {
+    auto* s = state->as<ob::SE2StateSpace::StateType>();
+    const auto& b = space_->as<ob::SE2StateSpace>()->getBounds();
+    double x, y;
+    if (!ridges_.empty() && rng_.uniform01() < ridge_fraction_) {
+      const Vector2& c = ridges_[rng_.uniformInt(0, static_cast<int>(ridges_.size()) - 1)];
+      const double h = 0.5 * map_.resolution_m();
+      x = std::clamp(c.x() + rng_.uniformReal(-h, h), b.low[0], b.high[0]);
+      y = std::clamp(c.y() + rng_.uniformReal(-h, h), b.low[1], b.high[1]);
+    } else {
+      x = rng_.uniformReal(b.low[0], b.high[0]);
+      y = rng_.uniformReal(b.low[1], b.high[1]);
+    }
+    double yaw = rng_.uniformReal(-M_PI, M_PI);
+    if (rng_.uniform01() < aligned_fraction_) {
+      const double h = map_.resolution_m();
+      const double gx = map_.SmoothClearanceAt({x + h, y}) - map_.SmoothClearanceAt({x - h, y});
+      const double gy = map_.SmoothClearanceAt({x, y + h}) - map_.SmoothClearanceAt({x, y - h});
+      if (std::isfinite(gx) && std::isfinite(gy) && std::hypot(gx, gy) > 1e-6) {
+        yaw = std::atan2(gy, gx) + M_PI / 2 + (rng_.uniformBool() ? 0.0 : M_PI) +
+              rng_.gaussian(0.0, 0.15);
+      }
+    }
+    s->setXY(x, y);
+    s->setYaw(OmplYaw(yaw));
+  }
+  void sampleUniformNear(ob::State* state, const ob::State* near, double distance) override {
+    fallback_->sampleUniformNear(state, near, distance);
+  }
+  void sampleGaussian(ob::State* state, const ob::State* mean, double std_dev) override {
+    fallback_->sampleGaussian(state, mean, std_dev);
+  }
+
+ private:
+  const CostMap& map_;
+  double ridge_fraction_;
+  double aligned_fraction_;
+  ob::StateSamplerPtr fallback_;
+  std::vector<Vector2> ridges_;
+};
+
 // Length plus traversal cost: the integral of 1 + w · cost / 100 along the motion, by the
 // trapezoid rule over samples about one cost cell apart (OMPL's own integration would sample at
 // the much finer validity resolution).
@@ -181,9 +252,11 @@ class PositionGoal : public ob::GoalSampleableRegion {
 
 ob::PlannerPtr MakePlanner(const std::string& name, const ob::SpaceInformationPtr& si) {
   if (name == "RRTConnect") return std::make_shared<og::RRTConnect>(si);
+  if (name == "RRT") return std::make_shared<og::RRT>(si);
   if (name == "RRTstar") return std::make_shared<og::RRTstar>(si);
   if (name == "InformedRRTstar") return std::make_shared<og::InformedRRTstar>(si);
-  if (name == "BITstar") return std::make_shared<og::BITstar>(si, "kBITstar");  // k-nearest by default
+  if (name == "BITstar")
+    return std::make_shared<og::BITstar>(si, "kBITstar");  // k-nearest by default
   if (name == "PRMstar") return std::make_shared<og::PRMstar>(si);
   CAIRN_DEMAND(false);  // names are validated in GlobalPlannerParams::Validate
   return nullptr;
@@ -205,6 +278,27 @@ bool PathStillValid(const CostMap& map, og::PathGeometric& path) {
     if (!map.Contains(p.position()) || !map.IsValid(p)) return false;
   }
   return true;
+}
+
+// The valid pose nearest to `start` within `radius_m` (rings of positions, the start's heading
+// first), or nullopt.
+std::optional<Pose2> RescueStart(const CostMap& map, const Pose2& start, double radius_m) {
+  const double step = std::max(0.05, 0.5 * map.resolution_m());
+  for (double r = step; r <= radius_m + 1e-9; r += step) {
+    const int n = std::max(8, static_cast<int>(std::ceil(2.0 * M_PI * r / step)));
+    for (int yaw_try = 0; yaw_try < 9; ++yaw_try) {
+      const double yaw =
+          start.yaw_rad +
+          (yaw_try == 0 ? 0.0 : (yaw_try % 2 ? 1 : -1) * M_PI / 4 * ((yaw_try + 1) / 2));
+      for (int k = 0; k < n; ++k) {
+        const double a = 2.0 * M_PI * k / n;
+        const Pose2 p{start.x_m + r * std::cos(a), start.y_m + r * std::sin(a),
+                      common::WrapAngle(yaw)};
+        if (map.Contains(p.position()) && map.IsValid(p)) return p;
+      }
+    }
+  }
+  return std::nullopt;
 }
 
 std::mutex& PlanMutex() {
@@ -236,7 +330,7 @@ const char* StateSpaceKindName(StateSpaceKind kind) {
 
 const std::vector<std::string>& KnownPlannerNames() {
   static const std::vector<std::string> names = {"RRTConnect", "RRTstar", "InformedRRTstar",
-                                                 "BITstar", "PRMstar"};
+                                                 "BITstar",    "PRMstar", "RRT"};
   return names;
 }
 
@@ -247,11 +341,22 @@ void GlobalPlannerParams::Validate() const {
   for (const auto& n : KnownPlannerNames()) names << " " << n;
   CAIRN_THROW_UNLESS(known, "unknown planner '" << planner << "'; known:" << names.str());
   CAIRN_THROW_UNLESS(turning_radius_m > 0.0, "turning_radius_m must be positive");
+  // Dubins curves are directed (forward only): a second tree grown from the goal, a roadmap's
+  // undirected edges or RRT*'s rewiring would reverse curves the robot cannot drive backwards
+  // (and RRTConnect's connect loop need not end). The single forward tree of RRT is sound.
+  CAIRN_THROW_UNLESS(state_space != StateSpaceKind::kDubins || planner == "RRT",
+                     "planner '" << planner
+                                 << "' needs a symmetric state space: with dubins use RRT "
+                                    "(or use reeds_shepp)");
   CAIRN_THROW_UNLESS(time_budget_s > 0.0, "time_budget_s must be positive");
   CAIRN_THROW_UNLESS(traversal_cost_weight >= 0.0, "traversal_cost_weight must not be negative");
   CAIRN_THROW_UNLESS(validity_resolution_m > 0.0, "validity_resolution_m must be positive");
   CAIRN_THROW_UNLESS(range_m >= 0.0, "range_m must not be negative");
   CAIRN_THROW_UNLESS(bounds_margin_m >= 0.0, "bounds_margin_m must not be negative");
+  CAIRN_THROW_UNLESS(aligned_heading_fraction >= 0.0 && aligned_heading_fraction <= 1.0,
+                     "aligned_heading_fraction must lie in [0, 1]");
+  CAIRN_THROW_UNLESS(ridge_sample_fraction >= 0.0 && ridge_sample_fraction <= 1.0,
+                     "ridge_sample_fraction must lie in [0, 1]");
   CAIRN_THROW_UNLESS(simplify_time_s >= 0.0, "simplify_time_s must not be negative");
   CAIRN_THROW_UNLESS(improvement_rounds >= 0, "improvement_rounds must not be negative");
   CAIRN_THROW_UNLESS(improvement_time_s >= 0.0, "improvement_time_s must not be negative");
@@ -259,6 +364,7 @@ void GlobalPlannerParams::Validate() const {
   CAIRN_THROW_UNLESS(interpolation_step_m > 0.0, "interpolation_step_m must be positive");
   CAIRN_THROW_UNLESS(goal_tolerance_m > 0.0, "goal_tolerance_m must be positive");
   CAIRN_THROW_UNLESS(goal_yaw_samples >= 1, "goal_yaw_samples must be at least 1");
+  CAIRN_THROW_UNLESS(start_rescue_radius_m >= 0.0, "start_rescue_radius_m must not be negative");
   CAIRN_THROW_UNLESS(seed != 0, "seed must not be 0 (OMPL would pick a random one)");
 }
 
@@ -278,17 +384,27 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
     return result;
   };
   auto cancelled = [&] { return cancel != nullptr && cancel->load(); };
-  const Pose2& start = request.start;
   const Pose2& goal = request.goal;
 
   // Cheap outcomes first: bounds, occupied start or goal, cancellation, grid connectivity.
-  const bool finite = std::isfinite(start.x_m) && std::isfinite(start.y_m) &&
-                      std::isfinite(start.yaw_rad) && std::isfinite(goal.x_m) &&
+  const bool finite = std::isfinite(request.start.x_m) && std::isfinite(request.start.y_m) &&
+                      std::isfinite(request.start.yaw_rad) && std::isfinite(goal.x_m) &&
                       std::isfinite(goal.y_m) && std::isfinite(goal.yaw_rad);
   if (!finite) return finish(PlanStatus::kOutOfBounds, "start or goal is not finite");
-  if (!map.Contains(start.position())) return finish(PlanStatus::kOutOfBounds, "start is outside the map");
-  if (!map.Contains(goal.position())) return finish(PlanStatus::kOutOfBounds, "goal is outside the map");
-  if (!map.IsValid(start)) return finish(PlanStatus::kStartOccupied, "the footprint at the start is blocked");
+  if (!map.Contains(request.start.position())) {
+    return finish(PlanStatus::kOutOfBounds, "start is outside the map");
+  }
+  if (!map.Contains(goal.position()))
+    return finish(PlanStatus::kOutOfBounds, "goal is outside the map");
+  // A start touching blocking cells: plan from the nearest valid pose close by, if any.
+  Pose2 start = request.start;
+  if (!map.IsValid(start)) {
+    const auto rescued = RescueStart(map, start, params_.start_rescue_radius_m);
+    if (!rescued)
+      return finish(PlanStatus::kStartOccupied, "the footprint at the start is blocked");
+    result.start_moved_m = (rescued->position() - start.position()).norm();
+    start = *rescued;
+  }
   std::vector<double> goal_yaws;
   if (request.goal_has_yaw) {
     if (map.IsValid(goal)) goal_yaws.push_back(goal.yaw_rad);
@@ -300,7 +416,8 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
       if (map.IsValid({goal.x_m, goal.y_m, yaw})) goal_yaws.push_back(yaw);
     }
   }
-  if (goal_yaws.empty()) return finish(PlanStatus::kGoalOccupied, "the footprint at the goal is blocked");
+  if (goal_yaws.empty())
+    return finish(PlanStatus::kGoalOccupied, "the footprint at the goal is blocked");
   if (cancelled()) return finish(PlanStatus::kCancelled, "cancelled");
   if (params_.grid_precheck && !map.MaybeConnected(start.position(), goal.position())) {
     return finish(PlanStatus::kNoPath, "the goal is not connected to the start");
@@ -316,7 +433,7 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
       space = std::make_shared<ob::SE2StateSpace>();
       break;
     case StateSpaceKind::kDubins:
-      space = std::make_shared<ob::DubinsStateSpace>(params_.turning_radius_m);
+      space = std::make_shared<DubinsSpace>(params_.turning_radius_m);
       break;
     case StateSpaceKind::kReedsShepp:
       space = std::make_shared<ob::ReedsSheppStateSpace>(params_.turning_radius_m);
@@ -334,8 +451,9 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
   };
   // The grid's extent in the world (its corners, for a rotated grid).
   ob::RealVectorBounds grid = bounds;
-  for (const Vector2& corner : {Vector2(0, 0), Vector2(g.length_x_m(), 0),
-                                Vector2(0, g.length_y_m()), Vector2(g.length_x_m(), g.length_y_m())}) {
+  for (const Vector2& corner :
+       {Vector2(0, 0), Vector2(g.length_x_m(), 0), Vector2(0, g.length_y_m()),
+        Vector2(g.length_x_m(), g.length_y_m())}) {
     const Vector2 w = g.origin.Transform(corner);
     for (int d = 0; d < 2; ++d) {
       grid.low[d] = std::min(grid.low[d], w[d]);
@@ -360,6 +478,13 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
     bounds.high[d] = std::min(grid.high[d], bounds.high[d] + params_.bounds_margin_m);
   }
   space->setBounds(bounds);
+  if (params_.aligned_heading_fraction > 0.0 || params_.ridge_sample_fraction > 0.0) {
+    const double ridge = params_.ridge_sample_fraction;
+    const double aligned = params_.aligned_heading_fraction;
+    space->setStateSamplerAllocator([&map, ridge, aligned](const ob::StateSpace* s) {
+      return std::make_shared<FreeSpaceSE2Sampler>(s, map, ridge, aligned);
+    });
+  }
 
   og::SimpleSetup setup(space);
   const ob::SpaceInformationPtr si = setup.getSpaceInformation();
@@ -378,8 +503,8 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
     goal_state->setYaw(OmplYaw(goal.yaw_rad));
     setup.setGoalState(goal_state, params_.goal_tolerance_m);
   } else {
-    setup.setGoal(std::make_shared<PositionGoal>(si, goal.position(), goal_yaws,
-                                                 params_.goal_tolerance_m));
+    setup.setGoal(
+        std::make_shared<PositionGoal>(si, goal.position(), goal_yaws, params_.goal_tolerance_m));
   }
 
   ob::OptimizationObjectivePtr objective;
@@ -509,8 +634,8 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
     for (size_t i = 1; i < path.getStateCount(); ++i) {
       const ob::State* a = path.getState(i - 1);
       const ob::State* b = path.getState(i);
-      const int n = std::max(1, static_cast<int>(std::ceil(si->distance(a, b) /
-                                                           params_.interpolation_step_m)));
+      const int n = std::max(
+          1, static_cast<int>(std::ceil(si->distance(a, b) / params_.interpolation_step_m)));
       for (int k = 1; k < n; ++k) {
         si->getStateSpace()->interpolate(a, b, static_cast<double>(k) / n, tmp);
         out.append(tmp);
@@ -537,6 +662,7 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
     }
     chosen = plain;
   }
+  if (result.start_moved_m > 0.0) result.poses.push_back(request.start);
   for (const ob::State* s : chosen.getStates()) result.poses.push_back(ToPose(s));
   if (params_.state_space == StateSpaceKind::kSE2) {
     // A wheeled robot drives along the path: headings follow the direction of travel where

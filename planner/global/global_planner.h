@@ -35,7 +35,8 @@ StateSpaceKind StateSpaceKindFromName(const std::string& name);
 const char* StateSpaceKindName(StateSpaceKind kind);
 
 struct GlobalPlannerParams {
-  /// OMPL planner: RRTConnect, RRTstar, InformedRRTstar, BITstar or PRMstar.
+  /// OMPL planner: RRTConnect, RRTstar, InformedRRTstar, BITstar, PRMstar, or RRT (the one
+  /// allowed with Dubins curves, which are directed).
   std::string planner{"RRTConnect"};
   StateSpaceKind state_space{StateSpaceKind::kSE2};
   /// Dubins and Reeds-Shepp turning radius.
@@ -52,12 +53,18 @@ struct GlobalPlannerParams {
   /// this margin and clipped to the grid: a mapper's grid is mostly unexplored, and sampling all
   /// of it starves narrow passages of samples.
   double bounds_margin_m{5.0};
+  /// Fraction of samples whose heading follows the local free space (along corridors, through
+  /// doors) instead of being uniform; narrow passages admit only such headings.
+  double aligned_heading_fraction{0.5};
+  /// Fraction of samples placed on the medial axis of free space (the ridge cells of the
+  /// distance field) instead of uniformly: the middle of corridors and doors.
+  double ridge_sample_fraction{0.5};
   /// Planner range (longest motion added at once); 0 keeps OMPL's default.
   double range_m{0.0};
   /// Time cap of the path simplification passes.
   double simplify_time_s{0.05};
   /// More exact solutions planned after the first, merged by PathHybridization (0: none) ...
-  int improvement_rounds{4};
+  int improvement_rounds{12};
   /// ... within this time after the first solution.
   double improvement_time_s{0.25};
   /// States closer than this to the start or the goal are checked without the padding, so a
@@ -69,6 +76,9 @@ struct GlobalPlannerParams {
   double goal_tolerance_m{0.05};
   /// Headings tried when the goal has no yaw.
   int goal_yaw_samples{16};
+  /// A start whose footprint touches blocking cells is moved to the nearest valid pose within
+  /// this distance (the path then begins with the real start); beyond it: kStartOccupied.
+  double start_rescue_radius_m{0.3};
   /// Run the grid connectivity proof before OMPL.
   bool grid_precheck{true};
   /// Seed of OMPL's random number generators (0 is not allowed by OMPL).
@@ -81,7 +91,7 @@ struct GlobalPlannerParams {
 struct PlanRequest {
   common::Pose2 start;
   common::Pose2 goal;
-  bool goal_has_yaw{false};  ///< else any heading at the goal position will do
+  bool goal_has_yaw{false};   ///< else any heading at the goal position will do
   double time_budget_s{0.0};  ///< 0: the params' budget
 };
 
@@ -96,6 +106,7 @@ struct PlanResult {
   int solutions{0};                  ///< exact solutions found (first plus improvements)
   double total_time_s{0.0};          ///< checks, solve, simplification and re-validation
   bool simplified{false};            ///< the simplified path passed re-validation
+  double start_moved_m{0.0};         ///< how far an occupied start was moved to free space
 
   bool ok() const { return status == PlanStatus::kSuccess; }
 };

@@ -85,7 +85,8 @@ GridPath GridAStar(const CostMap& map, const Vector2& start_m, const Vector2& go
   out.found = true;
   out.cost = g_cost[g];
   for (int64_t i = g; i >= 0; i = parent[i]) {
-    out.points_m.push_back(map.geometry().CenterOf({static_cast<int>(i % sx), static_cast<int>(i / sx)}));
+    out.points_m.push_back(
+        map.geometry().CenterOf({static_cast<int>(i % sx), static_cast<int>(i / sx)}));
     if (i == s) break;
   }
   std::reverse(out.points_m.begin(), out.points_m.end());

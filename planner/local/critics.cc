@@ -19,13 +19,23 @@ int Sign(double x, double eps) { return x > eps ? 1 : (x < -eps ? -1 : 0); }
 
 }  // namespace
 
+void ClearanceCritic::Prepare(const CriticContext& context) {
+  TrajectoryCritic::Prepare(context);
+  escaping_.clear();
+  if (context.map != nullptr && !context.map->IsValid(context.pose)) {
+    escaping_ = context.map->BlockingCellsUnder(context.pose);
+  }
+}
+
 Score ClearanceCritic::Evaluate(const Trajectory& trajectory) const {
   const CostMap& map = *context().map;
   const double inscribed = map.footprint().inscribed_radius_m();
   float worst = 0.0f;
   double closest = std::numeric_limits<double>::infinity();
   for (size_t k = 0; k < trajectory.poses.size(); ++k) {
-    const FootprintCost c = map.CheckFootprint(trajectory.poses[k]);
+    const FootprintCost c = escaping_.empty()
+                                ? map.CheckFootprint(trajectory.poses[k])
+                                : map.CheckFootprintIgnoring(trajectory.poses[k], escaping_);
     if (c.valid) {
       worst = std::max(worst, c.max_cost);
       closest = std::min(closest, map.SmoothClearanceAt(trajectory.poses[k].position()));

@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 #include "common/types.h"
 #include "planner/cost_map.h"
@@ -24,10 +25,10 @@ struct Score {
 /// What the critics know about the current control cycle.
 struct CriticContext {
   const CostMap* map{nullptr};
-  common::Pose2 pose;           ///< robot pose (world)
-  Velocity last_command;        ///< the command sent in the previous cycle
-  const Path* path{nullptr};    ///< global path (world)
-  size_t segment_begin{0};      ///< local window of path segments the critics look at
+  common::Pose2 pose;         ///< robot pose (world)
+  Velocity last_command;      ///< the command sent in the previous cycle
+  const Path* path{nullptr};  ///< global path (world)
+  size_t segment_begin{0};    ///< local window of path segments the critics look at
   size_t segment_end{0};
   common::Vector2 local_goal{common::Vector2::Zero()};  ///< carrot on the path (world)
 };
@@ -76,22 +77,30 @@ class TrajectoryCritic {
 /// 2 + (1 - t_blocked / horizon) (2..3), worse than any clear one, so the robot slows down in front
 /// of obstacles instead of finding every sample rejected at once. With `admissible_braking` off,
 /// any blocked pose rejects the trajectory (Nav2 DWB).
+///
+/// When the robot already touches blocking cells (an obstacle appeared under it, or a wall grew
+/// by a cell), those cells count as free for the cycle, so trajectories that move away stay
+/// valid and the robot can escape; any other blocking cell still rejects.
 class ClearanceCritic : public TrajectoryCritic {
  public:
   struct Params {
     bool admissible_braking{true};
-    double sim_step_s{0.1};         ///< time between simulated poses
-    double margin_s{0.3};           ///< reaction margin (pose steps, control periods, latency)
-    double inflation_m{0.3};        ///< proximity to blocking cells costs up to this far
+    double sim_step_s{0.1};   ///< time between simulated poses
+    double margin_s{0.3};     ///< reaction margin (pose steps, control periods, latency)
+    double inflation_m{0.3};  ///< proximity to blocking cells costs up to this far
     double acc_lim_x_mps2{0.8};
     double acc_lim_theta_radps2{1.5};
   };
   ClearanceCritic(double scale, const Params& params)
       : TrajectoryCritic("clearance", scale), params_(params) {}
+  void Prepare(const CriticContext& context) override;
   Score Evaluate(const Trajectory& trajectory) const override;
+  /// Blocking cells under the robot this cycle (empty when it is clear).
+  const std::vector<int64_t>& escaping_cells() const { return escaping_; }
 
  private:
   Params params_;
+  std::vector<int64_t> escaping_;
 };
 
 /// "path_align": distance (m) from a point `forward_point_distance_m` ahead of the final pose
@@ -99,7 +108,8 @@ class ClearanceCritic : public TrajectoryCritic {
 class PathAlignCritic : public TrajectoryCritic {
  public:
   PathAlignCritic(double scale, double forward_point_distance_m)
-      : TrajectoryCritic("path_align", scale), forward_point_distance_m_(forward_point_distance_m) {}
+      : TrajectoryCritic("path_align", scale),
+        forward_point_distance_m_(forward_point_distance_m) {}
   Score Evaluate(const Trajectory& trajectory) const override;
 
  private:

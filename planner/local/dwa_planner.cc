@@ -9,8 +9,8 @@ namespace cairn::planner {
 
 void DwaParams::Validate() const {
   generator.Validate();
-  for (const double s : {path_align_scale, goal_dist_scale, clearance_scale, speed_scale,
-                         oscillation_scale}) {
+  for (const double s :
+       {path_align_scale, goal_dist_scale, clearance_scale, speed_scale, oscillation_scale}) {
     CAIRN_THROW_UNLESS(std::isfinite(s) && s >= 0.0, "critic scales must be finite and >= 0");
   }
   CAIRN_THROW_UNLESS(braking_margin_s >= 0.0, "braking_margin_s must not be negative");
@@ -26,13 +26,14 @@ DwaPlanner::DwaPlanner(const VelocityLimits& limits, const DwaParams& params)
   params_.Validate();
   // Cheap critics first; clearance (footprint rasterisation) last.
   critics_.push_back(std::make_unique<SpeedCritic>(params_.speed_scale, limits.max_vel_x_mps));
-  auto oscillation = std::make_unique<OscillationCritic>(
-      params_.oscillation_scale, params_.oscillation_reset_dist_m, params_.oscillation_reset_angle_rad);
+  auto oscillation = std::make_unique<OscillationCritic>(params_.oscillation_scale,
+                                                         params_.oscillation_reset_dist_m,
+                                                         params_.oscillation_reset_angle_rad);
   oscillation_ = oscillation.get();
   critics_.push_back(std::move(oscillation));
   critics_.push_back(std::make_unique<GoalDistCritic>(params_.goal_dist_scale));
-  critics_.push_back(
-      std::make_unique<PathAlignCritic>(params_.path_align_scale, params_.forward_point_distance_m));
+  critics_.push_back(std::make_unique<PathAlignCritic>(params_.path_align_scale,
+                                                       params_.forward_point_distance_m));
   ClearanceCritic::Params clearance;
   clearance.admissible_braking = params_.admissible_braking;
   clearance.sim_step_s = params_.generator.sim_step_s;

@@ -52,13 +52,13 @@ struct DwaInput {
 };
 
 struct DwaResult {
-  bool found{false};      ///< false: no valid trajectory; `command` then brakes
+  bool found{false};  ///< false: no valid trajectory; `command` then brakes
   Velocity command;
   double score{0.0};
   Trajectory best;
   int samples{0};
   int valid{0};
-  bool oscillation_reset{false};  ///< every valid sample was an oscillation: memory cleared
+  bool oscillation_reset{false};    ///< every valid sample was an oscillation: memory cleared
   std::vector<int64_t> rejections;  ///< this cycle, per critic (same order as critic_names())
 };
 

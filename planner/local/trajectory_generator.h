@@ -46,10 +46,10 @@ struct DynamicWindow {
 };
 
 struct TrajectoryGeneratorParams {
-  int vx_samples{20};          ///< samples of forward speed across the window
-  int vtheta_samples{20};      ///< samples of yaw rate across the window
-  double sim_time_s{1.7};      ///< horizon each sample is simulated over
-  double sim_step_s{0.1};      ///< spacing of the simulated poses
+  int vx_samples{20};             ///< samples of forward speed across the window
+  int vtheta_samples{20};         ///< samples of yaw rate across the window
+  double sim_time_s{1.7};         ///< horizon each sample is simulated over
+  double sim_step_s{0.1};         ///< spacing of the simulated poses
   double control_period_s{0.05};  ///< 20 Hz: the window spans what one period can reach
 
   /// @throws std::invalid_argument naming the bad field.

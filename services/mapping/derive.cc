@@ -11,9 +11,9 @@ const char kMappingCodeVersion[] = "cairn-terrain-1";
 DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::RobotProfile& profile,
                                   const TraversabilityParams& traversability,
                                   const ObstacleParams& obstacles) {
-  CAIRN_THROW_UNLESS(base.HasLayer(layers::kElevation),
-                     "cannot derive profile layers: the map has no '" << layers::kElevation
-                                                                      << "' layer");
+  CAIRN_THROW_UNLESS(
+      base.HasLayer(layers::kElevation),
+      "cannot derive profile layers: the map has no '" << layers::kElevation << "' layer");
   profile.Validate();
   // Work on a copy holding only what derivation reads, so the base map is never touched.
   common::GridMap work(base.geometry());

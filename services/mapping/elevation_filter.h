@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
 
 #include "common/types.h"
 
@@ -20,9 +22,9 @@ struct ElevationFilterParams {
 
   /// |z - h| / sqrt(var + var_z) at or above this is another height (another surface).
   double mahalanobis_threshold{2.5};
-  double multi_height_noise_m2{9e-7};    ///< added to a cell's variance per conflicting point
-  double min_variance_m2{9e-6};          ///< (3 mm)^2: variances below are clamped up
-  double max_variance_m2{0.01};          ///< (10 cm)^2: variances above make the cell unknown
+  double multi_height_noise_m2{9e-7};  ///< added to a cell's variance per conflicting point
+  double min_variance_m2{9e-6};        ///< (3 mm)^2: variances below are clamped up
+  double max_variance_m2{0.01};        ///< (10 cm)^2: variances above make the cell unknown
   /// Blend toward a higher point of the same scan: 0 takes the higher point (upstream default).
   double increase_height_alpha{0.0};
 
@@ -38,6 +40,13 @@ struct ElevationFilterParams {
 /// the small lateral sigma, steep ones the range sigma.
 double PointHeightVariance(const common::Vector3& sensor_m, const common::Vector3& point_m,
                            const ElevationFilterParams& params);
+/// The same from the range and the vertical component of the unit beam direction.
+inline double PointHeightVariance(double range_m, double beam_z,
+                                  const ElevationFilterParams& params) {
+  const double bz2 = beam_z * beam_z;
+  const double lateral = params.beam_constant_m + params.beam_angle_rad * range_m;
+  return params.range_noise_m * params.range_noise_m * bz2 + lateral * lateral * (1.0 - bz2);
+}
 
 /// What one measurement did to a cell.
 enum class FuseOutcome : int8_t {
@@ -52,7 +61,49 @@ enum class FuseOutcome : int8_t {
 /// the cell was last updated by the scan this point belongs to. After the update the variance is
 /// clamped to min_variance; above max_variance the cell becomes unknown (both NaN).
 /// Returns what happened (before the clamp).
-FuseOutcome FuseHeight(float* height_m, float* variance_m2, double z_m, double var_z_m2,
-                       bool same_scan, const ElevationFilterParams& params);
+inline FuseOutcome FuseHeight(float* height_m, float* variance_m2, double z, double var_z,
+                              bool same_scan, const ElevationFilterParams& p) {
+  FuseOutcome outcome;
+  double h = *height_m, var = *variance_m2;
+  if (std::isnan(h) || !std::isfinite(var)) {
+    h = z;
+    var = var_z;
+    outcome = FuseOutcome::kInitialized;
+  } else {
+    // Distance of the measurement from the estimate in units of the standard deviation of
+    // their difference. elevation_mapping divides by the cell's sigma alone: once a cell has
+    // converged (3 mm at the variance clamp) nearly every point of a centimetre-noise lidar
+    // falls outside the gate, so the height freezes across scans and, within a scan, climbs to
+    // the highest noisy point. Gating on var + var_z keeps noise in the fusion and still
+    // separates true second surfaces (a wall face, an object) that lie many sigmas away.
+    const double mahalanobis = std::fabs(z - h) / std::sqrt(var + var_z);
+    if (mahalanobis >= p.mahalanobis_threshold) {
+      if (same_scan && z < h) {
+        return FuseOutcome::kIgnoredLower;  // nothing changes, no clamp needed
+      } else if (same_scan) {
+        const double a = p.increase_height_alpha;
+        h = a * h + (1.0 - a) * z;
+        var = a * var + (1.0 - a) * var_z;
+        outcome = FuseOutcome::kRaised;
+      } else {
+        var += p.multi_height_noise_m2;
+        outcome = FuseOutcome::kMultiHeight;
+      }
+    } else {
+      h = (var * z + var_z * h) / (var + var_z);
+      var = (var * var_z) / (var + var_z);
+      outcome = FuseOutcome::kFused;
+    }
+  }
+  if (var < p.min_variance_m2) var = p.min_variance_m2;
+  if (var > p.max_variance_m2) {
+    *height_m = std::numeric_limits<float>::quiet_NaN();
+    *variance_m2 = std::numeric_limits<float>::quiet_NaN();
+    return outcome;
+  }
+  *height_m = static_cast<float>(h);
+  *variance_m2 = static_cast<float>(var);
+  return outcome;
+}
 
 }  // namespace cairn::mapping

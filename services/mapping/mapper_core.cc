@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "common/check.h"
 #include "common/layers.h"
 
 namespace cairn::mapping {
@@ -22,12 +23,31 @@ void MapperCoreParams::Validate() const {
     band.Validate();
   }
   if (octomap_enabled) octomap.Validate();
+  if (dynamic_enabled) {
+    dynamic.Validate();
+    if (static_map_path.empty()) dynamic_extent.Validate();
+  }
 }
 
 MapperCore::MapperCore(const MapperCoreParams& params) : params_(params), terrain_(params.terrain) {
   params_.Validate();
   if (params_.occupancy_enabled) occupancy_ = std::make_unique<OccupancyGrid>(params_.occupancy);
   if (params_.octomap_enabled) octomap_ = std::make_unique<OctomapLayer>(params_.octomap);
+  if (params_.dynamic_enabled) {
+    common::GridMap static_map;
+    if (!params_.static_map_path.empty()) {
+      auto loaded = LoadStaticMap(params_.static_map_path);
+      if (!loaded.ok()) throw std::invalid_argument(loaded.status().ToString());
+      static_map = std::move(loaded.value());
+    } else {
+      CAIRN_THROW_UNLESS(params_.dynamic_extent.size_x > 0 && params_.dynamic_extent.size_y > 0,
+                         "dynamic layers need a static map or an extent");
+      static_map = common::GridMap(params_.dynamic_extent);
+      static_map.AddLayer(layers::kStaticMap);
+    }
+    dynamic_ = std::make_unique<DynamicLayers>(static_map, params_.dynamic);
+    dynamic_initial_ = std::make_unique<DynamicLayers>(*dynamic_);
+  }
 }
 
 RevolutionReport MapperCore::ProcessRevolution(const common::LidarRevolution& revolution,
@@ -63,6 +83,7 @@ RevolutionReport MapperCore::ProcessRevolution(const common::LidarRevolution& re
     const std::vector<PlanarRay> rays =
         ProjectObstacleBand(revolution, params_.band, ground_z, &report.band);
     report.occupancy = occupancy_->InsertRays(rays);
+    if (dynamic_) pending_rays_.insert(pending_rays_.end(), rays.begin(), rays.end());
   }
   const auto t3 = Clock::now();
   report.elevation_s = Seconds(t0, t1);
@@ -73,8 +94,25 @@ RevolutionReport MapperCore::ProcessRevolution(const common::LidarRevolution& re
 }
 
 OccupancyInsertStats MapperCore::ProcessScan(const common::LaserScan& scan) {
+  if (dynamic_) pending_scans_.push_back(scan);
   if (!occupancy_) return {};
   return occupancy_->InsertScan(scan);
+}
+
+DynamicUpdateStats MapperCore::StepDynamic() {
+  if (!dynamic_) return {};
+  const DynamicUpdateStats stats = dynamic_->Update(pending_scans_, pending_rays_);
+  pending_scans_.clear();
+  pending_rays_.clear();
+  return stats;
+}
+
+void MapperCore::ClearShortTerm() {
+  if (!dynamic_) return;
+  const common::GridGeometry& g = dynamic_->geometry();
+  for (int iy = 0; iy < g.size_y; ++iy) {
+    for (int ix = 0; ix < g.size_x; ++ix) dynamic_->SetShortTermCost({ix, iy}, kCostUnknown);
+  }
 }
 
 OctomapInsertStats MapperCore::InsertOctomap(const common::LidarRevolution& revolution) {
@@ -86,6 +124,9 @@ void MapperCore::Reset() {
   terrain_.Clear();
   if (occupancy_) occupancy_->Clear();
   if (octomap_) octomap_ = std::make_unique<OctomapLayer>(params_.octomap);
+  if (dynamic_) *dynamic_ = *dynamic_initial_;
+  pending_scans_.clear();
+  pending_rays_.clear();
   revolutions_ = 0;
 }
 

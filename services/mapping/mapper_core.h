@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "common/point_cloud.h"
+#include "services/mapping/dynamic_layers.h"
 #include "services/mapping/occupancy_band.h"
 #include "services/mapping/occupancy_grid.h"
 #include "services/mapping/octomap_layer.h"
@@ -23,6 +24,13 @@ struct MapperCoreParams {
   ObstacleBandParams band;
   bool octomap_enabled{true};
   OctomapLayerParams octomap;
+  /// Seed 001's dynamic layers (static, short-term, long-term, final) from the planar laser
+  /// and the lidar's obstacle band. Their grid is the static map's when one is given, else
+  /// dynamic_extent with an all-unknown static map.
+  bool dynamic_enabled{false};
+  DynamicLayersParams dynamic;
+  std::string static_map_path;  ///< a map_server YAML file
+  common::GridGeometry dynamic_extent;
 
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
@@ -41,7 +49,8 @@ struct RevolutionReport {
 
 class MapperCore {
  public:
-  /// @throws std::invalid_argument if the params are invalid.
+  /// @throws std::invalid_argument if the params are invalid or the static map cannot be
+  /// loaded.
   explicit MapperCore(const MapperCoreParams& params);
   MapperCore(const MapperCore&) = delete;
   MapperCore& operator=(const MapperCore&) = delete;
@@ -55,6 +64,11 @@ class MapperCore {
   OccupancyInsertStats ProcessScan(const common::LaserScan& scan);
   /// A revolution into the OctoMap (no-op when disabled).
   OctomapInsertStats InsertOctomap(const common::LidarRevolution& revolution);
+  /// One step of the dynamic layers from the scans and band rays received since the last step
+  /// (no-op when disabled).
+  DynamicUpdateStats StepDynamic();
+  /// Forgets the short-term layer (every cell unknown again).
+  void ClearShortTerm();
 
   TerrainMap& terrain() { return terrain_; }
   const TerrainMap& terrain() const { return terrain_; }
@@ -62,6 +76,8 @@ class MapperCore {
   const OccupancyGrid* occupancy() const { return occupancy_.get(); }
   OctomapLayer* octomap() { return octomap_.get(); }
   const OctomapLayer* octomap() const { return octomap_.get(); }
+  DynamicLayers* dynamic() { return dynamic_.get(); }
+  const DynamicLayers* dynamic() const { return dynamic_.get(); }
   const MapperCoreParams& params() const { return params_; }
   int64_t revolutions() const { return revolutions_; }
 
@@ -73,6 +89,10 @@ class MapperCore {
   TerrainMap terrain_;
   std::unique_ptr<OccupancyGrid> occupancy_;
   std::unique_ptr<OctomapLayer> octomap_;
+  std::unique_ptr<DynamicLayers> dynamic_;
+  std::unique_ptr<DynamicLayers> dynamic_initial_;  // as built, for Reset
+  std::vector<common::LaserScan> pending_scans_;
+  std::vector<PlanarRay> pending_rays_;
   int64_t revolutions_{0};
 };
 

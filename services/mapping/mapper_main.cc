@@ -35,7 +35,8 @@ std::vector<std::string> SplitList(const std::string& text) {
 }
 
 // A profile by name (in the profiles directory) or by path (contains '/' or ends in .yaml).
-common::Result<common::RobotProfile> ResolveProfile(const std::string& dir, const std::string& name) {
+common::Result<common::RobotProfile> ResolveProfile(const std::string& dir,
+                                                    const std::string& name) {
   const bool is_path = name.find('/') != std::string::npos ||
                        (name.size() > 5 && name.substr(name.size() - 5) == ".yaml");
   if (!is_path) {
@@ -105,6 +106,7 @@ void LoadTerrain(common::YamlMap m, TerrainMapParams* p) {
   m.Get("self_filter_radius_m", &p->self_filter_radius_m);
   m.Get("max_height_above_sensor_m", &p->max_height_above_sensor_m);
   m.Get("ray_bound_length_m", &p->ray_bound_length_m);
+  m.Get("ray_bound_max_range_m", &p->ray_bound_max_range_m);
   m.Get("commit_epsilon_m", &p->commit_epsilon_m);
   m.Get("visibility_tolerance_m", &p->visibility_tolerance_m);
   m.Get("max_visibility_conflict_m", &p->max_visibility_conflict_m);
@@ -167,6 +169,35 @@ void LoadOctomap(common::YamlMap m, MapperParams* params) {
   m.Finish();
 }
 
+void LoadDynamic(common::YamlMap m, MapperCoreParams* core) {
+  m.Get("enabled", &core->dynamic_enabled);
+  m.Get("static_map", &core->static_map_path);
+  double origin_x = -20.0, origin_y = -20.0, size_x = 40.0, size_y = 40.0, res = 0.05;
+  m.Get("origin_x_m", &origin_x);
+  m.Get("origin_y_m", &origin_y);
+  m.Get("size_x_m", &size_x);
+  m.Get("size_y_m", &size_y);
+  m.Get("resolution_m", &res);
+  if (!(res > 0) || !(size_x > 0) || !(size_y > 0)) {
+    m.Fail(m.Raw("resolution_m"), "dynamic: resolution and size must be positive");
+  }
+  core->dynamic_extent.resolution_m = res;
+  core->dynamic_extent.size_x = static_cast<int>(std::lround(size_x / res));
+  core->dynamic_extent.size_y = static_cast<int>(std::lround(size_y / res));
+  core->dynamic_extent.origin = {origin_x, origin_y, 0.0};
+  DynamicLayersParams& p = core->dynamic;
+  m.Get("cost_inc", &p.cost_inc);
+  m.Get("cost_dec", &p.cost_dec);
+  m.Get("min_length_m", &p.min_length_m);
+  m.Get("max_length_m", &p.max_length_m);
+  m.Get("update_hz", &p.update_hz);
+  m.Get("longterm_add_og", &p.longterm_add_og);
+  m.Get("longterm_free_og", &p.longterm_free_og);
+  m.Get("longterm_cost_dec", &p.longterm_cost_dec);
+  m.Get("static_wall_og", &p.static_wall_og);
+  m.Finish();
+}
+
 // The mapper's YAML file: every key optional, unknown keys are errors naming file and line.
 void LoadMapperConfig(const std::string& path, MapperParams* params,
                       std::vector<std::string>* profiles) {
@@ -214,6 +245,7 @@ void LoadMapperConfig(const std::string& path, MapperParams* params,
   if (m.Has("terrain")) LoadTerrain(m.Child("terrain"), &params->core.terrain);
   if (m.Has("occupancy")) LoadOccupancy(m.Child("occupancy"), &params->core);
   if (m.Has("octomap")) LoadOctomap(m.Child("octomap"), params);
+  if (m.Has("dynamic")) LoadDynamic(m.Child("dynamic"), &params->core);
   m.Finish();
 }
 
@@ -234,8 +266,8 @@ int Replay(runtime::Node& node, MapperService& service, const std::string& log_p
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   node.Event("replayed %lld messages, %lld revolutions in %.2f s (%.1f revolutions/s)",
-             static_cast<long long>(events), static_cast<long long>(service.revolutions()),
-             seconds, seconds > 0 ? service.revolutions() / seconds : 0.0);
+             static_cast<long long>(events), static_cast<long long>(service.revolutions()), seconds,
+             seconds > 0 ? service.revolutions() / seconds : 0.0);
   if (!output.empty()) {
     const common::Status status = service.WriteOutputs(output);
     if (!status.ok()) {
@@ -249,7 +281,7 @@ int Replay(runtime::Node& node, MapperService& service, const std::string& log_p
 
 int Main(int argc, char** argv) {
   std::string robot, config, profiles_flag, profiles_dir = CAIRN_CONFIG_DIR "/profiles";
-  std::string lcm_url, replay, output, pose_source;
+  std::string lcm_url, replay, output, pose_source, static_map;
   common::FlagParser flags(
       "cairn-mapper",
       "One robot's mapper: fuses the lidar into a site-fixed elevation map, derives slope, step, "
@@ -264,10 +296,13 @@ int Main(int argc, char** argv) {
                   "overrides the config");
   flags.AddString("profiles-dir", &profiles_dir, "where profile names are looked up");
   flags.AddString("pose-source", &pose_source, "ground_truth or odometry; overrides the config");
+  flags.AddString("static-map", &static_map,
+                  "a map_server YAML: turns the dynamic layers (seed 001) on over that map");
   flags.AddString("lcm-url", &lcm_url, "LCM URL (default LCM_DEFAULT_URL, else udpm ttl=0)");
   flags.AddString("replay", &replay, "an lcm-logger file to map offline instead of the bus");
-  flags.AddString("output", &output, "with --replay: directory for the maps (raw float32 layers, "
-                                     "map.yaml, obstacles.yaml, octomap.bt)");
+  flags.AddString("output", &output,
+                  "with --replay: directory for the maps (raw float32 layers, "
+                  "map.yaml, obstacles.yaml, octomap.bt)");
   flags.AddHelpSection("Channels",
                        "in:  <robot>.LIDAR .SCAN .POSE .ODOM .IMU .MAP.CONTROL .MAP.TILE_RESEND\n"
                        "out: <robot>.MAP.TILES .MAP.MANIFEST .MAP.OCCUPANCY .MAP.OBSTACLES "
@@ -294,6 +329,10 @@ int Main(int argc, char** argv) {
     return 2;
   }
   if (!profiles_flag.empty()) profile_names = SplitList(profiles_flag);
+  if (!static_map.empty()) {
+    params.core.dynamic_enabled = true;
+    params.core.static_map_path = static_map;
+  }
   if (pose_source == "odometry") {
     params.pose_source = PoseSource::kOdometry;
   } else if (pose_source == "ground_truth") {

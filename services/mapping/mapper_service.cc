@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "cairn/lcmt_octomap.hpp"
+
 #include "common/channels.h"
 #include "common/check.h"
 #include "common/layers.h"
@@ -114,8 +115,8 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
   next_octomap_ = now + Period(params_.octomap_period_s);
   if (mode_ == Mode::kLive) {
     const std::string& r = params_.robot;
-    node_.Subscribe<cairn::lcmt_point_cloud_slice>(
-        Ch(r, channels::kLidar), [this](const auto& m) { OnSlice(m); });
+    node_.Subscribe<cairn::lcmt_point_cloud_slice>(Ch(r, channels::kLidar),
+                                                   [this](const auto& m) { OnSlice(m); });
     node_.Subscribe<cairn::lcmt_laser_scan>(Ch(r, channels::kScan),
                                             [this](const auto& m) { OnScan(m); });
     node_.Subscribe<cairn::lcmt_pose>(Ch(r, channels::kPose), [this](const auto& m) { OnPose(m); });
@@ -239,8 +240,9 @@ std::optional<common::Pose3> MapperService::SensorPose(const std::string& sensor
   auto it = mounts_.find(sensor);
   if (it == mounts_.end()) {
     // The mount: configured for the lidar, else measured once against the producer's pose.
-    common::Pose3 mount = (sensor == "lidar" && params_.lidar_mount) ? *params_.lidar_mount
-                                                                      : Compose(Inverse(*base), reported);
+    common::Pose3 mount = (sensor == "lidar" && params_.lidar_mount)
+                              ? *params_.lidar_mount
+                              : Compose(Inverse(*base), reported);
     it = mounts_.emplace(sensor, mount).first;
     node_.Event("%s mount: (%.3f, %.3f, %.3f) m from the base", sensor.c_str(),
                 mount.position_m.x(), mount.position_m.y(), mount.position_m.z());
@@ -278,11 +280,10 @@ void MapperService::OnRevolution(common::LidarRevolution revolution) {
     }
     slice.sensor_pose = *pose;
     const size_t before = slice.points.size();
-    slice.points.erase(std::remove_if(slice.points.begin(), slice.points.end(),
-                                      [&](const common::LidarPoint& p) {
-                                        return BadPoint(p, slice.max_range_m);
-                                      }),
-                       slice.points.end());
+    slice.points.erase(
+        std::remove_if(slice.points.begin(), slice.points.end(),
+                       [&](const common::LidarPoint& p) { return BadPoint(p, slice.max_range_m); }),
+        slice.points.end());
     bad_points += static_cast<int64_t>(before - slice.points.size());
     kept.push_back(std::move(slice));
   }
@@ -426,6 +427,7 @@ void MapperService::Process(Job& job) {
       break;
     case Job::Kind::kScan:
       core_.ProcessScan(job.scan);
+      StepDynamicUpTo(job.scan.utime);
       break;
     case Job::Kind::kControl:
       ProcessControl(job.control);
@@ -438,7 +440,9 @@ void MapperService::Process(Job& job) {
 
 void MapperService::ProcessRevolution(RevolutionJob& job) {
   const RevolutionReport report = core_.ProcessRevolution(job.revolution, job.robot, job.time_s);
-  if (report.terrain.out_of_range > 0) node_.Count("points_outside_mapping_range", report.terrain.out_of_range);
+  StepDynamicUpTo(job.revolution.slices.back().utime);
+  if (report.terrain.out_of_range > 0)
+    node_.Count("points_outside_mapping_range", report.terrain.out_of_range);
   const int64_t n = ++revolutions_;
   if (!announced_first_revolution_) {
     announced_first_revolution_ = true;
@@ -525,7 +529,15 @@ void MapperService::ProcessControl(const lcmt_map_control_request& request) {
       reply.message = "published everything";
       break;
     case lcmt_map_control_request::OP_CLEAR_SHORT_TERM:
-      reply.message = "this mapper keeps no short-term layer";
+      if (core_.dynamic() != nullptr) {
+        core_.ClearShortTerm();
+        dynamic_published_updates_ = -1;
+        reply.message = "short-term layer cleared";
+        node_.Event("short-term layer cleared on request of %s", request.requester.c_str());
+      } else {
+        reply.status = lcmt_map_control_reply::STATUS_NOT_FOUND;
+        reply.message = "this mapper keeps no short-term layer (dynamic layers are off)";
+      }
       break;
     case lcmt_map_control_request::OP_RESET: {
       {
@@ -542,8 +554,8 @@ void MapperService::ProcessControl(const lcmt_map_control_request& request) {
       break;
     }
     case lcmt_map_control_request::OP_SNAPSHOT: {
-      const std::string dir = params_.snapshot_dir + "/" + params_.robot + "-" +
-                              std::to_string(reply.utime);
+      const std::string dir =
+          params_.snapshot_dir + "/" + params_.robot + "-" + std::to_string(reply.utime);
       const common::Status status = WriteOutputs(dir);
       if (status.ok()) {
         reply.message = dir;
@@ -582,7 +594,8 @@ void MapperService::ProcessResend(const cairn::lcmt_tile_resend_request& request
   Send(Ch(params_.robot, channels::kMapOccupancy), batch.occupancy_tiles);
   Send(Ch(params_.robot, channels::kMapTiles), batch.tiles);
   if (batch.manifest.num_tiles > 0 || batch.changed) {
-    Send(Ch(params_.robot, channels::kMapManifest), std::vector<cairn::lcmt_grid_manifest>{batch.manifest});
+    Send(Ch(params_.robot, channels::kMapManifest),
+         std::vector<cairn::lcmt_grid_manifest>{batch.manifest});
   }
   node_.Count("tiles_resent",
               static_cast<int64_t>(batch.tiles.size() + batch.occupancy_tiles.size()));
@@ -597,7 +610,7 @@ std::vector<std::string> MapperService::FastLayers() const {
 
 std::vector<std::string> MapperService::SlowLayers() const {
   return {layers::kElevationVariance, layers::kObservationCount, layers::kLastSeen,
-          layers::kGroundBound, layers::kDitchDepth, layers::kDitchWidth};
+          layers::kGroundBound,       layers::kDitchDepth,       layers::kDitchWidth};
 }
 
 template <typename Msg>
@@ -607,7 +620,8 @@ void MapperService::Send(const std::string& channel, const std::vector<Msg>& mes
     node_.Publish(channel, m);
     if (++in_burst >= params_.tiles_per_burst && params_.burst_pause_ms > 0) {
       in_burst = 0;
-      std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
+      std::this_thread::sleep_for(
+          std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
     }
   }
 }
@@ -622,7 +636,8 @@ void MapperService::PublishTerrain(const std::vector<std::string>& names, bool f
   std::vector<cairn::lcmt_grid_manifest> out = batch.manifests;
   if (manifests) {
     for (const auto& name : all) {
-      const bool sent = std::any_of(out.begin(), out.end(), [&](const auto& m) { return m.layer == name; });
+      const bool sent =
+          std::any_of(out.begin(), out.end(), [&](const auto& m) { return m.layer == name; });
       if (sent) continue;
       if (auto m = terrain_publisher_.Manifest(name)) out.push_back(*m);
     }
@@ -633,8 +648,7 @@ void MapperService::PublishTerrain(const std::vector<std::string>& names, bool f
 void MapperService::PublishRegistry(bool force) {
   common::ObstacleRegistry registry = core_.terrain().BuildRegistry();
   registry.map_version = revolutions_;
-  cairn::lcmt_obstacle_registry msg =
-      runtime::ToLcm(registry, 0, params_.robot, params_.map_name);
+  cairn::lcmt_obstacle_registry msg = runtime::ToLcm(registry, 0, params_.robot, params_.map_name);
   msg.map_version = 0;
   std::string bytes(static_cast<size_t>(msg.getEncodedSize()), '\0');
   msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
@@ -654,6 +668,21 @@ void MapperService::PublishRegistry(bool force) {
 }
 
 void MapperService::PublishOccupancy(bool force) {
+  if (const DynamicLayers* dynamic = core_.dynamic()) {
+    if (force || dynamic->updates() != dynamic_published_updates_) {
+      dynamic_published_updates_ = dynamic->updates();
+      const common::GridMap layers_map = dynamic->ToGridMap();
+      const int64_t utime = Now();
+      std::vector<cairn::lcmt_grid_manifest> manifests;
+      for (const char* name : {layers::kShortTerm, layers::kLongTerm, layers::kFinal}) {
+        auto batch = occupancy_tiler_.Update(layers_map, name, runtime::TileEncoding::kOccupancy,
+                                             utime, force);
+        Send(Ch(params_.robot, channels::kMapOccupancy), batch.occupancy_tiles);
+        if (batch.changed || force) manifests.push_back(batch.manifest);
+      }
+      Send(Ch(params_.robot, channels::kMapManifest), manifests);
+    }
+  }
   const OccupancyGrid* grid = core_.occupancy();
   if (grid == nullptr) return;
   if (!force && grid->version() == occupancy_published_version_) return;
@@ -670,6 +699,18 @@ void MapperService::PublishOccupancy(bool force) {
   Send(Ch(params_.robot, channels::kMapTiles), logodds.tiles);
   Send(Ch(params_.robot, channels::kMapManifest),
        std::vector<cairn::lcmt_grid_manifest>{occ.manifest, logodds.manifest});
+}
+
+void MapperService::StepDynamicUpTo(int64_t utime) {
+  const DynamicLayers* dynamic = core_.dynamic();
+  if (dynamic == nullptr || utime <= 0) return;
+  const int64_t period = static_cast<int64_t>(std::llround(dynamic->update_period_s() * 1e6));
+  if (next_dynamic_utime_ == 0) next_dynamic_utime_ = utime + period;
+  if (utime < next_dynamic_utime_) return;
+  core_.StepDynamic();
+  // One step per period of sensor time; after a gap, one step and a fresh start.
+  next_dynamic_utime_ += period;
+  if (next_dynamic_utime_ <= utime) next_dynamic_utime_ = utime + period;
 }
 
 void MapperService::PublishOctomap(bool force) {
@@ -715,7 +756,9 @@ void MapperService::PublishDue(bool force) {
   if (slow) next_slow_ = now + Period(params_.slow_publish_period_s);
   if (force || slow || now >= next_fast_) {
     next_fast_ = now + Period(params_.publish_period_s);
-    PublishTerrain(FastLayers(), force, slow);
+    // Manifests of the fast layers go out every period, changed or not: they tell receivers
+    // (the navigator's staleness check) that the layer is current.
+    PublishTerrain(FastLayers(), force, /*manifests=*/true);
   }
   if (slow) PublishTerrain(SlowLayers(), force, true);
   if (force || slow || now >= next_registry_) {
@@ -768,11 +811,23 @@ common::Status MapperService::WriteOutputs(const std::string& dir) {
       const common::GridMap map = grid->Export(bounds);
       yaml << "occupancy:\n";
       geometry(map.geometry(), "  ");
-      const common::Status s =
-          WriteLayer(dir + "/" + FileNameOf(layers::kOccupancyLogOdds), map.at(layers::kOccupancyLogOdds));
+      const common::Status s = WriteLayer(dir + "/" + FileNameOf(layers::kOccupancyLogOdds),
+                                          map.at(layers::kOccupancyLogOdds));
       if (!s.ok()) return s;
       yaml << "  layers:\n    - {name: \"" << layers::kOccupancyLogOdds
            << "\", file: " << FileNameOf(layers::kOccupancyLogOdds) << "}\n";
+    }
+  }
+  if (const DynamicLayers* dynamic = core_.dynamic()) {
+    const common::GridMap map = dynamic->ToGridMap();
+    yaml << "dynamic:\n";
+    geometry(map.geometry(), "  ");
+    yaml << "  layers:\n";
+    for (const char* name :
+         {layers::kStaticMap, layers::kShortTerm, layers::kLongTerm, layers::kFinal}) {
+      const common::Status s = WriteLayer(dir + "/" + FileNameOf(name), map.at(name));
+      if (!s.ok()) return s;
+      yaml << "    - {name: \"" << name << "\", file: " << FileNameOf(name) << "}\n";
     }
   }
   {
@@ -795,12 +850,14 @@ common::Status MapperService::WriteOutputs(const std::string& dir) {
         << "\n    depth_m: " << Num(o.depth_m) << "\n    area_m2: " << Num(o.area_m2)
         << "\n    num_cells: " << o.num_cells << "\n    outline_m: [";
     for (size_t k = 0; k < o.outline_m.size(); ++k) {
-      obs << (k ? ", " : "") << "[" << Num(o.outline_m[k].x()) << ", " << Num(o.outline_m[k].y()) << "]";
+      obs << (k ? ", " : "") << "[" << Num(o.outline_m[k].x()) << ", " << Num(o.outline_m[k].y())
+          << "]";
     }
     obs << "]\n    verdicts:\n";
     for (const auto& v : o.verdicts) {
-      obs << "      - {profile: " << v.profile << ", crossable: " << (v.crossable ? "true" : "false")
-          << ", reason: \"" << v.reason << "\"}\n";
+      obs << "      - {profile: " << v.profile
+          << ", crossable: " << (v.crossable ? "true" : "false") << ", reason: \"" << v.reason
+          << "\"}\n";
     }
   }
   std::ofstream(dir + "/obstacles.yaml", std::ios::trunc) << obs.str();

@@ -23,6 +23,7 @@
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
+
 #include "common/robot_profile.h"
 #include "common/status.h"
 #include "services/mapping/mapper_core.h"
@@ -42,7 +43,8 @@
 ///   ditch_width and cost/<profile> for every profile) and occupancy_logodds as float tiles,
 ///   only the tiles that changed, at publish_period_s (slow_publish_period_s for the base
 ///   statistics), with every manifest again at the slow period;
-/// - <robot>.MAP.OCCUPANCY: the 2-D occupancy (0..100, -1 unknown) as int8 tiles;
+/// - <robot>.MAP.OCCUPANCY: the 2-D occupancy (0..100, -1 unknown) as int8 tiles, and, when
+///   the dynamic layers are on, short_term, long_term and final (seed 001);
 /// - <robot>.MAP.OBSTACLES: the obstacle registry, with every profile's verdicts;
 /// - <robot>.MAP.OCTOMAP: the OctoMap's .bt stream in chunks;
 /// - <robot>.MAP.CONTROL_REPLY: answers (a replayed request id gets the first answer again).
@@ -72,14 +74,14 @@ struct MapperParams {
   double max_imu_gap_s{0.25};
   /// Base-to-lidar transform for odometry poses; without it, measured from the first slice.
   std::optional<common::Pose3> lidar_mount;
-  double publish_period_s{0.5};
+  double publish_period_s{0.2};
   double slow_publish_period_s{5.0};
   double registry_period_s{1.0};
   double occupancy_period_s{1.0};
   double octomap_period_s{5.0};
   int octomap_every_revolutions{10};
   int max_pending_revolutions{3};
-  int tiles_per_burst{8};        ///< tiles sent back to back before a short pause
+  int tiles_per_burst{8};  ///< tiles sent back to back before a short pause
   double burst_pause_ms{1.0};
   std::string snapshot_dir{"var/mapper-snapshots"};  ///< OP_SNAPSHOT writes below it
   MapperCoreParams core;
@@ -161,6 +163,8 @@ class MapperService {
   void PublishRegistry(bool force);
   void PublishOccupancy(bool force);
   void PublishOctomap(bool force);
+  /// Steps the dynamic layers at their rate, on sensor time (so a replay steps alike).
+  void StepDynamicUpTo(int64_t utime);
   template <typename Msg>
   void Send(const std::string& channel, const std::vector<Msg>& messages);
   std::vector<std::string> FastLayers() const;
@@ -177,7 +181,7 @@ class MapperService {
   runtime::RevolutionAssembler assembler_;
   PoseBuffer ground_truth_;
   PoseBuffer odometry_;
-  PoseBuffer imu_;  // orientation only
+  PoseBuffer imu_;                               // orientation only
   std::map<std::string, common::Pose3> mounts_;  // base -> sensor (odometry poses)
   bool warned_no_pose_{false};
 
@@ -205,6 +209,8 @@ class MapperService {
   int64_t octomap_published_version_{-1};
   int64_t octomap_chunk_version_{0};
   int64_t occupancy_published_version_{-1};
+  int64_t dynamic_published_updates_{-1};
+  int64_t next_dynamic_utime_{0};
   std::chrono::steady_clock::time_point next_fast_, next_slow_, next_registry_, next_occupancy_,
       next_octomap_;
   std::map<std::pair<std::string, int64_t>, cairn::lcmt_map_control_reply> replies_;

@@ -10,11 +10,10 @@
 #include <utility>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
-
 #include "common/check.h"
 #include "common/layers.h"
 #include "services/mapping/traversability.h"
+#include <Eigen/Eigenvalues>
 
 namespace cairn::mapping {
 namespace {
@@ -95,7 +94,9 @@ void Classify(GridMap* map, const ObstacleParams& p, const CellRect& rect) {
   // cell pair, or two when a vertical face left an intermediate height in the cell it cuts
   // (then the rise is compared with twice the outer differences, as a ramp would rise that
   // much over two cells). Spans start up to two cells before the window.
-  auto same_sign_abs = [](double v, double ref) { return (v > 0) == (ref > 0) ? std::fabs(v) : 0.0; };
+  auto same_sign_abs = [](double v, double ref) {
+    return (v > 0) == (ref > 0) ? std::fabs(v) : 0.0;
+  };
   auto known = [&](int x, int y) { return inside(x, y) && !std::isnan(H(x, y)); };
   for (int y = std::max(0, w.y0 - 2); y < w.y1; ++y) {
     for (int x = std::max(0, w.x0 - 2); x < w.x1; ++x) {
@@ -116,12 +117,16 @@ void Classify(GridMap* map, const ObstacleParams& p, const CellRect& rect) {
             if ((hm - hc) * delta < 0 || (hn - hm) * delta < 0) continue;  // not monotonic
           }
           double before = 0, after = 0;
-          if (known(x - d[0], y - d[1])) before = same_sign_abs(double(hc) - H(x - d[0], y - d[1]), delta);
-          if (known(nx + d[0], ny + d[1])) after = same_sign_abs(double(H(nx + d[0], ny + d[1])) - hn, delta);
+          if (known(x - d[0], y - d[1]))
+            before = same_sign_abs(double(hc) - H(x - d[0], y - d[1]), delta);
+          if (known(nx + d[0], ny + d[1]))
+            after = same_sign_abs(double(H(nx + d[0], ny + d[1])) - hn, delta);
           // What an incline rises along this line per cell, from the normals of both cells
           // (an edge tilts the normals around it, so the lower of the two is taken).
-          const double along = std::min(Rise(nxl, nyl, x, y, sx, d, res), Rise(nxl, nyl, nx, ny, sx, d, res));
-          if (std::fabs(delta) <= p.step_contrast * span * std::max({before, after, along})) continue;
+          const double along =
+              std::min(Rise(nxl, nyl, x, y, sx, d, res), Rise(nxl, nyl, nx, ny, sx, d, res));
+          if (std::fabs(delta) <= p.step_contrast * span * std::max({before, after, along}))
+            continue;
           // Small steps must hold over two cells on each side (noise rarely does): the mean
           // of the pair beyond minus the mean of the pair before.
           if (std::fabs(delta) < p.wall_min_height_m && known(x - d[0], y - d[1]) &&
@@ -335,8 +340,7 @@ void DouglasPeucker(const std::vector<Vector2>& pts, size_t a, size_t b, double 
 // Outer boundary of a set of cells along the cell edges (counter-clockwise, in cell corner
 // coordinates), simplified to `tol` cells. Cells touching at a corner stay one outline.
 std::vector<Vector2> TraceOutline(const std::vector<int64_t>& cells, int sx, double tol) {
-  int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = std::numeric_limits<int>::min(),
-      y1 = x1;
+  int x0 = std::numeric_limits<int>::max(), y0 = x0, x1 = std::numeric_limits<int>::min(), y1 = x1;
   for (int64_t i : cells) {
     const int x = static_cast<int>(i % sx), y = static_cast<int>(i / sx);
     x0 = std::min(x0, x);
@@ -503,9 +507,9 @@ void ObstacleParams::Validate() const {
                      "wall_min_height_m must exceed min_step_height_m");
   CAIRN_THROW_UNLESS(min_drop_height_m > 0, "min_drop_height_m must be positive");
   CAIRN_THROW_UNLESS(min_ramp_area_m2 >= 0, "min_ramp_area_m2 must be >= 0");
-  CAIRN_THROW_UNLESS(small_step_height_m >= 0 && min_small_step_length_m >= 0 &&
-                         min_small_step_elongation >= 0,
-                     "small step limits must be >= 0");
+  CAIRN_THROW_UNLESS(
+      small_step_height_m >= 0 && min_small_step_length_m >= 0 && min_small_step_elongation >= 0,
+      "small step limits must be >= 0");
   CAIRN_THROW_UNLESS(surface_continuity_m > 0, "surface_continuity_m must be positive");
   CAIRN_THROW_UNLESS(outline_tolerance_cells >= 0, "outline_tolerance_cells must be >= 0");
 }
@@ -513,12 +517,12 @@ void ObstacleParams::Validate() const {
 void ComputeFeatureLayers(GridMap* map, const ObstacleParams& params, const CellRect& rect_in) {
   CAIRN_THROW_UNLESS(map != nullptr, "no map");
   params.Validate();
-  for (const char* name : {layers::kElevation, layers::kSlope, layers::kDitchDepth,
-                           kNormalXLayer, kNormalYLayer}) {
+  for (const char* name :
+       {layers::kElevation, layers::kSlope, layers::kDitchDepth, kNormalXLayer, kNormalYLayer}) {
     CAIRN_THROW_UNLESS(map->HasLayer(name), "the map has no '" << name << "' layer");
   }
-  for (const char* name : {kFeatureClassLayer, kFeatureEdgeLayer, kFeatureLowLayer,
-                           kFeatureHighLayer}) {
+  for (const char* name :
+       {kFeatureClassLayer, kFeatureEdgeLayer, kFeatureLowLayer, kFeatureHighLayer}) {
     if (!map->HasLayer(name)) map->AddLayer(name);
   }
   const CellRect rect{std::max(0, rect_in.x0), std::max(0, rect_in.y0),
@@ -532,7 +536,8 @@ common::ObstacleRegistry ExtractObstacles(const GridMap& map_in, const ObstacleP
   CAIRN_THROW_UNLESS(map_in.HasLayer(layers::kElevation),
                      "the map has no '" << layers::kElevation << "' layer");
   GridMap map = map_in;
-  if (!map.HasLayer(layers::kSlope) || !map.HasLayer(layers::kDitchDepth)) {
+  if (!map.HasLayer(layers::kSlope) || !map.HasLayer(layers::kDitchDepth) ||
+      !map.HasLayer(kNormalXLayer) || !map.HasLayer(kNormalYLayer)) {
     ComputeGeometricLayers(&map, TraversabilityParams{});
   }
   ComputeFeatureLayers(&map, params, CellRect::All(map));
@@ -541,9 +546,9 @@ common::ObstacleRegistry ExtractObstacles(const GridMap& map_in, const ObstacleP
 
 common::ObstacleRegistry AssembleObstacles(const GridMap& map_ref, const ObstacleParams& params) {
   params.Validate();
-  for (const char* name : {layers::kElevation, layers::kSlope, layers::kDitchDepth,
-                           layers::kDitchWidth, kFeatureClassLayer, kFeatureEdgeLayer,
-                           kFeatureLowLayer, kFeatureHighLayer}) {
+  for (const char* name :
+       {layers::kElevation, layers::kSlope, layers::kDitchDepth, layers::kDitchWidth,
+        kFeatureClassLayer, kFeatureEdgeLayer, kFeatureLowLayer, kFeatureHighLayer}) {
     CAIRN_THROW_UNLESS(map_ref.HasLayer(name), "the map has no '" << name << "' layer");
   }
   const GridMap* map = &map_ref;
@@ -639,7 +644,8 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map_ref, const Obstacl
           if (std::isnan(ddepth[i])) continue;  // a rim
           widths.push_back(dwidth[i]);
           if (!std::isnan(h[i])) {
-            depth_seen = std::isnan(depth_seen) ? ddepth[i] : std::max(depth_seen, double(ddepth[i]));
+            depth_seen =
+                std::isnan(depth_seen) ? ddepth[i] : std::max(depth_seen, double(ddepth[i]));
           }
         }
         o.width_m = Median(widths);
@@ -669,7 +675,8 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map_ref, const Obstacl
         // next to it (a vertical face cut by a cell leaves intermediate edges that a median of
         // the edges would average in), and it goes up from the larger surface (the ground most
         // of the site is on) onto the smaller one, or down from it.
-        if (surface.empty()) LabelSurfaces(cells, h, params.surface_continuity_m, &surface, &surface_size);
+        if (surface.empty())
+          LabelSurfaces(cells, h, params.surface_continuity_m, &surface, &surface_size);
         const int32_t own = label[f.cells.front()];
         std::map<int32_t, std::vector<double>> beside;  // surface -> heights next to the step
         std::vector<int64_t> ring;
@@ -737,8 +744,9 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map_ref, const Obstacl
         }
         // ... and at least the slope of the plane fitted to the ramp's heights, which normals
         // at the edge of what was seen cannot flatten.
-        o.slope_rad = std::max(Percentile(interior_slopes.empty() ? all_slopes : interior_slopes, 0.75),
-                               PlaneSlope(*map, f.cells));
+        o.slope_rad =
+            std::max(Percentile(interior_slopes.empty() ? all_slopes : interior_slopes, 0.75),
+                     PlaneSlope(*map, f.cells));
         o.height_m = hi - lo;
         break;
       }
@@ -756,7 +764,8 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map_ref, const Obstacl
   // Numbered by centroid (y, then x): the same map always gives the same ids.
   std::stable_sort(registry.obstacles.begin(), registry.obstacles.end(),
                    [](const Obstacle& a, const Obstacle& b) {
-                     if (a.centroid_m.y() != b.centroid_m.y()) return a.centroid_m.y() < b.centroid_m.y();
+                     if (a.centroid_m.y() != b.centroid_m.y())
+                       return a.centroid_m.y() < b.centroid_m.y();
                      return a.centroid_m.x() < b.centroid_m.x();
                    });
   int32_t id = 1;
@@ -805,15 +814,15 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
       break;
     case ObstacleKind::kDitch: {
       const bool bridged = o.width_m <= profile.max_ditch_width_m + kTol;
-      const bool drivable = std::isfinite(o.depth_m) &&
-                            o.depth_m <= std::min(profile.max_step_down_m, profile.max_step_up_m) + kTol;
+      const bool drivable =
+          std::isfinite(o.depth_m) &&
+          o.depth_m <= std::min(profile.max_step_down_m, profile.max_step_up_m) + kTol;
       if (!bridged && !drivable) {
         v.crossable = false;
-        v.reason = std::isfinite(o.depth_m)
-                       ? Format("ditch %.2f m wide > %.2f m and too deep", o.width_m,
-                                profile.max_ditch_width_m)
-                       : Format("ditch %.2f m wide > %.2f m, bottom unseen", o.width_m,
-                                profile.max_ditch_width_m);
+        v.reason = std::isfinite(o.depth_m) ? Format("ditch %.2f m wide > %.2f m and too deep",
+                                                     o.width_m, profile.max_ditch_width_m)
+                                            : Format("ditch %.2f m wide > %.2f m, bottom unseen",
+                                                     o.width_m, profile.max_ditch_width_m);
       }
       break;
     }
@@ -837,8 +846,9 @@ void LabelObstacles(common::ObstacleRegistry* registry,
     for (size_t k = 0; k < profiles.size(); ++k) {
       const common::RobotProfile& profile = profiles[k];
       auto& vs = o.verdicts;
-      vs.erase(std::remove_if(vs.begin(), vs.end(),
-                              [&](const common::ObstacleVerdict& v) { return v.profile == profile.name; }),
+      vs.erase(std::remove_if(
+                   vs.begin(), vs.end(),
+                   [&](const common::ObstacleVerdict& v) { return v.profile == profile.name; }),
                vs.end());
       vs.push_back(JudgeWithHash(o, profile, hashes[k]));
     }

@@ -30,9 +30,9 @@
 namespace cairn::mapping {
 
 struct ObstacleParams {
-  double min_ramp_slope_rad{0.035};   ///< slopes below this are flat ground
-  double min_step_height_m{0.006};    ///< height differences below this are not steps
-  int min_cells{4};                   ///< smaller components are noise
+  double min_ramp_slope_rad{0.035};  ///< slopes below this are flat ground
+  double min_step_height_m{0.006};   ///< height differences below this are not steps
+  int min_cells{4};                  ///< smaller components are noise
   /// A height difference is a step when it exceeds this multiple of the differences just
   /// before and after it along the same line.
   double step_contrast{1.5};
@@ -62,22 +62,22 @@ struct ObstacleParams {
 /// Per-cell feature layers (internal to the mapping core; kept in the live map so the registry
 /// can be assembled without classifying every cell again).
 inline constexpr char kFeatureClassLayer[] = "feature_class";  ///< 0 none, 1 ditch, 2 wall,
-                                                              ///< 3 step, 4 drop, 5 ramp
-inline constexpr char kFeatureEdgeLayer[] = "feature_edge";  ///< largest discontinuity (m)
-inline constexpr char kFeatureLowLayer[] = "feature_low";    ///< its lower side (m, world z)
-inline constexpr char kFeatureHighLayer[] = "feature_high";  ///< its higher side
+                                                               ///< 3 step, 4 drop, 5 ramp
+inline constexpr char kFeatureEdgeLayer[] = "feature_edge";    ///< largest discontinuity (m)
+inline constexpr char kFeatureLowLayer[] = "feature_low";      ///< its lower side (m, world z)
+inline constexpr char kFeatureHighLayer[] = "feature_high";    ///< its higher side
 
 /// Classifies the cells of `rect` into the feature layers, from the elevation, the geometric
 /// layers and the ground bound. Reads up to FeatureRadiusCells() around `rect`.
 /// @throws std::invalid_argument if a needed layer is missing.
-void ComputeFeatureLayers(common::GridMap* map, const ObstacleParams& params,
-                          const CellRect& rect);
+void ComputeFeatureLayers(common::GridMap* map, const ObstacleParams& params, const CellRect& rect);
 /// How far (cells) a feature cell depends on the elevation and geometric layers around it.
 inline constexpr int FeatureRadiusCells() { return 4; }
 
 /// Connected components of the feature layers, measured; no verdicts yet.
 /// @throws std::invalid_argument if a needed layer is missing.
-common::ObstacleRegistry AssembleObstacles(const common::GridMap& map, const ObstacleParams& params);
+common::ObstacleRegistry AssembleObstacles(const common::GridMap& map,
+                                           const ObstacleParams& params);
 
 /// Finds features in a map holding elevation and the geometric layers; no verdicts yet.
 /// Missing geometric layers are computed (with default TraversabilityParams) on a copy.

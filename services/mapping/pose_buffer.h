@@ -14,7 +14,8 @@ namespace cairn::mapping {
 class PoseBuffer {
  public:
   /// @param max_age_s samples older than this behind the newest are forgotten.
-  explicit PoseBuffer(double max_age_s = 5.0) : max_age_us_(static_cast<int64_t>(max_age_s * 1e6)) {}
+  explicit PoseBuffer(double max_age_s = 5.0)
+      : max_age_us_(static_cast<int64_t>(max_age_s * 1e6)) {}
 
   /// Adds a sample. Samples out of time order are inserted in place; a sample with the time
   /// of an existing one replaces it. Non-finite poses are refused (returns false).

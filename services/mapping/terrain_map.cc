@@ -7,7 +7,6 @@
 
 #include "common/check.h"
 #include "common/layers.h"
-#include "services/mapping/raytrace.h"
 
 namespace cairn::mapping {
 namespace {
@@ -18,10 +17,9 @@ int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) 
 
 // Derived layers that are not cost layers.
 const std::vector<std::string>& GeometricLayers() {
-  static const std::vector<std::string> names{layers::kSlope,      layers::kStepMax,
-                                              layers::kRoughness,  kNormalXLayer,
-                                              kNormalYLayer,       layers::kDitchDepth,
-                                              layers::kDitchWidth};
+  static const std::vector<std::string> names{
+      layers::kSlope, layers::kStepMax,    layers::kRoughness, kNormalXLayer,
+      kNormalYLayer,  layers::kDitchDepth, layers::kDitchWidth};
   return names;
 }
 const std::vector<std::string>& FeatureLayers() {
@@ -41,7 +39,7 @@ struct TerrainMap::Tile {
   std::vector<float> filter_height;
   std::vector<float> raw_bound;
   std::vector<float> conflict_bound;  // as raw_bound, from rays ending two or more cells on
-  std::vector<int64_t> scan;
+  std::vector<uint32_t> scan;         // low 32 bits of the scan id, 0 = none yet
   float* elevation{nullptr};
   float* variance{nullptr};
   float* count{nullptr};
@@ -68,16 +66,17 @@ void TerrainMapParams::Validate() const {
   CAIRN_THROW_UNLESS(tile_size_cells >= 8 && tile_size_cells <= 250,
                      "tile_size_cells must be in [8, 250], got " << tile_size_cells);
   filter.Validate();
-  CAIRN_THROW_UNLESS(min_range_m >= 0 && max_range_m > min_range_m,
-                     "need 0 <= min_range_m < max_range_m, got " << min_range_m << ", "
-                                                                 << max_range_m);
+  CAIRN_THROW_UNLESS(
+      min_range_m >= 0 && max_range_m > min_range_m,
+      "need 0 <= min_range_m < max_range_m, got " << min_range_m << ", " << max_range_m);
   CAIRN_THROW_UNLESS(max_height_above_sensor_m > 0, "max_height_above_sensor_m must be positive");
   CAIRN_THROW_UNLESS(self_filter_radius_m >= 0, "self_filter_radius_m must be >= 0");
   CAIRN_THROW_UNLESS(std::isfinite(ray_bound_length_m), "ray_bound_length_m must be finite");
   CAIRN_THROW_UNLESS(commit_epsilon_m >= 0 && commit_epsilon_m < 0.05,
                      "commit_epsilon_m must be in [0, 0.05), got " << commit_epsilon_m);
-  CAIRN_THROW_UNLESS(visibility_tolerance_m >= 0 && max_visibility_conflict_m >= visibility_tolerance_m,
-                     "need 0 <= visibility_tolerance_m <= max_visibility_conflict_m");
+  CAIRN_THROW_UNLESS(
+      visibility_tolerance_m >= 0 && max_visibility_conflict_m >= visibility_tolerance_m,
+      "need 0 <= visibility_tolerance_m <= max_visibility_conflict_m");
   traversability.Validate();
   obstacles.Validate();
 }
@@ -162,7 +161,7 @@ TerrainMap::Tile* TerrainMap::GetTile(int tx, int ty) {
     tile->filter_height.assign(n, kNaN);
     tile->raw_bound.assign(n, kNaN);
     tile->conflict_bound.assign(n, kNaN);
-    tile->scan.assign(n, std::numeric_limits<int64_t>::min());
+    tile->scan.assign(n, 0u);
     tile->elevation = tile->layers.at(layers::kElevation).data();
     tile->variance = tile->layers.at(layers::kElevationVariance).data();
     tile->count = tile->layers.at(layers::kObservationCount).data();
@@ -189,8 +188,8 @@ TerrainMap::Tile* TerrainMap::TileForCell(int64_t cx, int64_t cy, int* lx, int* 
 }
 
 void TerrainMap::MarkDirty(int64_t cx, int64_t cy) {
-  dirty_blocks_.insert({static_cast<int>(FloorDiv(cx, block_cells_)),
-                        static_cast<int>(FloorDiv(cy, block_cells_))});
+  dirty_blocks_.insert(
+      {static_cast<int>(FloorDiv(cx, block_cells_)), static_cast<int>(FloorDiv(cy, block_cells_))});
 }
 
 common::GridGeometry TerrainMap::TileGeometry(int tx, int ty) const {
@@ -223,6 +222,9 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
   const common::Vector3& origin = sensor_pose.position_m;
   const double res = params_.resolution_m;
   const float time_f = static_cast<float>(time_s);
+  // Scans are told apart by the low 32 bits of their id (never 0, which marks "no scan yet").
+  const uint32_t scan_tag =
+      static_cast<uint32_t>(scan_id) | (static_cast<uint32_t>(scan_id) == 0 ? 0x80000000u : 0u);
   std::array<int64_t, 256> last_end;
   last_end.fill(std::numeric_limits<int64_t>::min());
   for (const auto& p : points) {
@@ -232,7 +234,7 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
       continue;
     }
     const double range = ps.norm();
-    if (range < params_.min_range_m || range > params_.max_range_m) {
+    if (range < std::max(params_.min_range_m, 1e-6) || range > params_.max_range_m) {
       ++stats.out_of_range;
       continue;
     }
@@ -252,8 +254,8 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
     int lx, ly;
     Tile* tile = TileForCell(cx, cy, &lx, &ly);
     const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
-    const double var_z = PointHeightVariance(origin, pw, params_.filter);
-    const bool same_scan = tile->scan[i] == scan_id;
+    const double var_z = PointHeightVariance(range, (pw.z() - origin.z()) / range, params_.filter);
+    const bool same_scan = tile->scan[i] == scan_tag;
     float h = tile->filter_height[i], var = tile->variance[i];
     const FuseOutcome outcome = FuseHeight(&h, &var, pw.z(), var_z, same_scan, params_.filter);
     if (outcome == FuseOutcome::kIgnoredLower) {
@@ -262,13 +264,14 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
       ++stats.used;
       tile->filter_height[i] = h;
       tile->variance[i] = var;
-      tile->scan[i] = scan_id;
+      tile->scan[i] = scan_tag;
       tile->count[i] += 1.f;
       tile->last_seen[i] = time_f;
       ++tile->base_version;
       CommitHeight(tile, i, cx, cy);
     }
-    if (params_.ray_bound_length_m > 0 && pw.z() < origin.z()) {
+    if (params_.ray_bound_length_m > 0 && pw.z() < origin.z() &&
+        range <= params_.ray_bound_max_range_m) {
       // Neighbouring rays of one ring end in the same cell many times over (a dozen per cell
       // at 5 m): the first of a run records the bound for all of them.
       const int64_t end_key = (cx << 32) ^ (cy & 0xffffffff);
@@ -314,19 +317,32 @@ void TerrainMap::RecordBound(const common::Vector3& from, const common::Vector3&
   const common::Vector3 a = from + start_t * d;
   const double res = params_.resolution_m;
   const double x0 = a.x() / res, y0 = a.y() / res, x1 = to.x() / res, y1 = to.y() / res;
+  const double dz = to.z() - a.z();
+  const double eps = params_.commit_epsilon_m;
+  // Exact traversal of the cells from the start to the return (Amanatides & Woo, as
+  // TraverseCells), keeping the parameter at which the segment leaves each cell.
+  int64_t ix = static_cast<int64_t>(std::floor(x0)), iy = static_cast<int64_t>(std::floor(y0));
   const int64_t end_x = static_cast<int64_t>(std::floor(x1));
   const int64_t end_y = static_cast<int64_t>(std::floor(y1));
-  const double dx = x1 - x0, dy = y1 - y0, dz = to.z() - a.z();
-  const double eps = params_.commit_epsilon_m;
-  TraverseCells(x0, y0, x1, y1, [&](int ix, int iy) {
-    if (ix == end_x && iy == end_y) return false;
-    // Parameter along [a, to] where the segment leaves cell (ix, iy).
-    double t_exit = 1.0;
-    if (dx > 0) t_exit = std::min(t_exit, (ix + 1 - x0) / dx);
-    if (dx < 0) t_exit = std::min(t_exit, (ix - x0) / dx);
-    if (dy > 0) t_exit = std::min(t_exit, (iy + 1 - y0) / dy);
-    if (dy < 0) t_exit = std::min(t_exit, (iy - y0) / dy);
-    const float z_exit = static_cast<float>(a.z() + std::clamp(t_exit, 0.0, 1.0) * dz);
+  const double dx = x1 - x0, dy = y1 - y0;
+  const int step_x = end_x > ix ? 1 : (end_x < ix ? -1 : 0);
+  const int step_y = end_y > iy ? 1 : (end_y < iy ? -1 : 0);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double t_max_x = kInf, t_delta_x = kInf, t_max_y = kInf, t_delta_y = kInf;
+  if (step_x != 0) {
+    t_delta_x = 1.0 / std::fabs(dx);
+    t_max_x = (step_x > 0 ? (ix + 1 - x0) : (x0 - ix)) * t_delta_x;
+  }
+  if (step_y != 0) {
+    t_delta_y = 1.0 / std::fabs(dy);
+    t_max_y = (step_y > 0 ? (iy + 1 - y0) : (y0 - iy)) * t_delta_y;
+  }
+  int64_t remaining_x = std::abs(end_x - ix), remaining_y = std::abs(end_y - iy);
+  while (remaining_x > 0 || remaining_y > 0) {
+    // This cell is left at the next border crossing; the return's own cell is never visited.
+    const bool step_in_x = remaining_y == 0 || (remaining_x > 0 && t_max_x <= t_max_y);
+    const double t_exit = std::min(1.0, step_in_x ? t_max_x : t_max_y);
+    const float z_exit = static_cast<float>(a.z() + std::max(0.0, t_exit) * dz);
     int lx, ly;
     Tile* tile = TileForCell(ix, iy, &lx, &ly);
     const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
@@ -343,12 +359,20 @@ void TerrainMap::RecordBound(const common::Vector3& from, const common::Vector3&
     // Only a ray that goes on for more than the next cell can say a surface is not there: one
     // that ends right after this cell may have hit a face standing in it.
     float& conflict = tile->conflict_bound[i];
-    if (std::abs(end_x - ix) + std::abs(end_y - iy) >= 2 && !(conflict <= z_exit)) {
+    if (remaining_x + remaining_y >= 2 && !(conflict <= z_exit)) {
       conflict = z_exit;
       if (!std::isnan(tile->filter_height[i])) CommitHeight(tile, i, ix, iy);
     }
-    return true;
-  });
+    if (step_in_x) {
+      ix += step_x;
+      t_max_x += t_delta_x;
+      --remaining_x;
+    } else {
+      iy += step_y;
+      t_max_y += t_delta_y;
+      --remaining_y;
+    }
+  }
 }
 
 common::GridGeometry TerrainMap::Bounds() const {
@@ -387,8 +411,35 @@ common::GridMap TerrainMap::Window(const CellRect& r, const std::vector<std::str
   g.size_x = r.x1 - r.x0;
   g.size_y = r.y1 - r.y0;
   g.origin = {r.x0 * params_.resolution_m, r.y0 * params_.resolution_m, 0.0};
-  common::GridMap out(g);
-  for (const auto& name : names) out.AddLayer(name);
+  common::GridMap out;
+  WindowInto(r, names, g, &out);
+  return out;
+}
+
+common::GridMap& TerrainMap::Scratch(const CellRect& r, const std::vector<std::string>& names) {
+  // Windows of the recomputation share one buffer of a fixed size in local coordinates (cell
+  // (0, 0) is the window's first cell), so no memory is allocated per window.
+  const int side = params_.tile_size_cells +
+                   2 * (DependencyRadiusCells(params_.traversability, params_.resolution_m) + 1);
+  common::GridGeometry g;
+  g.resolution_m = params_.resolution_m;
+  g.size_x = std::max(side, r.x1 - r.x0);
+  g.size_y = std::max(side, r.y1 - r.y0);
+  WindowInto(r, names, g, &scratch_);
+  return scratch_;
+}
+
+void TerrainMap::WindowInto(const CellRect& r, const std::vector<std::string>& names,
+                            const common::GridGeometry& g, common::GridMap* out_map) const {
+  if (out_map->geometry() != g || out_map->size_x() == 0) *out_map = common::GridMap(g);
+  common::GridMap& out = *out_map;
+  for (const auto& name : names) {
+    if (out.HasLayer(name)) {
+      out.at(name).setConstant(kNaN);
+    } else {
+      out.AddLayer(name);
+    }
+  }
   const int T = params_.tile_size_cells;
   const int64_t tx0 = FloorDiv(r.x0, T), tx1 = FloorDiv(r.x1 - 1, T);
   const int64_t ty0 = FloorDiv(r.y0, T), ty1 = FloorDiv(r.y1 - 1, T);
@@ -396,8 +447,10 @@ common::GridMap TerrainMap::Window(const CellRect& r, const std::vector<std::str
     for (int64_t tx = tx0; tx <= tx1; ++tx) {
       const Tile* tile = FindTile(static_cast<int>(tx), static_cast<int>(ty));
       if (tile == nullptr) continue;
-      const int64_t x0 = std::max<int64_t>(r.x0, tx * T), x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
-      const int64_t y0 = std::max<int64_t>(r.y0, ty * T), y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
+      const int64_t x0 = std::max<int64_t>(r.x0, tx * T),
+                    x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
+      const int64_t y0 = std::max<int64_t>(r.y0, ty * T),
+                    y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
       for (const auto& name : names) {
         if (!tile->layers.HasLayer(name)) continue;
         out.at(name).block(x0 - r.x0, y0 - r.y0, x1 - x0, y1 - y0) =
@@ -405,11 +458,10 @@ common::GridMap TerrainMap::Window(const CellRect& r, const std::vector<std::str
       }
     }
   }
-  return out;
 }
 
-void TerrainMap::WriteBack(const common::GridMap& window, int64_t ox, int64_t oy,
-                           const CellRect& r, const std::vector<std::string>& names) {
+void TerrainMap::WriteBack(const common::GridMap& window, int64_t ox, int64_t oy, const CellRect& r,
+                           const std::vector<std::string>& names) {
   const int T = params_.tile_size_cells;
   const int64_t tx0 = FloorDiv(r.x0, T), tx1 = FloorDiv(r.x1 - 1, T);
   const int64_t ty0 = FloorDiv(r.y0, T), ty1 = FloorDiv(r.y1 - 1, T);
@@ -418,8 +470,10 @@ void TerrainMap::WriteBack(const common::GridMap& window, int64_t ox, int64_t oy
       auto it = tiles_.find({static_cast<int>(tx), static_cast<int>(ty)});
       if (it == tiles_.end()) continue;
       Tile* tile = it->second.get();
-      const int64_t x0 = std::max<int64_t>(r.x0, tx * T), x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
-      const int64_t y0 = std::max<int64_t>(r.y0, ty * T), y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
+      const int64_t x0 = std::max<int64_t>(r.x0, tx * T),
+                    x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
+      const int64_t y0 = std::max<int64_t>(r.y0, ty * T),
+                    y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
       for (const auto& name : names) {
         if (!tile->layers.HasLayer(name)) tile->layers.AddLayer(name);
         tile->layers.at(name).block(x0 - tx * T, y0 - ty * T, x1 - x0, y1 - y0) =
@@ -465,10 +519,15 @@ void TerrainMap::RecomputeCosts(const std::vector<CellRect>& rects, const RobotC
   constexpr int kMargin = 2;
   for (const CellRect& r : rects) {
     const CellRect w = Grow(r, kMargin);
-    common::GridMap window = Window(w, in);
+    common::GridMap& window = Scratch(w, in);
     const CellRect local{kMargin, kMargin, kMargin + r.x1 - r.x0, kMargin + r.y1 - r.y0};
+    // The window is in local coordinates: so is the robot.
+    RobotContext local_robot = robot;
+    if (robot.xy_m) {
+      local_robot.xy_m = *robot.xy_m - common::Vector2(w.x0, w.y0) * params_.resolution_m;
+    }
     for (const auto* p : which) {
-      ComputeCostLayer(&window, *p, params_.traversability, robot, local);
+      ComputeCostLayer(&window, *p, params_.traversability, local_robot, local);
     }
     WriteBack(window, w.x0, w.y0, r, out);
   }
@@ -490,10 +549,14 @@ DerivedStats TerrainMap::UpdateDerived(const RobotContext& robot) {
   // IMU compensation the robot's surroundings (the pitch changes every cell's slope there).
   std::set<Key> cost_region = region;
   auto add_around = [&](const common::Vector2& xy, double radius_m) {
-    const int64_t cx0 = static_cast<int64_t>(std::floor((xy.x() - radius_m) / params_.resolution_m));
-    const int64_t cx1 = static_cast<int64_t>(std::floor((xy.x() + radius_m) / params_.resolution_m));
-    const int64_t cy0 = static_cast<int64_t>(std::floor((xy.y() - radius_m) / params_.resolution_m));
-    const int64_t cy1 = static_cast<int64_t>(std::floor((xy.y() + radius_m) / params_.resolution_m));
+    const int64_t cx0 =
+        static_cast<int64_t>(std::floor((xy.x() - radius_m) / params_.resolution_m));
+    const int64_t cx1 =
+        static_cast<int64_t>(std::floor((xy.x() + radius_m) / params_.resolution_m));
+    const int64_t cy0 =
+        static_cast<int64_t>(std::floor((xy.y() - radius_m) / params_.resolution_m));
+    const int64_t cy1 =
+        static_cast<int64_t>(std::floor((xy.y() + radius_m) / params_.resolution_m));
     for (int64_t by = FloorDiv(cy0, B); by <= FloorDiv(cy1, B); ++by) {
       for (int64_t bx = FloorDiv(cx0, B); bx <= FloorDiv(cx1, B); ++bx) {
         cost_region.insert({static_cast<int>(bx), static_cast<int>(by)});
@@ -513,8 +576,9 @@ DerivedStats TerrainMap::UpdateDerived(const RobotContext& robot) {
   std::vector<std::string> base_in{layers::kElevation, layers::kGroundBound};
   for (const CellRect& r : geo_rects) {
     const CellRect w = Grow(r, geo_radius);
-    common::GridMap window = Window(w, base_in);
-    const CellRect local{geo_radius, geo_radius, geo_radius + r.x1 - r.x0, geo_radius + r.y1 - r.y0};
+    common::GridMap& window = Scratch(w, base_in);
+    const CellRect local{geo_radius, geo_radius, geo_radius + r.x1 - r.x0,
+                         geo_radius + r.y1 - r.y0};
     ComputeGeometricLayers(&window, params_.traversability, local);
     WriteBack(window, w.x0, w.y0, r, GeometricLayers());
     stats.geometric_cells += static_cast<int64_t>(r.x1 - r.x0) * (r.y1 - r.y0);
@@ -525,7 +589,7 @@ DerivedStats TerrainMap::UpdateDerived(const RobotContext& robot) {
   const int fm = FeatureRadiusCells() + 1;
   for (const CellRect& r : geo_rects) {
     const CellRect w = Grow(r, fm);
-    common::GridMap window = Window(w, feature_in);
+    common::GridMap& window = Scratch(w, feature_in);
     ComputeFeatureLayers(&window, params_.obstacles, {fm, fm, fm + r.x1 - r.x0, fm + r.y1 - r.y0});
     WriteBack(window, w.x0, w.y0, r, FeatureLayers());
   }
@@ -545,8 +609,11 @@ common::ObstacleRegistry TerrainMap::BuildRegistry() const {
   std::vector<std::string> names{layers::kElevation, layers::kGroundBound, layers::kSlope,
                                  layers::kDitchDepth, layers::kDitchWidth};
   for (const auto& n : FeatureLayers()) names.push_back(n);
-  const common::GridMap map = Export(names, AllocatedBounds());
-  common::ObstacleRegistry registry = AssembleObstacles(map, params_.obstacles);
+  const common::GridGeometry g = AllocatedBounds();
+  const int x0 = static_cast<int>(std::lround(g.origin.x_m / params_.resolution_m));
+  const int y0 = static_cast<int>(std::lround(g.origin.y_m / params_.resolution_m));
+  WindowInto({x0, y0, x0 + g.size_x, y0 + g.size_y}, names, g, &registry_scratch_);
+  common::ObstacleRegistry registry = AssembleObstacles(registry_scratch_, params_.obstacles);
   LabelObstacles(&registry, profiles_);
   return registry;
 }
@@ -565,18 +632,18 @@ common::GridMap TerrainMap::Export(const std::vector<std::string>& names,
                      "export window must be aligned with the map's cells");
   const std::vector<std::string> known_derived = DerivedLayers();
   for (const auto& n : names) {
-    const bool ok = std::find(known_derived.begin(), known_derived.end(), n) != known_derived.end() ||
-                    n == layers::kElevation || n == layers::kElevationVariance ||
-                    n == layers::kObservationCount || n == layers::kLastSeen ||
-                    n == layers::kGroundBound ||
-                    std::find(FeatureLayers().begin(), FeatureLayers().end(), n) != FeatureLayers().end();
+    const bool ok =
+        std::find(known_derived.begin(), known_derived.end(), n) != known_derived.end() ||
+        n == layers::kElevation || n == layers::kElevationVariance ||
+        n == layers::kObservationCount || n == layers::kLastSeen || n == layers::kGroundBound ||
+        std::find(FeatureLayers().begin(), FeatureLayers().end(), n) != FeatureLayers().end();
     CAIRN_THROW_UNLESS(ok, "the terrain map has no layer '" << n << "'");
   }
   const int64_t x0 = std::llround(fx), y0 = std::llround(fy);
-  common::GridMap out = Window({static_cast<int>(x0), static_cast<int>(y0),
-                                static_cast<int>(x0 + window.size_x),
-                                static_cast<int>(y0 + window.size_y)},
-                               names);
+  common::GridMap out =
+      Window({static_cast<int>(x0), static_cast<int>(y0), static_cast<int>(x0 + window.size_x),
+              static_cast<int>(y0 + window.size_y)},
+             names);
   return out;
 }
 
@@ -623,7 +690,7 @@ size_t TerrainMap::memory_bytes() const {
   size_t bytes = 0;
   for (const auto& [key, tile] : tiles_) {
     bytes += tile->layers.layer_names().size() * sizeof(float) * tile->filter_height.size();
-    bytes += tile->filter_height.size() * (2 * sizeof(float) + sizeof(int64_t));
+    bytes += tile->filter_height.size() * (3 * sizeof(float) + sizeof(uint32_t));
   }
   return bytes;
 }

@@ -45,19 +45,22 @@ namespace cairn::mapping {
 
 struct TerrainMapParams {
   double resolution_m{0.2};
-  int tile_size_cells{100};   ///< also the tile of the published layers
+  int tile_size_cells{100};  ///< also the tile of the published layers
   ElevationFilterParams filter;
-  double min_range_m{0.4};    ///< closer points (the robot itself) are dropped
+  double min_range_m{0.4};  ///< closer points (the robot itself) are dropped
   /// Points closer than this to the sensor horizontally are dropped: the robot's own body and
   /// the ground under it, which a real sensor cannot see (0 keeps them).
   double self_filter_radius_m{0.0};
-  double max_range_m{30.0};   ///< farther points are dropped (counted)
+  double max_range_m{30.0};  ///< farther points are dropped (counted)
   /// Points higher than this above the sensor are overhangs (tunnel ceilings, canopies) a 2.5-D
   /// map cannot hold; they are skipped.
   double max_height_above_sensor_m{1.0};
   /// Each downward ray records, over this last stretch before its return, the height at which
   /// it crossed each cell (the ground bound). <= 0 turns the bound off.
   double ray_bound_length_m{2.0};
+  /// Only returns closer than this record the bound: farther rays run almost level and prove
+  /// nothing deeper than the ground they hit.
+  double ray_bound_max_range_m{12.0};
   /// The published elevation (and ground bound) follows the filter in steps larger than this.
   double commit_epsilon_m{0.003};
   /// A cell a lidar ray passed beneath by more than visibility_tolerance_m (but less than
@@ -75,12 +78,12 @@ struct TerrainMapParams {
 /// What one Integrate() call did with its points.
 struct IntegrateStats {
   int64_t points{0};
-  int64_t used{0};          ///< changed a cell (initialised, fused, raised, multi-height)
+  int64_t used{0};           ///< changed a cell (initialised, fused, raised, multi-height)
   int64_t ignored_lower{0};  ///< lower than the cell, same scan
-  int64_t nonfinite{0};     ///< NaN or infinite coordinates: bad input
-  int64_t out_of_range{0};  ///< closer than min_range or farther than max_range
-  int64_t self{0};          ///< within self_filter_radius of the sensor
-  int64_t overhang{0};      ///< above max_height_above_sensor
+  int64_t nonfinite{0};      ///< NaN or infinite coordinates: bad input
+  int64_t out_of_range{0};   ///< closer than min_range or farther than max_range
+  int64_t self{0};           ///< within self_filter_radius of the sensor
+  int64_t overhang{0};       ///< above max_height_above_sensor
   IntegrateStats& operator+=(const IntegrateStats& o);
 };
 
@@ -178,6 +181,11 @@ class TerrainMap {
   void CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy);
   /// Copies `layers` of the global cell rectangle into a dense map (NaN outside tiles).
   common::GridMap Window(const CellRect& global, const std::vector<std::string>& layers) const;
+  /// The same into `out` with geometry `g` (reusing its buffers when the geometry matches).
+  void WindowInto(const CellRect& global, const std::vector<std::string>& layers,
+                  const common::GridGeometry& g, common::GridMap* out) const;
+  /// A window of the recomputation in the shared scratch map (local coordinates).
+  common::GridMap& Scratch(const CellRect& global, const std::vector<std::string>& layers);
   /// Writes `layers` of `window` (whose cell (0,0) is global `origin_cell`) back for `rect`.
   void WriteBack(const common::GridMap& window, int64_t origin_x, int64_t origin_y,
                  const CellRect& rect, const std::vector<std::string>& layers);
@@ -192,6 +200,8 @@ class TerrainMap {
   Key last_key_{0, 0};
   std::set<Key> dirty_blocks_;  ///< blocks whose base layers changed
   std::optional<common::Vector2> last_robot_xy_;
+  common::GridMap scratch_;                   // recomputation windows
+  mutable common::GridMap registry_scratch_;  // BuildRegistry's copy of the map
   int block_cells_{25};
 };
 

@@ -22,9 +22,12 @@ bool IsBaseLayer(const std::string& layer) {
 }  // namespace
 
 TerrainPublisher::TerrainPublisher(std::string robot, std::string map_name, int extent_tiles)
-    : robot_(std::move(robot)), map_name_(std::move(map_name)), extent_tiles_(std::max(1, extent_tiles)) {}
+    : robot_(std::move(robot)),
+      map_name_(std::move(map_name)),
+      extent_tiles_(std::max(1, extent_tiles)) {}
 
-std::optional<cairn::lcmt_grid_manifest> TerrainPublisher::Manifest(const std::string& layer) const {
+std::optional<cairn::lcmt_grid_manifest> TerrainPublisher::Manifest(
+    const std::string& layer) const {
   auto it = layers_.find(layer);
   if (it == layers_.end()) return std::nullopt;
   return MakeManifest(layer, it->second);
@@ -211,13 +214,15 @@ TerrainPublisher::Batch TerrainPublisher::Resend(
   if (it == layers_.end()) return batch;
   const LayerState& state = it->second;
   if (request.num_tiles <= 0) {
-    for (const auto& [key, tile] : state.tiles) batch.tiles.push_back(MakeTile(request.layer, state, key, tile));
+    for (const auto& [key, tile] : state.tiles)
+      batch.tiles.push_back(MakeTile(request.layer, state, key, tile));
   } else {
     const size_t n = std::min<size_t>(static_cast<size_t>(request.num_tiles),
                                       std::min(request.tile_ix.size(), request.tile_iy.size()));
     for (size_t i = 0; i < n; ++i) {
       auto t = state.tiles.find({request.tile_ix[i], request.tile_iy[i]});
-      if (t != state.tiles.end()) batch.tiles.push_back(MakeTile(request.layer, state, t->first, t->second));
+      if (t != state.tiles.end())
+        batch.tiles.push_back(MakeTile(request.layer, state, t->first, t->second));
     }
   }
   batch.manifests.push_back(MakeManifest(request.layer, state));

@@ -10,6 +10,7 @@
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
+
 #include "common/grid_map.h"
 #include "services/mapping/terrain_map.h"
 

@@ -6,10 +6,9 @@
 #include <limits>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
-
 #include "common/check.h"
 #include "common/layers.h"
+#include <Eigen/Eigenvalues>
 
 namespace cairn::mapping {
 namespace {
@@ -44,9 +43,7 @@ struct TerrainView {
   int sy;
   bool Inside(int x, int y) const { return x >= 0 && y >= 0 && x < sx && y < sy; }
   float H(int x, int y) const { return h[x + static_cast<int64_t>(y) * sx]; }
-  float B(int x, int y) const {
-    return bound ? bound[x + static_cast<int64_t>(y) * sx] : kNaN;
-  }
+  float B(int x, int y) const { return bound ? bound[x + static_cast<int64_t>(y) * sx] : kNaN; }
 };
 
 // Result of looking for the rims of a gap along one line through a cell.
@@ -124,8 +121,8 @@ DitchCell TestUnseenCell(const TerrainView& v, int x, int y, const Traversabilit
     const bool diagonal = d[0] != 0 && d[1] != 0;
     const double step_m = diagonal ? res * M_SQRT2 : res;
     const int cells = diagonal ? std::max(1, static_cast<int>(max_cells / M_SQRT2)) : max_cells;
-    const GapLine line = FindRims(v, x, y, d[0], d[1], u + p.min_ditch_depth_m,
-                                  p.min_ditch_depth_m, cells, step_m);
+    const GapLine line =
+        FindRims(v, x, y, d[0], d[1], u + p.min_ditch_depth_m, p.min_ditch_depth_m, cells, step_m);
     if (!line.found) continue;
     const double depth = line.rim_m - u;
     if (depth + p.height_tolerance_m < p.min_ditch_depth_m) continue;
@@ -250,8 +247,8 @@ void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params,
   if (rect.empty()) return;
   const Layer& elevation = map->at(layers::kElevation);
   const float* h = elevation.data();
-  const float* bound = map->HasLayer(layers::kGroundBound) ? map->at(layers::kGroundBound).data()
-                                                           : nullptr;
+  const float* bound =
+      map->HasLayer(layers::kGroundBound) ? map->at(layers::kGroundBound).data() : nullptr;
   const TerrainView view{h, bound, sx, sy};
 
   // Offsets of the normal window: every cell centre within the radius.
@@ -380,8 +377,10 @@ void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params,
         const DitchCell& c = unseen_at(x, y);
         const size_t pi = (x - rect.x0) + static_cast<size_t>(y - rect.y0) * rw;
         if (c.ditch || is_painted[pi]) {
-          const double depth = c.ditch ? std::max(c.depth_m, painted[pi].depth_m) : painted[pi].depth_m;
-          const double width = c.ditch ? std::min(c.width_m, painted[pi].width_m) : painted[pi].width_m;
+          const double depth =
+              c.ditch ? std::max(c.depth_m, painted[pi].depth_m) : painted[pi].depth_m;
+          const double width =
+              c.ditch ? std::min(c.width_m, painted[pi].width_m) : painted[pi].width_m;
           ditch_depth.data()[i] = static_cast<float>(depth);
           ditch_width.data()[i] = static_cast<float>(width);
         }
@@ -422,8 +421,8 @@ void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params,
 }
 
 void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
-                      const TraversabilityParams& params,
-                      std::optional<common::Vector2> robot_xy_m, double robot_pitch_rad) {
+                      const TraversabilityParams& params, std::optional<common::Vector2> robot_xy_m,
+                      double robot_pitch_rad) {
   CAIRN_THROW_UNLESS(map != nullptr, "no map");
   if (!map->HasLayer(layers::kSlope) || !map->HasLayer(layers::kDitchDepth) ||
       !map->HasLayer(kNormalXLayer)) {
@@ -441,9 +440,9 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
   CAIRN_THROW_UNLESS(map != nullptr, "no map");
   profile.Validate();
   params.Validate();
-  for (const char* name : {layers::kElevation, layers::kSlope, layers::kRoughness,
-                           layers::kDitchDepth, layers::kDitchWidth, kNormalXLayer,
-                           kNormalYLayer}) {
+  for (const char* name :
+       {layers::kElevation, layers::kSlope, layers::kRoughness, layers::kDitchDepth,
+        layers::kDitchWidth, kNormalXLayer, kNormalYLayer}) {
     CAIRN_THROW_UNLESS(map->HasLayer(name), "the map has no '" << name << "' layer");
   }
   const int sx = map->size_x(), sy = map->size_y();
@@ -460,8 +459,8 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
   const float* ny = map->at(kNormalYLayer).data();
   const float* ddepth = map->at(layers::kDitchDepth).data();
   const float* dwidth = map->at(layers::kDitchWidth).data();
-  const float* bound = map->HasLayer(layers::kGroundBound) ? map->at(layers::kGroundBound).data()
-                                                           : nullptr;
+  const float* bound =
+      map->HasLayer(layers::kGroundBound) ? map->at(layers::kGroundBound).data() : nullptr;
   const double tol = params.height_tolerance_m;
   const double max_slope = std::min(profile.max_slope_up_rad, profile.max_slope_down_rad);
   const double up_limit = profile.max_step_up_m, down_limit = profile.max_step_down_m;
@@ -529,8 +528,9 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
         } else if (in_ditch) {
           // A ditch the robot can bridge: graded by the width it uses.
           const double r = std::min(1.0, share(dwidth[i], ditch_limit));
-          cost.data()[i] = r <= ff ? layers::kCostFree
-                                   : static_cast<float>(params.graded_cost_max * (r - ff) / (1 - ff));
+          cost.data()[i] = r <= ff
+                               ? layers::kCostFree
+                               : static_cast<float>(params.graded_cost_max * (r - ff) / (1 - ff));
         } else if (blind && std::fabs(x + 0.5 - robot_cells.x()) < blind_cells &&
                    std::fabs(y + 0.5 - robot_cells.y()) < blind_cells) {
           cost.data()[i] = layers::kCostFree;
@@ -564,8 +564,8 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
       double s = slope[i];
       if (compensate) {
         if (exact_tilt) {
-          const double nzc = std::sqrt(std::max(0.0, 1.0 - double(nx[i]) * nx[i] -
-                                                         double(ny[i]) * ny[i]));
+          const double nzc =
+              std::sqrt(std::max(0.0, 1.0 - double(nx[i]) * nx[i] - double(ny[i]) * ny[i]));
           const double nh = nx[i] * cos_heading + ny[i] * sin_heading;
           const double nz_world = nh * sp + nzc * cp;
           s = std::acos(std::clamp(std::fabs(nz_world), 0.0, 1.0));
@@ -631,8 +631,8 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
         cost.data()[i] = layers::kCostFree;
       } else {
         const double r = std::min(1.0, ratio);
-        cost.data()[i] = static_cast<float>(
-            std::max(1e-3, params.graded_cost_max * (r - ff) / (1.0 - ff)));
+        cost.data()[i] =
+            static_cast<float>(std::max(1e-3, params.graded_cost_max * (r - ff) / (1.0 - ff)));
       }
     }
   }

@@ -42,7 +42,7 @@ inline constexpr char kNormalXLayer[] = "normal_x";  ///< x component of the uni
 inline constexpr char kNormalYLayer[] = "normal_y";  ///< y component (n_z = sqrt(1 - x² - y²))
 
 struct TraversabilityParams {
-  double normal_radius_m{0.3};        ///< PCA window for normals (3 x 3 cells at 0.2 m)
+  double normal_radius_m{0.3};         ///< PCA window for normals (3 x 3 cells at 0.2 m)
   double blind_zone_half_size_m{0.5};  ///< cells within this of the robot count as free
   bool imu_pitch_compensation{false};  ///< add the robot's pitch to the map slope
   bool unknown_is_lethal{false};       ///< else unknown stays NaN in the cost layer
@@ -102,9 +102,10 @@ void ComputeCostLayer(common::GridMap* map, const common::RobotProfile& profile,
                       std::optional<common::Vector2> robot_xy_m = std::nullopt,
                       double robot_pitch_rad = 0.0);
 
-/// As above with the robot's heading (exact IMU compensation: the map normals are tilted by
-/// the pitch about the robot's lateral axis, so level ground ahead of a pitched robot stays
-/// level), writing only the cells of `rect`. The geometric layers must exist.
+/// As above with the robot's heading (exact IMU compensation: the map normals and the offsets
+/// to the neighbours are tilted by the pitch about the robot's lateral axis, so level ground
+/// ahead of a pitched robot stays level instead of the seed's slope + pitch), writing only the
+/// cells of `rect`. The geometric layers must exist; cells outside `rect` are only read.
 /// @throws std::invalid_argument if they do not or the profile is invalid.
 void ComputeCostLayer(common::GridMap* map, const common::RobotProfile& profile,
                       const TraversabilityParams& params, const RobotContext& robot,

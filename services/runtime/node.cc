@@ -132,8 +132,10 @@ bool Node::SpinOnce(int timeout_ms) {
   auto now = std::chrono::steady_clock::now();
   int wait_ms = timeout_ms;
   for (const auto& timer : timers_) {
-    const int until = static_cast<int>(
-        std::chrono::duration_cast<std::chrono::milliseconds>(timer.next - now).count());
+    // Round up, so the wait never ends just before a timer is due (a busy spin).
+    const auto until_us =
+        std::chrono::duration_cast<std::chrono::microseconds>(timer.next - now).count();
+    const int until = static_cast<int>((until_us + 999) / 1000);
     wait_ms = std::max(0, std::min(wait_ms, until));
   }
   lcm_->handleTimeout(wait_ms);

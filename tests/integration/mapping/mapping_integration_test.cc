@@ -2,12 +2,10 @@
 // registry of the tunnel's features with each profile's verdicts, the published tiles, control
 // requests, bad input, clean shutdown, and offline replay giving byte-identical maps.
 
-#include <signal.h>
-#include <sys/wait.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -20,18 +18,25 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
 #include "cairn/lcmt_map_control_reply.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
+#include "cairn/lcmt_occupancy_tile.hpp"
+#include "cairn/lcmt_octomap.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_sim_control_reply.hpp"
 #include "cairn/lcmt_sim_control_request.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
+
+#include "common/layers.h"
+#include "services/runtime/tiler.h"
 #include "tests/support/harness.h"
 
 namespace cairn::testing {
@@ -65,13 +70,6 @@ std::string MapperConfig(const std::string& dir) {
   const std::string path = dir + "/mapper.yaml";
   std::ofstream(path) << s;
   return path;
-}
-
-int64_t Counter(const cairn::lcmt_health& h, const std::string& name) {
-  for (int i = 0; i < h.num_counters; ++i) {
-    if (h.counter_names[i] == name) return h.counter_values[i];
-  }
-  return 0;
 }
 
 void SendCommand(Bus& bus, double v, double w) {
@@ -113,6 +111,8 @@ bool DriveTo(Bus& bus, double lane_y, double x_end, double speed_mps, double tim
   const bool reached = WaitFor(
       [&] {
         auto pose = bus.Last<cairn::lcmt_pose>(Ch("POSE"));
+        if (pose && std::fabs(pose->position_m[1] - lane_y) > 1.0)
+          pose.reset();  // before the reset
         if (pose && pose->position_m[0] >= x_end) return true;
         const auto now = std::chrono::steady_clock::now();
         if (pose && now - last_send > std::chrono::milliseconds(50)) {
@@ -135,10 +135,9 @@ const cairn::lcmt_obstacle_verdict* Verdict(const cairn::lcmt_obstacle& o, const
 }
 
 // The first obstacle of `kind` whose centroid lies in [x0, x1] x [y0, y1].
-std::optional<cairn::lcmt_obstacle> Find(const cairn::lcmt_obstacle_registry& r, int8_t kind,
-                                         double x0, double x1, double y0, double y1,
-                                         const std::function<bool(const cairn::lcmt_obstacle&)>& ok =
-                                             nullptr) {
+std::optional<cairn::lcmt_obstacle> Find(
+    const cairn::lcmt_obstacle_registry& r, int8_t kind, double x0, double x1, double y0, double y1,
+    const std::function<bool(const cairn::lcmt_obstacle&)>& ok = nullptr) {
   for (const auto& o : r.obstacles) {
     if (o.kind != kind) continue;
     if (o.centroid_m[0] < x0 || o.centroid_m[0] > x1 || o.centroid_m[1] < y0 ||
@@ -154,9 +153,10 @@ std::optional<cairn::lcmt_obstacle> Find(const cairn::lcmt_obstacle_registry& r,
 std::string Describe(const cairn::lcmt_obstacle_registry& r) {
   std::ostringstream s;
   for (const auto& o : r.obstacles) {
-    s << "  kind " << int(o.kind) << " at (" << o.centroid_m[0] << ", " << o.centroid_m[1]
-      << ") h " << o.height_m << " w " << o.width_m << " slope " << o.slope_rad * 180 / M_PI;
-    for (const auto& v : o.verdicts) s << " " << v.profile << ":" << (v.crossable ? "yes" : v.reason);
+    s << "  kind " << int(o.kind) << " at (" << o.centroid_m[0] << ", " << o.centroid_m[1] << ") h "
+      << o.height_m << " w " << o.width_m << " slope " << o.slope_rad * 180 / M_PI;
+    for (const auto& v : o.verdicts)
+      s << " " << v.profile << ":" << (v.crossable ? "yes" : v.reason);
     s << "\n";
   }
   return s.str();
@@ -175,9 +175,11 @@ class MappingProcessTest : public ::testing::Test {
                                     std::to_string(x) + "," + std::to_string(y),
                                 "--speed", "1", "--seed", "3"});
   }
-  ChildProcess& StartMapper(std::vector<std::string> extra = {}) {
-    std::vector<std::string> args{"--robot", kRobot, "--config", MapperConfig(procs_->dir()),
-                                  "--profiles", "pioneer3at,rover"};
+  ChildProcess& StartMapper(std::vector<std::string> extra = {}, bool with_octomap = false) {
+    const std::string config =
+        with_octomap ? SourcePath("config/mapping/mapper.yaml") : MapperConfig(procs_->dir());
+    std::vector<std::string> args{"--robot", kRobot,       "--config",
+                                  config,    "--profiles", "pioneer3at,rover"};
     args.insert(args.end(), extra.begin(), extra.end());
     return procs_->Start("cairn-mapper", args);
   }
@@ -231,12 +233,14 @@ TEST_F(MappingProcessTest, TunnelRegistryVerdicts) {
 
   auto lane = [](double y) { return std::make_pair(y - 1.9, y + 1.9); };
   auto all_found = [&](const cairn::lcmt_obstacle_registry& r) {
-    auto ramp = Find(r, cairn::lcmt_obstacle::KIND_RAMP, 7.5, 10.5, lane(10).first, lane(10).second);
+    auto ramp =
+        Find(r, cairn::lcmt_obstacle::KIND_RAMP, 7.5, 10.5, lane(10).first, lane(10).second);
     auto step20 = Find(r, cairn::lcmt_obstacle::KIND_STEP_UP, 9.5, 10.6, lane(22).first,
                        lane(22).second, [](const auto& o) { return o.height_m > 0.12; });
     auto step1 = Find(r, cairn::lcmt_obstacle::KIND_STEP_UP, 9.5, 10.6, lane(18).first,
                       lane(18).second, [](const auto& o) { return o.height_m < 0.03; });
-    auto ditch = Find(r, cairn::lcmt_obstacle::KIND_DITCH, 9.8, 10.9, lane(30).first, lane(30).second);
+    auto ditch =
+        Find(r, cairn::lcmt_obstacle::KIND_DITCH, 9.8, 10.9, lane(30).first, lane(30).second);
     return ramp && step20 && step1 && ditch;
   };
   std::optional<cairn::lcmt_obstacle_registry> registry;
@@ -282,6 +286,461 @@ TEST_F(MappingProcessTest, TunnelRegistryVerdicts) {
   EXPECT_TRUE(bus_->Seen(Ch("MAP.TILES")));
   EXPECT_TRUE(bus_->Seen(Ch("MAP.MANIFEST")));
   EXPECT_TRUE(bus_->Seen(Ch("MAP.OCCUPANCY")));
+}
+
+}  // namespace
+}  // namespace cairn::testing
+
+namespace cairn::testing {
+namespace {
+
+// A lidar slice (one slice per revolution) of flat ground 0.5 m below a sensor at (x, y),
+// small enough (about 50 KB) to cross the bus in one datagram.
+cairn::lcmt_point_cloud_slice GroundSlice(int64_t utime, int64_t revolution, double x, double y) {
+  cairn::lcmt_point_cloud_slice m{};
+  m.utime = utime;
+  m.robot = kRobot;
+  m.frame = "lidar";
+  m.revolution = revolution;
+  m.slice_index = 0;
+  m.slice_count = 1;
+  m.azimuth_start_rad = 0;
+  m.azimuth_end_rad = 2 * M_PI;
+  m.max_range_m = 70.0;
+  m.sensor_position_m[0] = x;
+  m.sensor_position_m[1] = y;
+  m.sensor_position_m[2] = 0.5;
+  m.sensor_orientation_wxyz[0] = 1.0;
+  for (double px = -4.0; px <= 4.0; px += 0.15) {
+    for (double py = -4.0; py <= 4.0; py += 0.15) {
+      if (std::hypot(px, py) < 1.0) continue;
+      m.x_m.push_back(static_cast<float>(px));
+      m.y_m.push_back(static_cast<float>(py));
+      m.z_m.push_back(-0.5f);
+      m.intensity.push_back(1.0f);
+      m.ring.push_back(0);
+    }
+  }
+  m.num_points = static_cast<int32_t>(m.x_m.size());
+  return m;
+}
+
+cairn::lcmt_pose PoseAt(int64_t utime, double x, double y) {
+  cairn::lcmt_pose p{};
+  p.utime = utime;
+  p.robot = kRobot;
+  p.frame = "world";
+  p.position_m[0] = x;
+  p.position_m[1] = y;
+  p.orientation_wxyz[0] = 1.0;
+  return p;
+}
+
+int64_t Counter(const cairn::lcmt_health& h, const std::string& name) {
+  for (int i = 0; i < h.num_counters; ++i) {
+    if (h.counter_names[i] == name) return h.counter_values[i];
+  }
+  return 0;
+}
+
+// Bad input is refused and counted in HEALTH, never a crash: NaN and out-of-range points, a
+// cloud with no pose near its time, undecodable bytes, unknown or invalid profiles and ops.
+// Good input in between still maps; the process exits cleanly on SIGTERM.
+TEST_F(MappingProcessTest, BadInputIsCountedAndRefused) {
+  ChildProcess& mapper = StartMapper();
+  ASSERT_TRUE(WaitReady("cairn-mapper", 20.0));
+
+  // A good revolution with a pose at its time.
+  bus_->Publish(Ch("POSE"), PoseAt(1'000'000, 0.0, 0.0));
+  bus_->Publish(Ch("LIDAR"), GroundSlice(1'000'000, 1, 0.0, 0.0));
+  ASSERT_TRUE(WaitFor([&] { return bus_->Seen(Ch("MAP.TILES")); }, 20.0, [&] { PumpAll(*bus_); }));
+
+  // Each bad message is sent until the mapper counts it (a datagram may be lost on the bus).
+  auto counted_after = [&](const std::function<void()>& send,
+                           const std::function<bool(const cairn::lcmt_health&)>& done) {
+    return WaitFor(
+        [&] {
+          auto h = bus_->Health("cairn-mapper", kRobot);
+          if (h && done(*h)) return true;
+          send();
+          return false;
+        },
+        15.0,
+        [&] {
+          for (int i = 0; i < 20; ++i) PumpAll(*bus_);
+        });
+  };
+  // NaN, infinite and beyond-range points in an otherwise good slice.
+  int64_t revolution = 2;
+  EXPECT_TRUE(counted_after(
+      [&] {
+        const int64_t t = 1'000'000 + 100'000 * revolution;
+        auto bad_points = GroundSlice(t, revolution++, 0.0, 0.0);
+        bus_->Publish(Ch("POSE"), PoseAt(t, 0.0, 0.0));
+        bad_points.x_m[0] = std::numeric_limits<float>::quiet_NaN();
+        bad_points.y_m[1] = std::numeric_limits<float>::infinity();
+        bad_points.x_m[2] = 500.0f;  // beyond the 70 m the slice declares
+        bus_->Publish(Ch("LIDAR"), bad_points);
+      },
+      [](const auto& h) { return Counter(h, "bad_points") >= 3; }));
+  // A slice 100 s away from any pose.
+  EXPECT_TRUE(counted_after(
+      [&] { bus_->Publish(Ch("LIDAR"), GroundSlice(100'000'000, revolution++, 0.0, 0.0)); },
+      [](const auto& h) { return Counter(h, "slices_without_pose") >= 1; }));
+  // Bytes that do not decode, and a slice whose index lies outside its count.
+  const std::string garbage = "not an lcm message at all";
+  EXPECT_TRUE(counted_after(
+      [&] {
+        bus_->lcm().publish(Ch("LIDAR"), garbage.data(), static_cast<unsigned>(garbage.size()));
+      },
+      [](const auto& h) { return h.decode_errors >= 1; }));
+  EXPECT_TRUE(counted_after(
+      [&] {
+        auto mismatched = GroundSlice(1'200'000, revolution++, 0.0, 0.0);
+        mismatched.slice_index = 3;  // of 1
+        bus_->Publish(Ch("LIDAR"), mismatched);
+      },
+      [](const auto& h) { return Counter(h, "bad_lidar_slices") >= 1; }));
+
+  // Unknown profile, invalid profile data, unknown op.
+  ControlRequest add_unknown{};
+  add_unknown.request_id = 11;
+  add_unknown.op = ControlRequest::OP_ADD_PROFILE;
+  add_unknown.profile = "no_such_robot";
+  EXPECT_EQ(Control(add_unknown).status, int(ControlReply::STATUS_NOT_FOUND));
+  ControlRequest add_invalid{};
+  add_invalid.request_id = 12;
+  add_invalid.op = ControlRequest::OP_ADD_PROFILE;
+  add_invalid.profile = "broken";
+  add_invalid.has_profile = true;
+  add_invalid.profile_data.name = "broken";
+  add_invalid.profile_data.max_step_up_m = -1.0;
+  EXPECT_EQ(Control(add_invalid).status, int(ControlReply::STATUS_INVALID));
+  ControlRequest bad_op{};
+  bad_op.request_id = 13;
+  bad_op.op = 99;
+  EXPECT_EQ(Control(bad_op).status, int(ControlReply::STATUS_INVALID));
+  ControlRequest remove_unknown{};
+  remove_unknown.request_id = 14;
+  remove_unknown.op = ControlRequest::OP_REMOVE_PROFILE;
+  remove_unknown.profile = "no_such_robot";
+  EXPECT_EQ(Control(remove_unknown).status, int(ControlReply::STATUS_NOT_FOUND));
+
+  std::optional<cairn::lcmt_health> health;
+  const bool counted = WaitFor(
+      [&] {
+        health = bus_->Health("cairn-mapper", kRobot);
+        return health && Counter(*health, "bad_points") >= 3 &&
+               Counter(*health, "slices_without_pose") >= 1 &&
+               Counter(*health, "bad_lidar_slices") >= 1 &&
+               Counter(*health, "refused_profiles") >= 3 && health->decode_errors >= 1;
+      },
+      15.0, [&] { PumpAll(*bus_); });
+  ASSERT_TRUE(health.has_value());
+  EXPECT_TRUE(counted) << "dropped " << health->dropped_inputs << ", bad_points "
+                       << Counter(*health, "bad_points") << ", no pose "
+                       << Counter(*health, "slices_without_pose") << ", decode errors "
+                       << health->decode_errors;
+  EXPECT_GE(health->dropped_inputs, 3 + 1 + 1 + 3);
+  EXPECT_EQ(health->state, int(cairn::lcmt_health::STATE_READY));
+  EXPECT_TRUE(mapper.Running());
+
+  // Still mapping: a later good revolution elsewhere grows the map.
+  bus_->Publish(Ch("POSE"), PoseAt(2'000'000, 30.0, 0.0));
+  bus_->Publish(Ch("LIDAR"), GroundSlice(2'000'000, 5, 30.0, 0.0));
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        auto m = bus_->Last<cairn::lcmt_grid_manifest>(Ch("MAP.MANIFEST"));
+        return m && m->origin_x_m + m->layer_size_x * m->resolution_m > 33.0;
+      },
+      15.0, [&] { PumpAll(*bus_); }));
+
+  // SIGTERM: a clean exit with status 0.
+  mapper.Signal(SIGTERM);
+  const auto status = mapper.WaitExit(10.0);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << "status " << *status;
+}
+
+// Profiles at run time: a profile added by name gets its cost layer; removing it publishes an
+// empty manifest of that layer; replaying a request id answers the same again.
+TEST_F(MappingProcessTest, ProfilesAtRunTimeAndTiles) {
+  StartMapper();
+  ASSERT_TRUE(WaitReady("cairn-mapper", 20.0));
+  bus_->Keep(Ch("MAP.MANIFEST"));
+  bus_->Publish(Ch("POSE"), PoseAt(1'000'000, 0.0, 0.0));
+  bus_->Publish(Ch("LIDAR"), GroundSlice(1'000'000, 1, 0.0, 0.0));
+
+  auto manifest_of = [&](const std::string& layer) -> std::optional<cairn::lcmt_grid_manifest> {
+    std::optional<cairn::lcmt_grid_manifest> newest;
+    for (const auto& bytes : bus_->Kept(Ch("MAP.MANIFEST"))) {
+      cairn::lcmt_grid_manifest m;
+      if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0 || m.layer != layer)
+        continue;
+      if (!newest || m.layer_version >= newest->layer_version) newest = m;
+    }
+    return newest;
+  };
+  ASSERT_TRUE(WaitFor([&] { return manifest_of("cost/rover").has_value(); }, 20.0,
+                      [&] { PumpAll(*bus_); }));
+  const auto rover = manifest_of("cost/rover");
+  EXPECT_GT(rover->num_tiles, 0);
+  EXPECT_EQ(rover->map_name, "live");
+
+  ControlRequest add{};
+  add.request_id = 21;
+  add.op = ControlRequest::OP_ADD_PROFILE;
+  add.profile = "kobuki";
+  const ControlReply added = Control(add);
+  EXPECT_EQ(added.status, int(ControlReply::STATUS_OK)) << added.message;
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        auto m = manifest_of("cost/kobuki");
+        return m && m->num_tiles > 0;
+      },
+      20.0, [&] { PumpAll(*bus_); }));
+  // The same request id again: the same answer, nothing done twice.
+  const ControlReply again = Control(add);
+  EXPECT_EQ(again.status, added.status);
+  EXPECT_EQ(again.message, added.message);
+
+  ControlRequest remove{};
+  remove.request_id = 22;
+  remove.op = ControlRequest::OP_REMOVE_PROFILE;
+  remove.profile = "kobuki";
+  EXPECT_EQ(Control(remove).status, int(ControlReply::STATUS_OK));
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        auto m = manifest_of("cost/kobuki");
+        return m && m->num_tiles == 0;
+      },
+      20.0, [&] { PumpAll(*bus_); }));
+
+  // A resend request for every tile of the elevation layer is answered.
+  const int64_t tiles_before = bus_->Count(Ch("MAP.TILES"));
+  cairn::lcmt_tile_resend_request resend{};
+  resend.requester = "mapping_integration_test";
+  resend.robot = kRobot;
+  resend.map_name = "live";
+  resend.layer = "elevation";
+  bus_->Publish(Ch("MAP.TILE_RESEND"), resend);
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        auto t = bus_->Last<cairn::lcmt_grid_tile>(Ch("MAP.TILES"));
+        return bus_->Count(Ch("MAP.TILES")) > tiles_before && t && t->layer == "elevation";
+      },
+      15.0, [&] { PumpAll(*bus_); }));
+}
+
+std::map<std::string, std::string> ReadDir(const std::string& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    std::ifstream in(entry.path(), std::ios::binary);
+    std::stringstream s;
+    s << in.rdbuf();
+    files[entry.path().filename().string()] = s.str();
+  }
+  return files;
+}
+
+// Offline: the same lcm-logger file replayed twice gives byte-identical maps.
+TEST_F(MappingProcessTest, ReplayTwiceGivesIdenticalMaps) {
+  StartSim(5.0, 30.0);
+  const std::string log = procs_->dir() + "/tunnel.lcmlog";
+  ChildProcess& logger = procs_->StartRaw("lcm-logger", {"/usr/bin/lcm-logger", "--lcm-url=" + url_,
+                                                         "-c", "p1\\..*|SIM\\.CLOCK", "-f", log});
+  ASSERT_TRUE(WaitFor([&] { return bus_->Seen(Ch("POSE")); }, 30.0, [&] { PumpAll(*bus_); }));
+  EXPECT_TRUE(DriveTo(*bus_, 30.0, 6.5, 0.3, 20.0));
+  logger.Signal(SIGINT);
+  ASSERT_TRUE(logger.WaitExit(10.0).has_value());
+  ASSERT_GT(fs::file_size(log), 1'000'000u);
+
+  std::vector<std::map<std::string, std::string>> outputs;
+  for (int run = 0; run < 2; ++run) {
+    const std::string out = procs_->dir() + "/replay" + std::to_string(run);
+    ChildProcess& replay = procs_->Start(
+        "cairn-mapper", {"--robot", kRobot, "--config", SourcePath("config/mapping/mapper.yaml"),
+                         "--profiles", "pioneer3at,rover", "--replay", log, "--output", out});
+    const auto status = replay.WaitExit(100.0);
+    ASSERT_TRUE(status.has_value()) << "replay did not finish";
+    ASSERT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << replay.Log();
+    outputs.push_back(ReadDir(out));
+  }
+  ASSERT_FALSE(outputs[0].empty());
+  for (const char* name : {"map.yaml", "obstacles.yaml", "elevation.f32", "cost_pioneer3at.f32",
+                           "cost_rover.f32", "occupancy_logodds.f32", "octomap.bt"}) {
+    ASSERT_TRUE(outputs[0].count(name)) << name;
+    EXPECT_GT(outputs[0][name].size(), 0u) << name;
+  }
+  EXPECT_EQ(outputs[0].size(), outputs[1].size());
+  for (const auto& [name, bytes] : outputs[0]) {
+    ASSERT_TRUE(outputs[1].count(name)) << name;
+    EXPECT_TRUE(bytes == outputs[1][name]) << name << " differs between the two replays";
+  }
+  // The replay mapped something real: the elevation holds known cells, the registry the trench.
+  const std::string& elevation = outputs[0]["elevation.f32"];
+  size_t known = 0;
+  for (size_t i = 0; i + 4 <= elevation.size(); i += 4) {
+    float v;
+    std::memcpy(&v, elevation.data() + i, 4);
+    known += std::isfinite(v);
+  }
+  EXPECT_GT(known, 1000u);
+  EXPECT_NE(outputs[0]["obstacles.yaml"].find("kind: ditch"), std::string::npos)
+      << outputs[0]["obstacles.yaml"];
+}
+
+// Wheel odometry instead of ground truth (roll and pitch from the IMU, the lidar mount measured
+// from the first slice): the 20 cm step still comes out at its place and height. The shipped
+// config runs the OctoMap too: its .bt stream goes out in chunks.
+TEST_F(MappingProcessTest, OdometryPosesMapTheStep) {
+  StartSim(5.0, 22.0);
+  StartMapper({"--pose-source", "odometry"}, /*with_octomap=*/true);
+  ASSERT_TRUE(WaitReady("cairn-mapper", 20.0));
+  ASSERT_TRUE(WaitFor([&] { return bus_->Seen(Ch("ODOM")); }, 30.0, [&] { PumpAll(*bus_); }));
+  EXPECT_TRUE(DriveTo(*bus_, 22.0, 6.9, 0.3, 25.0));
+  std::optional<cairn::lcmt_obstacle_registry> registry;
+  const bool found = WaitFor(
+      [&] {
+        registry = Registry();
+        return registry && Find(*registry, cairn::lcmt_obstacle::KIND_STEP_UP, 9.5, 10.6, 20.1,
+                                23.9, [](const auto& o) { return o.height_m > 0.12; });
+      },
+      20.0, [&] { PumpAll(*bus_); });
+  ASSERT_TRUE(registry.has_value());
+  ASSERT_TRUE(found) << Describe(*registry);
+  const auto step = *Find(*registry, cairn::lcmt_obstacle::KIND_STEP_UP, 9.5, 10.6, 20.1, 23.9,
+                          [](const auto& o) { return o.height_m > 0.12; });
+  EXPECT_NEAR(step.height_m, 0.20, 0.04);
+  EXPECT_FALSE(Verdict(step, "pioneer3at")->crossable);
+  std::optional<cairn::lcmt_octomap> chunk;
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        chunk = bus_->Last<cairn::lcmt_octomap>(Ch("MAP.OCTOMAP"));
+        return chunk.has_value();
+      },
+      30.0, [&] { PumpAll(*bus_); }));
+  if (chunk) {
+    EXPECT_TRUE(chunk->binary);
+    EXPECT_GT(chunk->total_bytes, 100);
+    EXPECT_EQ(chunk->num_bytes, static_cast<int32_t>(chunk->data.size()));
+    EXPECT_DOUBLE_EQ(chunk->resolution_m, 0.1);
+  }
+}
+
+TEST(MapperCliTest, HelpAndBadConfig) {
+  ProcessSet procs(PrivateLcmUrl());
+  ChildProcess& help = procs.StartRaw("help", {BinPath("cairn-mapper"), "--help"});
+  auto status = help.WaitExit(10.0);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0);
+  EXPECT_NE(help.Log().find("--replay"), std::string::npos);
+  // An unknown key is an error naming the file and line.
+  const std::string cfg = procs.dir() + "/bad.yaml";
+  std::ofstream(cfg) << "map_name: live\nterrain:\n  resolutoin_m: 0.2\n";
+  ChildProcess& bad =
+      procs.StartRaw("bad", {BinPath("cairn-mapper"), "--robot", "p1", "--config", cfg});
+  status = bad.WaitExit(10.0);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 2);
+  EXPECT_NE(bad.Log().find("bad.yaml:3"), std::string::npos) << bad.Log();
+  EXPECT_NE(bad.Log().find("resolutoin_m"), std::string::npos);
+  // An unknown profile refuses to start.
+  ChildProcess& unknown = procs.StartRaw(
+      "unknown", {BinPath("cairn-mapper"), "--robot", "p1", "--profiles", "pioneer3at,warthog"});
+  status = unknown.WaitExit(10.0);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 2);
+  EXPECT_NE(unknown.Log().find("warthog"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace cairn::testing
+
+namespace cairn::testing {
+namespace {
+
+// Seed 001's dynamic layers through the mapper: in the apartment, a box spawned in front of the
+// Kobuki's laser appears in the short-term layer and fades after it is removed; OP_CLEAR_SHORT_TERM
+// forgets the layer.
+TEST(MappingDynamicTest, SpawnedObjectAppearsAndFades) {
+  const std::string url = PrivateLcmUrl();
+  ProcessSet procs(url);
+  Bus bus(url);
+  const std::string cfg = procs.dir() + "/dynamic.yaml";
+  std::ofstream(cfg) << "profiles: [kobuki]\n"
+                        "occupancy_period_s: 0.5\n"
+                        "octomap: {enabled: false}\n"
+                        "dynamic: {enabled: true, origin_x_m: -1.0, origin_y_m: -1.0,\n"
+                        "          size_x_m: 12.0, size_y_m: 11.0, resolution_m: 0.05,\n"
+                        "          cost_inc: 8, cost_dec: 5}\n";
+  procs.Start("cairn-sim",
+              {"--scenario", SourcePath("config/sim/apartment_kobuki.yaml"), "--speed", "1"});
+  procs.Start("cairn-mapper", {"--robot", "kobuki", "--config", cfg});
+  runtime::LayerAssembler assembler;
+  size_t consumed = 0;
+  auto pump = [&] {
+    PumpAll(bus);
+    const auto& kept = bus.Kept("kobuki.MAP.OCCUPANCY");
+    for (; consumed < kept.size(); ++consumed) {
+      cairn::lcmt_occupancy_tile t;
+      const auto& bytes = kept[consumed];
+      if (t.decode(bytes.data(), 0, static_cast<int>(bytes.size())) >= 0) assembler.OnTile(t);
+    }
+  };
+  bus.Keep("kobuki.MAP.OCCUPANCY");
+  // The box's face towards the robot (which stands at (3, 3) facing +x).
+  const common::Vector2 face(4.27, 3.0);
+  auto short_term = [&]() -> float {
+    auto layer = assembler.Layer(layers::kShortTerm);
+    if (!layer) return NAN;
+    auto v = layer->ValueAt(layers::kShortTerm, face);
+    return v ? *v : NAN;
+  };
+  ASSERT_TRUE(WaitFor([&] { return !std::isnan(short_term()); }, 40.0, pump))
+      << "no short-term layer around " << face.transpose();
+  EXPECT_LT(short_term(), 50.f);  // nothing there yet
+
+  auto control = [&](int8_t op, int64_t id) {
+    cairn::lcmt_sim_control_request r{};
+    r.request_id = id;
+    r.requester = "mapping_integration_test";
+    r.op = op;
+    r.name = "box1";
+    r.shape = cairn::lcmt_sim_control_request::SHAPE_BOX;
+    r.size_m[0] = r.size_m[1] = r.size_m[2] = 0.25;
+    r.position_m[0] = 4.5;
+    r.position_m[1] = 3.0;
+    r.position_m[2] = 0.25;
+    bus.Publish("SIM.CONTROL", r);
+    return WaitFor(
+        [&] {
+          auto reply = bus.Last<cairn::lcmt_sim_control_reply>("SIM.CONTROL_REPLY");
+          return reply && reply->request_id == id &&
+                 reply->status == cairn::lcmt_sim_control_reply::STATUS_OK;
+        },
+        10.0, pump);
+  };
+  ASSERT_TRUE(control(cairn::lcmt_sim_control_request::OP_SPAWN, 1));
+  EXPECT_TRUE(WaitFor([&] { return short_term() >= 90.f; }, 30.0, pump))
+      << "short-term at the box: " << short_term();
+  ASSERT_TRUE(control(cairn::lcmt_sim_control_request::OP_REMOVE, 2));
+  const float at_removal = short_term();
+  EXPECT_TRUE(WaitFor([&] { return short_term() <= 10.f; }, 40.0, pump))
+      << "short-term at the removed box: " << short_term() << " (was " << at_removal << ")";
+
+  // OP_CLEAR_SHORT_TERM makes the layer unknown again (away from the laser's current view).
+  cairn::lcmt_map_control_request clear{};
+  clear.request_id = 5;
+  clear.requester = "mapping_integration_test";
+  clear.op = cairn::lcmt_map_control_request::OP_CLEAR_SHORT_TERM;
+  bus.Publish("kobuki.MAP.CONTROL", clear);
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        auto r = bus.Last<cairn::lcmt_map_control_reply>("kobuki.MAP.CONTROL_REPLY");
+        return r && r->request_id == 5 && r->status == cairn::lcmt_map_control_reply::STATUS_OK;
+      },
+      10.0, pump));
 }
 
 }  // namespace

@@ -87,15 +87,15 @@ TEST(MapstoreCliTest, ExportToYamlPgmAndImportBackKeepsTheTrinaryCells) {
   auto raw_map = io::ReadRosMap(out + "/raw.yaml");
   ASSERT_TRUE(raw_map.ok());
   EXPECT_TRUE(SameLayer(raw_map->occupancy, occ));
-  CliResult png = RunCli(procs, {"export", "--db", db, "--site", "lab", "--map", "flat",
-                                 "--format", "png", "--out", out});
+  CliResult png = RunCli(procs, {"export", "--db", db, "--site", "lab", "--map", "flat", "--format",
+                                 "png", "--out", out});
   ASSERT_EQ(png.exit_code, 0) << png.output;
   EXPECT_TRUE(fs::exists(out + "/flat_v1_elevation.png"));
-  CliResult csv = RunCli(procs, {"export", "--db", db, "--site", "lab", "--map", "flat",
-                                 "--format", "csv", "--out", out});
+  CliResult csv = RunCli(procs, {"export", "--db", db, "--site", "lab", "--map", "flat", "--format",
+                                 "csv", "--out", out});
   ASSERT_EQ(csv.exit_code, 0) << csv.output;
-  CliResult diff = RunCli(procs, {"diff", "--db", db, "--site", "lab", "--map", "flat", "--map-b",
-                                  "drawn"});
+  CliResult diff =
+      RunCli(procs, {"diff", "--db", db, "--site", "lab", "--map", "flat", "--map-b", "drawn"});
   EXPECT_EQ(diff.exit_code, 1) << diff.output;
   EXPECT_NE(diff.output.find("static"), std::string::npos);
 }
@@ -107,8 +107,8 @@ TEST(MapstoreCliTest, ExportsNeverWriteOutsideTheTargetFolder) {
   const std::string out = procs.dir() + "/export";
   fs::create_directories(out);
   fs::create_symlink(procs.dir() + "/victim.pgm", out + "/flat_v1_static.pgm");
-  CliResult through_link = RunCli(procs, {"export", "--db", db, "--site", "lab", "--map", "flat",
-                                          "--out", out});
+  CliResult through_link =
+      RunCli(procs, {"export", "--db", db, "--site", "lab", "--map", "flat", "--out", out});
   EXPECT_EQ(through_link.exit_code, 1);
   EXPECT_NE(through_link.output.find("symlink"), std::string::npos) << through_link.output;
   EXPECT_FALSE(fs::exists(procs.dir() + "/victim.pgm"));
@@ -159,9 +159,9 @@ TEST(MapstoreCliTest, CheckRefusesForeignFilesAndFindsDamage) {
 
 TEST(MapstoreCliTest, EveryCommandPrintsHelp) {
   ProcessSet procs(cairn::testing::PrivateLcmUrl());
-  for (const char* command : {"list", "show", "export", "import", "share", "diff", "check",
-                              "vacuum", "migrate", "profiles", "put-profile", "delete", "audit",
-                              "places"}) {
+  for (const char* command :
+       {"list", "show", "export", "import", "share", "diff", "check", "vacuum", "migrate",
+        "profiles", "put-profile", "delete", "audit", "places"}) {
     CliResult r = RunCli(procs, {command, "--help"});
     EXPECT_EQ(r.exit_code, 0) << command;
     EXPECT_NE(r.output.find(std::string("cairn-map ") + command), std::string::npos) << r.output;
@@ -197,12 +197,14 @@ TEST(MapstoreCliTest, ShareAndDiffUnderTwoProfiles) {
     ASSERT_TRUE((*store)->PutProfile(ShippedProfile("pioneer3at"), {"cli-test", 0, 0}).ok());
     ASSERT_TRUE((*store)->PutProfile(ShippedProfile("rover"), {"cli-test", 0, 0}).ok());
   }
-  CliResult share = RunCli(procs, {"share", "--db", db, "--site", "lab", "--map", "hill",
-                                   "--profile", "rover"}, 120.0);
+  CliResult share = RunCli(
+      procs, {"share", "--db", db, "--site", "lab", "--map", "hill", "--profile", "rover"}, 120.0);
   ASSERT_EQ(share.exit_code, 0) << share.output;
   EXPECT_NE(share.output.find("derived and cached"), std::string::npos) << share.output;
-  CliResult diff = RunCli(procs, {"diff", "--db", db, "--site", "lab", "--map", "hill",
-                                  "--profile-a", "pioneer3at", "--profile-b", "rover"}, 120.0);
+  CliResult diff = RunCli(procs,
+                          {"diff", "--db", db, "--site", "lab", "--map", "hill", "--profile-a",
+                           "pioneer3at", "--profile-b", "rover"},
+                          120.0);
   EXPECT_EQ(diff.exit_code, 1) << diff.output;
   EXPECT_NE(diff.output.find("cost/pioneer3at"), std::string::npos) << diff.output;
   CliResult show = RunCli(procs, {"show", "--db", db, "--site", "lab", "--map", "hill"});

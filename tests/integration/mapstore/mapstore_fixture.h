@@ -3,8 +3,6 @@
 // Helpers for the map store integration tests: real cairn-mapstore and cairn-map processes on a
 // private bus.
 
-#include <sys/wait.h>
-
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -13,8 +11,10 @@
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
+#include <sys/wait.h>
 
 #include "cairn/lcmt_mapstore_request.hpp"
+
 #include "common/layers.h"
 #include "common/robot_profile.h"
 #include "mapstore/map_store.h"
@@ -145,8 +145,8 @@ inline ::testing::AssertionResult SameLayer(const common::Layer& a, const common
     for (int ix = 0; ix < a.rows(); ++ix) {
       const float x = a(ix, iy), y = b(ix, iy);
       if (!(std::isnan(x) && std::isnan(y)) && x != y) {
-        return ::testing::AssertionFailure() << "cell (" << ix << ", " << iy << "): " << x
-                                             << " != " << y;
+        return ::testing::AssertionFailure()
+               << "cell (" << ix << ", " << iy << "): " << x << " != " << y;
       }
     }
   }

@@ -1,13 +1,12 @@
 // Safety of the stored maps under real processes: SIGKILL during saves, concurrent savers with a
 // reader, and concurrent pushes to one service.
 
-#include <signal.h>
-
 #include <atomic>
 #include <chrono>
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include "mapstore/sqlite_map_store.h"
 #include "tests/integration/mapstore/mapstore_fixture.h"
@@ -87,8 +86,9 @@ TEST(MapstoreSafetyTest, SigkillDuringSaves50TimesKeepsTheLastCommittedVersion) 
     const float offset = OffsetOf(*map);
     EXPECT_GE(offset, 1.f);
     EXPECT_LE(offset, static_cast<float>(i + 1));
-    EXPECT_TRUE(SameLayer(map->at(layers::kElevation),
-                          TerrainSnapshot("lab", "field", 260, 240, offset).base.at(layers::kElevation)))
+    EXPECT_TRUE(
+        SameLayer(map->at(layers::kElevation),
+                  TerrainSnapshot("lab", "field", 260, 240, offset).base.at(layers::kElevation)))
         << "iteration " << i;
     if (latest > last_known) last_known = latest;  // committed though unacknowledged
   }
@@ -106,8 +106,7 @@ TEST(MapstoreSafetyTest, TwoSaversAndOneReaderOnOneDatabase) {
                                          cairn::testing::PrivateLcmUrl(),
                                          cairn::testing::PrivateLcmUrl()};
   for (size_t i = 0; i < urls.size(); ++i) {
-    procs.StartRaw("cairn-mapstore",
-                   {BinPath("cairn-mapstore"), "--db", db, "--lcm-url", urls[i]});
+    procs.StartRaw("cairn-mapstore", {BinPath("cairn-mapstore"), "--db", db, "--lcm-url", urls[i]});
   }
   constexpr int kSaves = 8;
   std::atomic<int> errors{0};
@@ -166,9 +165,9 @@ TEST(MapstoreSafetyTest, TwoSaversAndOneReaderOnOneDatabase) {
     for (int v = 1; v <= kSaves; ++v) {
       auto loaded = client.Load("lab", name, v, "", {"elevation"});
       ASSERT_TRUE(loaded.ok()) << loaded.status().ToString();
-      EXPECT_TRUE(SameLayer(loaded->layers.at("elevation"),
-                            TerrainSnapshot("lab", name, 300, 200, static_cast<float>(v - 1))
-                                .base.at("elevation")));
+      EXPECT_TRUE(SameLayer(
+          loaded->layers.at("elevation"),
+          TerrainSnapshot("lab", name, 300, 200, static_cast<float>(v - 1)).base.at("elevation")));
     }
   }
   const CliResult check = RunCli(procs, {"check", "--db", db});
@@ -207,9 +206,9 @@ TEST(MapstoreSafetyTest, TwoMappersPushToOneServiceAtOnce) {
     ASSERT_EQ(list->num_maps, kSaves) << name;
     auto last = client.Load("lab", name, kSaves, "", {"elevation"});
     ASSERT_TRUE(last.ok());
-    EXPECT_TRUE(SameLayer(last->layers.at("elevation"),
-                          TerrainSnapshot("lab", name, 220, 180, 10.f * (kSaves - 1))
-                              .base.at("elevation")));
+    EXPECT_TRUE(SameLayer(
+        last->layers.at("elevation"),
+        TerrainSnapshot("lab", name, 220, 180, 10.f * (kSaves - 1)).base.at("elevation")));
   }
 }
 

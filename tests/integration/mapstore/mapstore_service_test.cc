@@ -1,17 +1,18 @@
 // cairn-mapstore as a real process on a private bus: push and pull saves, loads, lists, errors,
 // replays, bad input, read-only use, export and import.
 
-#include <signal.h>
-#include <sys/stat.h>
-
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
+#include <signal.h>
+#include <sys/stat.h>
 
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
+
 #include "common/channels.h"
 #include "services/runtime/tiler.h"
 #include "tests/integration/mapstore/mapstore_fixture.h"
@@ -55,13 +56,15 @@ int64_t Counter(const cairn::lcmt_health& h, const std::string& name) {
 class MapstoreServiceTest : public ::testing::Test {
  protected:
   MapstoreServiceTest()
-      : procs_(cairn::testing::PrivateLcmUrl()), lcm_(procs_.url()),
+      : procs_(cairn::testing::PrivateLcmUrl()),
+        lcm_(procs_.url()),
         client_(lcm_, "test-client", TestClientOptions()) {}
 
   ChildProcess& StartStore() {
     db_ = procs_.dir() + "/site.db";
-    ChildProcess& p = procs_.Start("cairn-mapstore",
-                                   {"--db", db_, "--files-root", procs_.dir() + "/files"});
+    ChildProcess& p = procs_.Start(
+        "cairn-mapstore", {"--db", db_, "--config", SourcePath("config/mapstore/mapstore.yaml"),
+                           "--files-root", procs_.dir() + "/files"});
     EXPECT_TRUE(WaitForStore(client_)) << "cairn-mapstore did not answer";
     return p;
   }
@@ -81,8 +84,8 @@ TEST_F(MapstoreServiceTest, PushSaveThenLoadGivesBackEverything) {
   EXPECT_EQ(saved->version, 1);
   EXPECT_EQ(saved->layers, (std::vector<std::string>{"elevation", "elevation_variance"}));
 
-  auto loaded = client_.Load("lab", "corridor", 0, "", {"elevation", "elevation_variance",
-                                                        "octomap"});
+  auto loaded =
+      client_.Load("lab", "corridor", 0, "", {"elevation", "elevation_variance", "octomap"});
   ASSERT_TRUE(loaded.ok()) << loaded.status().ToString();
   EXPECT_EQ(loaded->reply.version, 1);
   EXPECT_EQ(loaded->layers.geometry(), s.base.geometry());
@@ -237,12 +240,12 @@ TEST_F(MapstoreServiceTest, BadInputIsCountedAndNeverCrashesTheService) {
 TEST_F(MapstoreServiceTest, ReadOnlyUseNeverChangesTheDatabase) {
   {
     ChildProcess& writer = StartStore();
-    ASSERT_EQ(client_.Call(PutProfileRequest(ShippedProfile("pioneer3at")))->status,
-              kStatusOk);
+    ASSERT_EQ(client_.Call(PutProfileRequest(ShippedProfile("pioneer3at")))->status, kStatusOk);
     ASSERT_EQ(client_.Call(PutProfileRequest(ShippedProfile("rover")))->status, kStatusOk);
-    ASSERT_EQ(client_.Save(WithObstaclesAndOctomap(TerrainSnapshot("lab", "corridor", 80, 60, 0.f)))
-                  ->status,
-              kStatusOk);
+    ASSERT_EQ(
+        client_.Save(WithObstaclesAndOctomap(TerrainSnapshot("lab", "corridor", 80, 60, 0.f)))
+            ->status,
+        kStatusOk);
     // A clean stop (SIGTERM) exits 0.
     const int status = writer.Stop();
     ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "exit status " << status;
@@ -285,7 +288,10 @@ class FakeMapper {
  public:
   FakeMapper(lcm::LCM& lcm, std::string robot, common::GridMap map,
              common::ObstacleRegistry obstacles)
-      : lcm_(lcm), robot_(std::move(robot)), map_(std::move(map)), obstacles_(std::move(obstacles)),
+      : lcm_(lcm),
+        robot_(std::move(robot)),
+        map_(std::move(map)),
+        obstacles_(std::move(obstacles)),
         tiler_(robot_, "live") {
     subs_.push_back(lcm_.subscribe(channels::ForRobot(robot_, channels::kMapControl),
                                    &FakeMapper::OnControl, this));
@@ -298,10 +304,9 @@ class FakeMapper {
   void PublishAll() {
     for (const std::string& layer : map_.layer_names()) {
       const bool occupancy = layer == layers::kOccupancy;
-      auto batch = tiler_.Update(map_, layer,
-                                 occupancy ? runtime::TileEncoding::kOccupancy
-                                           : runtime::TileEncoding::kFloat,
-                                 1, true);
+      auto batch = tiler_.Update(
+          map_, layer,
+          occupancy ? runtime::TileEncoding::kOccupancy : runtime::TileEncoding::kFloat, 1, true);
       lcm_.publish(channels::ForRobot(robot_, channels::kMapManifest), &batch.manifest);
       for (const auto& t : batch.tiles) {
         // The first round loses a tile of the elevation, as UDP may.
@@ -334,7 +339,8 @@ class FakeMapper {
     ++resends_;
     auto batch = tiler_.Resend(*m);
     lcm_.publish(channels::ForRobot(robot_, channels::kMapManifest), &batch.manifest);
-    for (const auto& t : batch.tiles) lcm_.publish(channels::ForRobot(robot_, channels::kMapTiles), &t);
+    for (const auto& t : batch.tiles)
+      lcm_.publish(channels::ForRobot(robot_, channels::kMapTiles), &t);
     for (const auto& t : batch.occupancy_tiles) {
       lcm_.publish(channels::ForRobot(robot_, channels::kMapOccupancy), &t);
     }
@@ -414,6 +420,19 @@ TEST_F(MapstoreServiceTest, ExportAndImportStayInTheFilesFolder) {
   Request absolute = imp;
   absolute.path = "/etc/passwd";
   EXPECT_EQ(client_.Call(absolute)->status, kStatusInvalid);
+}
+
+TEST_F(MapstoreServiceTest, ABadConfigIsRefusedNamingFileAndLine) {
+  const std::string config = procs_.dir() + "/bad.yaml";
+  std::ofstream(config) << "service:\n  save_timeout_s: 3\n  tiles_per_bust: 4\n";
+  ChildProcess& p =
+      procs_.Start("cairn-mapstore", {"--db", procs_.dir() + "/x.db", "--config", config});
+  auto status = p.WaitExit(10.0);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(WEXITSTATUS(*status), 2);
+  EXPECT_NE(p.Log().find("bad.yaml:3"), std::string::npos) << p.Log();
+  EXPECT_NE(p.Log().find("tiles_per_bust"), std::string::npos) << p.Log();
+  EXPECT_FALSE(fs::exists(procs_.dir() + "/x.db"));
 }
 
 }  // namespace

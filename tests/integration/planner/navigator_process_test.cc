@@ -4,9 +4,9 @@
 
 #include <csignal>
 #include <fstream>
-#include <sys/wait.h>
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include "cairn/lcmt_goal.hpp"
 #include "cairn/lcmt_grid_manifest.hpp"
@@ -17,6 +17,7 @@
 #include "cairn/lcmt_sim_clock.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
+
 #include "common/channels.h"
 #include "common/grid_map.h"
 #include "common/layers.h"
@@ -90,9 +91,10 @@ class FakeWorld {
       if (collisions_++ % 20 == 0) {
         auto c = bus_.Last<cairn::lcmt_velocity_command>(ch::ForRobot("r1", ch::kCmdVel));
         auto st = Status();
-        std::fprintf(stderr, "collision at t=%.2f: (%.2f, %.2f, %.2f) cmd (%.2f, %.2f) state %d: %s\n", t,
-                     pose_.x_m, pose_.y_m, pose_.yaw_rad, c ? c->linear_mps : 0.0,
-                     c ? c->angular_radps : 0.0, st ? st->state : -1, st ? st->message.c_str() : "");
+        std::fprintf(
+            stderr, "collision at t=%.2f: (%.2f, %.2f, %.2f) cmd (%.2f, %.2f) state %d: %s\n", t,
+            pose_.x_m, pose_.y_m, pose_.yaw_rad, c ? c->linear_mps : 0.0,
+            c ? c->angular_radps : 0.0, st ? st->state : -1, st ? st->message.c_str() : "");
       }
     }
     sim_utime_ = 1'000'000 + static_cast<int64_t>(t * 1e6);
@@ -102,7 +104,8 @@ class FakeWorld {
     if (publish_pose_) {
       common::Pose3 p;
       p.position_m = {pose_.x_m, pose_.y_m, 0.0};
-      p.orientation = common::Quaternion(Eigen::AngleAxisd(pose_.yaw_rad, Eigen::Vector3d::UnitZ()));
+      p.orientation =
+          common::Quaternion(Eigen::AngleAxisd(pose_.yaw_rad, Eigen::Vector3d::UnitZ()));
       bus_.Publish(ch::ForRobot("r1", ch::kPose), runtime::ToLcmPose(p, sim_utime_, "r1", "world"));
     }
     // Answer the navigator's requests for tiles it missed (it starts after the first batch).
@@ -111,13 +114,14 @@ class FakeWorld {
       cairn::lcmt_tile_resend_request r;
       const auto& bytes = resends[resends_answered_];
       if (r.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0) continue;
-      for (const auto& tile : tiler_.Resend(r).tiles) bus_.Publish(ch::ForRobot("r1", ch::kMapTiles), tile);
+      for (const auto& tile : tiler_.Resend(r).tiles)
+        bus_.Publish(ch::ForRobot("r1", ch::kMapTiles), tile);
     }
     if (publish_map_ && t - last_map_t_ >= 0.2) {
       last_map_t_ = t;
       last_map_utime_ = sim_utime_;
-      auto batch = tiler_.Update(map_, layers::CostLayer("pioneer3at"), runtime::TileEncoding::kFloat,
-                                 sim_utime_);
+      auto batch = tiler_.Update(map_, layers::CostLayer("pioneer3at"),
+                                 runtime::TileEncoding::kFloat, sim_utime_);
       for (const auto& tile : batch.tiles) bus_.Publish(ch::ForRobot("r1", ch::kMapTiles), tile);
       bus_.Publish(ch::ForRobot("r1", ch::kMapManifest), batch.manifest);
     }
@@ -169,7 +173,8 @@ TEST(NavigatorProcessTest, DrivesThroughTheGapAndStopsWhenTheMapGoesStale) {
   ProcessSet procs(url);
   FakeWorld world(url);
   auto& nav = procs.Start("cairn-navigator", {"--robot", "r1", "--profile", "pioneer3at"});
-  ASSERT_TRUE(world.RunUntil([&] { return world.bus_.Health("cairn-navigator", "r1").has_value(); }, 10.0));
+  ASSERT_TRUE(
+      world.RunUntil([&] { return world.bus_.Health("cairn-navigator", "r1").has_value(); }, 10.0));
 
   world.SendGoal(1, 13.0, 2.0);
   ASSERT_TRUE(world.RunUntil([&] { return world.StatusIs(kStateReached); }, 90.0))
@@ -195,16 +200,19 @@ TEST(NavigatorProcessTest, DrivesThroughTheGapAndStopsWhenTheMapGoesStale) {
   // Drive back; on the way the map stops arriving: within 0.5 s of sim time past the cost
   // layer's age limit the robot is commanded to stop, and the status says why.
   world.SendGoal(2, 2.0, 2.0);
-  ASSERT_TRUE(world.RunUntil([&] {
-    auto c = world.bus_.Last<cairn::lcmt_velocity_command>(ch::ForRobot("r1", ch::kCmdVel));
-    return world.StatusIs(kStateDriving) && c && std::abs(c->linear_mps) > 0.2;
-  }, 30.0));
+  ASSERT_TRUE(world.RunUntil(
+      [&] {
+        auto c = world.bus_.Last<cairn::lcmt_velocity_command>(ch::ForRobot("r1", ch::kCmdVel));
+        return world.StatusIs(kStateDriving) && c && std::abs(c->linear_mps) > 0.2;
+      },
+      30.0));
   world.publish_map_ = false;
   const int64_t last_map = world.last_map_utime_;
   ASSERT_TRUE(world.RunUntil([&] { return world.StatusIs(kStateStopped); }, 5.0));
   const auto stopped = *world.Status();
   EXPECT_EQ(stopped.reason, kReasonStaleMap);
-  const auto stop_cmd = world.bus_.Last<cairn::lcmt_velocity_command>(ch::ForRobot("r1", ch::kCmdVel));
+  const auto stop_cmd =
+      world.bus_.Last<cairn::lcmt_velocity_command>(ch::ForRobot("r1", ch::kCmdVel));
   ASSERT_TRUE(stop_cmd.has_value());
   EXPECT_EQ(stop_cmd->linear_mps, 0.0);
   EXPECT_EQ(stop_cmd->angular_radps, 0.0);

@@ -18,6 +18,7 @@
 #include "cairn/lcmt_sim_control_reply.hpp"
 #include "cairn/lcmt_sim_control_request.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
+
 #include "common/channels.h"
 #include "common/robot_profile.h"
 #include "planner/footprint.h"
@@ -70,8 +71,9 @@ std::vector<Vector2> Box(double x0, double y0, double x1, double y1) {
 class NavigatorStackTest : public ::testing::Test {
  protected:
   NavigatorStackTest() : url_(testing::PrivateLcmUrl()), procs_(url_), bus_(url_) {
-    footprint_ = common::LoadRobotProfileFile(testing::SourcePath("config/profiles/pioneer3at.yaml"))
-                     .footprint_m;
+    footprint_ =
+        common::LoadRobotProfileFile(testing::SourcePath("config/profiles/pioneer3at.yaml"))
+            .footprint_m;
     bus_.Keep(ch::ForRobot(kRobot, ch::kPose));
     bus_.Keep(ch::ForRobot(kRobot, ch::kCmdVel));
     bus_.Keep(ch::ForRobot(kRobot, ch::kMapManifest));
@@ -84,8 +86,10 @@ class NavigatorStackTest : public ::testing::Test {
     std::stringstream text;
     text << in.rdbuf();
     std::string yaml = text.str();
-    yaml = std::regex_replace(yaml, std::regex("\\npublish_period_s: [0-9.]+"), "\npublish_period_s: 0.2");
-    yaml = std::regex_replace(yaml, std::regex("\\nprofiles: \\[[^\\]]*\\]"), "\nprofiles: [pioneer3at]");
+    yaml = std::regex_replace(yaml, std::regex("\\npublish_period_s: [0-9.]+"),
+                              "\npublish_period_s: 0.2");
+    yaml = std::regex_replace(yaml, std::regex("\\nprofiles: \\[[^\\]]*\\]"),
+                              "\nprofiles: [pioneer3at]");
     const std::string path = procs_.dir() + "/mapper.yaml";
     std::ofstream(path) << yaml;
     return path;
@@ -94,7 +98,8 @@ class NavigatorStackTest : public ::testing::Test {
   void StartStack(double x, double y, double yaw_deg) {
     std::ostringstream robot;
     robot << kRobot << ":pioneer3at:pioneer3at:" << x << "," << y << "," << yaw_deg;
-    sim_ = &procs_.Start("cairn-sim", {"--world", "tunnel", "--robot", robot.str(), "--speed", "1"});
+    sim_ =
+        &procs_.Start("cairn-sim", {"--world", "tunnel", "--robot", robot.str(), "--speed", "1"});
     mapper_ = &procs_.Start("cairn-mapper", {"--robot", kRobot, "--config", MapperConfig()});
     nav_ = &procs_.Start("cairn-navigator", {"--robot", kRobot, "--profile", "pioneer3at"});
     // Ready when the cost layer is on the bus and the navigator reports.
@@ -117,6 +122,19 @@ class NavigatorStackTest : public ::testing::Test {
     return false;
   }
 
+  // Highest layer version of the cost layer seen so far.
+  int64_t CostVersion() {
+    int64_t v = 0;
+    for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kMapManifest))) {
+      cairn::lcmt_grid_manifest m;
+      if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) >= 0 &&
+          m.layer == "cost/pioneer3at") {
+        v = std::max(v, m.layer_version);
+      }
+    }
+    return v;
+  }
+
   void SendGoal(int64_t id, double x, double y) {
     cairn::lcmt_goal g{};
     g.robot = kRobot;
@@ -130,10 +148,12 @@ class NavigatorStackTest : public ::testing::Test {
     return bus_.Last<cairn::lcmt_nav_status>(ch::ForRobot(kRobot, ch::kNavStatus));
   }
   bool WaitState(int state, double timeout_s) {
-    return WaitFor([&] {
-      auto s = Status();
-      return s && s->state == state;
-    }, timeout_s, [&] { bus_.Pump(20); });
+    return WaitFor(
+        [&] {
+          auto s = Status();
+          return s && s->state == state;
+        },
+        timeout_s, [&] { bus_.Pump(20); });
   }
   std::string StatusText() {
     auto s = Status();
@@ -167,11 +187,13 @@ class NavigatorStackTest : public ::testing::Test {
     r.requester = "navigator_stack_test";
     bus_.Publish(ch::kSimControl, r);
     std::optional<cairn::lcmt_sim_control_reply> reply;
-    WaitFor([&] {
-      auto m = bus_.Last<cairn::lcmt_sim_control_reply>(ch::kSimControlReply);
-      if (m && m->request_id == r.request_id) reply = m;
-      return reply.has_value();
-    }, 10.0, [&] { bus_.Pump(20); });
+    WaitFor(
+        [&] {
+          auto m = bus_.Last<cairn::lcmt_sim_control_reply>(ch::kSimControlReply);
+          if (m && m->request_id == r.request_id) reply = m;
+          return reply.has_value();
+        },
+        10.0, [&] { bus_.Pump(20); });
     return reply;
   }
 
@@ -196,15 +218,120 @@ TEST_F(NavigatorStackTest, ReachesTheGoalBehindTheCubeWithoutTouchingIt) {
   // Ground truth: the footprint never touched the 1 m cube (x 9..10, y 1.5..2.5) nor a lane
   // wall (y = 0 and y = 4, 0.2 m thick).
   const auto cube = Box(9.0, 1.5, 10.0, 2.5);
-  double min_x = 1e9;
   for (const auto& p : poses) {
     const auto fp = FootprintAt(ToPose2(p));
     ASSERT_FALSE(ConvexOverlap(fp, cube, 0.0)) << "touched the cube at x " << p.position_m[0];
     ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, -0.1, 24.0, 0.1), 0.0)) << "touched the south wall";
     ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, 3.9, 24.0, 4.1), 0.0)) << "touched the lane wall";
-    min_x = std::min(min_x, p.position_m[0]);
   }
-  EXPECT_GT(min_x, 3.5);
+}
+
+TEST_F(NavigatorStackTest, ClimbsTheFiveDegreeRampToItsTop) {
+  StartStack(4.0, 6.0, 0.0);
+  SendGoal(2, 14.0, 6.0);
+  ASSERT_TRUE(WaitState(kStateReached, 100.0)) << StatusText();
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  // On the platform at the top: x 14, z 0.3 (the base's height above the deck it stands on).
+  const auto& last = poses.back();
+  EXPECT_LT(std::hypot(last.position_m[0] - 14.0, last.position_m[1] - 6.0), 0.5);
+  const double start_z = poses.front().position_m[2];
+  EXPECT_NEAR(last.position_m[2] - start_z, 0.3, 0.05);
+}
+
+TEST_F(NavigatorStackTest, ReportsNoPathOverTheTenDegreeRampAndNeverDrivesOntoIt) {
+  StartStack(4.0, 10.0, 0.0);
+  // Let the mapper integrate a few revolutions (the ramp in view) before asking.
+  ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
+  SendGoal(3, 14.0, 10.0);
+  ASSERT_TRUE(WaitState(kStateFailed, 110.0)) << StatusText();
+  EXPECT_EQ(Status()->reason, kReasonNoPath) << StatusText();
+  // Ground truth: the footprint never reached the ramp (x >= 8.0) and the base never rose.
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  const double start_z = poses.front().position_m[2];
+  for (const auto& p : poses) {
+    const auto fp = FootprintAt(ToPose2(p));
+    ASSERT_FALSE(ConvexOverlap(fp, Box(8.0, 8.1, 24.0, 11.9), 0.0))
+        << "on the ramp at x " << p.position_m[0];
+    ASSERT_LT(p.position_m[2] - start_z, 0.02);
+  }
+}
+
+TEST_F(NavigatorStackTest, ReplansAroundAnObjectSpawnedOnItsPathAndArrives) {
+  StartStack(4.0, 18.0, 0.0);  // lane 4: open floor, a 1 cm plate from x = 10 (traversable)
+  SendGoal(4, 14.0, 18.0);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        const auto poses = Poses();
+        return !poses.empty() && poses.back().position_m[0] > 5.5;
+      },
+      60.0, [&] { bus_.Pump(20); }))
+      << StatusText();
+  // A 0.8 m crate appears across the straight route ahead.
+  cairn::lcmt_sim_control_request spawn{};
+  spawn.op = cairn::lcmt_sim_control_request::OP_SPAWN;
+  spawn.name = "crate";
+  spawn.shape = cairn::lcmt_sim_control_request::SHAPE_BOX;
+  spawn.size_m[0] = 0.4;
+  spawn.size_m[1] = 0.4;
+  spawn.size_m[2] = 0.4;
+  spawn.position_m[0] = 10.0;
+  spawn.position_m[1] = 18.0;
+  spawn.position_m[2] = 0.42;
+  const auto reply = SimControl(spawn);
+  ASSERT_TRUE(reply.has_value());
+  ASSERT_EQ(reply->status, +cairn::lcmt_sim_control_reply::STATUS_OK) << reply->message;
+  ASSERT_TRUE(WaitState(kStateReached, 100.0)) << StatusText();
+  EXPECT_GE(Status()->replans, 1);
+  const auto crate = Box(9.6, 17.6, 10.4, 18.4);
+  for (const auto& p : Poses()) {
+    ASSERT_FALSE(ConvexOverlap(FootprintAt(ToPose2(p)), crate, 0.0))
+        << "touched the crate at x " << p.position_m[0] << ", y " << p.position_m[1];
+  }
+}
+
+TEST_F(NavigatorStackTest, StopsWithinHalfASecondOfSimTimeWhenTheMapperStops) {
+  StartStack(4.0, 38.0, 0.0);  // lane 9, the demo route
+  SendGoal(5, 21.0, 38.0);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        auto c = bus_.Last<cairn::lcmt_velocity_command>(ch::ForRobot(kRobot, ch::kCmdVel));
+        auto s = Status();
+        return s && s->state == kStateDriving && c && c->linear_mps > 0.2;
+      },
+      60.0, [&] { bus_.Pump(20); }))
+      << StatusText();
+  mapper_->Signal(SIGKILL);
+  ASSERT_TRUE(mapper_->WaitExit(5.0).has_value());
+  ASSERT_TRUE(WaitState(kStateStopped, 10.0)) << StatusText();
+  EXPECT_EQ(Status()->reason, kReasonStaleMap);
+  // The newest map message before the stop, and the first zero command after it (sim time).
+  int64_t last_map = 0;
+  for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kMapManifest))) {
+    cairn::lcmt_grid_manifest m;
+    if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) >= 0)
+      last_map = std::max(last_map, m.utime);
+  }
+  int64_t stop_utime = -1;
+  for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kCmdVel))) {
+    cairn::lcmt_velocity_command c;
+    if (c.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0) continue;
+    if (c.utime > last_map && c.linear_mps == 0.0 && c.angular_radps == 0.0) {
+      stop_utime = c.utime;
+      break;
+    }
+  }
+  ASSERT_GT(stop_utime, 0);
+  EXPECT_LE(stop_utime - last_map, 500'000 + 100'000)
+      << "stopped " << (stop_utime - last_map) / 1e3 << " ms of sim time after the last map";
+  // And the robot really stops: its ground-truth speed falls to zero.
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        auto p = bus_.Last<cairn::lcmt_pose>(ch::ForRobot(kRobot, ch::kPose));
+        return p && std::hypot(p->linear_velocity_mps[0], p->linear_velocity_mps[1]) < 0.02;
+      },
+      3.0, [&] { bus_.Pump(20); }));
 }
 
 }  // namespace

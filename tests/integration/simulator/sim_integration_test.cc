@@ -409,14 +409,15 @@ TEST(SimIntegrationTest, SameSeedAtMaxSpeedRepeatsTheRun) {
   const std::string scenario = WriteFile(procs.dir(), "repeat.yaml", R"(
 world: tunnel
 seed: 5
+clock_rate_hz: 10  # at full speed 100 per simulated second would flood the test's bus
 robots:
   - id: r
     model: pioneer3at
     spawn: {x_m: 4.0, y_m: 2.3, yaw_deg: 0}
     sensors:
-      planar_laser: {}
+      planar_laser: {rate_hz: 5}
       odometry: {slip_noise_ratio: 0.05}
-      ground_truth: {}
+      ground_truth: {rate_hz: 10}
     commands:
       - {at_s: 0.0, duration_s: 12.0, linear_mps: 0.5, angular_radps: 0.05}
       - {at_s: 12.0, duration_s: 4.0, linear_mps: -0.2, angular_radps: 0.6}
@@ -477,7 +478,8 @@ robots:
     }
     moved = std::max(moved, std::hypot(pa.position_m[0] - 4.0, pa.position_m[1] - 2.3));
   }
-  EXPECT_GT(compared, 200);
+  // At full speed UDP may drop some messages; every pair received from both runs must match.
+  EXPECT_GT(compared, 80);
   EXPECT_GT(moved, 3.0);  // it really drove (into the cube)
   // Physics does not depend on the seed; sensor noise does.
   int same_pose = 0;
@@ -485,7 +487,7 @@ robots:
     auto it = c.find(utime);
     if (it != c.end() && pa.position_m[0] == it->second.position_m[0]) ++same_pose;
   }
-  EXPECT_GT(same_pose, 200);
+  EXPECT_GT(same_pose, 80);
   const auto sa = scans(*runs[0].bus), sb = scans(*runs[1].bus), sc = scans(*runs[2].bus);
   int same_seed_equal = 0, other_seed_equal = 0, both = 0;
   for (const auto& [utime, ra] : sa) {
@@ -500,7 +502,7 @@ robots:
     if (same(ra, ib->second)) ++same_seed_equal;
     if (same(ra, ic->second)) ++other_seed_equal;
   }
-  EXPECT_GT(both, 20);
+  EXPECT_GT(both, 30);
   EXPECT_EQ(same_seed_equal, both);
   EXPECT_EQ(other_seed_equal, 0);
 }

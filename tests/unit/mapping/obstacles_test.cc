@@ -65,9 +65,8 @@ GridMap Corridor(const std::function<double(double)>& feature, int nx = 80) {
 // the P3-AT (8 deg), crossable for the rover (12 deg).
 TEST(ObstaclesTest, TenDegreeRampSplitsThePioneerAndTheRover) {
   const double t = std::tan(10 * kDeg);
-  const common::ObstacleRegistry r = Extract(Corridor([t](double x) {
-    return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t);
-  }));
+  const common::ObstacleRegistry r = Extract(
+      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); }));
   const auto ramps = OfKind(r, ObstacleKind::kRamp);
   ASSERT_EQ(ramps.size(), 1u);
   const Obstacle& ramp = *ramps[0];
@@ -87,9 +86,8 @@ TEST(ObstaclesTest, TenDegreeRampSplitsThePioneerAndTheRover) {
 
 TEST(ObstaclesTest, FiveDegreeRampIsCrossableForBoth) {
   const double t = std::tan(5 * kDeg);
-  const common::ObstacleRegistry r = Extract(Corridor([t](double x) {
-    return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t);
-  }));
+  const common::ObstacleRegistry r = Extract(
+      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); }));
   const auto ramps = OfKind(r, ObstacleKind::kRamp);
   ASSERT_EQ(ramps.size(), 1u);
   EXPECT_NEAR(ramps[0]->slope_rad / kDeg, 5.0, 0.3);
@@ -253,9 +251,8 @@ TEST(JudgeObstacleTest, LabelReplacesOnlyTheGivenProfiles) {
 // only where the terrain matters to them.
 TEST(DeriveTest, BaseMapUntouchedAndProfilesDifferOnlyOnTheRamp) {
   const double t = std::tan(10 * kDeg);
-  const GridMap base = Corridor([t](double x) {
-    return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t);
-  });
+  const GridMap base =
+      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); });
   const GridMap before = base;
   const DerivedLayers a = DeriveProfileLayers(base, ShippedProfile("pioneer3at"));
   const DerivedLayers b = DeriveProfileLayers(base, ShippedProfile("rover"));
@@ -296,9 +293,8 @@ TEST(DeriveTest, BaseMapUntouchedAndProfilesDifferOnlyOnTheRamp) {
 TEST(DeriveTest, ProfileChangeChangesTheVerdict) {
   // Seed 000 scenario 18: the rover edited to 9 deg no longer crosses the 10 deg ramp.
   const double t = std::tan(10 * kDeg);
-  const GridMap base = Corridor([t](double x) {
-    return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t);
-  });
+  const GridMap base =
+      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); });
   common::RobotProfile rover = ShippedProfile("rover");
   const std::string hash_before = rover.ContentHash();
   rover.max_slope_up_rad = 9 * kDeg;

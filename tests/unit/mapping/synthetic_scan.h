@@ -34,9 +34,9 @@ inline common::LidarSlice SyntheticRevolution(const common::Pose3& sensor,
   slice.max_range_m = lidar.max_range_m;
   const Eigen::Matrix3d r = sensor.orientation.toRotationMatrix();
   for (int ring = 0; ring < lidar.rings; ++ring) {
-    const double el = lidar.min_elevation_rad +
-                      (lidar.max_elevation_rad - lidar.min_elevation_rad) * ring /
-                          std::max(1, lidar.rings - 1);
+    const double el =
+        lidar.min_elevation_rad +
+        (lidar.max_elevation_rad - lidar.min_elevation_rad) * ring / std::max(1, lidar.rings - 1);
     for (int a = 0; a < lidar.azimuths; ++a) {
       const double az = 2 * M_PI * a / lidar.azimuths;
       const common::Vector3 dir_s(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),

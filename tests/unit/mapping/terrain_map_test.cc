@@ -83,8 +83,8 @@ TEST(ElevationFilterTest, LaserNoiseFollowsTheBeam) {
   EXPECT_NEAR(PointHeightVariance({0, 0, 0}, {5, 0, 0}, p), 0.0045 * 0.0045, 1e-12);
   // Grazing the ground at 45 deg: half of each.
   const double lat = 0.0015 + 0.0006 * std::sqrt(2.0);
-  EXPECT_NEAR(PointHeightVariance({0, 0, 1}, {1, 0, 0}, p),
-              0.5 * 0.018 * 0.018 + 0.5 * lat * lat, 1e-12);
+  EXPECT_NEAR(PointHeightVariance({0, 0, 1}, {1, 0, 0}, p), 0.5 * 0.018 * 0.018 + 0.5 * lat * lat,
+              1e-12);
 }
 
 TerrainMapParams Params() {
@@ -176,7 +176,8 @@ TEST(TerrainMapTest, TrenchSeenFromTheRimIsADitch) {
   lidar.rings = 32;
   lidar.azimuths = 720;
   for (int k = 0; k < 3; ++k) {
-    const common::LidarSlice scan = SyntheticRevolution(SensorAt(1.4 + 0.05 * k, 0.1, 0.33), ground, lidar, k);
+    const common::LidarSlice scan =
+        SyntheticRevolution(SensorAt(1.4 + 0.05 * k, 0.1, 0.33), ground, lidar, k);
     map.Integrate(scan.points, scan.sensor_pose, k, k * 0.1);
   }
   RobotContext robot;
@@ -201,7 +202,8 @@ TEST(TerrainMapTest, TrenchSeenFromTheRimIsADitch) {
   const common::ObstacleRegistry registry = map.BuildRegistry();
   const common::Obstacle* front = nullptr;
   for (const auto& o : registry.obstacles) {
-    if (o.kind == common::ObstacleKind::kDitch && std::fabs(o.centroid_m.y() - 0.1) < 1.0) front = &o;
+    if (o.kind == common::ObstacleKind::kDitch && std::fabs(o.centroid_m.y() - 0.1) < 1.0)
+      front = &o;
   }
   ASSERT_NE(front, nullptr);
   EXPECT_GE(front->width_m, 0.35);
@@ -226,16 +228,17 @@ TEST(TerrainMapTest, LiveDerivedLayersEqualDerivingTheExport) {
   map.AddProfile(pioneer);
   const double t = std::tan(10 * kDeg);
   auto ground = [t](double x, double y) {
-    if (x >= 6.0 && x < 6.6) return -0.4;                    // trench
-    if (y > 3.0 && x > 2.0 && x < 3.0) return 0.2;           // block
-    return x < 8.0 ? 0.0 : std::min(3.0, x - 8.0) * t;       // ramp
+    if (x >= 6.0 && x < 6.6) return -0.4;               // trench
+    if (y > 3.0 && x > 2.0 && x < 3.0) return 0.2;      // block
+    return x < 8.0 ? 0.0 : std::min(3.0, x - 8.0) * t;  // ramp
   };
   SyntheticLidar lidar;
   lidar.rings = 24;
   lidar.azimuths = 540;
   for (int k = 0; k < 12; ++k) {
     const double x = 0.5 + 0.7 * k;
-    const common::LidarSlice scan = SyntheticRevolution(SensorAt(x, 1.0, 0.4 + ground(x, 1.0)), ground, lidar, k);
+    const common::LidarSlice scan =
+        SyntheticRevolution(SensorAt(x, 1.0, 0.4 + ground(x, 1.0)), ground, lidar, k);
     map.Integrate(scan.points, scan.sensor_pose, k, 0.1 * k);
     RobotContext robot;
     robot.xy_m = common::Vector2(x, 1.0);
@@ -248,9 +251,9 @@ TEST(TerrainMapTest, LiveDerivedLayersEqualDerivingTheExport) {
   RobotContext robot;
   robot.xy_m = common::Vector2(0.5 + 0.7 * 11, 1.0);
   ComputeCostLayer(&derived, pioneer, map.params().traversability, robot, CellRect::All(derived));
-  const GridMap live = map.Export({layers::kSlope, layers::kStepMax, layers::kRoughness,
-                                   layers::kDitchDepth, layers::kDitchWidth,
-                                   layers::CostLayer("pioneer3at")});
+  const GridMap live =
+      map.Export({layers::kSlope, layers::kStepMax, layers::kRoughness, layers::kDitchDepth,
+                  layers::kDitchWidth, layers::CostLayer("pioneer3at")});
   int64_t compared = 0, lethal = 0;
   for (const auto& name : live.layer_names()) {
     const common::Layer& a = live.at(name);

@@ -68,7 +68,8 @@ TEST(TraversabilityTest, NormalWindowSmallerThanACellGivesVerticalNormal) {
 
 TEST(TraversabilityTest, FewerThanThreePointsGiveVerticalNormal) {
   GridMap map = MakeTerrain(8, 8, kRes, [](double x, double y) {
-    const int ix = static_cast<int>(std::floor(x / kRes)), iy = static_cast<int>(std::floor(y / kRes));
+    const int ix = static_cast<int>(std::floor(x / kRes)),
+              iy = static_cast<int>(std::floor(y / kRes));
     if (iy == 4 && (ix == 4 || ix == 5)) return 0.1 * ix;  // two lonely cells, 10 cm apart
     return std::nan("");
   });
@@ -186,7 +187,8 @@ TEST(TraversabilityTest, ResolutionCouplesStepAndSlope) {
   steps_only.max_step_up_m = 0.03;
   GridMap nine = MakeTerrain(12, 12, kRes, Plane(9 * kDeg));
   ComputeCostLayer(&nine, steps_only, {});
-  ForInterior(nine, [&](int ix, int iy) { EXPECT_EQ(Cost(nine, "steps", ix, iy), layers::kCostLethal); });
+  ForInterior(nine,
+              [&](int ix, int iy) { EXPECT_EQ(Cost(nine, "steps", ix, iy), layers::kCostLethal); });
 
   GridMap eight3 = MakeTerrain(12, 12, kRes, Plane(8.3 * kDeg));
   ComputeCostLayer(&eight3, steps_only, {});
@@ -361,15 +363,15 @@ TEST(TraversabilityTest, UnseenTrenchIsADitch) {
 }
 
 TEST(TraversabilityTest, NarrowDitchIsBridgedByAWideEnoughRobot) {
-  GridMap map = TrenchMap(0.2, -0.2);  // one cell
+  GridMap map = TrenchMap(0.2, -0.2);                                 // one cell
   const common::RobotProfile pioneer = ShippedProfile("pioneer3at");  // 0.10 m
-  const common::RobotProfile rover = ShippedProfile("rover");          // 0.30 m
+  const common::RobotProfile rover = ShippedProfile("rover");         // 0.30 m
   ComputeCostLayer(&map, pioneer, {});
   ComputeCostLayer(&map, rover, {});
   EXPECT_NEAR(map.at(layers::kDitchWidth)(10, 6), 0.2, 1e-5);
   EXPECT_EQ(Cost(map, "pioneer3at", 10, 6), layers::kCostLethal);
   EXPECT_LT(Cost(map, "rover", 10, 6), layers::kCostLethal);
-  EXPECT_LT(Cost(map, "rover", 9, 6), layers::kCostLethal);  // no drop rule into a bridged gap
+  EXPECT_LT(Cost(map, "rover", 9, 6), layers::kCostLethal);       // no drop rule into a bridged gap
   EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);  // drop of 0.2 m > 0.1 m
 }
 
@@ -406,9 +408,8 @@ TEST(TraversabilityTest, SeenBottomJoinsTheDitchButGroundAtRimLevelDoesNot) {
 
 TEST(TraversabilityTest, DropIntoAnUnseenGapIsAStepDown) {
   // A platform 0.3 m high ends at x = 2; beyond it nothing was seen, but rays went down to 0.
-  GridMap map = MakeTerrain(30, 12, kRes, [](double x, double) {
-    return x < 2.0 ? 0.3 : std::nan("");
-  });
+  GridMap map =
+      MakeTerrain(30, 12, kRes, [](double x, double) { return x < 2.0 ? 0.3 : std::nan(""); });
   Layer& b = map.AddLayer(layers::kGroundBound);
   for (int ix = 10; ix < 30; ++ix) {
     for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.0f;
@@ -453,16 +454,18 @@ TEST(TraversabilityTest, WindowWithMarginMatchesWholeMap) {
   wg.origin.y_m += (rect.y0 - margin) * kRes;
   GridMap window(wg);
   for (const char* name : {layers::kElevation, layers::kGroundBound}) {
-    window.AddLayer(name) = map.at(name).block(rect.x0 - margin, rect.y0 - margin, wg.size_x, wg.size_y);
+    window.AddLayer(name) =
+        map.at(name).block(rect.x0 - margin, rect.y0 - margin, wg.size_x, wg.size_y);
   }
   const CellRect inner{margin, margin, margin + rect.x1 - rect.x0, margin + rect.y1 - rect.y0};
-  ComputeGeometricLayers(&window, params, CellRect{inner.x0 - 1, inner.y0 - 1, inner.x1 + 1, inner.y1 + 1});
+  ComputeGeometricLayers(&window, params,
+                         CellRect{inner.x0 - 1, inner.y0 - 1, inner.x1 + 1, inner.y1 + 1});
   ComputeCostLayer(&window, pioneer, params, RobotContext{}, inner);
   int lethal = 0, ditch = 0;
   for (int y = rect.y0; y < rect.y1; ++y) {
     for (int x = rect.x0; x < rect.x1; ++x) {
       for (const std::string& name : {std::string(layers::kSlope), std::string(layers::kDitchDepth),
-                                     layers::CostLayer("pioneer3at")}) {
+                                      layers::CostLayer("pioneer3at")}) {
         const float a = whole.at(name)(x, y);
         const float w = window.at(name)(x - rect.x0 + margin, y - rect.y0 + margin);
         EXPECT_TRUE((std::isnan(a) && std::isnan(w)) || a == w) << name << " " << x << "," << y;

@@ -1,13 +1,12 @@
 #include "mapstore/map_io.h"
 
-#include <png.h>
-
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
+#include <png.h>
 
 #include "common/layers.h"
 
@@ -77,8 +76,8 @@ TEST(MapIoTest, TrinaryRoundTripKeepsFreeOccupiedUnknown) {
   // map_server conventions in the file itself: the first image row is the top of the map.
   const std::string pgm = ReadFile(dir + "/flat.pgm").value();
   const size_t data = pgm.size() - 31 * 17;
-  EXPECT_EQ(static_cast<uint8_t>(pgm[data]), 254);               // (0, 16): free
-  EXPECT_EQ(static_cast<uint8_t>(pgm[pgm.size() - 1]), 0);       // (30, 0): occupied
+  EXPECT_EQ(static_cast<uint8_t>(pgm[data]), 254);          // (0, 16): free
+  EXPECT_EQ(static_cast<uint8_t>(pgm[pgm.size() - 1]), 0);  // (30, 0): occupied
 }
 
 TEST(MapIoTest, RawModeKeepsEveryValue) {

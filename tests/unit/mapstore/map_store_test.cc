@@ -46,8 +46,8 @@ std::unique_ptr<MapStore> MakeStore<SqliteMapStore>() {
     for (int ix = 0; ix < a.rows(); ++ix) {
       const float x = a(ix, iy), y = b(ix, iy);
       if (!(std::isnan(x) && std::isnan(y)) && x != y) {
-        return ::testing::AssertionFailure() << "cell (" << ix << ", " << iy << "): " << x
-                                             << " != " << y;
+        return ::testing::AssertionFailure()
+               << "cell (" << ix << ", " << iy << "): " << x << " != " << y;
       }
     }
   }
@@ -177,8 +177,9 @@ TYPED_TEST(MapStoreTest, UnknownThingsAreNotFoundWithAMessage) {
 }
 
 TYPED_TEST(MapStoreTest, BadNamesAndBadMapsAreRefused) {
-  for (const std::string& bad : std::vector<std::string>{"", "../etc", "a/b", "semi;colon", "-dash", "x'y", "sp ace",
-                                 std::string(65, 'a'), std::string("nul\0x", 5)}) {
+  for (const std::string& bad :
+       std::vector<std::string>{"", "../etc", "a/b", "semi;colon", "-dash", "x'y", "sp ace",
+                                std::string(65, 'a'), std::string("nul\0x", 5)}) {
     MapSnapshot s = SampleSnapshot(bad);
     auto r = this->dut_->SaveMap(s, this->ctx_);
     EXPECT_EQ(r.status().code(), StatusCode::kInvalidArgument) << "name '" << bad << "'";
@@ -371,23 +372,22 @@ TYPED_TEST(MapStoreTest, SharingDerivesCachesAndReportsVerdictChanges) {
   auto again = ShareMap(*this->dut_, deriver, {"lab", "corridor", 0}, "rover", this->ctx_);
   ASSERT_TRUE(again.ok());
   EXPECT_TRUE(again->was_cached);
-  EXPECT_TRUE(SameLayer(again->derived.layers.at("cost/rover"),
-                        shared->derived.layers.at("cost/rover")));
+  EXPECT_TRUE(
+      SameLayer(again->derived.layers.at("cost/rover"), shared->derived.layers.at("cost/rover")));
   auto after = this->dut_->LoadLayers({"lab", "corridor", 0}, {});
   ASSERT_TRUE(after.ok());
   EXPECT_TRUE(SameLayer(before->at("elevation"), after->at("elevation")));
   EXPECT_EQ(this->dut_->GetMapInfo({"lab", "corridor", 0})->version, 1);
 
   // A new code version is a cache miss.
-  auto other_code = ShareMap(*this->dut_, FakeDeriver("fake-2"), {"lab", "corridor", 0}, "rover",
-                             this->ctx_);
+  auto other_code =
+      ShareMap(*this->dut_, FakeDeriver("fake-2"), {"lab", "corridor", 0}, "rover", this->ctx_);
   ASSERT_TRUE(other_code.ok());
   EXPECT_FALSE(other_code->was_cached);
   // Unknown profile or map.
-  EXPECT_EQ(ShareMap(*this->dut_, deriver, {"lab", "corridor", 0}, "tank", this->ctx_)
-                .status()
-                .code(),
-            StatusCode::kNotFound);
+  EXPECT_EQ(
+      ShareMap(*this->dut_, deriver, {"lab", "corridor", 0}, "tank", this->ctx_).status().code(),
+      StatusCode::kNotFound);
   EXPECT_EQ(ShareMap(*this->dut_, deriver, {"lab", "nope", 0}, "rover", this->ctx_).status().code(),
             StatusCode::kNotFound);
 }
@@ -484,8 +484,8 @@ TYPED_TEST(MapStoreTest, DiffFindsChangedCellsAndObstacles) {
 
   ASSERT_TRUE(this->dut_->PutProfile(Profile("pioneer3at", 8.0, 0.03), this->ctx_).ok());
   ASSERT_TRUE(this->dut_->PutProfile(Profile("rover", 12.0, 0.08), this->ctx_).ok());
-  auto profiles = DiffProfiles(*this->dut_, &deriver, {"lab", "corridor", 1}, "pioneer3at",
-                               "rover");
+  auto profiles =
+      DiffProfiles(*this->dut_, &deriver, {"lab", "corridor", 1}, "pioneer3at", "rover");
   ASSERT_TRUE(profiles.ok()) << profiles.status().ToString();
   ASSERT_EQ(profiles->layers.size(), 1u);
   // Ramp cells (5 cm steps) are lethal for pioneer3at and free for the rover.

@@ -8,9 +8,11 @@
 #include <gtest/gtest.h>
 
 #include "cairn/lcmt_map_control_request.hpp"
+
 #include "common/channels.h"
 #include "mapstore/in_memory_map_store.h"
 #include "mapstore/mapstore_conversions.h"
+#include "mapstore/tile_wire.h"
 #include "services/runtime/conversions.h"
 #include "services/runtime/tiler.h"
 #include "tests/unit/mapstore/fake_deriver.h"
@@ -211,6 +213,29 @@ TEST_F(MapstoreServiceUnitTest, MissingTilesTimeOutWithAMessage) {
   EXPECT_EQ(node_.counter("save_timeouts"), 1);
 }
 
+TEST_F(MapstoreServiceUnitTest, APushWithBadObstaclesFailsAsInvalid) {
+  MapSnapshot s = testing::SampleSnapshot("corridor");
+  const int64_t id = ++next_id_;
+  const std::string map_name = std::to_string(id) + "/corridor";
+  runtime::LayerTiler tiler("rover1", map_name, 10);
+  for (const std::string& layer : s.base.layer_names()) {
+    auto batch = tiler.Update(s.base, layer, runtime::TileEncoding::kFloat, 1, true);
+    node_.Publish(channels::kMapstorePushManifest, batch.manifest);
+    for (const auto& t : batch.tiles) node_.Publish(channels::kMapstorePushTiles, t);
+  }
+  auto registry = runtime::ToLcm(s.obstacles, 1, "rover1", map_name);
+  registry.obstacles[0].kind = 42;  // no such obstacle kind
+  node_.Publish(channels::kMapstorePushObstacles, registry);
+  Request r = MakeRequest(Request::OP_SAVE, "corridor");
+  r.request_id = id;
+  r.layers = s.base.layer_names();
+  r.expect_obstacles = true;
+  const Reply reply = CallWithResends(r, &tiler);
+  EXPECT_EQ(reply.status, kInvalid);
+  EXPECT_NE(reply.message.find("obstacle"), std::string::npos) << reply.message;
+  EXPECT_FALSE(store_.GetMapInfo({"lab", "corridor", 0}).ok());
+}
+
 TEST_F(MapstoreServiceUnitTest, PullSaveFromAMappersLiveMap) {
   const MapSnapshot s = testing::SampleSnapshot("yard", 45, 33);
   common::GridMap live = s.base;
@@ -267,6 +292,34 @@ TEST_F(MapstoreServiceUnitTest, ShareRepliesWithTheVerdictsThatChange) {
   EXPECT_EQ(reply.obstacles[0].id, 7);
   EXPECT_TRUE(reply.obstacles[0].verdicts.back().crossable);
   EXPECT_EQ(store_.ListDerived({"lab", "corridor", 0})->size(), 1u);
+}
+
+}  // namespace
+}  // namespace cairn::mapstore
+
+namespace cairn::mapstore {
+namespace {
+
+TEST(TileWireTest, FastEncodingEqualsTheGeneratedOne) {
+  for (int n : {0, 1, 7, 10000}) {
+    cairn::lcmt_grid_tile t{};
+    t.utime = -5;
+    t.robot = "rover";
+    t.map_name = "42/corridor";
+    t.layer = "elevation";
+    t.resolution_m = 0.05;
+    t.layer_size_x = t.layer_size_y = 1000;
+    t.tile_size = 100;
+    t.cells_x = n;
+    t.cells_y = 1;
+    t.checksum = 0xffffffff;
+    t.num_cells = n;
+    for (int i = 0; i < n; ++i) t.data.push_back(i % 3 == 0 ? NAN : 0.01f * i - 3.f);
+    std::vector<uint8_t> fast, generated(t.getEncodedSize());
+    EncodeTile(t, &fast);
+    t.encode(generated.data(), 0, static_cast<int>(generated.size()));
+    EXPECT_EQ(fast, generated) << n << " cells";
+  }
 }
 
 }  // namespace

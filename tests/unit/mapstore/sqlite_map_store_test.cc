@@ -1,8 +1,7 @@
 // SqliteMapStore behaviour that only a file can show: persistence, refusal of foreign or
 // corrupt files, immutability, read-only use, a full disk, concurrent writers, migration.
 
-#include <sqlite3.h>
-#include <sys/stat.h>
+#include "mapstore/sqlite_map_store.h"
 
 #include <atomic>
 #include <cmath>
@@ -12,12 +11,13 @@
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
+#include <sys/stat.h>
 
 #include "common/layers.h"
 #include "mapstore/blob_codec.h"
 #include "mapstore/map_operations.h"
 #include "mapstore/schema.h"
-#include "mapstore/sqlite_map_store.h"
 #include "tests/unit/mapstore/fake_deriver.h"
 
 namespace cairn::mapstore {
@@ -137,17 +137,19 @@ TEST(SqliteMapStoreTest, CorruptBlobIsRefusedAndReportedByCheck) {
     ASSERT_TRUE(dut->Check().value().ok);
   }
   // Another program damages one stored tile (past the trigger that forbids it).
-  RawExec(path,
-          "DROP TRIGGER blobs_immutable;"
-          "UPDATE blobs SET data = substr(data, 1, 40) || CASE WHEN substr(data, 41, 1) = X'00' "
-          "THEN X'01' ELSE X'00' END || substr(data, 42) WHERE id = (SELECT blob_id FROM layer_tiles "
-          "t JOIN layers l ON l.id = t.layer_id WHERE l.name = 'elevation' AND t.tile_ix = 1 AND "
-          "t.tile_iy = 0);");
+  RawExec(
+      path,
+      "DROP TRIGGER blobs_immutable;"
+      "UPDATE blobs SET data = substr(data, 1, 40) || CASE WHEN substr(data, 41, 1) = X'00' "
+      "THEN X'01' ELSE X'00' END || substr(data, 42) WHERE id = (SELECT blob_id FROM layer_tiles "
+      "t JOIN layers l ON l.id = t.layer_id WHERE l.name = 'elevation' AND t.tile_ix = 1 AND "
+      "t.tile_iy = 0);");
   auto dut = OpenOrDie(path);
   auto map = dut->LoadLayers({"lab", "corridor", 0}, {{"elevation"}, std::nullopt});
   EXPECT_EQ(map.status().code(), StatusCode::kCorrupt);
   EXPECT_NE(map.status().message().find("elevation"), std::string::npos) << map.status().message();
-  EXPECT_NE(map.status().message().find("tile (1, 0)"), std::string::npos) << map.status().message();
+  EXPECT_NE(map.status().message().find("tile (1, 0)"), std::string::npos)
+      << map.status().message();
   // The other layer still loads, and so does a region away from the bad tile.
   EXPECT_TRUE(dut->LoadLayers({"lab", "corridor", 0}, {{"observation_count"}, std::nullopt}).ok());
   EXPECT_TRUE(dut->LoadLayers({"lab", "corridor", 0}, {{"elevation"}, CellBox{0, 0, 10, 10}}).ok());

@@ -25,9 +25,9 @@ TEST(CostMapTest, AsymmetricPatternCatchesTransposedOrFlippedGrids) {
   EXPECT_EQ(map->CostAt({4.05, 2.55}), 100.0f);
   EXPECT_FALSE(map->IsValid({4.05, 2.55, 0.0}));
   EXPECT_FALSE(map->CheckFootprintExact({4.05, 2.55, 0.0}).valid);
-  EXPECT_TRUE(map->IsValid({1.0 + 0.95, 2.55, 0.0}));   // x flipped: cell (9, 5)
-  EXPECT_TRUE(map->IsValid({4.05, 2.0 + 1.45, 0.0}));   // y flipped: cell (30, 14)
-  EXPECT_TRUE(map->IsValid({1.55, 2.0 + 1.95, 0.0}));   // transposed would be (5, 30): (5, 19)
+  EXPECT_TRUE(map->IsValid({1.0 + 0.95, 2.55, 0.0}));  // x flipped: cell (9, 5)
+  EXPECT_TRUE(map->IsValid({4.05, 2.0 + 1.45, 0.0}));  // y flipped: cell (30, 14)
+  EXPECT_TRUE(map->IsValid({1.55, 2.0 + 1.95, 0.0}));  // transposed would be (5, 30): (5, 19)
   // The raw storage is x fastest: data()[ix + iy * size_x].
   EXPECT_EQ(map->cost().data()[30 + 5 * 40], 100.0f);
 
@@ -40,8 +40,8 @@ TEST(CostMapTest, AsymmetricPatternCatchesTransposedOrFlippedGrids) {
   EXPECT_FALSE(thin->IsValid({4.05, 2.55 - 0.35, M_PI / 2}));
   // The robot's front is +x: an asymmetric footprint reaching 0.5 m forward and 0.1 m back.
   const auto nose = layer.Build({{0.5, 0.03}, {-0.1, 0.03}, {-0.1, -0.03}, {0.5, -0.03}});
-  EXPECT_FALSE(nose->IsValid({4.05 - 0.4, 2.55, 0.0}));   // facing the cell
-  EXPECT_TRUE(nose->IsValid({4.05 - 0.4, 2.55, M_PI}));   // facing away
+  EXPECT_FALSE(nose->IsValid({4.05 - 0.4, 2.55, 0.0}));  // facing the cell
+  EXPECT_TRUE(nose->IsValid({4.05 - 0.4, 2.55, M_PI}));  // facing away
 }
 
 TEST(CostMapTest, RotatedGridOrigin) {
@@ -136,6 +136,56 @@ TEST(CostMapTest, ConnectivityNeverDeniesAPathThePlannerFinds) {
     }
   }
   EXPECT_GT(solved, 6);
+}
+
+TEST(CostMapTest, RidgeCellsRunDownTheMiddleOfCorridors) {
+  // A 1.2 m corridor along x between two walls: the ridge of the distance field is its centre
+  // line (y = 5.0), which is where narrow-passage samples go.
+  TestLayer layer(100, 100, 0.1);
+  layer.Rect(0.0, 0.0, 10.0, 4.4, 100.0f).Rect(0.0, 5.6, 10.0, 10.0, 100.0f);
+  const auto map = layer.Build(PioneerFootprint());
+  const auto& ridges = map->RidgeCells();
+  ASSERT_FALSE(ridges.empty());
+  int in_corridor = 0;
+  for (const int32_t i : ridges) {
+    const Vector2 c = map->geometry().CenterOf({i % 100, i / 100});
+    EXPECT_GT(c.y(), 4.4);
+    EXPECT_LT(c.y(), 5.6);
+    if (c.x() > 1.0 && c.x() < 9.0) {
+      EXPECT_NEAR(c.y(), 5.0, 0.11);
+      ++in_corridor;
+    }
+  }
+  EXPECT_GE(in_corridor, 70);
+  // The smooth clearance is continuous and matches the cell-centre one at cell centres.
+  EXPECT_NEAR(map->SmoothClearanceAt({5.05, 5.05}), map->ClearanceAt({5.05, 5.05}), 1e-6);
+  EXPECT_LT(std::abs(map->SmoothClearanceAt({5.0, 5.0}) - map->SmoothClearanceAt({5.0, 5.01})),
+            0.011);
+}
+
+TEST(CostMapTest, BlockingCellsUnderTheRobotAndCheckingAroundThem) {
+  TestLayer layer(60, 60, 0.1);
+  layer.Rect(3.25, 0.0, 3.6, 6.0, 100.0f);
+  const auto map = layer.Build(PioneerFootprint());
+  const Pose2 touching{3.0, 3.0, 0.0};  // front at 3.315: cells of x 3.2..3.4 are under it
+  ASSERT_FALSE(map->IsValid(touching));
+  const auto cells = map->BlockingCellsUnder(touching);
+  ASSERT_FALSE(cells.empty());
+  EXPECT_TRUE(std::is_sorted(cells.begin(), cells.end()));
+  for (const int64_t i : cells)
+    EXPECT_TRUE(map->IsBlockedCell({static_cast<int>(i % 60), static_cast<int>(i / 60)}));
+  EXPECT_TRUE(map->CheckFootprintIgnoring(touching, cells).valid);
+  EXPECT_TRUE(map->CheckFootprintIgnoring({2.9, 3.0, 0.0}, cells).valid);
+  EXPECT_FALSE(map->CheckFootprintIgnoring({3.2, 3.0, 0.0}, cells).valid);  // deeper: new cells
+  EXPECT_TRUE(map->BlockingCellsUnder({2.0, 3.0, 0.0}).empty());
+  // The known-cell bounding box.
+  TestLayer partial(40, 30, 0.1, NAN);
+  partial.Rect(1.0, 0.5, 2.0, 1.5, 0.0f);
+  const auto known = partial.Build(PioneerFootprint())->known_cells();
+  ASSERT_TRUE(known.has_value());
+  EXPECT_EQ(known->first, (common::CellIndex{10, 5}));
+  EXPECT_EQ(known->second, (common::CellIndex{19, 14}));
+  EXPECT_FALSE(TestLayer(5, 5, 0.1, NAN).Build(PioneerFootprint())->known_cells().has_value());
 }
 
 TEST(CostMapTest, ConnectivitySeparatesWalledOffRegions) {

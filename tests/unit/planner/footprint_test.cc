@@ -15,8 +15,10 @@ using common::Vector2;
 
 // Closed convex polygon vs closed axis-aligned unit square at (ix, iy): separating axis test.
 bool Overlaps(const std::vector<Vector2>& poly, int ix, int iy) {
-  std::vector<Vector2> square = {{double(ix), double(iy)}, {ix + 1.0, double(iy)},
-                                 {ix + 1.0, iy + 1.0}, {double(ix), iy + 1.0}};
+  std::vector<Vector2> square = {{double(ix), double(iy)},
+                                 {ix + 1.0, double(iy)},
+                                 {ix + 1.0, iy + 1.0},
+                                 {double(ix), iy + 1.0}};
   std::vector<Vector2> axes = {{1, 0}, {0, 1}};
   for (size_t i = 0; i < poly.size(); ++i) {
     const Vector2 e = poly[(i + 1) % poly.size()] - poly[i];
@@ -39,7 +41,8 @@ bool Overlaps(const std::vector<Vector2>& poly, int ix, int iy) {
 
 TEST(FootprintTest, HullAndRadii) {
   // A concave polygon becomes its hull; duplicate and collinear points disappear.
-  const std::vector<Vector2> poly = {{1, 1}, {0, 0.2}, {-1, 1}, {-1, -1}, {0, -1}, {1, -1}, {1, -1}};
+  const std::vector<Vector2> poly = {{1, 1},  {0, 0.2}, {-1, 1}, {-1, -1},
+                                     {0, -1}, {1, -1},  {1, -1}};
   const FootprintRasterizer r(poly);
   EXPECT_EQ(r.hull_m().size(), 4u);
   EXPECT_NEAR(r.circumscribed_radius_m(), std::sqrt(2.0), 1e-12);

@@ -5,6 +5,7 @@
 #include "planner/local/critics.h"
 #include "planner/local/dwa_planner.h"
 #include "planner/local/trajectory_generator.h"
+#include "planner/recovery.h"
 #include "tests/unit/planner/test_maps.h"
 
 namespace cairn::planner {
@@ -41,8 +42,8 @@ TEST(TrajectoryGeneratorTest, WindowRespectsAccelerationAndVelocityLimits) {
     ASSERT_EQ(samples.size(), 400u) << last.linear_mps << " " << last.angular_radps;
     for (const Velocity& s : samples) {
       ASSERT_TRUE(gen.limits().Allows(last, s, 0.05, 1e-12))
-          << "from (" << last.linear_mps << ", " << last.angular_radps << ") to ("
-          << s.linear_mps << ", " << s.angular_radps << ")";
+          << "from (" << last.linear_mps << ", " << last.angular_radps << ") to (" << s.linear_mps
+          << ", " << s.angular_radps << ")";
     }
     ASSERT_TRUE(gen.limits().Allows(last, gen.Brake(last), 0.05, 1e-12));
   }
@@ -88,10 +89,11 @@ TEST(TrajectoryGeneratorTest, SimulatesConstantVelocityArcs) {
 class CriticTest : public ::testing::Test {
  protected:
   CriticTest() : layer_(100, 60, 0.1) {
-    layer_.Rect(6.0, 0.0, 6.5, 6.0, 100.0f);   // a wall across x = 6..6.5
-    layer_.Rect(3.0, 4.0, 4.0, 6.0, 40.0f);    // graded terrain up at y > 4
+    layer_.Rect(6.0, 0.0, 6.5, 6.0, 100.0f);  // a wall across x = 6..6.5
+    layer_.Rect(3.0, 4.0, 4.0, 6.0, 40.0f);   // graded terrain up at y > 4
     map_ = layer_.Build(PioneerFootprint());
-    path_ = Path({{1.0, 3.0, 0.0}, {2.0, 3.0, 0.0}, {3.0, 3.0, 0.0}, {4.0, 3.0, 0.0}, {5.0, 3.0, 0.0}});
+    path_ =
+        Path({{1.0, 3.0, 0.0}, {2.0, 3.0, 0.0}, {3.0, 3.0, 0.0}, {4.0, 3.0, 0.0}, {5.0, 3.0, 0.0}});
     ctx_.map = map_.get();
     ctx_.pose = {1.0, 3.0, 0.0};
     ctx_.path = &path_;
@@ -199,7 +201,7 @@ TEST_F(CriticTest, OscillationRejectsASecondReversalUntilTheRobotMoves) {
   OscillationCritic dut(1.0, 0.05, 0.2);
   dut.Prepare(ctx_);
   const Pose2 p{1.0, 3.0, 0.0};
-  dut.Commit({0.0, 0.3}, p);                       // turning left
+  dut.Commit({0.0, 0.3}, p);                             // turning left
   EXPECT_TRUE(dut.Evaluate(Arc(p, {0.0, -0.3})).valid);  // one reversal is allowed ...
   EXPECT_DOUBLE_EQ(dut.Evaluate(Arc(p, {0.0, -0.3})).value, 1.0);
   EXPECT_DOUBLE_EQ(dut.Evaluate(Arc(p, {0.0, 0.3})).value, 0.0);
@@ -289,7 +291,8 @@ TEST(DwaPlannerTest, SlowsForAnObstacleAheadAndCountsRejections) {
 
 TEST(DwaPlannerTest, BrakesWhenNothingIsValid) {
   TestLayer layer(60, 60, 0.1);
-  layer.Rect(0.0, 0.0, 6.0, 6.0, 100.0f).Rect(2.6, 2.7, 3.4, 3.3, 0.0f);  // a tight box of free cells
+  layer.Rect(0.0, 0.0, 6.0, 6.0, 100.0f)
+      .Rect(2.6, 2.7, 3.4, 3.3, 0.0f);  // a tight box of free cells
   const auto map = layer.Build(PioneerFootprint());
   const Path path({{3.0, 3.0, 0.0}, {5.0, 3.0, 0.0}});
   DwaPlanner dut(Limits(), {});
@@ -299,6 +302,25 @@ TEST(DwaPlannerTest, BrakesWhenNothingIsValid) {
   EXPECT_EQ(r.valid, 0);
   EXPECT_NEAR(r.command.linear_mps, 0.3 - 0.04, 1e-12);
   EXPECT_NEAR(r.command.angular_radps, 0.2 - 0.075, 1e-12);
+}
+
+TEST(DwaPlannerTest, EscapesWhenTheMapPutsAnObstacleUnderTheRobot) {
+  // A wall appeared under the robot's front (its cells reach 0.085 m past the bumper): with
+  // the goal behind, the robot backs away instead of finding every trajectory blocked; driving
+  // deeper into the wall stays blocked.
+  TestLayer layer(100, 60, 0.1);
+  layer.Rect(1.25, 0.0, 1.6, 6.0, 100.0f);
+  const auto map = layer.Build(PioneerFootprint());
+  const Pose2 pose{1.0, 3.0, 0.0};
+  ASSERT_FALSE(map->IsValid(pose));
+  const Path path({{1.0, 3.0, M_PI}, {-0.0, 3.0, M_PI}});
+  DwaPlanner dut(Limits(), {});
+  const DwaResult r = dut.Compute(Input(*map, path, pose, {0.0, 0.0}, {0.2, 3.0}));
+  ASSERT_TRUE(r.found);
+  EXPECT_LT(r.command.linear_mps, 0.0);
+  // Recovery motions may move away too, not deeper.
+  EXPECT_TRUE(MotionClear(map.get(), pose, {-0.1, 0.0}, 0.5));
+  EXPECT_FALSE(MotionClear(map.get(), pose, {0.3, 0.0}, 0.5));
 }
 
 TEST(DwaPlannerTest, OscillationAloneNeverStallsTheRobot) {
@@ -332,7 +354,8 @@ TEST(DwaPlannerTest, CommandsNeverExceedTheLimitsInRandomSituations) {
     TestLayer layer(80, 80, 0.1);
     for (int k = 0; k < 12; ++k) {
       const double x = u(rng) * 8.0, y = u(rng) * 8.0;
-      layer.Rect(x, y, x + u(rng) * 1.5, y + u(rng) * 1.5, k % 4 == 0 ? NAN : (k % 2 ? 100.0f : 60.0f));
+      layer.Rect(x, y, x + u(rng) * 1.5, y + u(rng) * 1.5,
+                 k % 4 == 0 ? NAN : (k % 2 ? 100.0f : 60.0f));
     }
     const auto map = layer.Build(PioneerFootprint());
     Pose2 pose{1.0 + u(rng) * 6.0, 1.0 + u(rng) * 6.0, (u(rng) - 0.5) * 2 * M_PI};
@@ -341,12 +364,12 @@ TEST(DwaPlannerTest, CommandsNeverExceedTheLimitsInRandomSituations) {
                   (u(rng) - 0.5) * 2 * limits.max_vel_theta_radps};
     dut.Reset();
     for (int k = 0; k < 25; ++k) {
-      const DwaResult r = dut.Compute(Input(*map, path, pose, last, path.poses().back().position()));
+      const DwaResult r =
+          dut.Compute(Input(*map, path, pose, last, path.poses().back().position()));
       found += r.found;
       ASSERT_TRUE(limits.Allows(last, r.command, 0.05, 1e-12))
-          << "map " << m << " cycle " << k << ": (" << last.linear_mps << ", "
-          << last.angular_radps << ") -> (" << r.command.linear_mps << ", "
-          << r.command.angular_radps << ")";
+          << "map " << m << " cycle " << k << ": (" << last.linear_mps << ", " << last.angular_radps
+          << ") -> (" << r.command.linear_mps << ", " << r.command.angular_radps << ")";
       dut.Commit(r.command, pose);
       // Move the robot along the command for one period.
       const Velocity v = r.command;

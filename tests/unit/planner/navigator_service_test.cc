@@ -10,6 +10,7 @@
 #include "cairn/lcmt_sim_clock.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
+
 #include "common/channels.h"
 #include "common/layers.h"
 #include "services/runtime/conversions.h"
@@ -54,14 +55,14 @@ class NavigatorServiceTest : public ::testing::Test {
     g.size_y = 80;
     map_ = common::GridMap(g);
     map_.AddLayer(layers::CostLayer("pioneer3at"), 0.0f);
-    node_.Subscribe<cairn::lcmt_velocity_command>(ch::ForRobot("r1", ch::kCmdVel),
-                                                  [this](const auto& m) { commands_.push_back(m); });
+    node_.Subscribe<cairn::lcmt_velocity_command>(
+        ch::ForRobot("r1", ch::kCmdVel), [this](const auto& m) { commands_.push_back(m); });
     node_.Subscribe<cairn::lcmt_nav_status>(ch::ForRobot("r1", ch::kNavStatus),
                                             [this](const auto& m) { statuses_.push_back(m); });
     node_.Subscribe<cairn::lcmt_path>(ch::ForRobot("r1", ch::kPath),
                                       [this](const auto& m) { paths_.push_back(m); });
-    node_.Subscribe<cairn::lcmt_tile_resend_request>(ch::ForRobot("r1", ch::kMapTileResend),
-                                                     [this](const auto& m) { resends_.push_back(m); });
+    node_.Subscribe<cairn::lcmt_tile_resend_request>(
+        ch::ForRobot("r1", ch::kMapTileResend), [this](const auto& m) { resends_.push_back(m); });
   }
 
   void Start(std::vector<Place> places = {}) {
@@ -115,7 +116,8 @@ class NavigatorServiceTest : public ::testing::Test {
     // Give the planner thread a moment (it runs in wall time).
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  bool StepUntil(const std::function<bool()>& done, int max_ticks, bool pose = true, bool map = true) {
+  bool StepUntil(const std::function<bool()>& done, int max_ticks, bool pose = true,
+                 bool map = true) {
     for (int k = 0; k < max_ticks; ++k) {
       Step(pose, map);
       if (done()) return true;
@@ -181,10 +183,10 @@ TEST_F(NavigatorServiceTest, StaleMapStopsAtOnceWithTheReason) {
   PublishMap(true);
   for (int k = 0; k < 4; ++k) Step();
   SendGoal(PoseGoal(1, 10.0, 4.0));
-  ASSERT_TRUE(StepUntil([&] { return !commands_.empty() && commands_.back().linear_mps > 0.2; }, 200));
+  ASSERT_TRUE(
+      StepUntil([&] { return !commands_.empty() && commands_.back().linear_mps > 0.2; }, 200));
   const int64_t last_map = sim_utime_;
-  ASSERT_TRUE(StepUntil([&] { return LastState() == kStateStopped; }, 40,
-                        true, false));
+  ASSERT_TRUE(StepUntil([&] { return LastState() == kStateStopped; }, 40, true, false));
   EXPECT_EQ(statuses_.back().reason, kReasonStaleMap);
   EXPECT_LE(sim_utime_ - last_map, 500'000 + 2 * 50'000 + 200'000);  // manifests came every 0.2 s
   EXPECT_EQ(commands_.back().linear_mps, 0.0);
@@ -201,9 +203,9 @@ TEST_F(NavigatorServiceTest, StaleOdometryStops) {
   PublishMap(true);
   for (int k = 0; k < 4; ++k) Step();
   SendGoal(PoseGoal(1, 10.0, 4.0));
-  ASSERT_TRUE(StepUntil([&] { return !commands_.empty() && commands_.back().linear_mps > 0.2; }, 200));
-  ASSERT_TRUE(StepUntil([&] { return LastState() == kStateStopped; }, 20,
-                        false, true));
+  ASSERT_TRUE(
+      StepUntil([&] { return !commands_.empty() && commands_.back().linear_mps > 0.2; }, 200));
+  ASSERT_TRUE(StepUntil([&] { return LastState() == kStateStopped; }, 20, false, true));
   EXPECT_EQ(statuses_.back().reason, kReasonStaleOdom);
   EXPECT_EQ(commands_.back().linear_mps, 0.0);
 }
@@ -286,7 +288,8 @@ TEST_F(NavigatorServiceTest, AsksForMissingTilesAndCancelStops) {
   PublishMap(true);
   for (int k = 0; k < 4; ++k) Step();
   SendGoal(PoseGoal(2, 10.0, 4.0));
-  ASSERT_TRUE(StepUntil([&] { return !commands_.empty() && commands_.back().linear_mps > 0.2; }, 200));
+  ASSERT_TRUE(
+      StepUntil([&] { return !commands_.empty() && commands_.back().linear_mps > 0.2; }, 200));
   cairn::lcmt_goal cancel{};
   cancel.robot = "r1";
   cancel.goal_id = 2;
@@ -314,7 +317,8 @@ TEST(NavigatorConfigTest, LoadsTheShippedFileAndRefusesUnknownKeys) {
     }
     return std::string();
   };
-  EXPECT_NE(error("local_planner:\n  critics:\n    speedd_scale: 1\n").find("nav.yaml:3"), std::string::npos);
+  EXPECT_NE(error("local_planner:\n  critics:\n    speedd_scale: 1\n").find("nav.yaml:3"),
+            std::string::npos);
   EXPECT_NE(error("global_planner:\n  planner: RRTfast\n").find("RRTfast"), std::string::npos);
   EXPECT_NE(error("global_planner:\n  state_space: se3\n").find("nav.yaml:2"), std::string::npos);
   EXPECT_NE(error("recovery:\n  sequence: [rotate, dance]\n").find("dance"), std::string::npos);

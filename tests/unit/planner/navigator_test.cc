@@ -51,7 +51,9 @@ class NavSim {
       if (out.clear_short_term) ++clears_;
       if (out.status_changed && (states_.empty() || states_.back() != nav_.status().state)) {
         states_.push_back(nav_.status().state);
-        if (getenv("NAV_DEBUG")) printf("t=%.2f %s %s %s\n", t_, NavStateName(nav_.status().state), NavReasonName(nav_.status().reason), nav_.status().message.c_str());
+        if (getenv("NAV_DEBUG"))
+          printf("t=%.2f %s %s %s\n", t_, NavStateName(nav_.status().state),
+                 NavReasonName(nav_.status().reason), nav_.status().message.c_str());
       }
       if (out.command) {
         const Velocity v = *out.command;
@@ -248,6 +250,31 @@ TEST(NavigatorTest, ReplansWhenAnObstacleAppearsOnThePath) {
   EXPECT_GT(sim.plans_, plans);
 }
 
+TEST(NavigatorTest, PeriodicReplanTakesAClearlyBetterPathOnly) {
+  // A wall forces a long detour; then the wall is gone (the map change blocks nothing, so
+  // only the periodic replan notices) and the robot switches to the short way.
+  TestLayer open(200, 100, 0.1);
+  TestLayer walled = open;
+  walled.Rect(6.0, 0.0, 6.4, 9.0, 100.0f);
+  NavigatorParams p;
+  p.replan_period_s = 2.0;
+  NavSim sim(walled.Build(PioneerFootprint()), p);
+  sim.pose_ = {2.0, 2.0, 0.0};
+  sim.nav_.SetGoal(PoseGoal(10.0, 2.0), 0.0);
+  sim.Run(1.0);
+  ASSERT_EQ(sim.nav_.status().state, NavState::kDriving);
+  const double detour = sim.nav_.path().length_m();
+  EXPECT_GT(detour, 15.0);
+  // An unchanged map: periodic replans find nothing clearly better and keep the path.
+  sim.Run(4.5);
+  EXPECT_EQ(sim.nav_.status().replans, 0);
+  EXPECT_GE(sim.plans_, 3);
+  sim.map_ = open.Build(PioneerFootprint());
+  ASSERT_TRUE(sim.Run(10.0, [&] { return sim.nav_.status().replans > 0; }));
+  EXPECT_LT(sim.nav_.path().length_m(), detour - 5.0);
+  ASSERT_TRUE(sim.RunUntilState(100.0, NavState::kReached));
+}
+
 TEST(NavigatorTest, NoPathRunsEveryRecoveryThenFails) {
   TestLayer closed = WallWithGap();
   closed.Rect(9.8, 5.9, 10.2, 7.3, 100.0f);
@@ -288,9 +315,10 @@ TEST(NavigatorTest, NewGoalReplacesTheOldOne) {
 
 TEST(NavigatorTest, ReasonsMapOneToOneOntoPlanStatus) {
   std::set<int> seen;
-  for (const PlanStatus s : {PlanStatus::kSuccess, PlanStatus::kStartOccupied, PlanStatus::kGoalOccupied,
-                             PlanStatus::kOutOfBounds, PlanStatus::kNoPath, PlanStatus::kTimedOut,
-                             PlanStatus::kCancelled, PlanStatus::kApproximate}) {
+  for (const PlanStatus s :
+       {PlanStatus::kSuccess, PlanStatus::kStartOccupied, PlanStatus::kGoalOccupied,
+        PlanStatus::kOutOfBounds, PlanStatus::kNoPath, PlanStatus::kTimedOut,
+        PlanStatus::kCancelled, PlanStatus::kApproximate}) {
     const NavReason r = ReasonOf(s);
     EXPECT_STREQ(NavReasonName(r), PlanStatusName(s));
     seen.insert(static_cast<int>(r));

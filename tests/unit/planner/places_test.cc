@@ -47,7 +47,8 @@ TEST(PlacesTest, LoadsTheApartmentPlaces) {
 }
 
 TEST(PlacesTest, ErrorsNameTheFileAndLine) {
-  EXPECT_NE(ErrorOf("- name: a\n  polygon: [[0, 0], [1, 0]]\n").find("places.yaml:2"), std::string::npos);
+  EXPECT_NE(ErrorOf("- name: a\n  polygon: [[0, 0], [1, 0]]\n").find("places.yaml:2"),
+            std::string::npos);
   EXPECT_NE(ErrorOf("- name: a\n  polygon: [[0, 0], [1, 0], [1, 1]]\n  colour: red\n")
                 .find("unknown key 'places[0].colour'"),
             std::string::npos);
@@ -57,7 +58,8 @@ TEST(PlacesTest, ErrorsNameTheFileAndLine) {
             std::string::npos);
   EXPECT_NE(ErrorOf("- name: a\n  polygon: [[0, 0], [1, x], [1, 1]]\n").find("places.yaml:2"),
             std::string::npos);
-  EXPECT_NE(ErrorOf("- polygon: [[0, 0], [1, 0], [1, 1]]\n").find("missing required key 'places[0].name'"),
+  EXPECT_NE(ErrorOf("- polygon: [[0, 0], [1, 0], [1, 1]]\n")
+                .find("missing required key 'places[0].name'"),
             std::string::npos);
   EXPECT_NE(ErrorOf("rooms: []\n").find("places.yaml:1: missing key 'places'"), std::string::npos);
   EXPECT_NE(ErrorOf("places: []\nrooms: []\n").find("unknown key 'rooms'"), std::string::npos);

@@ -46,7 +46,9 @@ inline std::vector<common::Vector2> PioneerFootprint() {
 }
 
 /// A small square robot (0.3 m × 0.3 m).
-inline std::vector<common::Vector2> SmallFootprint() { return common::RectangleFootprint(0.3, 0.3); }
+inline std::vector<common::Vector2> SmallFootprint() {
+  return common::RectangleFootprint(0.3, 0.3);
+}
 
 inline common::RobotProfile PioneerProfile() {
   common::RobotProfile p;

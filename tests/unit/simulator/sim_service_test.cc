@@ -1,5 +1,6 @@
 #include "simulator/sim_service.h"
 
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -37,7 +38,9 @@ class SimServiceTest : public testing::SimTest {
     options.lcm_url = "memq://";
     options.install_signal_handlers = false;
     node_ = std::make_unique<runtime::Node>(options);
-    dut_ = std::make_unique<SimService>(*node_, *sim_, SimServiceParams{});
+    SimServiceParams params;
+    params.max_clock_rate_hz = 1e9;  // one SIM.CLOCK per clock tick, however fast the test runs
+    dut_ = std::make_unique<SimService>(*node_, *sim_, params);
     // Record every message by channel (memq delivers to the same LCM instance).
     node_->SubscribeRaw(".*", [this](const std::string& channel, const void*, int, int64_t) {
       ++counts_[channel];
@@ -103,6 +106,29 @@ TEST_F(SimServiceTest, PublishesEverySensorAndTheClockInSimTime) {
   const auto slice = runtime::FromLcm(last_slice);
   ASSERT_TRUE(slice.ok()) << slice.status().ToString();
   EXPECT_GT(slice->points.size(), 1000u);
+}
+
+TEST(SimServiceClockTest, ClockIsCappedInWallTimeWhenRunningFast) {
+  InstallMujocoLogHooks();
+  Scenario s = InlineScenario(FlatWorld(), "", "");
+  MujocoSim sim(s);
+  runtime::NodeOptions options;
+  options.process_name = "cairn-sim";
+  options.lcm_url = "memq://";
+  options.install_signal_handlers = false;
+  runtime::Node node(options);
+  int64_t clocks = 0;
+  node.SubscribeRaw("SIM.CLOCK", [&](const std::string&, const void*, int, int64_t) { ++clocks; });
+  SimServiceParams params;
+  params.max_clock_rate_hz = 50.0;
+  SimService dut(node, sim, params);
+  const auto start = std::chrono::steady_clock::now();
+  dut.StepAndPublish(2500);  // 5 s of simulated time: 500 clock ticks
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  dut.HandlePending();
+  EXPECT_LE(clocks, static_cast<int64_t>(50.0 * wall_s) + 2);
+  EXPECT_GE(clocks, 1);
 }
 
 TEST_F(SimServiceTest, NanCommandsAreDroppedAndCountedClampedOnesCounted) {
