@@ -244,6 +244,8 @@ std::vector<int64_t> CostMap::BlockingCellsUnder(const Pose2& pose_world) const 
 FootprintCost CostMap::CheckFootprintIgnoring(const Pose2& pose_world,
                                               const std::vector<int64_t>& ignored_cells) const {
   const Vector2 g = ToGridCells(pose_world.position());
+  // Far from every blocking cell the ignored ones cannot matter; near one, read the cells.
+  if (QuickCheck(g.x(), g.y(), shapes_[0]) == Quick::kValidFree) return FootprintCost{};
   return ExactAtGridPose(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad), shapes_[0], &ignored_cells);
 }
 

@@ -79,6 +79,7 @@ void LoadTraversability(common::YamlMap m, TraversabilityParams* p) {
   m.Get("min_ditch_depth_m", &p->min_ditch_depth_m);
   m.Get("max_ditch_search_m", &p->max_ditch_search_m);
   m.Get("height_tolerance_m", &p->height_tolerance_m);
+  m.Get("min_step_edge_cells", &p->min_step_edge_cells);
   m.Finish();
 }
 

@@ -213,6 +213,8 @@ void TraversabilityParams::Validate() const {
                      "max_ditch_search_m must be positive, got " << max_ditch_search_m);
   CAIRN_THROW_UNLESS(height_tolerance_m >= 0 && height_tolerance_m < 0.01,
                      "height_tolerance_m must be in [0, 0.01), got " << height_tolerance_m);
+  CAIRN_THROW_UNLESS(min_step_edge_cells == 1 || min_step_edge_cells == 2,
+                     "min_step_edge_cells must be 1 or 2, got " << min_step_edge_cells);
 }
 
 int DependencyRadiusCells(const TraversabilityParams& params, double resolution_m) {
@@ -587,16 +589,16 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
         if (!std::isnan(a) && !std::isnan(b) && !std::isnan(c) && !std::isnan(d)) {
           const double up = double(std::max(std::max(a, b), std::max(c, d))) - hc;
           const double down = hc - double(std::min(std::min(a, b), std::min(c, d)));
-          if (up > up_limit + tol || down > down_limit + tol) {
-            cost.data()[i] = layers::kCostLethal;
+          if (up <= up_limit + tol && down <= down_limit + tol) {
+            ratio =
+                std::max({ratio, up > 0 ? up * inv_up : 0.0, down > 0 ? down * inv_down : 0.0});
+            const double r = std::min(1.0, ratio);
+            cost.data()[i] = ratio <= ff ? layers::kCostFree
+                                         : static_cast<float>(std::max(
+                                               1e-3, params.graded_cost_max * (r - ff) / (1.0 - ff)));
             continue;
           }
-          ratio = std::max({ratio, up > 0 ? up * inv_up : 0.0, down > 0 ? down * inv_down : 0.0});
-          const double r = std::min(1.0, ratio);
-          cost.data()[i] = ratio <= ff ? layers::kCostFree
-                                       : static_cast<float>(std::max(
-                                             1e-3, params.graded_cost_max * (r - ff) / (1.0 - ff)));
-          continue;
+          // A limit is exceeded: the per-neighbour rules below decide (edge length).
         }
       }
       for (int k = 0; k < 4 && !lethal; ++k) {
@@ -609,7 +611,23 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
           // In a robot-levelled map the neighbour offset is tilted by the pitch as well.
           if (exact_tilt) rise = forward_m[k] * sp + rise * cp;
           if (rise > up_limit + tol || -rise > down_limit + tol) {
-            lethal = true;
+            // The same edge one cell to either side must exceed the limit too (see
+            // min_step_edge_cells); otherwise the pair counts as a step at the limit.
+            bool supported = params.min_step_edge_cells <= 1;
+            const int64_t side = kNeighbours[k][1] + static_cast<int64_t>(kNeighbours[k][0]) * sx;
+            for (const int64_t s : {side, -side}) {
+              if (supported) break;
+              const float hs = h[i + s], hn_s = h[j + s];
+              if (std::isnan(hs) || std::isnan(hn_s)) continue;
+              double rise_s = double(hn_s) - hs;
+              if (exact_tilt) rise_s = forward_m[k] * sp + rise_s * cp;
+              supported = rise > 0 ? rise_s > up_limit + tol : -rise_s > down_limit + tol;
+            }
+            if (supported) {
+              lethal = true;
+            } else {
+              ratio = std::max(ratio, 1.0);
+            }
           } else {
             ratio = std::max(ratio, rise > 0 ? rise * inv_up : -rise * inv_down);
           }

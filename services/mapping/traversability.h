@@ -56,6 +56,13 @@ struct TraversabilityParams {
   double max_ditch_search_m{1.8};
   /// Slack on height comparisons (m), for float elevations: makes the inclusive bounds hold.
   double height_tolerance_m{1e-5};
+  /// A step between two cells is lethal only when the edge is at least this many cells long:
+  /// with 2, one of the two cell pairs beside it (across the same edge) must exceed the limit
+  /// too. A real step edge is a line; a lone pair over the limit is elevation noise (a ramp
+  /// near a profile's step limit at 0.2 m cells rises 1.75 cm per cell at 5 deg, and a few
+  /// millimetres of noise on two cells make a false 3 cm step). This is the idea of
+  /// traversability_estimation's critical_cell_number. 1 gives the seed's per-pair rule.
+  int min_step_edge_cells{2};
 
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;

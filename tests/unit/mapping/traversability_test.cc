@@ -153,6 +153,29 @@ TEST(TraversabilityTest, StepBoundaryHoldsAtHighElevation) {
   EXPECT_LT(Cost(map, "test", 4, 4), layers::kCostLethal);
 }
 
+// A lethal step edge is at least two cells long (min_step_edge_cells = 2): one cell 4 cm above
+// its neighbours on a flat floor is elevation noise, a straight 4 cm edge is a step. With 1 (the
+// seed's per-pair rule) the lone cell makes its neighbours lethal.
+TEST(TraversabilityTest, LoneHighCellIsNoStepButAnEdgeIs) {
+  common::RobotProfile p = LenientProfile();
+  p.max_step_up_m = 0.03;
+  GridMap lone = MakeTerrain(10, 10, kRes, [](double x, double y) {
+    return (x >= 1.0 && x < 1.2 && y >= 1.0 && y < 1.2) ? 0.04 : 0.0;
+  });
+  TraversabilityParams params;
+  ComputeCostLayer(&lone, p, params);
+  EXPECT_LT(Cost(lone, "test", 4, 5), layers::kCostLethal);  // beside the lone cell
+  EXPECT_LT(Cost(lone, "test", 5, 4), layers::kCostLethal);
+  EXPECT_GT(Cost(lone, "test", 4, 5), layers::kCostFree);   // at the limit: graded, not free
+  GridMap edge = StepMap(0.04);
+  ComputeCostLayer(&edge, p, params);
+  for (int iy = 1; iy < 7; ++iy) EXPECT_EQ(Cost(edge, "test", 4, iy), layers::kCostLethal);
+  params.min_step_edge_cells = 1;
+  ComputeCostLayer(&lone, p, params);
+  EXPECT_EQ(Cost(lone, "test", 4, 5), layers::kCostLethal);
+  EXPECT_EQ(Cost(lone, "test", 5, 4), layers::kCostLethal);
+}
+
 // Seed 000 test 5: from the high cell, a drop of exactly 10 cm is free, 10.1 cm lethal.
 TEST(TraversabilityTest, StepDownBoundaryIsInclusive) {
   common::RobotProfile p = LenientProfile();
