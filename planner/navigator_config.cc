@@ -39,6 +39,8 @@ void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
   map.Get("time_budget_s", &p->time_budget_s);
   map.Get("stop_at_first_solution", &p->stop_at_first_solution);
   map.Get("traversal_cost_weight", &p->traversal_cost_weight);
+  map.Get("clearance_weight", &p->clearance_weight);
+  map.Get("clearance_inflation_m", &p->clearance_inflation_m);
   map.Get("validity_resolution_m", &p->validity_resolution_m);
   map.Get("range_m", &p->range_m);
   map.Get("bounds_margin_m", &p->bounds_margin_m);

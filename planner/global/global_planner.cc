@@ -186,20 +186,36 @@ class FreeSpaceSE2Sampler : public ob::StateSampler {
   std::vector<Vector2> ridges_;
 };
 
-// Length plus traversal cost: the integral of 1 + w · cost / 100 along the motion, by the
-// trapezoid rule over samples about one cost cell apart (OMPL's own integration would sample at
-// the much finer validity resolution).
+// Length plus traversal cost: the integral of 1 + w · cost / 100 + w_c · proximity along the
+// motion, by the trapezoid rule over samples about one cost cell apart (OMPL's own integration
+// would sample at the much finer validity resolution). Proximity (0..1) grows as the distance to
+// the nearest blocking cell falls below the inscribed radius plus the clearance inflation: the
+// cost layer carries no inflation, and without it shortcut paths would hug corners.
 class TraversalCostObjective : public ob::StateCostIntegralObjective {
  public:
-  TraversalCostObjective(const ob::SpaceInformationPtr& si, const CostMap& map, double weight)
+  TraversalCostObjective(const ob::SpaceInformationPtr& si, const CostMap& map,
+                         const GlobalPlannerParams& params)
       : ob::StateCostIntegralObjective(si, true),
         map_(map),
-        weight_(weight / 100.0),
+        weight_(params.traversal_cost_weight / 100.0),
+        clearance_weight_(params.clearance_weight),
+        inflation_m_(params.clearance_inflation_m),
+        inscribed_m_(map.footprint().inscribed_radius_m()),
         step_m_(std::max(map.resolution_m(), 0.1)) {
     description_ = "length plus traversal cost";
   }
+  double CostAt(const Vector2& p) const {
+    double c = 1.0 + weight_ * map_.TraversalCostAt(p);
+    if (clearance_weight_ > 0.0 && inflation_m_ > 0.0) {
+      const double d = map_.SmoothClearanceAt(p);
+      if (std::isfinite(d)) {
+        c += clearance_weight_ * std::clamp(1.0 - (d - inscribed_m_) / inflation_m_, 0.0, 1.0);
+      }
+    }
+    return c;
+  }
   ob::Cost stateCost(const ob::State* s) const override {
-    return ob::Cost(1.0 + weight_ * map_.TraversalCostAt(ToPose(s).position()));
+    return ob::Cost(CostAt(ToPose(s).position()));
   }
   ob::Cost motionCost(const ob::State* s1, const ob::State* s2) const override {
     const double d = si_->distance(s1, s2);
@@ -207,9 +223,9 @@ class TraversalCostObjective : public ob::StateCostIntegralObjective {
     const Vector2 b = ToPose(s2).position();
     const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / step_m_)));
     double sum = 0.0;
-    double prev = 1.0 + weight_ * map_.TraversalCostAt(a);
+    double prev = CostAt(a);
     for (int k = 1; k <= n; ++k) {
-      const double c = 1.0 + weight_ * map_.TraversalCostAt(a + (b - a) * (double(k) / n));
+      const double c = CostAt(a + (b - a) * (double(k) / n));
       sum += 0.5 * (prev + c);
       prev = c;
     }
@@ -223,6 +239,9 @@ class TraversalCostObjective : public ob::StateCostIntegralObjective {
  private:
   const CostMap& map_;
   double weight_;
+  double clearance_weight_;
+  double inflation_m_;
+  double inscribed_m_;
   double step_m_;
 };
 
@@ -350,6 +369,8 @@ void GlobalPlannerParams::Validate() const {
                                     "(or use reeds_shepp)");
   CAIRN_THROW_UNLESS(time_budget_s > 0.0, "time_budget_s must be positive");
   CAIRN_THROW_UNLESS(traversal_cost_weight >= 0.0, "traversal_cost_weight must not be negative");
+  CAIRN_THROW_UNLESS(clearance_weight >= 0.0, "clearance_weight must not be negative");
+  CAIRN_THROW_UNLESS(clearance_inflation_m >= 0.0, "clearance_inflation_m must not be negative");
   CAIRN_THROW_UNLESS(validity_resolution_m > 0.0, "validity_resolution_m must be positive");
   CAIRN_THROW_UNLESS(range_m >= 0.0, "range_m must not be negative");
   CAIRN_THROW_UNLESS(bounds_margin_m >= 0.0, "bounds_margin_m must not be negative");
@@ -508,8 +529,8 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
   }
 
   ob::OptimizationObjectivePtr objective;
-  if (params_.traversal_cost_weight > 0.0) {
-    objective = std::make_shared<TraversalCostObjective>(si, map, params_.traversal_cost_weight);
+  if (params_.traversal_cost_weight > 0.0 || params_.clearance_weight > 0.0) {
+    objective = std::make_shared<TraversalCostObjective>(si, map, params_);
   } else {
     objective = std::make_shared<ob::PathLengthOptimizationObjective>(si);
   }

@@ -14,7 +14,7 @@
 ///
 /// - States are checked by rasterising the footprint on the cost layer (CostMap::IsValid).
 /// - The objective is path length plus traversal cost: the integral of
-///   1 + traversal_cost_weight · cost / 100 along the path.
+///   1 + traversal_cost_weight · cost / 100 + clearance_weight · proximity along the path.
 /// - Only an exact solution counts; an approximate one is PlanStatus::kApproximate.
 /// - Before OMPL runs, a grid connectivity check proves "no path" when the goal is not
 ///   connected to the start (sampling planners cannot prove infeasibility within a budget).
@@ -47,6 +47,11 @@ struct GlobalPlannerParams {
   bool stop_at_first_solution{true};
   /// Weight of the traversal cost against length (0: shortest path).
   double traversal_cost_weight{1.0};
+  /// Weight of the proximity cost (0..1 per metre, growing as the distance to the nearest
+  /// blocking cell falls below the inscribed radius plus clearance_inflation_m): keeps paths
+  /// off walls and corners, since the cost layer itself has no inflation.
+  double clearance_weight{1.0};
+  double clearance_inflation_m{0.4};
   /// Spacing of the states checked along a motion (OMPL's validity checking resolution).
   double validity_resolution_m{0.05};
   /// The planner samples the bounding box of the known cells, the start and the goal, grown by

@@ -29,9 +29,18 @@ GridPath GridAStar(const CostMap& map, const Vector2& start_m, const Vector2& go
   const float* cost = map.cost().data();
   const float unknown_cost = map.params().unknown_cost;
   const float lethal = map.params().lethal_cost;
+  const double inscribed_cells = map.footprint().inscribed_radius_m() / res;
+  const double inflation_cells = params.clearance_inflation_m / res;
+  // Cell cost in units of cost/100, proximity folded in (same scale as the OMPL objective).
   auto traversal = [&](int64_t i) {
     const float v = cost[i];
-    return std::isnan(v) ? unknown_cost : std::min(std::max(v, 0.0f), lethal);
+    double c = std::isnan(v) ? unknown_cost : std::min(std::max(v, 0.0f), lethal);
+    c *= params.traversal_cost_weight;
+    if (params.clearance_weight > 0.0 && inflation_cells > 0.0 && std::isfinite(dist[i])) {
+      c += 100.0 * params.clearance_weight *
+           std::clamp(1.0 - (dist[i] - inscribed_cells) / inflation_cells, 0.0, 1.0);
+    }
+    return static_cast<float>(c);
   };
 
   const int64_t s = start->ix + static_cast<int64_t>(start->iy) * sx;
@@ -44,7 +53,7 @@ GridPath GridAStar(const CostMap& map, const Vector2& start_m, const Vector2& go
   std::vector<uint8_t> closed(static_cast<size_t>(n), 0);
   using Entry = std::pair<float, int32_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
-  const double w = params.traversal_cost_weight / 100.0;
+  const double w = 1.0 / 100.0;  // traversal() already carries the weights
   // Octile distance times the cheapest step cost is admissible.
   auto heuristic = [&](int64_t i) {
     const double dx = std::abs(static_cast<double>(i % sx - goal->ix));

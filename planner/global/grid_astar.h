@@ -9,13 +9,16 @@
 /// @file
 /// Grid A*: 8-connected search on the cost layer with the footprint's inscribed disc as the
 /// inflation. It is the benchmark baseline of the OMPL planner and uses the same cost: step
-/// length times (1 + weight · mean cell cost / 100).
+/// length times (1 + weight · mean cell cost / 100 + clearance weight · mean proximity).
 
 namespace cairn::planner {
 
 struct GridAStarParams {
   /// Multiplies the traversal cost (cost/100) added to each metre travelled.
   double traversal_cost_weight{1.0};
+  /// Proximity cost as in GlobalPlannerParams (same weight and inflation by default).
+  double clearance_weight{1.0};
+  double clearance_inflation_m{0.4};
   /// A cell is passable when its centre is at least this far (m) from every blocking cell.
   /// Negative: the footprint's inscribed radius less (half a cell diagonal - half a cell), the
   /// most permissive inflation that never closes a gap the footprint fits through.
