@@ -351,6 +351,53 @@ const std::vector<int32_t>& CostMap::RidgeCells() const {
   return ridges_;
 }
 
+bool CostMap::ConnectedWithinHorizon(const Vector2& a_world_m, const Vector2& b_world_m,
+                                     double horizon_m, double goal_radius_m) const {
+  const auto a = geometry_.IndexOf(a_world_m);
+  const auto b = geometry_.IndexOf(b_world_m);
+  if (!a || !b) return false;
+  const int sx = geometry_.size_x;
+  const int sy = geometry_.size_y;
+  const double res = geometry_.resolution_m;
+  const double inscribed = shapes_[0].inscribed_cells;
+  const double threshold = std::max(0.0, inscribed - kInnerSlack - 1e-3);
+  const float* d = blocked_distance_.data();
+  const float* c = cost_.data();
+  const double h2 = (horizon_m / res) * (horizon_m / res);
+  const double g2 = (goal_radius_m / res) * (goal_radius_m / res);
+  auto allowed = [&](int ix, int iy) {
+    const int64_t i = ix + static_cast<int64_t>(iy) * sx;
+    if (inscribed > 0.0 && !(d[i] > 0.0f && d[i] >= threshold)) return false;
+    if (!std::isnan(c[i])) return true;
+    const double da = double(ix - a->ix) * (ix - a->ix) + double(iy - a->iy) * (iy - a->iy);
+    const double db = double(ix - b->ix) * (ix - b->ix) + double(iy - b->iy) * (iy - b->iy);
+    return da <= h2 || db <= g2;
+  };
+  if (!allowed(a->ix, a->iy) || !allowed(b->ix, b->iy)) return false;
+  std::vector<uint8_t> seen(static_cast<size_t>(geometry_.num_cells()), 0);
+  std::vector<int64_t> stack = {a->ix + static_cast<int64_t>(a->iy) * sx};
+  seen[stack.back()] = 1;
+  const int64_t target = b->ix + static_cast<int64_t>(b->iy) * sx;
+  while (!stack.empty()) {
+    const int64_t i = stack.back();
+    stack.pop_back();
+    if (i == target) return true;
+    const int ix = static_cast<int>(i % sx);
+    const int iy = static_cast<int>(i / sx);
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int nx = ix + dx, ny = iy + dy;
+        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= sx || ny >= sy) continue;
+        const int64_t j = nx + static_cast<int64_t>(ny) * sx;
+        if (seen[j] || !allowed(nx, ny)) continue;
+        seen[j] = 1;
+        stack.push_back(j);
+      }
+    }
+  }
+  return false;
+}
+
 int CostMap::ComponentOf(const Vector2& world_m) const {
   std::call_once(components_once_, [this] { ComputeComponents(); });
   const Vector2 g = ToGridCells(world_m);

@@ -134,6 +134,14 @@ class CostMap {
   /// Sampling them puts states in the middle of corridors and doors (MAPRM's idea).
   const std::vector<int32_t>& RidgeCells() const;
 
+  /// Like MaybeConnected, but unknown cells only count within `horizon_m` of `a` or within
+  /// `goal_radius_m` of `b`: "is there a route through what the robot knows, and through the
+  /// unexplored space it can see around it?" Unknown space far away (between distant lidar
+  /// rings, behind unobserved stretches of wall) is not assumed open. A breadth-first search
+  /// from `a` (linear in the cells it reaches).
+  bool ConnectedWithinHorizon(const common::Vector2& a_world_m, const common::Vector2& b_world_m,
+                              double horizon_m, double goal_radius_m) const;
+
   /// Component label of the cell holding a point; -1 when impassable or outside.
   int ComponentOf(const common::Vector2& world_m) const;
 

@@ -54,6 +54,8 @@ void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
   map.Get("goal_tolerance_m", &p->goal_tolerance_m);
   map.Get("goal_yaw_samples", &p->goal_yaw_samples);
   map.Get("grid_precheck", &p->grid_precheck);
+  map.Get("unknown_horizon_m", &p->unknown_horizon_m);
+  map.Get("unknown_goal_radius_m", &p->unknown_goal_radius_m);
   map.Get("start_rescue_radius_m", &p->start_rescue_radius_m);
   map.Get("seed", &p->seed);
   map.Finish();

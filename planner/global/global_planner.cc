@@ -386,6 +386,8 @@ void GlobalPlannerParams::Validate() const {
   CAIRN_THROW_UNLESS(goal_tolerance_m > 0.0, "goal_tolerance_m must be positive");
   CAIRN_THROW_UNLESS(goal_yaw_samples >= 1, "goal_yaw_samples must be at least 1");
   CAIRN_THROW_UNLESS(start_rescue_radius_m >= 0.0, "start_rescue_radius_m must not be negative");
+  CAIRN_THROW_UNLESS(unknown_horizon_m >= 0.0, "unknown_horizon_m must not be negative");
+  CAIRN_THROW_UNLESS(unknown_goal_radius_m >= 0.0, "unknown_goal_radius_m must not be negative");
   CAIRN_THROW_UNLESS(seed != 0, "seed must not be 0 (OMPL would pick a random one)");
 }
 
@@ -442,6 +444,15 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
   if (cancelled()) return finish(PlanStatus::kCancelled, "cancelled");
   if (params_.grid_precheck && !map.MaybeConnected(start.position(), goal.position())) {
     return finish(PlanStatus::kNoPath, "the goal is not connected to the start");
+  }
+  if (params_.grid_precheck && params_.unknown_horizon_m > 0.0 &&
+      map.params().unknown_is_traversable &&
+      !map.ConnectedWithinHorizon(start.position(), goal.position(), params_.unknown_horizon_m,
+                                  params_.unknown_goal_radius_m)) {
+    std::ostringstream m;
+    m << "the goal is not connected to the start through known cells and unknown cells within "
+      << params_.unknown_horizon_m << " m";
+    return finish(PlanStatus::kNoPath, m.str());
   }
 
   std::lock_guard<std::mutex> lock(PlanMutex());

@@ -17,7 +17,9 @@
 ///   1 + traversal_cost_weight · cost / 100 + clearance_weight · proximity along the path.
 /// - Only an exact solution counts; an approximate one is PlanStatus::kApproximate.
 /// - Before OMPL runs, a grid connectivity check proves "no path" when the goal is not
-///   connected to the start (sampling planners cannot prove infeasibility within a budget).
+///   connected to the start (sampling planners cannot prove infeasibility within a budget);
+///   with unknown cells traversable, unknown space beyond unknown_horizon_m of the start is
+///   not counted on for that check.
 /// - States are checked with the footprint grown by CostMapParams::planning_padding_m (except
 ///   near the start and the goal), so poses between checked states keep clear as well.
 /// - After the first exact solution, a few more are planned within a small budget and merged
@@ -86,6 +88,12 @@ struct GlobalPlannerParams {
   double start_rescue_radius_m{0.3};
   /// Run the grid connectivity proof before OMPL.
   bool grid_precheck{true};
+  /// With unknown cells traversable, "no path" is also answered when the goal cannot be reached
+  /// through known cells plus unknown cells within this distance of the start (or within
+  /// unknown_goal_radius_m of the goal): routes through far unexplored space (gaps between
+  /// distant lidar rings, unobserved stretches of wall) are not taken on faith. 0: off.
+  double unknown_horizon_m{12.0};
+  double unknown_goal_radius_m{2.0};
   /// Seed of OMPL's random number generators (0 is not allowed by OMPL).
   uint32_t seed{1};
 

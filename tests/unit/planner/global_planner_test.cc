@@ -186,6 +186,31 @@ TEST(GlobalPlannerTest, NoPathWhenTheGapIsNarrowerThanTheRobot) {
   EXPECT_EQ(r.status, PlanStatus::kNoPath) << r.message;
 }
 
+TEST(GlobalPlannerTest, NoPathThroughFarUnexploredSpaceOnly) {
+  // The goal pocket (x > 10) is walled off except through a gap in its wall 25 m away from the
+  // start, in unexplored space. Unknown cells are traversable, so the sound connectivity proof
+  // sees a route; within the 12 m horizon there is none.
+  TestLayer layer(300, 100, 0.1, 0.0f);
+  layer.Rect(9.8, 0.0, 10.2, 10.0, 100.0f);  // the wall between start and goal
+  layer.Rect(10.2, 9.6, 30.0, 10.0, NAN);    // unexplored strip along the top ...
+  layer.Rect(24.0, 0.0, 30.0, 10.0, NAN);    // ... and the far end
+  layer.Rect(9.8, 8.0, 10.2, 10.0, NAN);     // the wall's far part was never seen
+  CostMapParams lenient;
+  lenient.unknown_is_traversable = true;
+  const auto map = layer.Build(SmallFootprint(), lenient);
+  const PlanRequest req{{2.0, 2.0, 0.0}, {14.0, 2.0, 0.0}, false};
+  EXPECT_TRUE(map->MaybeConnected(req.start.position(), req.goal.position()));
+  EXPECT_FALSE(map->ConnectedWithinHorizon(req.start.position(), req.goal.position(), 6.0, 2.0));
+  EXPECT_TRUE(map->ConnectedWithinHorizon(req.start.position(), req.goal.position(), 30.0, 2.0));
+  GlobalPlannerParams p = Params();
+  p.unknown_horizon_m = 6.0;
+  const PlanResult r = GlobalPlanner(p).Plan(*map, req);
+  EXPECT_EQ(r.status, PlanStatus::kNoPath) << r.message;
+  EXPECT_NE(r.message.find("within 6 m"), std::string::npos);
+  p.unknown_horizon_m = 0.0;  // off: the route through the unexplored gap is planned
+  EXPECT_EQ(GlobalPlanner(p).Plan(*map, req).status, PlanStatus::kSuccess);
+}
+
 TEST(GlobalPlannerTest, TimedOutWhenTheBudgetIsTooSmall) {
   // A long maze of narrow passages: connected, but not in a tenth of a millisecond.
   TestLayer layer(300, 300, 0.1);
