@@ -1,9 +1,12 @@
 #include "mapstore/map_cli.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <ctime>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <memory>
@@ -26,6 +29,7 @@
 namespace cairn::mapstore {
 namespace {
 
+namespace fs = std::filesystem;
 using common::FlagParser;
 using common::Status;
 
@@ -609,6 +613,25 @@ int CmdPlaces(int argc, char** argv) {
   return 0;
 }
 
+// `cairn-map serve` is cairn-map-server (it needs the bus, this program does not): run the
+// sibling executable in place of this process, with the same flags (and the same pid, so a
+// launcher watching it sees one process).
+int CmdServe(int argc, char** argv) {
+  std::error_code ec;
+  const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+  const std::string server =
+      ec ? std::string("cairn-map-server") : (self.parent_path() / "cairn-map-server").string();
+  std::vector<std::string> args = {server};
+  for (int i = 1; i < argc; ++i) args.emplace_back(argv[i]);
+  std::vector<char*> exec_argv;
+  for (auto& a : args) exec_argv.push_back(a.data());
+  exec_argv.push_back(nullptr);
+  execvp(server.c_str(), exec_argv.data());
+  std::fprintf(stderr, "cairn-map serve: cannot run %s: %s\n", server.c_str(),
+               std::strerror(errno));
+  return 1;
+}
+
 struct Command {
   const char* name;
   const char* summary;
@@ -631,6 +654,7 @@ const std::vector<Command>& Commands() {
       {"delete", "soft-delete a map or version", CmdDelete},
       {"audit", "recent changes", CmdAudit},
       {"places", "semantic places of a site", CmdPlaces},
+      {"serve", "serve a stored map to a robot on the bus (cairn-map-server)", CmdServe},
   };
   return commands;
 }

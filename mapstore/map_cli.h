@@ -14,6 +14,8 @@
 ///   cairn-map vacuum   drop unreferenced blobs and compact the file
 ///   cairn-map migrate  bring an older schema to the current one
 ///   cairn-map profiles / put-profile / delete / audit / places
+///   cairn-map serve    serve a stored map to a robot on the bus: runs cairn-map-server (the
+///                      only command that uses the bus, kept in its own program)
 ///
 /// Every command prints --help. Long operations show progress when stdout is a terminal.
 /// Exit status: 0 success, 1 failure (or problems found by check), 2 bad usage.

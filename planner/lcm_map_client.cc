@@ -15,9 +15,16 @@ LcmMapClient::LcmMapClient(runtime::Node& node, LcmMapClientParams params,
       footprint_m_(std::move(footprint_m)),
       cost_params_(cost_params) {
   cost_params_.Validate();
+  if (params_.encoding == MapEncoding::kOccupancy) params_.occupancy.Validate();
   FootprintRasterizer check(footprint_m_);  // throws on a bad footprint
-  node_.Subscribe<cairn::lcmt_grid_tile>(channels::ForRobot(params_.robot, channels::kMapTiles),
-                                         [this](const cairn::lcmt_grid_tile& t) { OnTile(t); });
+  if (params_.encoding == MapEncoding::kOccupancy) {
+    node_.Subscribe<cairn::lcmt_occupancy_tile>(
+        channels::ForRobot(params_.robot, channels::kMapOccupancy),
+        [this](const cairn::lcmt_occupancy_tile& t) { OnTile(t); });
+  } else {
+    node_.Subscribe<cairn::lcmt_grid_tile>(channels::ForRobot(params_.robot, channels::kMapTiles),
+                                           [this](const cairn::lcmt_grid_tile& t) { OnTile(t); });
+  }
   node_.Subscribe<cairn::lcmt_grid_manifest>(
       channels::ForRobot(params_.robot, channels::kMapManifest),
       [this](const cairn::lcmt_grid_manifest& m) { OnManifest(m); });
@@ -41,6 +48,18 @@ bool LcmMapClient::Accepts(const std::string& robot, const std::string& map_name
 }
 
 void LcmMapClient::OnTile(const cairn::lcmt_grid_tile& tile) {
+  // A float tile of our layer name while we read occupancy (or the reverse) is not ours.
+  if (params_.encoding != MapEncoding::kCost) return;
+  OnTileImpl(tile);
+}
+
+void LcmMapClient::OnTile(const cairn::lcmt_occupancy_tile& tile) {
+  if (params_.encoding != MapEncoding::kOccupancy) return;
+  OnTileImpl(tile);
+}
+
+template <typename TileMsg>
+void LcmMapClient::OnTileImpl(const TileMsg& tile) {
   if (!Accepts(tile.robot, tile.map_name, tile.layer)) return;
   if (!assembler_.OnTile(tile)) {
     node_.CountDropped("bad_map_tiles");
@@ -101,6 +120,9 @@ void LcmMapClient::MaybeBuild(bool allow_incomplete) {
   auto layer = assembler_.Layer(params_.layer);
   if (!layer) return;
   common::Layer& cells = layer->at(params_.layer);
+  if (params_.encoding == MapEncoding::kOccupancy) {
+    cells = OccupancyToCostLayer(cells, params_.occupancy, cost_params_.lethal_cost);
+  }
   if (allow_incomplete && tile_size_ > 0) {
     // Tiles the mapper announced but we never got: block them rather than read them as
     // unexplored (which the planners may be allowed to cross).
@@ -124,14 +146,15 @@ void LcmMapClient::MaybeBuild(bool allow_incomplete) {
     ++snapshots_;
   } catch (const std::exception& e) {
     node_.CountDropped("bad_map_layers");
-    node_.Warn("map_layer", std::string("cost layer refused: ") + e.what());
+    node_.Warn("map_layer", "layer " + params_.layer + " refused: " + e.what());
     built_version_ = version;  // do not retry the same bad version
     pending_since_utime_ = 0;
   }
   node_.Count("map_snapshots");
   if (!allow_incomplete) return;
   node_.Count("incomplete_map_snapshots");
-  node_.Warn("map_incomplete", "using an incomplete cost layer (missing tiles count as lethal)");
+  node_.Warn("map_incomplete",
+             "using an incomplete layer " + params_.layer + " (missing tiles count as lethal)");
 }
 
 }  // namespace cairn::planner

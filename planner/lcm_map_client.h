@@ -8,22 +8,28 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_occupancy_tile.hpp"
 
 #include "planner/cost_map.h"
 #include "planner/map_source.h"
+#include "planner/occupancy_cost.h"
 #include "services/runtime/node.h"
 #include "services/runtime/tiler.h"
 
 /// @file
-/// LcmMapClient: a MapSource that rebuilds one cost layer from a mapper's tiles
-/// (<robot>.MAP.TILES, lcmt_grid_tile) and manifests (<robot>.MAP.MANIFEST), asks for missing
-/// tiles on <robot>.MAP.TILE_RESEND, and turns each complete layer version into a CostMap.
+/// LcmMapClient: a MapSource that rebuilds one layer from a mapper's tiles and manifests
+/// (<robot>.MAP.MANIFEST), asks for missing tiles on <robot>.MAP.TILE_RESEND, and turns each
+/// complete layer version into a CostMap. The layer is either a cost layer ("cost/<profile>",
+/// float tiles on <robot>.MAP.TILES) or a 2-D occupancy layer (the dynamic map server's
+/// "final", int8 tiles on <robot>.MAP.OCCUPANCY) converted to cost by OccupancyToCostLayer.
 
 namespace cairn::planner {
 
 struct LcmMapClientParams {
   std::string robot;
-  std::string layer;     ///< "cost/<profile>"
+  std::string layer;     ///< "cost/<profile>" (kCost), or "final", "long_term"... (kOccupancy)
+  MapEncoding encoding{MapEncoding::kCost};
+  OccupancyCostParams occupancy;  ///< kOccupancy: the occupancy-to-cost thresholds
   std::string map_name;  ///< accept only this map name ("" = any)
   std::string requester{"cairn-navigator"};
   double resend_interval_s{0.5};
@@ -35,7 +41,7 @@ struct LcmMapClientParams {
 class LcmMapClient : public MapSource {
  public:
   /// Subscribes on `node` (which must outlive the client).
-  /// @throws std::invalid_argument for an invalid footprint or cost-map params.
+  /// @throws std::invalid_argument for an invalid footprint, cost-map or occupancy params.
   LcmMapClient(runtime::Node& node, LcmMapClientParams params,
                std::vector<common::Vector2> footprint_m, CostMapParams cost_params);
   LcmMapClient(const LcmMapClient&) = delete;
@@ -46,6 +52,7 @@ class LcmMapClient : public MapSource {
 
   /// Handlers (public for tests that drive the client without a bus).
   void OnTile(const cairn::lcmt_grid_tile& tile);
+  void OnTile(const cairn::lcmt_occupancy_tile& tile);
   void OnManifest(const cairn::lcmt_grid_manifest& manifest);
   /// Sends resend requests and builds overdue incomplete snapshots; call periodically.
   void Poll();
@@ -55,6 +62,8 @@ class LcmMapClient : public MapSource {
  private:
   bool Accepts(const std::string& robot, const std::string& map_name,
                const std::string& layer) const;
+  template <typename TileMsg>
+  void OnTileImpl(const TileMsg& tile);
   void MaybeBuild(bool allow_incomplete);
 
   runtime::Node& node_;

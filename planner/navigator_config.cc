@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "common/check.h"
+#include "common/layers.h"
 
 namespace cairn::planner {
 
@@ -32,6 +33,14 @@ void LoadCostMap(YamlMap map, CostMapParams* p) {
   map.Finish();
 }
 
+void LoadMapLayer(YamlMap map, MapLayerConfig* p) {
+  map.Get("layer", &p->layer);
+  GetNamed(map, "encoding", &p->encoding, MapEncodingFromName);
+  map.Get("occupied_threshold_og", &p->occupancy.occupied_threshold_og);
+  map.Get("free_threshold_og", &p->occupancy.free_threshold_og);
+  map.Finish();
+}
+
 void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
   map.Get("planner", &p->planner);
   GetNamed(map, "state_space", &p->state_space, StateSpaceKindFromName);
@@ -47,6 +56,7 @@ void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
   map.Get("aligned_heading_fraction", &p->aligned_heading_fraction);
   map.Get("ridge_sample_fraction", &p->ridge_sample_fraction);
   map.Get("improvement_rounds", &p->improvement_rounds);
+  map.Get("grid_route_candidate", &p->grid_route_candidate);
   map.Get("improvement_time_s", &p->improvement_time_s);
   map.Get("escape_radius_m", &p->escape_radius_m);
   map.Get("simplify_time_s", &p->simplify_time_s);
@@ -150,6 +160,12 @@ PoseSource PoseSourceFromName(const std::string& name) {
   return PoseSource::kPose;
 }
 
+std::string MapLayerConfig::LayerFor(const std::string& profile) const {
+  if (!layer.empty()) return layer;
+  return encoding == MapEncoding::kOccupancy ? std::string(layers::kFinal)
+                                             : layers::CostLayer(profile);
+}
+
 void NavigatorConfig::Finalize() {
   CAIRN_THROW_UNLESS(control_rate_hz > 0.0 && control_rate_hz <= 1000.0,
                      "control_rate_hz must lie in (0, 1000]");
@@ -160,6 +176,7 @@ void NavigatorConfig::Finalize() {
   local_planner.generator.control_period_s = navigator.control_period_s;
   navigator.plan_time_budget_s = global_planner.time_budget_s;
   cost_map.Validate();
+  if (map.encoding == MapEncoding::kOccupancy) map.occupancy.Validate();
   global_planner.Validate();
   local_planner.Validate();
   navigator.Validate();
@@ -173,6 +190,7 @@ NavigatorConfig LoadNavigatorConfig(YamlMap& root) {
   root.Get("map_name", &c.map_name);
   root.Get("resend_interval_s", &c.resend_interval_s);
   root.Get("incomplete_map_timeout_s", &c.incomplete_map_timeout_s);
+  LoadMapLayer(root.Child("map"), &c.map);
   LoadCostMap(root.Child("cost_map"), &c.cost_map);
   LoadGlobal(root.Child("global_planner"), &c.global_planner);
   LoadLocal(root.Child("local_planner"), &c.local_planner);

@@ -7,6 +7,7 @@
 #include "planner/global/global_planner.h"
 #include "planner/local/dwa_planner.h"
 #include "planner/navigator.h"
+#include "planner/occupancy_cost.h"
 
 /// @file
 /// Configuration of cairn-navigator (config/navigator/navigator.yaml) and its strict loader.
@@ -16,12 +17,27 @@ namespace cairn::planner {
 /// Where the robot pose comes from.
 enum class PoseSource { kPose, kOdom };
 
+/// Which of the mapper's layers the navigator plans on (the `map:` section).
+struct MapLayerConfig {
+  /// "" (default): the profile's cost layer "cost/<profile>" with encoding cost; with encoding
+  /// occupancy, "" means "final" (the dynamic map server's composed layer, seed 001).
+  std::string layer;
+  MapEncoding encoding{MapEncoding::kCost};
+  /// Occupancy encoding only: how occupancy becomes cost.
+  OccupancyCostParams occupancy;
+
+  /// The layer name to subscribe to for a robot profile.
+  std::string LayerFor(const std::string& profile) const;
+};
+
 struct NavigatorConfig {
   PoseSource pose_source{PoseSource::kPose};  ///< <robot>.POSE (lcmt_pose) or <robot>.ODOM
   double control_rate_hz{20.0};
   double status_rate_hz{2.0};
   /// Accept map tiles of this map name only ("" = any).
   std::string map_name;
+  /// The layer planned on and its encoding (default: the profile's cost layer).
+  MapLayerConfig map;
   /// Ask the mapper again for missing tiles at most this often.
   double resend_interval_s{0.5};
   /// Use an incomplete layer (absent tiles unknown) after waiting this long for the rest.

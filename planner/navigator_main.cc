@@ -41,7 +41,8 @@ int main(int argc, char** argv) {
   common::FlagParser flags(
       "cairn-navigator",
       "Navigates one robot to goals: an OMPL global planner on the mapper's cost layer for the "
-      "robot's profile, a DWA local planner, recovery behaviours and a safety stop when the pose "
+      "robot's profile (or, with map.encoding occupancy, on a 2-D occupancy layer such as the "
+      "dynamic map server's final layer), a DWA local planner, recovery behaviours and a safety stop when the pose "
       "or the map goes stale.");
   flags.AddString("robot", &robot, "robot name, the prefix of its channels (required)");
   flags.AddString("profile", &profile_arg,
@@ -55,7 +56,8 @@ int main(int argc, char** argv) {
                   "override the configuration: pose (<robot>.POSE) or odom (<robot>.ODOM)");
   flags.AddString("lcm-url", &lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm with ttl=0)");
   flags.AddHelpSection("Channels",
-                       "reads  <robot>.GOAL, <robot>.POSE or <robot>.ODOM, <robot>.MAP.TILES,\n"
+                       "reads  <robot>.GOAL, <robot>.POSE or <robot>.ODOM, <robot>.MAP.TILES\n"
+                       "       (or <robot>.MAP.OCCUPANCY with map.encoding occupancy),\n"
                        "       <robot>.MAP.MANIFEST, SIM.CLOCK\n"
                        "writes <robot>.CMD_VEL, <robot>.PATH, <robot>.NAV_STATUS,\n"
                        "       <robot>.MAP.TILE_RESEND, <robot>.MAP.CONTROL, HEALTH");

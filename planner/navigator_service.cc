@@ -23,7 +23,9 @@ LcmMapClientParams MapClientParams(const std::string& robot, const common::Robot
                                    const NavigatorConfig& config) {
   LcmMapClientParams p;
   p.robot = robot;
-  p.layer = layers::CostLayer(profile.name);
+  p.layer = config.map.LayerFor(profile.name);
+  p.encoding = config.map.encoding;
+  p.occupancy = config.map.occupancy;
   p.map_name = config.map_name;
   p.requester = kProcess;
   p.resend_interval_s = config.resend_interval_s;
@@ -61,9 +63,10 @@ NavigatorService::NavigatorService(runtime::Node& node, NavigatorConfig config,
   node_.AddTimer(1.0 / config_.status_rate_hz, [this] { PublishStatus(); });
   node_.SetState(runtime::HealthState::kReady, "waiting for a goal");
   node_.Event(
-      "navigating %s as %s on layer %s with %s (%s), DWA %dx%d over %.1f s at %.0f Hz, pose from "
-      "%s",
-      robot_.c_str(), profile_.name.c_str(), layers::CostLayer(profile_.name).c_str(),
+      "navigating %s as %s on layer %s (%s) with %s (%s), DWA %dx%d over %.1f s at %.0f Hz, pose "
+      "from %s",
+      robot_.c_str(), profile_.name.c_str(), config_.map.LayerFor(profile_.name).c_str(),
+      MapEncodingName(config_.map.encoding),
       config_.global_planner.planner.c_str(),
       StateSpaceKindName(config_.global_planner.state_space),
       config_.local_planner.generator.vx_samples, config_.local_planner.generator.vtheta_samples,
@@ -276,6 +279,12 @@ void NavigatorService::OnGoal(const cairn::lcmt_goal& msg) {
     RefuseGoal(msg, "tolerances must be finite and not negative");
     return;
   }
+  // A goal id already taken is a re-send (senders repeat a goal until the status names it, as
+  // a message on the bus can be lost): idempotent, it never restarts the goal.
+  if (msg.goal_id != 0 && msg.goal_id == last_goal_id_) {
+    node_.Count("goal_repeats", 1);
+    return;
+  }
   NavGoal goal;
   goal.id = msg.goal_id;
   goal.xy_tolerance_m = msg.xy_tolerance_m;
@@ -302,6 +311,7 @@ void NavigatorService::OnGoal(const cairn::lcmt_goal& msg) {
     RefuseGoal(msg, "unknown kind " + std::to_string(msg.kind));
     return;
   }
+  last_goal_id_ = msg.goal_id;
   navigator_.SetGoal(goal, now_s);
 }
 

@@ -87,6 +87,7 @@ class NavigatorService {
   NavState last_logged_state_{NavState::kIdle};
   NavReason last_logged_reason_{NavReason::kNone};
   int64_t last_logged_goal_{-1};
+  int64_t last_goal_id_{0};  // the newest goal id taken (re-sends of it are ignored)
   bool stopped_degraded_{false};
 
   // Planner worker: one job at a time, the newest wins.

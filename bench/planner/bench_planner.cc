@@ -193,7 +193,8 @@ void BenchOmpl(const cairn::common::RobotProfile& profile) {
       ++skipped;
     }
     astar_ms.push_back(astar_time);
-    planner::GlobalPlannerParams gp;  // the navigator's defaults: RRTConnect, 1 s budget
+    planner::GlobalPlannerParams gp;  // the navigator's defaults: RRTConnect, 1 s budget ...
+    gp.grid_route_candidate = false;  // ... sampling alone, measured against the grid A* baseline
     gp.seed = 1 + run;
     const planner::PlanResult r = planner::GlobalPlanner(gp).Plan(map, {start, goal, false});
     if (r.ok()) {

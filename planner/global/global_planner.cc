@@ -36,6 +36,7 @@
 #include "common/check.h"
 #include "common/log.h"
 #include "planner/global/dubins_space.h"
+#include "planner/global/grid_astar.h"
 
 namespace cairn::planner {
 
@@ -651,6 +652,42 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
         if (objective->isCostBetterThan(merged.cost(objective), best.cost(objective))) {
           best = merged;
         }
+      }
+    }
+  }
+
+  // The grid route as one more candidate (see GlobalPlannerParams::grid_route_candidate).
+  if (params_.grid_route_candidate && !cancelled()) {
+    GridAStarParams gp;
+    gp.traversal_cost_weight = params_.traversal_cost_weight;
+    gp.clearance_weight = params_.clearance_weight;
+    gp.clearance_inflation_m = params_.clearance_inflation_m;
+    const GridPath grid_path = GridAStar(map, start.position(), goal.position(), gp);
+    if (grid_path.found && grid_path.points_m.size() >= 2) {
+      og::PathGeometric route(si);
+      ob::ScopedState<ob::SE2StateSpace> s(space);
+      const size_t n = grid_path.points_m.size();
+      for (size_t i = 0; i < n; ++i) {
+        const Vector2& p = grid_path.points_m[i];
+        double yaw = start.yaw_rad;
+        if (i == 0) {
+          s->setXY(start.x_m, start.y_m);
+        } else {
+          const Vector2 d = (i + 1 < n ? grid_path.points_m[i + 1] : p) - grid_path.points_m[i - 1];
+          yaw = std::atan2(d.y(), d.x());
+          s->setXY(p.x(), p.y());
+        }
+        s->setYaw(OmplYaw(yaw));
+        route.append(s.get());
+      }
+      // End on a goal state the planner accepts (the goal position with an allowed heading).
+      const ob::State* last = best.getState(best.getStateCount() - 1);
+      route.append(last);
+      if (params_.simplify_time_s > 0.0) simplify(&route);
+      if (route.check() &&
+          objective->isCostBetterThan(route.cost(objective), best.cost(objective))) {
+        best = route;
+        result.grid_route_chosen = true;
       }
     }
   }

@@ -74,6 +74,12 @@ struct GlobalPlannerParams {
   int improvement_rounds{12};
   /// ... within this time after the first solution.
   double improvement_time_s{0.25};
+  /// Also offer the grid A* route on the same cost layer (headings along it, shortcut by OMPL's
+  /// simplifier, re-checked with the footprint) as one more candidate: a sampling planner that
+  /// stops at its first solutions may take any homotopy class, such as a long detour through
+  /// unexplored space, and the grid route anchors the choice to the cheapest class. The
+  /// candidate counts only if it is valid and cheaper under the objective.
+  bool grid_route_candidate{true};
   /// States closer than this to the start or the goal are checked without the padding, so a
   /// robot standing close to an obstacle can still leave (or reach) its spot.
   double escape_radius_m{0.6};
@@ -91,8 +97,9 @@ struct GlobalPlannerParams {
   /// With unknown cells traversable, "no path" is also answered when the goal cannot be reached
   /// through known cells plus unknown cells within this distance of the start (or within
   /// unknown_goal_radius_m of the goal): routes through far unexplored space (gaps between
-  /// distant lidar rings, unobserved stretches of wall) are not taken on faith. 0: off.
-  double unknown_horizon_m{12.0};
+  /// distant lidar rings, unobserved stretches of wall) are not taken on faith. 0 (default):
+  /// off, every unknown cell may be explored.
+  double unknown_horizon_m{0.0};
   double unknown_goal_radius_m{2.0};
   /// Seed of OMPL's random number generators (0 is not allowed by OMPL).
   uint32_t seed{1};
@@ -119,6 +126,7 @@ struct PlanResult {
   int solutions{0};                  ///< exact solutions found (first plus improvements)
   double total_time_s{0.0};          ///< checks, solve, simplification and re-validation
   bool simplified{false};            ///< the simplified path passed re-validation
+  bool grid_route_chosen{false};     ///< the grid A* candidate beat the sampled paths
   double start_moved_m{0.0};         ///< how far an occupied start was moved to free space
 
   bool ok() const { return status == PlanStatus::kSuccess; }

@@ -132,7 +132,13 @@ void DynamicLayers::SetLongTerm(const common::GridMap& map, const std::string& l
   CAIRN_THROW_UNLESS(map.geometry() == geometry_,
                      "the long-term layer's grid differs from the static map's");
   const common::Layer& values = map.at(layer);
-  for (size_t i = 0; i < long_og_.size(); ++i) long_og_[i] = ToOccupancy(values.data()[i]);
+  for (size_t i = 0; i < long_og_.size(); ++i) {
+    long_og_[i] = ToOccupancy(values.data()[i]);
+    // A restored layer never erases a wall of the (possibly newer) static map.
+    if (static_og_[i] >= params_.static_wall_og) {
+      long_og_[i] = std::max(long_og_[i], static_og_[i]);
+    }
+  }
 }
 
 common::GridMap DynamicLayers::ToGridMap() const {

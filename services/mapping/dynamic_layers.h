@@ -132,8 +132,10 @@ class DynamicLayers {
   void SetLongTermOccupancy(const common::CellIndex& cell, int8_t value);
 
   /// Restores a stored long-term layer: `map`'s layer `layer` (0..100, NaN unknown) on the
-  /// same grid. @throws std::invalid_argument if the geometry differs; std::out_of_range if
-  /// the layer is missing.
+  /// same grid. Cells where the static map has a wall (>= static_wall_og) keep at least the
+  /// wall's value, so a layer stored before a wall was drawn cannot erase it.
+  /// @throws std::invalid_argument if the geometry differs; std::out_of_range if the layer is
+  /// missing.
   void SetLongTerm(const common::GridMap& map, const std::string& layer = layers::kLongTerm);
 
   /// The four layers as floats in 0..100, NaN unknown: layers::kStaticMap, kShortTerm (the

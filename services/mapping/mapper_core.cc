@@ -14,6 +14,17 @@ double Seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_cloc
   return std::chrono::duration<double>(b - a).count();
 }
 
+// Equal sizes, and resolution and origin equal within a micrometre (a grid that went through a
+// store and back).
+bool SameGrid(const common::GridGeometry& a, const common::GridGeometry& b) {
+  constexpr double kTolerance = 1e-6;
+  return a.size_x == b.size_x && a.size_y == b.size_y &&
+         std::abs(a.resolution_m - b.resolution_m) < kTolerance &&
+         std::abs(a.origin.x_m - b.origin.x_m) < kTolerance &&
+         std::abs(a.origin.y_m - b.origin.y_m) < kTolerance &&
+         std::abs(a.origin.yaw_rad - b.origin.yaw_rad) < kTolerance;
+}
+
 }  // namespace
 
 void MapperCoreParams::Validate() const {
@@ -47,6 +58,24 @@ MapperCore::MapperCore(const MapperCoreParams& params) : params_(params), terrai
     }
     dynamic_ = std::make_unique<DynamicLayers>(static_map, params_.dynamic);
     dynamic_initial_ = std::make_unique<DynamicLayers>(*dynamic_);
+    // The remembered long-term layer (OP_RESET goes back to the static map alone).
+    if (params_.long_term_restore) {
+      const common::GridMap& restore = *params_.long_term_restore;
+      if (!restore.HasLayer(layers::kLongTerm)) {
+        long_term_restore_status_ =
+            common::InvalidArgumentError("the stored map has no long_term layer");
+      } else if (!SameGrid(restore.geometry(), dynamic_->geometry())) {
+        long_term_restore_status_ = common::InvalidArgumentError(
+            "the stored long-term layer lies on another grid than the static map (was the "
+            "static map changed?)");
+      } else {
+        // The same grid up to the rounding of a store round trip: take the static map's.
+        common::GridMap same(dynamic_->geometry());
+        same.AddLayer(layers::kLongTerm) = restore.at(layers::kLongTerm);
+        dynamic_->SetLongTerm(same, layers::kLongTerm);
+      }
+      params_.long_term_restore.reset();  // used once; do not keep a copy
+    }
   }
 }
 

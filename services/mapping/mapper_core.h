@@ -2,8 +2,10 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 
 #include "common/point_cloud.h"
+#include "common/status.h"
 #include "services/mapping/dynamic_layers.h"
 #include "services/mapping/occupancy_band.h"
 #include "services/mapping/occupancy_grid.h"
@@ -31,6 +33,10 @@ struct MapperCoreParams {
   DynamicLayersParams dynamic;
   std::string static_map_path;  ///< a map_server YAML file
   common::GridGeometry dynamic_extent;
+  /// A stored long-term layer (layers::kLongTerm, 0..100, NaN unknown) that replaces the one
+  /// copied from the static map at start: seed 001's memory across runs. It must lie on the
+  /// static map's grid; otherwise it is ignored (long_term_restore_status() says why).
+  std::optional<common::GridMap> long_term_restore;
 
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
@@ -76,6 +82,8 @@ class MapperCore {
   const OccupancyGrid* occupancy() const { return occupancy_.get(); }
   OctomapLayer* octomap() { return octomap_.get(); }
   const OctomapLayer* octomap() const { return octomap_.get(); }
+  /// Ok when no long-term layer was to be restored or it was; else why it was ignored.
+  const common::Status& long_term_restore_status() const { return long_term_restore_status_; }
   DynamicLayers* dynamic() { return dynamic_.get(); }
   const DynamicLayers* dynamic() const { return dynamic_.get(); }
   const MapperCoreParams& params() const { return params_; }
@@ -90,7 +98,8 @@ class MapperCore {
   std::unique_ptr<OccupancyGrid> occupancy_;
   std::unique_ptr<OctomapLayer> octomap_;
   std::unique_ptr<DynamicLayers> dynamic_;
-  std::unique_ptr<DynamicLayers> dynamic_initial_;  // as built, for Reset
+  std::unique_ptr<DynamicLayers> dynamic_initial_;  // from the static map alone, for Reset
+  common::Status long_term_restore_status_;
   std::vector<common::LaserScan> pending_scans_;
   std::vector<PlanarRay> pending_rays_;
   int64_t revolutions_{0};

@@ -12,9 +12,11 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "common/flags.h"
+#include "common/layers.h"
 #include "common/log.h"
 #include "common/robot_profile.h"
 #include "common/yaml_reader.h"
+#include "mapstore/mapstore_client.h"
 #include "services/mapping/mapper_service.h"
 #include "services/runtime/node.h"
 
@@ -170,8 +172,12 @@ void LoadOctomap(common::YamlMap m, MapperParams* params) {
   m.Finish();
 }
 
-void LoadDynamic(common::YamlMap m, MapperCoreParams* core) {
+void LoadDynamic(common::YamlMap m, MapperParams* params) {
+  MapperCoreParams* core = &params->core;
   m.Get("enabled", &core->dynamic_enabled);
+  m.Get("long_term_store", &params->long_term_store);
+  m.Get("long_term_save_period_s", &params->long_term_save_period_s);
+  m.Get("long_term_load_timeout_s", &params->long_term_load_timeout_s);
   m.Get("static_map", &core->static_map_path);
   double origin_x = -20.0, origin_y = -20.0, size_x = 40.0, size_y = 40.0, res = 0.05;
   m.Get("origin_x_m", &origin_x);
@@ -246,7 +252,7 @@ void LoadMapperConfig(const std::string& path, MapperParams* params,
   if (m.Has("terrain")) LoadTerrain(m.Child("terrain"), &params->core.terrain);
   if (m.Has("occupancy")) LoadOccupancy(m.Child("occupancy"), &params->core);
   if (m.Has("octomap")) LoadOctomap(m.Child("octomap"), params);
-  if (m.Has("dynamic")) LoadDynamic(m.Child("dynamic"), &params->core);
+  if (m.Has("dynamic")) LoadDynamic(m.Child("dynamic"), params);
   m.Finish();
 }
 
@@ -280,9 +286,35 @@ int Replay(runtime::Node& node, MapperService& service, const std::string& log_p
   return 0;
 }
 
+// Seed 001's memory across runs: the long-term layer last saved to the store. Returns false
+// (after saying why) when the mapper must not start: the store did not answer, or failed.
+bool RestoreLongTerm(runtime::Node& node, MapperParams* params) {
+  const std::string& where = params->long_term_store;
+  const auto slash = where.find('/');
+  if (slash == std::string::npos) return true;  // Validate() reports the bad name
+  mapstore::MapstoreClientOptions options;
+  options.total_timeout_s = params->long_term_load_timeout_s;
+  mapstore::MapstoreClient client(node.lcm(), "cairn-mapper-" + params->robot, options);
+  auto loaded = client.Load(where.substr(0, slash), where.substr(slash + 1), /*version=*/0,
+                            /*profile=*/"", {layers::kLongTerm});
+  if (loaded.ok()) {
+    node.Event("long-term layer restored from %s version %lld", where.c_str(),
+               static_cast<long long>(loaded->reply.version));
+    params->core.long_term_restore = std::move(loaded->layers);
+    return true;
+  }
+  if (loaded.status().code() == common::StatusCode::kNotFound) {
+    node.Event("no long-term layer stored as %s yet: it starts as the static map", where.c_str());
+    return true;
+  }
+  CAIRN_LOG_ERROR("cannot restore the long-term layer from %s: %s", where.c_str(),
+                  loaded.status().ToString().c_str());
+  return false;
+}
+
 int Main(int argc, char** argv) {
   std::string robot, config, profiles_flag, profiles_dir = CAIRN_CONFIG_DIR "/profiles";
-  std::string lcm_url, replay, output, pose_source, static_map;
+  std::string lcm_url, replay, output, pose_source, static_map, long_term_store;
   common::FlagParser flags(
       "cairn-mapper",
       "One robot's mapper: fuses the lidar into a site-fixed elevation map, derives slope, step, "
@@ -299,6 +331,10 @@ int Main(int argc, char** argv) {
   flags.AddString("pose-source", &pose_source, "ground_truth or odometry; overrides the config");
   flags.AddString("static-map", &static_map,
                   "a map_server YAML: turns the dynamic layers (seed 001) on over that map");
+  flags.AddString("long-term-store", &long_term_store,
+                  "SITE/MAP in cairn-mapstore: restore the long-term layer from there at start "
+                  "and save it there periodically (dynamic.long_term_save_period_s); overrides "
+                  "the config");
   flags.AddString("lcm-url", &lcm_url, "LCM URL (default LCM_DEFAULT_URL, else udpm ttl=0)");
   flags.AddString("replay", &replay, "an lcm-logger file to map offline instead of the bus");
   flags.AddString("output", &output,
@@ -307,7 +343,9 @@ int Main(int argc, char** argv) {
   flags.AddHelpSection("Channels",
                        "in:  <robot>.LIDAR .SCAN .POSE .ODOM .IMU .MAP.CONTROL .MAP.TILE_RESEND\n"
                        "out: <robot>.MAP.TILES .MAP.MANIFEST .MAP.OCCUPANCY .MAP.OBSTACLES "
-                       ".MAP.OCTOMAP .MAP.CONTROL_REPLY, HEALTH");
+                       ".MAP.OCTOMAP .MAP.CONTROL_REPLY, HEALTH\n"
+                       "with --long-term-store: MAPSTORE.REQUEST (load at start, periodic pull "
+                       "saves), MAPSTORE.REPLY, MAPSTORE.TILES, MAPSTORE.MANIFEST");
   flags.AddHelpSection("Control (<robot>.MAP.CONTROL)",
                        "OP_ADD_PROFILE (by name or with profile data), OP_REMOVE_PROFILE, "
                        "OP_PUBLISH_ALL, OP_RESET, OP_SNAPSHOT (writes the maps under "
@@ -334,6 +372,7 @@ int Main(int argc, char** argv) {
     params.core.dynamic_enabled = true;
     params.core.static_map_path = static_map;
   }
+  if (!long_term_store.empty()) params.long_term_store = long_term_store;
   if (pose_source == "odometry") {
     params.pose_source = PoseSource::kOdometry;
   } else if (pose_source == "ground_truth") {
@@ -365,6 +404,10 @@ int Main(int argc, char** argv) {
     if (!replay.empty()) {
       MapperService service(node, params, profiles, resolver, MapperService::Mode::kReplay);
       return Replay(node, service, replay, output);
+    }
+    if (!params.long_term_store.empty()) {
+      params.Validate();  // a bad SITE/MAP is reported before anything is asked
+      if (!RestoreLongTerm(node, &params)) return 1;
     }
     MapperService service(node, params, profiles, resolver, MapperService::Mode::kLive);
     const int code = node.Spin();

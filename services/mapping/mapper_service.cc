@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_octomap.hpp"
 
 #include "common/channels.h"
@@ -93,6 +94,16 @@ void MapperParams::Validate() const {
   CAIRN_THROW_UNLESS(max_pending_revolutions >= 1, "max_pending_revolutions must be >= 1");
   CAIRN_THROW_UNLESS(tiles_per_burst >= 1, "tiles_per_burst must be >= 1");
   CAIRN_THROW_UNLESS(burst_pause_ms >= 0, "burst_pause_ms must be >= 0");
+  if (!long_term_store.empty()) {
+    const auto slash = long_term_store.find('/');
+    CAIRN_THROW_UNLESS(slash != std::string::npos && slash > 0 &&
+                           slash + 1 < long_term_store.size() &&
+                           long_term_store.find('/', slash + 1) == std::string::npos,
+                       "long_term_store must be SITE/MAP, got '" << long_term_store << "'");
+    CAIRN_THROW_UNLESS(core.dynamic_enabled,
+                       "long_term_store needs the dynamic layers (a static map)");
+    CAIRN_THROW_UNLESS(long_term_save_period_s > 0, "long_term_save_period_s must be positive");
+  }
   core.Validate();
 }
 
@@ -105,7 +116,10 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
       mode_(mode),
       core_(params_.core),
       terrain_publisher_(params_.robot, params_.map_name),
-      occupancy_tiler_(params_.robot, params_.map_name) {
+      // Versions from the wall clock: a restarted mapper's layers supersede its predecessor's
+      // at every receiver (the navigator, the store's mirror for pull saves).
+      occupancy_tiler_(params_.robot, params_.map_name, runtime::kDefaultTileSize,
+                       mode == Mode::kLive ? runtime::LayerTiler::StartVersionBase() : 0) {
   for (const auto& p : profiles) core_.terrain().AddProfile(p);
   const auto now = Clock::now();
   next_fast_ = now + Period(params_.publish_period_s);
@@ -113,6 +127,8 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
   next_registry_ = now + Period(params_.registry_period_s);
   next_occupancy_ = now + Period(params_.occupancy_period_s);
   next_octomap_ = now + Period(params_.octomap_period_s);
+  next_long_term_save_ = now + Period(params_.long_term_save_period_s);
+  next_save_request_id_ = runtime::Node::WallUtime();  // unique across restarts
   if (mode_ == Mode::kLive) {
     const std::string& r = params_.robot;
     node_.Subscribe<cairn::lcmt_point_cloud_slice>(Ch(r, channels::kLidar),
@@ -127,6 +143,10 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
                                               [this](const auto& m) { OnControl(m); });
     node_.Subscribe<cairn::lcmt_tile_resend_request>(Ch(r, channels::kMapTileResend),
                                                      [this](const auto& m) { OnResend(m); });
+    if (!params_.long_term_store.empty()) {
+      node_.Subscribe<cairn::lcmt_mapstore_reply>(channels::kMapstoreReply,
+                                                  [this](const auto& m) { OnMapstoreReply(m); });
+    }
     worker_ = std::thread([this] { WorkerLoop(); });
     if (core_.octomap() != nullptr) octomap_worker_ = std::thread([this] { OctomapLoop(); });
   }
@@ -134,6 +154,14 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
   for (const auto& p : core_.terrain().profiles()) names += (names.empty() ? "" : ",") + p.name;
   node_.Event("mapping %s for profiles [%s], poses from %s", params_.robot.c_str(), names.c_str(),
               params_.pose_source == PoseSource::kGroundTruth ? "ground truth" : "odometry");
+  if (!core_.long_term_restore_status().ok()) {
+    node_.Warn("long_term_restore", "the stored long-term layer was not used: " +
+                                        core_.long_term_restore_status().message());
+  }
+  if (!params_.long_term_store.empty()) {
+    node_.Event("saving the long-term layer to %s every %.0f s", params_.long_term_store.c_str(),
+                params_.long_term_save_period_s);
+  }
   node_.SetState(runtime::HealthState::kReady);
 }
 
@@ -339,6 +367,20 @@ void MapperService::OnControl(const lcmt_map_control_request& msg) {
   j.kind = Job::Kind::kControl;
   j.control = msg;
   Enqueue(std::move(j));
+}
+
+void MapperService::OnMapstoreReply(const cairn::lcmt_mapstore_reply& msg) {
+  {
+    std::lock_guard<std::mutex> lock(save_mutex_);
+    if (saves_in_flight_.erase(msg.request_id) == 0) return;  // not one of ours
+  }
+  if (msg.status == cairn::lcmt_mapstore_reply::STATUS_OK) {
+    node_.Count("long_term_saves");
+  } else {
+    node_.Count("long_term_save_failures");
+    node_.Warn("long_term_save", "saving the long-term layer to " + params_.long_term_store +
+                                     " failed: " + msg.message);
+  }
 }
 
 void MapperService::OnResend(const cairn::lcmt_tile_resend_request& msg) {
@@ -678,7 +720,9 @@ void MapperService::PublishOccupancy(bool force) {
         auto batch = occupancy_tiler_.Update(layers_map, name, runtime::TileEncoding::kOccupancy,
                                              utime, force);
         Send(Ch(params_.robot, channels::kMapOccupancy), batch.occupancy_tiles);
-        if (batch.changed || force) manifests.push_back(batch.manifest);
+        // Every step's manifests go out, changed or not: they tell receivers (the navigator's
+        // staleness check when it plans on the final layer) that the layer is current.
+        manifests.push_back(batch.manifest);
       }
       Send(Ch(params_.robot, channels::kMapManifest), manifests);
     }
@@ -773,6 +817,42 @@ void MapperService::PublishDue(bool force) {
     next_octomap_ = now + Period(params_.octomap_period_s);
     PublishOctomap(force);
   }
+  if (mode_ == Mode::kLive && !params_.long_term_store.empty() && now >= next_long_term_save_) {
+    next_long_term_save_ = now + Period(params_.long_term_save_period_s);
+    RequestLongTermSave();
+  }
+}
+
+void MapperService::RequestLongTermSave() {
+  const auto slash = params_.long_term_store.find('/');
+  cairn::lcmt_mapstore_request r{};
+  r.utime = Now();
+  r.requester = "cairn-mapper-" + params_.robot;  // request ids are per requester
+  r.op = cairn::lcmt_mapstore_request::OP_SAVE;
+  r.site = params_.long_term_store.substr(0, slash);
+  r.map_name = params_.long_term_store.substr(slash + 1);
+  r.robot = params_.robot;  // a pull: the store fetches the layer from our tiles
+  r.layers = {layers::kLongTerm};
+  r.num_layers = 1;
+  r.code_version = kMappingCodeVersion;
+  {
+    std::lock_guard<std::mutex> lock(save_mutex_);
+    r.request_id = ++next_save_request_id_;
+    // A save the store never answered (it was down) is forgotten after a few periods.
+    const auto now = Clock::now();
+    for (auto it = saves_in_flight_.begin(); it != saves_in_flight_.end();) {
+      if (now - it->second > Period(4 * params_.long_term_save_period_s)) {
+        node_.Count("long_term_save_failures");
+        node_.Warn("long_term_save", "cairn-mapstore did not answer a save of the long-term layer");
+        it = saves_in_flight_.erase(it);
+      } else {
+        ++it;
+      }
+    }
+    saves_in_flight_[r.request_id] = now;
+  }
+  node_.Publish(channels::kMapstoreRequest, r);
+  node_.Count("long_term_save_requests");
 }
 
 common::Status MapperService::WriteOutputs(const std::string& dir) {

@@ -18,6 +18,7 @@
 #include "cairn/lcmt_laser_scan.hpp"
 #include "cairn/lcmt_map_control_reply.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
+#include "cairn/lcmt_mapstore_reply.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
 #include "cairn/lcmt_odometry.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
@@ -47,7 +48,12 @@
 ///   the dynamic layers are on, short_term, long_term and final (seed 001);
 /// - <robot>.MAP.OBSTACLES: the obstacle registry, with every profile's verdicts;
 /// - <robot>.MAP.OCTOMAP: the OctoMap's .bt stream in chunks;
-/// - <robot>.MAP.CONTROL_REPLY: answers (a replayed request id gets the first answer again).
+/// - <robot>.MAP.CONTROL_REPLY: answers (a replayed request id gets the first answer again);
+/// - MAPSTORE.REQUEST, with long_term_store set: every long_term_save_period_s a pull save of
+///   the long-term layer (OP_SAVE naming this robot and the layer; cairn-mapstore then fetches
+///   the tiles from <robot>.MAP.OCCUPANCY). Replies are read on MAPSTORE.REPLY and counted
+///   (long_term_saves, long_term_save_failures). This is seed 001's periodic map_saver; the
+///   main restores the stored layer at start (MapperCoreParams::long_term_restore).
 ///
 /// Sensor poses. pose_source ground_truth: each slice's own sensor pose, accepted only when a
 /// <robot>.POSE sample lies within max_pose_gap_s of the slice. odometry: the odometry pose at
@@ -84,6 +90,13 @@ struct MapperParams {
   int tiles_per_burst{8};  ///< tiles sent back to back before a short pause
   double burst_pause_ms{1.0};
   std::string snapshot_dir{"var/mapper-snapshots"};  ///< OP_SNAPSHOT writes below it
+  /// "SITE/MAP" in cairn-mapstore where the long-term layer is remembered across runs
+  /// ("" = nowhere). Needs the dynamic layers.
+  std::string long_term_store;
+  /// How often the long-term layer is saved there (seed 001's "every so often"; 20 s).
+  double long_term_save_period_s{20.0};
+  /// How long cairn-mapper waits at start for the store to send the stored layer.
+  double long_term_load_timeout_s{30.0};
   MapperCoreParams core;
 
   /// @throws std::invalid_argument naming a bad field.
@@ -141,6 +154,7 @@ class MapperService {
   void OnImu(const cairn::lcmt_imu& msg);
   void OnControl(const cairn::lcmt_map_control_request& msg);
   void OnResend(const cairn::lcmt_tile_resend_request& msg);
+  void OnMapstoreReply(const cairn::lcmt_mapstore_reply& msg);
   void OnRevolution(common::LidarRevolution revolution);
   /// The world pose of a sensor at `utime` whose producer reported `reported` (the sensor's
   /// pose by the producer's own localisation), per pose_source; nullopt without a pose near
@@ -163,6 +177,8 @@ class MapperService {
   void PublishRegistry(bool force);
   void PublishOccupancy(bool force);
   void PublishOctomap(bool force);
+  /// Asks cairn-mapstore to pull-save the long-term layer (worker thread).
+  void RequestLongTermSave();
   /// Steps the dynamic layers at their rate, on sensor time (so a replay steps alike).
   void StepDynamicUpTo(int64_t utime);
   template <typename Msg>
@@ -212,7 +228,11 @@ class MapperService {
   int64_t dynamic_published_updates_{-1};
   int64_t next_dynamic_utime_{0};
   std::chrono::steady_clock::time_point next_fast_, next_slow_, next_registry_, next_occupancy_,
-      next_octomap_;
+      next_octomap_, next_long_term_save_;
+  // Long-term saves in flight (request ids), shared with the LCM thread.
+  std::mutex save_mutex_;
+  std::map<int64_t, std::chrono::steady_clock::time_point> saves_in_flight_;
+  int64_t next_save_request_id_{0};
   std::map<std::pair<std::string, int64_t>, cairn::lcmt_map_control_reply> replies_;
   std::deque<std::pair<std::string, int64_t>> reply_order_;
   bool announced_first_revolution_{false};

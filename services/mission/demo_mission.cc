@@ -148,6 +148,7 @@ bool DemoMission::Drive(MissionReport* report) {
     double distance_m{0.0};
     std::vector<common::Vector2>* path;
     std::optional<NavStatus> status;
+    Clock::time_point status_time;
     int64_t goal_id{0};
   } state;
   state.path = &driven_m_;
@@ -180,6 +181,7 @@ bool DemoMission::Drive(MissionReport* report) {
         NavStatus m;
         if (m.decode(rbuf->data, 0, rbuf->data_size) < 0 || m.goal_id != s->goal_id) return;
         s->status = m;
+        s->status_time = Clock::now();
       },
       &state);
 
@@ -198,8 +200,12 @@ bool DemoMission::Drive(MissionReport* report) {
   int8_t last_state = -1;
   bool done = false;
   while (!done && SecondsSince(start) < params_.timeout_s && !node_->stopping()) {
-    // Publish the goal until the navigator answers for it.
-    if (!state.status && SecondsSince(last_goal) > 1.0) {
+    // Publish the goal until the navigator answers for it, and again whenever its status for
+    // the goal stops (a restarted navigator starts idle; re-sends of a goal id are idempotent).
+    const bool unanswered = !state.status || SecondsSince(state.status_time) > 3.0;
+    if (unanswered && SecondsSince(last_goal) > 1.0) {
+      if (state.status) node_->Event("goal %lld: no status for 3 s, sending it again",
+                                     static_cast<long long>(goal.goal_id));
       goal.utime = node_->NowUtime();
       node_->Publish(channels::ForRobot(params_.robot, channels::kGoal), goal);
       last_goal = Clock::now();

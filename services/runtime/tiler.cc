@@ -3,6 +3,7 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 
@@ -49,12 +50,23 @@ uint32_t Crc32(const void* data, size_t size) {
   return static_cast<uint32_t>(crc);
 }
 
-LayerTiler::LayerTiler(std::string robot, std::string map_name, int tile_size_cells)
-    : robot_(std::move(robot)), map_name_(std::move(map_name)), tile_size_(tile_size_cells) {
+LayerTiler::LayerTiler(std::string robot, std::string map_name, int tile_size_cells,
+                       int64_t version_base)
+    : robot_(std::move(robot)),
+      map_name_(std::move(map_name)),
+      tile_size_(tile_size_cells),
+      version_base_(version_base) {
+  if (version_base_ < 0) throw std::invalid_argument("the version base must not be negative");
   if (tile_size_ <= 0 || static_cast<size_t>(tile_size_) * tile_size_ * 4 + 512 > kMaxMessageBytes) {
     throw std::invalid_argument("tile size " + std::to_string(tile_size_) +
                                 " cells does not fit a 256 KB message");
   }
+}
+
+int64_t LayerTiler::StartVersionBase() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
 }
 
 int64_t LayerTiler::version(const std::string& layer) const {
@@ -73,7 +85,7 @@ LayerTiler::Batch LayerTiler::Update(const common::GridMap& map, const std::stri
     state.geometry = map.geometry();
     state.encoding = encoding;
   }
-  const int64_t next_version = state.version + 1;
+  const int64_t next_version = (state.version == 0 ? version_base_ : state.version) + 1;
   const int nx = (map.size_x() + tile_size_ - 1) / tile_size_;
   const int ny = (map.size_y() + tile_size_ - 1) / tile_size_;
   std::vector<std::pair<int, int>> changed;

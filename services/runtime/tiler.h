@@ -40,7 +40,15 @@ uint32_t Crc32(const void* data, size_t size);
 /// Publisher side: remembers what it sent per layer.
 class LayerTiler {
  public:
-  LayerTiler(std::string robot, std::string map_name, int tile_size_cells = kDefaultTileSize);
+  /// Layer versions start after `version_base` (the first Update gives version_base + 1).
+  /// Receivers ignore versions older than what they hold, so a publisher that may restart (a
+  /// mapper under cairn-launch) passes a base from the wall clock (StartVersionBase()): its
+  /// successor's versions then exceed its own and are taken at once.
+  LayerTiler(std::string robot, std::string map_name, int tile_size_cells = kDefaultTileSize,
+             int64_t version_base = 0);
+  /// A version base that grows faster than any publisher bumps versions: the wall clock in
+  /// milliseconds since the epoch.
+  static int64_t StartVersionBase();
 
   struct Batch {
     std::vector<cairn::lcmt_grid_tile> tiles;
@@ -84,6 +92,7 @@ class LayerTiler {
   std::string robot_;
   std::string map_name_;
   int tile_size_;
+  int64_t version_base_;
   std::map<std::string, LayerState> layers_;
 };
 

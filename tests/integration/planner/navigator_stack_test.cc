@@ -2,6 +2,7 @@
 // tunnel world of seed 000, one Pioneer 3-AT), cairn-mapper (terrain and cost layers) and
 // cairn-navigator. Lanes, starts and goals: simulator/worlds/tunnel_lanes.yaml.
 
+#include <chrono>
 #include <csignal>
 #include <fstream>
 #include <regex>
@@ -95,13 +96,29 @@ class NavigatorStackTest : public ::testing::Test {
     return path;
   }
 
-  void StartStack(double x, double y, double yaw_deg) {
+  // The shipped navigator configuration, told not to count on unexplored space farther than
+  // 12 m from the robot (or 2 m from the goal) when it decides whether a goal is reachable.
+  std::string HorizonNavigatorConfig() {
+    std::ifstream in(testing::SourcePath("config/navigator/navigator.yaml"));
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string yaml = std::regex_replace(
+        text.str(), std::regex("unknown_horizon_m: [0-9.]+"), "unknown_horizon_m: 12.0");
+    EXPECT_NE(yaml, text.str()) << "the navigator config no longer names unknown_horizon_m";
+    const std::string path = procs_.dir() + "/navigator.yaml";
+    std::ofstream(path) << yaml;
+    return path;
+  }
+
+  void StartStack(double x, double y, double yaw_deg, const std::string& nav_config = "") {
     std::ostringstream robot;
     robot << kRobot << ":pioneer3at:pioneer3at:" << x << "," << y << "," << yaw_deg;
     sim_ =
         &procs_.Start("cairn-sim", {"--world", "tunnel", "--robot", robot.str(), "--speed", "1"});
     mapper_ = &procs_.Start("cairn-mapper", {"--robot", kRobot, "--config", MapperConfig()});
-    nav_ = &procs_.Start("cairn-navigator", {"--robot", kRobot, "--profile", "pioneer3at"});
+    std::vector<std::string> nav_args = {"--robot", kRobot, "--profile", "pioneer3at"};
+    if (!nav_config.empty()) nav_args.insert(nav_args.end(), {"--config", nav_config});
+    nav_ = &procs_.Start("cairn-navigator", nav_args);
     // Ready when the cost layer is on the bus and the navigator reports.
     ASSERT_TRUE(WaitFor(
         [&] {
@@ -142,7 +159,21 @@ class NavigatorStackTest : public ::testing::Test {
     g.kind = cairn::lcmt_goal::KIND_POSE;
     g.x_m = x;
     g.y_m = y;
-    bus_.Publish(ch::ForRobot(kRobot, ch::kGoal), g);
+    // Re-sent until the status names it (a message on the bus can be lost; re-sends of a goal
+    // id are idempotent).
+    auto last_sent = std::chrono::steady_clock::now() - std::chrono::seconds(2);
+    EXPECT_TRUE(WaitFor(
+        [&] {
+          auto s = bus_.Last<cairn::lcmt_nav_status>(ch::ForRobot(kRobot, ch::kNavStatus));
+          if (s && s->goal_id == id) return true;
+          if (std::chrono::steady_clock::now() - last_sent > std::chrono::seconds(1)) {
+            bus_.Publish(ch::ForRobot(kRobot, ch::kGoal), g);
+            last_sent = std::chrono::steady_clock::now();
+          }
+          return false;
+        },
+        15.0, [&] { bus_.Pump(20); }))
+        << "the navigator never took goal " << id;
   }
   std::optional<cairn::lcmt_nav_status> Status() {
     return bus_.Last<cairn::lcmt_nav_status>(ch::ForRobot(kRobot, ch::kNavStatus));
@@ -240,7 +271,10 @@ TEST_F(NavigatorStackTest, ClimbsTheFiveDegreeRampToItsTop) {
 }
 
 TEST_F(NavigatorStackTest, ReportsNoPathOverTheTenDegreeRampAndNeverDrivesOntoIt) {
-  StartStack(4.0, 10.0, 0.0);
+  // The platform is walled in except for the ramp, but the other lanes (joined by the cross
+  // corridor) are unexplored: counting on all unexplored space, the robot would explore them
+  // before the verdict could be "no path". With a 12 m horizon the verdict comes at once.
+  StartStack(4.0, 10.0, 0.0, HorizonNavigatorConfig());
   // Let the mapper integrate a few revolutions (the ramp in view) before asking.
   ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
   SendGoal(3, 14.0, 10.0);
@@ -258,6 +292,42 @@ TEST_F(NavigatorStackTest, ReportsNoPathOverTheTenDegreeRampAndNeverDrivesOntoIt
     ASSERT_FALSE(ConvexOverlap(fp, Box(8.0, 8.1, 24.0, 11.9), 0.0))
         << "on the ramp at x " << p.position_m[0];
     ASSERT_LT(p.position_m[2] - start_z, 0.02);
+  }
+}
+
+TEST_F(NavigatorStackTest, ReportsNoPathOntoTheTwentyCentimetreStepAndNeverMountsIt) {
+  // Lane 5: a 20 cm block from x = 10 to the end wall, wall to wall (pioneer3at: step up 3 cm).
+  StartStack(4.0, 22.0, 0.0, HorizonNavigatorConfig());
+  ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
+  SendGoal(6, 14.0, 22.0);
+  EXPECT_TRUE(WaitState(kStateFailed, 110.0)) << StatusText();
+  ASSERT_TRUE(Status().has_value());
+  EXPECT_EQ(Status()->reason, kReasonNoPath) << StatusText();
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  const double start_z = poses.front().position_m[2];
+  for (const auto& p : poses) {
+    ASSERT_FALSE(ConvexOverlap(FootprintAt(ToPose2(p)), Box(10.0, 20.1, 24.0, 23.9), 0.0))
+        << "at the step at x " << p.position_m[0];
+    ASSERT_LT(p.position_m[2] - start_z, 0.02);
+  }
+}
+
+TEST_F(NavigatorStackTest, NeverCrossesTheEdgeOfTheTwentyCentimetreDrop) {
+  // Lane 6: a 5 deg ramp up to a platform at 0.2 m that ends in a 20 cm drop at x = 13.29, wall
+  // to wall; the goal lies past the drop (pioneer3at: step down 10 cm). The floor below the
+  // edge is hidden from the robot until it is close: whatever it tries, it must not drive off.
+  StartStack(4.0, 26.0, 0.0, HorizonNavigatorConfig());
+  ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
+  SendGoal(7, 17.0, 26.0);
+  EXPECT_TRUE(WaitState(kStateFailed, 150.0)) << StatusText();
+  ASSERT_TRUE(Status().has_value());
+  EXPECT_EQ(Status()->reason, kReasonNoPath) << StatusText();
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  for (const auto& p : poses) {
+    ASSERT_FALSE(ConvexOverlap(FootprintAt(ToPose2(p)), Box(13.3, 24.1, 24.0, 27.9), 0.0))
+        << "over the drop's edge at x " << p.position_m[0];
   }
 }
 

@@ -425,6 +425,19 @@ TEST(DynamicLayersTest, RestoresAStoredLongTermLayer) {
   EXPECT_THROW(next_run.SetLongTerm(wrong), std::invalid_argument);
 }
 
+TEST(DynamicLayersTest, RestoringALongTermLayerNeverErasesAStaticWall) {
+  // A layer stored before the wall column at ix = 110 was drawn (free there) and a free cell:
+  // the wall keeps its static value, the rest is taken as stored.
+  common::GridMap stored(StaticMap().geometry());
+  stored.AddLayer(layers::kLongTerm, 0.f);
+  stored.at(layers::kLongTerm)(60, 50) = 97.f;
+  DynamicLayers dut(StaticMap());
+  dut.SetLongTerm(stored);
+  EXPECT_EQ(dut.LongTermOccupancy({110, 30}), 100);
+  EXPECT_EQ(dut.LongTermOccupancy({60, 50}), 97);
+  EXPECT_EQ(dut.LongTermOccupancy({6, 5}), 0);  // static 37 is no wall: the stored value wins
+}
+
 TEST(DynamicLayersTest, RejectsBadInput) {
   DynamicLayersParams params;
   params.max_length_m = 0.1;

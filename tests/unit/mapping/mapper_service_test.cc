@@ -12,7 +12,10 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_mapstore_reply.hpp"
+#include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
+#include "cairn/lcmt_occupancy_tile.hpp"
 
 #include "common/channels.h"
 #include "common/layers.h"
@@ -200,6 +203,117 @@ TEST(MapperServiceTest, MapsSlicesOverMemq) {
   ASSERT_EQ(step->num_verdicts, 1);
   EXPECT_FALSE(step->verdicts[0].crossable);
   EXPECT_EQ(node.counter("bad_points"), 0);
+}
+
+// The dynamic layers on a 4 x 3 m extent, with a remembered long-term layer.
+MapperParams DynamicParams() {
+  MapperParams params;
+  params.robot = "r1";
+  params.occupancy_period_s = 0.05;
+  params.core.occupancy_enabled = false;
+  params.core.octomap_enabled = false;
+  params.core.dynamic_enabled = true;
+  params.core.dynamic_extent.resolution_m = 0.05;
+  params.core.dynamic_extent.size_x = 80;
+  params.core.dynamic_extent.size_y = 60;
+  params.core.dynamic_extent.origin = {-1.0, -1.0, 0.0};
+  return params;
+}
+
+TEST(MapperCoreTest, RestoresTheLongTermLayerOnlyOnTheSameGrid) {
+  MapperCoreParams params = DynamicParams().core;
+  common::GridMap stored(params.dynamic_extent);
+  stored.AddLayer(layers::kLongTerm, 0.f)(10, 20) = 98.f;
+  params.long_term_restore = stored;
+  MapperCore restored(params);
+  EXPECT_TRUE(restored.long_term_restore_status().ok());
+  EXPECT_EQ(restored.dynamic()->LongTermOccupancy({10, 20}), 98);
+  // OP_RESET forgets the memory too: back to the static map alone.
+  restored.Reset();
+  EXPECT_EQ(restored.dynamic()->LongTermOccupancy({10, 20}), -1);
+
+  common::GridGeometry other = params.dynamic_extent;
+  other.size_x += 1;
+  common::GridMap elsewhere(other);
+  elsewhere.AddLayer(layers::kLongTerm, 0.f);
+  params.long_term_restore = elsewhere;
+  MapperCore ignored(params);
+  EXPECT_EQ(ignored.long_term_restore_status().code(), common::StatusCode::kInvalidArgument);
+  EXPECT_NE(ignored.long_term_restore_status().message().find("another grid"), std::string::npos);
+  EXPECT_EQ(ignored.dynamic()->LongTermOccupancy({10, 20}), -1);
+}
+
+TEST(MapperServiceTest, PublishesTheRestoredLongTermLayerAndAsksTheStoreToSaveIt) {
+  runtime::NodeOptions options;
+  options.process_name = "cairn-mapper";
+  options.robot = "r1";
+  options.lcm_url = "memq://";
+  options.install_signal_handlers = false;
+  options.follow_sim_clock = false;
+  runtime::Node node(options);
+  MapperParams params = DynamicParams();
+  common::GridMap stored(params.core.dynamic_extent);
+  stored.AddLayer(layers::kLongTerm, 0.f)(10, 20) = 98.f;
+  params.core.long_term_restore = stored;
+  params.long_term_store = "flat/long_term";
+  params.long_term_save_period_s = 0.05;
+  runtime::LayerAssembler assembler;
+  std::vector<cairn::lcmt_mapstore_request> requests;
+  node.Subscribe<cairn::lcmt_occupancy_tile>(
+      "r1.MAP.OCCUPANCY", [&](const cairn::lcmt_occupancy_tile& t) { assembler.OnTile(t); });
+  node.Subscribe<cairn::lcmt_grid_manifest>(
+      "r1.MAP.MANIFEST", [&](const cairn::lcmt_grid_manifest& m) { assembler.OnManifest(m); });
+  node.Subscribe<cairn::lcmt_mapstore_request>(
+      "MAPSTORE.REQUEST", [&](const cairn::lcmt_mapstore_request& r) { requests.push_back(r); });
+  MapperService service(node, params, {ShippedProfile("kobuki")},
+                        [](const std::string& name) -> common::Result<common::RobotProfile> {
+                          return common::NotFoundError("no profile " + name);
+                        });
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (std::chrono::steady_clock::now() < deadline &&
+         !(assembler.Complete(layers::kLongTerm) && !requests.empty())) {
+    node.SpinOnce(20);
+  }
+  // The first long-term layer on the bus is the restored one (nothing was scanned).
+  ASSERT_TRUE(assembler.Complete(layers::kLongTerm));
+  const auto layer = assembler.Layer(layers::kLongTerm);
+  ASSERT_TRUE(layer.has_value());
+  EXPECT_FLOAT_EQ(layer->at(layers::kLongTerm)(10, 20), 98.f);
+  EXPECT_FLOAT_EQ(layer->at(layers::kLongTerm)(11, 20), 0.f);
+  // A pull save of the long-term layer alone, naming this robot.
+  ASSERT_FALSE(requests.empty());
+  const cairn::lcmt_mapstore_request& save = requests.front();
+  constexpr int kOpSave = cairn::lcmt_mapstore_request::OP_SAVE;  // no odr-use in EXPECT_EQ
+  EXPECT_EQ(save.op, kOpSave);
+  EXPECT_EQ(save.site, "flat");
+  EXPECT_EQ(save.map_name, "long_term");
+  EXPECT_EQ(save.robot, "r1");
+  ASSERT_EQ(save.num_layers, 1);
+  EXPECT_EQ(save.layers[0], layers::kLongTerm);
+  // The store's answers are counted; someone else's reply is not.
+  cairn::lcmt_mapstore_reply reply{};
+  reply.request_id = save.request_id;
+  reply.op = save.op;
+  reply.status = cairn::lcmt_mapstore_reply::STATUS_OK;
+  node.Publish("MAPSTORE.REPLY", reply);
+  reply.request_id = 7;  // not one of the mapper's
+  node.Publish("MAPSTORE.REPLY", reply);
+  for (int i = 0; i < 10; ++i) node.SpinOnce(10);
+  service.Stop();
+  EXPECT_EQ(node.counter("long_term_saves"), 1);
+  EXPECT_GE(node.counter("long_term_save_requests"), 1);
+}
+
+TEST(MapperServiceTest, RefusesABadLongTermStore) {
+  MapperParams params = DynamicParams();
+  params.long_term_store = "no-slash";
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params.long_term_store = "a/b/c";
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params.long_term_store = "site/map";
+  params.Validate();
+  params.core.dynamic_enabled = false;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
 }
 
 }  // namespace

@@ -211,6 +211,30 @@ TEST(GlobalPlannerTest, NoPathThroughFarUnexploredSpaceOnly) {
   EXPECT_EQ(GlobalPlanner(p).Plan(*map, req).status, PlanStatus::kSuccess);
 }
 
+TEST(GlobalPlannerTest, GridRouteCandidateAvoidsALongDetour) {
+  // A 1 m gap straight ahead and a 4 m opening 6.5 m aside. The first sampled solution may take
+  // the opening (twice as long); the grid route through the gap competes with it.
+  TestLayer layer(200, 200, 0.1, 0.0f);
+  layer.Rect(9.8, 0.0, 10.2, 9.0, 100.0f).Rect(9.8, 10.0, 10.2, 16.0, 100.0f);  // gap y 9..10
+  const auto map = layer.Build(SmallFootprint());
+  const PlanRequest req{{5.0, 9.5, 0.0}, {15.0, 9.5, 0.0}, false};
+  const GridPath astar = GridAStar(*map, req.start.position(), req.goal.position());
+  ASSERT_TRUE(astar.found);
+  for (uint32_t seed = 1; seed <= 5; ++seed) {
+    GlobalPlannerParams p = Params();
+    p.seed = seed;
+    p.improvement_rounds = 0;  // the first sampled solution alone ...
+    const PlanResult r = GlobalPlanner(p).Plan(*map, req);
+    ASSERT_EQ(r.status, PlanStatus::kSuccess) << r.message;
+    ExpectPathValid(*map, r, req.start, req.goal);
+    EXPECT_LE(r.length_m, 1.1 * astar.length_m) << "seed " << seed;  // ... never the loop
+  }
+  GlobalPlannerParams off = Params();
+  off.grid_route_candidate = false;
+  off.improvement_rounds = 0;
+  EXPECT_FALSE(GlobalPlanner(off).Plan(*map, req).grid_route_chosen);
+}
+
 TEST(GlobalPlannerTest, TimedOutWhenTheBudgetIsTooSmall) {
   // A long maze of narrow passages: connected, but not in a tenth of a millisecond.
   TestLayer layer(300, 300, 0.1);

@@ -178,6 +178,24 @@ TEST_F(NavigatorServiceTest, GoalBecomesAPathAndCommandsUntilReached) {
   EXPECT_GE(node_.counter("plans"), 1);
 }
 
+TEST_F(NavigatorServiceTest, AReSentGoalIdDoesNotRestartTheGoal) {
+  Start();
+  PublishMap(true);
+  for (int k = 0; k < 4; ++k) Step();
+  SendGoal(PoseGoal(9, 10.0, 4.0));
+  ASSERT_TRUE(StepUntil([&] { return !paths_.empty(); }, 100));
+  const size_t plans = paths_.size();
+  // The same id again (a sender repeating it until the status names it): ignored, counted.
+  SendGoal(PoseGoal(9, 10.0, 4.0));
+  for (int k = 0; k < 20; ++k) Step();
+  EXPECT_EQ(node_.counter("goal_repeats"), 1);
+  EXPECT_EQ(paths_.size(), plans) << "the repeated goal was planned again";
+  // A new id is a new goal.
+  SendGoal(PoseGoal(10, 10.0, 4.0));
+  ASSERT_TRUE(StepUntil([&] { return paths_.size() > plans; }, 100));
+  EXPECT_EQ(paths_.back().goal_id, 10);
+}
+
 TEST_F(NavigatorServiceTest, StaleMapStopsAtOnceWithTheReason) {
   Start();
   PublishMap(true);

@@ -47,6 +47,39 @@ TEST(LayerTilerTest, FirstUpdateSendsAllTilesThenOnlyChanged) {
   EXPECT_EQ(one.manifest.layer_version, 2);
 }
 
+TEST(LayerTilerTest, ARestartedPublisherWithAVersionBaseSupersedesItsPredecessor) {
+  // The assembler ignores manifests older than the one it holds: a publisher restarted from
+  // version 1 would be ignored; one starting from a later wall-clock base is taken at once.
+  common::GridMap before = MakeMap(120, 50);
+  common::GridMap after = before;
+  after.at("elevation")(5, 5) = 42.f;
+  LayerTiler old_publisher("r1", "live", kDefaultTileSize, 1000);
+  LayerAssembler receiver;
+  for (int k = 0; k < 3; ++k) {
+    before.at("elevation")(0, 0) = static_cast<float>(k);
+    auto b = old_publisher.Update(before, "elevation", TileEncoding::kFloat, k);
+    for (const auto& t : b.tiles) receiver.OnTile(t);
+    receiver.OnManifest(b.manifest);
+  }
+  EXPECT_EQ(receiver.version("elevation"), 1003);
+  LayerTiler restarted_from_zero("r1", "live");
+  auto stale = restarted_from_zero.Update(after, "elevation", TileEncoding::kFloat, 10);
+  LayerAssembler copy = receiver;
+  for (const auto& t : stale.tiles) copy.OnTile(t);
+  copy.OnManifest(stale.manifest);
+  EXPECT_EQ(copy.version("elevation"), 1003);  // ignored
+  LayerTiler restarted("r1", "live", kDefaultTileSize, 2000);
+  auto fresh = restarted.Update(after, "elevation", TileEncoding::kFloat, 10);
+  EXPECT_EQ(fresh.manifest.layer_version, 2001);
+  for (const auto& t : fresh.tiles) receiver.OnTile(t);
+  receiver.OnManifest(fresh.manifest);
+  EXPECT_EQ(receiver.version("elevation"), 2001);
+  ASSERT_TRUE(receiver.Complete("elevation"));
+  EXPECT_FLOAT_EQ(receiver.Layer("elevation")->at("elevation")(5, 5), 42.f);
+  EXPECT_GT(LayerTiler::StartVersionBase(), 1'600'000'000'000);  // ms since the epoch
+  EXPECT_THROW(LayerTiler("r1", "live", kDefaultTileSize, -1), std::invalid_argument);
+}
+
 TEST(LayerAssemblerTest, RebuildsExactlyAndDetectsMissingTiles) {
   common::GridMap map = MakeMap(250, 130);
   LayerTiler tiler("r1", "live");
