@@ -182,13 +182,8 @@ void MapServerService::PublishRegistry() {
   if (!served_) return;
   cairn::lcmt_obstacle_registry msg =
       runtime::ToLcm(served_->obstacles, node_.NowUtime(), params_.robot, map_name_);
-  if (msg.getEncodedSize() > static_cast<int>(runtime::kMaxMessageBytes)) {
+  if (runtime::FitRegistryToMessageLimit(&msg)) {
     node_.Warn("registry_size", "the obstacle registry exceeds 256 KB; outlines are left out");
-    for (auto& o : msg.obstacles) {
-      o.num_outline = 0;
-      o.outline_x_m.clear();
-      o.outline_y_m.clear();
-    }
   }
   node_.Publish(Ch(params_.robot, channels::kMapObstacles), msg);
 }

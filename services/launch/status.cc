@@ -130,6 +130,13 @@ bool WriteStatusFile(const std::string& path, const GraphStatus& status) {
   return !ec;
 }
 
+const ProcessRow* FindProcess(const GraphStatus& status, const std::string& name) {
+  for (const auto& p : status.processes) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
 std::optional<GraphStatus> ReadStatusFile(const std::string& path, std::string* error) {
   std::ifstream in(path);
   if (!in) {

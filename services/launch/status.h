@@ -45,6 +45,8 @@ std::optional<GraphStatus> ParseStatus(const std::string& json, std::string* err
 /// Writes atomically (temporary file + rename).
 bool WriteStatusFile(const std::string& path, const GraphStatus& status);
 std::optional<GraphStatus> ReadStatusFile(const std::string& path, std::string* error);
+/// The row of the named process, nullptr if the graph has none.
+const ProcessRow* FindProcess(const GraphStatus& status, const std::string& name);
 /// The table printed by `cairn-launch status`.
 std::string FormatStatusTable(const GraphStatus& status);
 

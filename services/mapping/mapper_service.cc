@@ -698,13 +698,8 @@ void MapperService::PublishRegistry(bool force) {
   last_registry_bytes_ = std::move(bytes);
   msg.utime = Now();
   msg.map_version = revolutions_;
-  if (msg.getEncodedSize() > static_cast<int>(runtime::kMaxMessageBytes)) {
+  if (runtime::FitRegistryToMessageLimit(&msg)) {
     node_.Warn("registry_size", "the obstacle registry exceeds 256 KB; outlines are left out");
-    for (auto& o : msg.obstacles) {
-      o.num_outline = 0;
-      o.outline_x_m.clear();
-      o.outline_y_m.clear();
-    }
   }
   node_.Publish(Ch(params_.robot, channels::kMapObstacles), msg);
 }

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "services/runtime/tiler.h"
+
 namespace cairn::runtime {
 
 using common::InvalidArgumentError;
@@ -305,4 +307,15 @@ Result<common::ObstacleRegistry> FromLcm(const cairn::lcmt_obstacle_registry& m)
   return r;
 }
 
+bool FitRegistryToMessageLimit(cairn::lcmt_obstacle_registry* msg) {
+  if (msg->getEncodedSize() <= static_cast<int>(kMaxMessageBytes)) return false;
+  for (auto& o : msg->obstacles) {
+    o.num_outline = 0;
+    o.outline_x_m.clear();
+    o.outline_y_m.clear();
+  }
+  return true;
+}
+
 }  // namespace cairn::runtime
+

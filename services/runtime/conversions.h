@@ -46,5 +46,8 @@ common::Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& msg);
 cairn::lcmt_obstacle_registry ToLcm(const common::ObstacleRegistry& registry, int64_t utime,
                                     const std::string& robot, const std::string& map_name);
 common::Result<common::ObstacleRegistry> FromLcm(const cairn::lcmt_obstacle_registry& msg);
+/// Keeps a registry message under the bus limit (tiler.h, kMaxMessageBytes): when it is larger,
+/// the outlines are left out. Returns whether they were.
+bool FitRegistryToMessageLimit(cairn::lcmt_obstacle_registry* msg);
 
 }  // namespace cairn::runtime

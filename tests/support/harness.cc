@@ -45,6 +45,20 @@ std::string SourcePath(const std::string& relative) {
   return std::string(CAIRN_SOURCE_DIR) + "/" + relative;
 }
 
+std::string MapperConfigWithoutOctomap(const std::string& dir) {
+  std::stringstream text;
+  text << std::ifstream(SourcePath("config/mapping/mapper.yaml")).rdbuf();
+  std::string s = text.str();
+  const std::string on = "octomap:\n  enabled: true";
+  const auto at = s.find(on);
+  if (at == std::string::npos)
+    throw std::runtime_error("config/mapping/mapper.yaml no longer has 'octomap:\n  enabled: true'");
+  s.replace(at, on.size(), "octomap:\n  enabled: false");
+  const std::string path = dir + "/mapper.yaml";
+  std::ofstream(path) << s;
+  return path;
+}
+
 std::string TestTempDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
   std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "test";

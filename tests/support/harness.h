@@ -34,6 +34,10 @@ std::string BinPath(const std::string& name);
 std::string SourcePath(const std::string& relative);
 /// A fresh directory under build/test-tmp/<test name>, removed first if it exists.
 std::string TestTempDir();
+/// The shipped mapper configuration (config/mapping/mapper.yaml) with the OctoMap off (the
+/// costliest part on a shared machine, for tests that do not look at it), written to
+/// <dir>/mapper.yaml; returns that path.
+std::string MapperConfigWithoutOctomap(const std::string& dir);
 
 class ChildProcess {
  public:

@@ -41,10 +41,7 @@ std::optional<launch::GraphStatus> ReadStatus(const std::string& run_dir) {
 }
 
 const launch::ProcessRow* Row(const launch::GraphStatus& s, const std::string& name) {
-  for (const auto& p : s.processes) {
-    if (p.name == name) return &p;
-  }
-  return nullptr;
+  return launch::FindProcess(s, name);
 }
 
 TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {

@@ -57,21 +57,6 @@ void PumpAll(Bus& bus) {
 
 std::string Ch(const std::string& stream) { return std::string(kRobot) + "." + stream; }
 
-// The shipped mapper config with the OctoMap off (it is not under test here and costs the most
-// CPU on a shared machine).
-std::string MapperConfig(const std::string& dir) {
-  std::ifstream in(SourcePath("config/mapping/mapper.yaml"));
-  std::stringstream text;
-  text << in.rdbuf();
-  std::string s = text.str();
-  const std::string on = "octomap:\n  enabled: true";
-  const auto at = s.find(on);
-  if (at != std::string::npos) s.replace(at, on.size(), "octomap:\n  enabled: false");
-  const std::string path = dir + "/mapper.yaml";
-  std::ofstream(path) << s;
-  return path;
-}
-
 void SendCommand(Bus& bus, double v, double w) {
   cairn::lcmt_velocity_command cmd{};
   cmd.robot = kRobot;
@@ -176,8 +161,8 @@ class MappingProcessTest : public ::testing::Test {
                                 "--speed", "1", "--seed", "3"});
   }
   ChildProcess& StartMapper(std::vector<std::string> extra = {}, bool with_octomap = false) {
-    const std::string config =
-        with_octomap ? SourcePath("config/mapping/mapper.yaml") : MapperConfig(procs_->dir());
+    const std::string config = with_octomap ? SourcePath("config/mapping/mapper.yaml")
+                                            : MapperConfigWithoutOctomap(procs_->dir());
     std::vector<std::string> args{"--robot", kRobot,       "--config",
                                   config,    "--profiles", "pioneer3at,rover"};
     args.insert(args.end(), extra.begin(), extra.end());

@@ -309,10 +309,7 @@ class DynamicStackTest : public ::testing::Test {
     return launch::ReadStatusFile(run_dir_ + "/status.json", &error);
   }
   const launch::ProcessRow* Row(const launch::GraphStatus& s, const std::string& name) const {
-    for (const auto& p : s.processes) {
-      if (p.name == name) return &p;
-    }
-    return nullptr;
+    return launch::FindProcess(s, name);
   }
 
   bool SimControl(int8_t op, const BoxSpec& box) {

@@ -2,16 +2,16 @@
 // cairn-navigator, cairn-mapstore) with cairn-mission driving it, services killed with SIGKILL
 // mid-mission, and a recorded run replayed through scripts/replay into a fresh mapper.
 
-#include <signal.h>
-#include <sys/wait.h>
-
 #include <cmath>
 #include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 
 #include "cairn/lcmt_pose.hpp"
+
 #include "common/layers.h"
 #include "mapstore/sqlite_map_store.h"
 #include "services/launch/status.h"
@@ -29,24 +29,7 @@ std::optional<launch::GraphStatus> ReadStatus(const std::string& run_dir) {
 }
 
 const launch::ProcessRow* Row(const launch::GraphStatus& s, const std::string& name) {
-  for (const auto& p : s.processes) {
-    if (p.name == name) return &p;
-  }
-  return nullptr;
-}
-
-// The shipped mapper config without the OctoMap (not under test here, and the costliest part
-// on a shared machine).
-std::string MapperConfig(const std::string& dir) {
-  std::stringstream text;
-  text << std::ifstream(SourcePath("config/mapping/mapper.yaml")).rdbuf();
-  std::string s = text.str();
-  const std::string on = "octomap:\n  enabled: true";
-  const auto at = s.find(on);
-  if (at != std::string::npos) s.replace(at, on.size(), "octomap:\n  enabled: false");
-  const std::string path = dir + "/mapper.yaml";
-  std::ofstream(path) << s;
-  return path;
+  return launch::FindProcess(s, name);
 }
 
 struct GraphOptions {
@@ -73,17 +56,17 @@ std::string WriteGraph(const ProcessSet& procs, const std::string& name, const G
     out << "  sim:\n"
         << "    command: " << BinPath("cairn-sim") << "\n"
         << "    args: [--scenario, " << SourcePath(o.scenario) << ", --speed, '1']\n"
-        << (o.sim_after_mapper ? "    depends_on: [mapper]\n" : "")
-        << "    restart: on-failure\n"
+        << (o.sim_after_mapper ? "    depends_on: [mapper]\n" : "") << "    restart: on-failure\n"
         << "    backoff_s: 0.2\n";
   }
   if (o.mapper) {
     out << "  mapper:\n"
         << "    command: " << BinPath("cairn-mapper") << "\n"
         << "    args: [--robot, " << kRobot << ", --profiles, pioneer3at, --config, "
-        << MapperConfig(procs.dir()) << "]\n"
+        << MapperConfigWithoutOctomap(procs.dir()) << "]\n"
         << "    robot: " << kRobot << "\n"
-        << (o.sim && !o.sim_after_mapper ? "    depends_on: [sim]\n" : "") << "    restart: on-failure\n"
+        << (o.sim && !o.sim_after_mapper ? "    depends_on: [sim]\n" : "")
+        << "    restart: on-failure\n"
         << "    backoff_s: 0.2\n";
   }
   if (o.navigator) {
@@ -190,8 +173,8 @@ struct LayerAgreement {
   int64_t only_one{0};
 };
 
-LayerAgreement Compare(const common::GridMap& a, const common::GridMap& b,
-                       const std::string& layer, double tol_m) {
+LayerAgreement Compare(const common::GridMap& a, const common::GridMap& b, const std::string& layer,
+                       double tol_m) {
   LayerAgreement r;
   const auto& ga = a.geometry();
   const common::Layer& la = a.at(layer);
@@ -250,8 +233,8 @@ TEST(MissionStackTest, ARecordedRunReplaysThroughScriptsReplayIntoTheSameStoredM
   mapstore::MapstoreClient client(lcm, "stack-test", mapstore::testing::TestClientOptions(90.0));
   ASSERT_TRUE(mapstore::testing::WaitForStore(client, 30.0));
   auto save = [&](const std::string& map) {
-    auto request = mapstore::testing::MakeRequest(cairn::lcmt_mapstore_request::OP_SAVE, "tunnel",
-                                                  map);
+    auto request =
+        mapstore::testing::MakeRequest(cairn::lcmt_mapstore_request::OP_SAVE, "tunnel", map);
     request.robot = kRobot;
     request.profile = "pioneer3at";
     return client.Call(request);
@@ -271,8 +254,8 @@ TEST(MissionStackTest, ARecordedRunReplaysThroughScriptsReplayIntoTheSameStoredM
   replay_graph.navigator = false;
   LaunchUp(procs, WriteGraph(procs, "replay", replay_graph), run_replay);
   ASSERT_TRUE(WaitReady(run_replay, 90.0)) << "the replay graph never became ready";
-  ChildProcess& player = procs.StartRaw(
-      "replay", {SourcePath("scripts/replay"), log_file, "--lcm-url", procs.url()});
+  ChildProcess& player =
+      procs.StartRaw("replay", {SourcePath("scripts/replay"), log_file, "--lcm-url", procs.url()});
   const auto played = player.WaitExit(60.0);
   ASSERT_TRUE(played.has_value() && WIFEXITED(*played) && WEXITSTATUS(*played) == 0)
       << player.Log();

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "services/runtime/tiler.h"
+
 namespace cairn::runtime {
 namespace {
 
@@ -139,6 +141,27 @@ TEST(ConversionsTest, ObstacleRegistryRoundTrip) {
   auto bad = ToLcm(o);
   bad.kind = 9;
   EXPECT_FALSE(FromLcm(bad).ok());
+}
+
+TEST(ConversionsTest, ARegistryOverTheBusLimitLosesItsOutlinesOnly) {
+  common::ObstacleRegistry r;
+  common::Obstacle o;
+  o.kind = common::ObstacleKind::kWallOrObject;
+  o.height_m = 1.5;
+  for (int i = 0; i < 100; ++i) o.outline_m.push_back({0.1 * i, 0.0});
+  r.obstacles.push_back(o);
+  auto small = ToLcm(r, 1, "r1", "live");
+  EXPECT_FALSE(FitRegistryToMessageLimit(&small));
+  EXPECT_EQ(small.obstacles[0].num_outline, 100);
+  r.obstacles.assign(300, o);  // 300 x 100 points x 16 bytes: about 480 KB
+  auto large = ToLcm(r, 1, "r1", "live");
+  ASSERT_GT(large.getEncodedSize(), static_cast<int>(kMaxMessageBytes));
+  EXPECT_TRUE(FitRegistryToMessageLimit(&large));
+  EXPECT_LE(large.getEncodedSize(), static_cast<int>(kMaxMessageBytes));
+  ASSERT_EQ(large.obstacles.size(), 300u);
+  EXPECT_EQ(large.obstacles[0].num_outline, 0);
+  EXPECT_DOUBLE_EQ(large.obstacles[299].height_m, 1.5);
+  EXPECT_TRUE(FromLcm(large).ok());
 }
 
 }  // namespace
