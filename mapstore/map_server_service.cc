@@ -204,15 +204,7 @@ void MapServerService::OnResend(const cairn::lcmt_tile_resend_request& request) 
 
 template <typename Msg>
 void MapServerService::Send(const std::string& channel, const std::vector<Msg>& messages) {
-  int in_burst = 0;
-  for (const auto& m : messages) {
-    node_.Publish(channel, m);
-    if (++in_burst >= params_.tiles_per_burst && params_.burst_pause_ms > 0) {
-      in_burst = 0;
-      std::this_thread::sleep_for(
-          std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
-    }
-  }
+  node_.PublishPaced(channel, messages, params_.tiles_per_burst, params_.burst_pause_ms);
 }
 
 }  // namespace cairn::mapstore

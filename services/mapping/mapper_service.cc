@@ -657,15 +657,7 @@ std::vector<std::string> MapperService::SlowLayers() const {
 
 template <typename Msg>
 void MapperService::Send(const std::string& channel, const std::vector<Msg>& messages) {
-  int in_burst = 0;
-  for (const auto& m : messages) {
-    node_.Publish(channel, m);
-    if (++in_burst >= params_.tiles_per_burst && params_.burst_pause_ms > 0) {
-      in_burst = 0;
-      std::this_thread::sleep_for(
-          std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
-    }
-  }
+  node_.PublishPaced(channel, messages, params_.tiles_per_burst, params_.burst_pause_ms);
 }
 
 void MapperService::PublishTerrain(const std::vector<std::string>& names, bool force,

@@ -9,6 +9,7 @@
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
@@ -85,6 +86,11 @@ class Node {
   /// Encodes and publishes; counts bytes. Returns false (and logs, rate-limited) on failure.
   template <typename Msg>
   bool Publish(const std::string& channel, const Msg& msg);
+  /// Publishes a batch (tiles of a layer), pausing pause_ms after every `burst` messages so a
+  /// receiver's socket buffer can drain (burst <= 0 or pause_ms <= 0: no pauses).
+  template <typename Msg>
+  void PublishPaced(const std::string& channel, const std::vector<Msg>& messages, int burst,
+                    double pause_ms);
 
   /// A wall-clock timer run from Spin(); the first call is one period after Spin starts.
   void AddTimer(double period_s, std::function<void()> callback);
@@ -192,5 +198,18 @@ bool Node::Publish(const std::string& channel, const Msg& msg) {
 bool ShutdownRequested();
 /// Installs SIGINT/SIGTERM handlers that set ShutdownRequested() (idempotent).
 void InstallSignalHandlers();
+
+template <typename Msg>
+void Node::PublishPaced(const std::string& channel, const std::vector<Msg>& messages, int burst,
+                        double pause_ms) {
+  int in_burst = 0;
+  for (const auto& m : messages) {
+    Publish(channel, m);
+    if (++in_burst >= burst && burst > 0 && pause_ms > 0) {
+      in_burst = 0;
+      std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(pause_ms));
+    }
+  }
+}
 
 }  // namespace cairn::runtime

@@ -24,6 +24,7 @@
 #include "common/robot_profile.h"
 #include "planner/footprint.h"
 #include "services/runtime/conversions.h"
+#include "tests/support/geometry.h"
 #include "tests/support/harness.h"
 
 namespace cairn::planner {
@@ -33,6 +34,7 @@ namespace ch = cairn::channels;
 using common::Pose2;
 using common::Vector2;
 using testing::Bus;
+using testing::ConvexOverlap;
 using testing::ProcessSet;
 using testing::WaitFor;
 
@@ -43,27 +45,6 @@ constexpr int kStateDriving = cairn::lcmt_nav_status::STATE_DRIVING;
 constexpr int kReasonNoPath = cairn::lcmt_nav_status::REASON_NO_PATH;
 constexpr int kReasonStaleMap = cairn::lcmt_nav_status::REASON_STALE_MAP;
 constexpr char kRobot[] = "p3at";
-
-// Separating-axis test between two convex polygons (touching counts as overlapping).
-bool ConvexOverlap(const std::vector<Vector2>& a, const std::vector<Vector2>& b, double margin) {
-  for (const auto* poly : {&a, &b}) {
-    for (size_t i = 0; i < poly->size(); ++i) {
-      const Vector2 e = (*poly)[(i + 1) % poly->size()] - (*poly)[i];
-      const Vector2 axis = Vector2(-e.y(), e.x()).normalized();
-      double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300;
-      for (const Vector2& v : a) {
-        a0 = std::min(a0, axis.dot(v));
-        a1 = std::max(a1, axis.dot(v));
-      }
-      for (const Vector2& v : b) {
-        b0 = std::min(b0, axis.dot(v));
-        b1 = std::max(b1, axis.dot(v));
-      }
-      if (a1 + margin < b0 || b1 + margin < a0) return false;
-    }
-  }
-  return true;
-}
 
 std::vector<Vector2> Box(double x0, double y0, double x1, double y1) {
   return {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};

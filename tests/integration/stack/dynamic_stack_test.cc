@@ -45,6 +45,7 @@
 #include "mapstore/mapstore_client.h"
 #include "services/launch/status.h"
 #include "services/runtime/tiler.h"
+#include "tests/support/geometry.h"
 #include "tests/support/harness.h"
 
 namespace cairn::testing {
@@ -76,27 +77,6 @@ struct BoxSpec {
     return {{x - hx, y - hy}, {x + hx, y - hy}, {x + hx, y + hy}, {x - hx, y + hy}};
   }
 };
-
-// Separating-axis test between two convex polygons (touching counts as overlapping).
-bool ConvexOverlap(const std::vector<Vector2>& a, const std::vector<Vector2>& b) {
-  for (const auto* poly : {&a, &b}) {
-    for (size_t i = 0; i < poly->size(); ++i) {
-      const Vector2 e = (*poly)[(i + 1) % poly->size()] - (*poly)[i];
-      const Vector2 axis = Vector2(-e.y(), e.x()).normalized();
-      double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300;
-      for (const Vector2& v : a) {
-        a0 = std::min(a0, axis.dot(v));
-        a1 = std::max(a1, axis.dot(v));
-      }
-      for (const Vector2& v : b) {
-        b0 = std::min(b0, axis.dot(v));
-        b1 = std::max(b1, axis.dot(v));
-      }
-      if (a1 < b0 || b1 < a0) return false;
-    }
-  }
-  return true;
-}
 
 // The highest value of a layer over the cells within one cell of a box (NaN: unknown, -1).
 float MaxOver(const common::GridMap& map, const std::string& layer, const BoxSpec& box) {
