@@ -58,7 +58,7 @@ class MapstoreClient {
   common::Result<cairn::lcmt_mapstore_reply> Save(const MapSnapshot& snapshot);
 
   struct Loaded {
-    cairn::lcmt_mapstore_reply reply;
+    cairn::lcmt_mapstore_reply reply{};
     common::GridMap layers;
     common::ObstacleRegistry obstacles;
     std::optional<OctomapData> octomap;

@@ -97,7 +97,7 @@ class MapstoreService {
   struct LiveMirror;
   /// What a worker job produced; applied on the node's thread.
   struct JobResult {
-    cairn::lcmt_mapstore_reply reply;
+    cairn::lcmt_mapstore_reply reply{};
     common::Status status;
     std::optional<common::GridMap> layers;  ///< payload sent as tiles
     std::string robot;                      ///< robot field of the payload tiles
@@ -106,9 +106,9 @@ class MapstoreService {
     std::string counter;                    ///< a HEALTH counter to bump
   };
   struct Job {
-    cairn::lcmt_mapstore_request request;
+    cairn::lcmt_mapstore_request request{};
     std::chrono::steady_clock::time_point started;
-    cairn::lcmt_mapstore_reply reply;
+    cairn::lcmt_mapstore_reply reply{};
   };
 
   void OnRequest(const cairn::lcmt_mapstore_request& request);

@@ -77,6 +77,10 @@ class CostMap {
     version_ = version;
     utime_ = utime;
   }
+  /// Tiles the publisher announced that this snapshot lacks (they read as lethal); a navigator
+  /// waits for them rather than plan on a layer with holes.
+  int missing_tiles() const { return missing_tiles_; }
+  void set_missing_tiles(int count) { missing_tiles_ = count; }
 
   /// True when the world point lies inside the grid.
   bool Contains(const common::Vector2& world_m) const;
@@ -168,6 +172,7 @@ class CostMap {
   std::vector<Shape> shapes_;  // indexed by FootprintKind
   int64_t version_{0};
   int64_t utime_{0};
+  int missing_tiles_{0};
   double cos_origin_{1.0};
   double sin_origin_{0.0};
   std::optional<std::pair<common::CellIndex, common::CellIndex>> known_cells_;

@@ -96,7 +96,7 @@ void LcmMapClient::OnManifest(const cairn::lcmt_grid_manifest& manifest) {
 void LcmMapClient::Poll() {
   const int64_t now = node_.NowUtime();
   const int64_t version = assembler_.version(params_.layer);
-  if (version == 0 || version == built_version_) return;
+  if (version == 0 || (version == built_version_ && !built_incomplete_)) return;
   if (!assembler_.Complete(params_.layer)) {
     if (now - last_resend_utime_ >= static_cast<int64_t>(params_.resend_interval_s * 1e6)) {
       if (auto request = assembler_.MakeResendRequest(params_.layer, params_.requester, now)) {
@@ -109,12 +109,16 @@ void LcmMapClient::Poll() {
         now - pending_since_utime_ >= static_cast<int64_t>(params_.incomplete_timeout_s * 1e6)) {
       MaybeBuild(true);
     }
+  } else if (built_incomplete_) {
+    MaybeBuild(false);  // the missing tiles of the version in use came in
   }
 }
 
 void LcmMapClient::MaybeBuild(bool allow_incomplete) {
   const int64_t version = assembler_.version(params_.layer);
-  if (version == 0 || version == built_version_) return;
+  if (version == 0) return;
+  // A version built with holes is built again once complete, never again with holes.
+  if (version == built_version_ && (!built_incomplete_ || allow_incomplete)) return;
   if (pending_since_utime_ == 0) pending_since_utime_ = node_.NowUtime();
   if (!allow_incomplete && !assembler_.Complete(params_.layer)) return;
   auto layer = assembler_.Layer(params_.layer);
@@ -123,10 +127,12 @@ void LcmMapClient::MaybeBuild(bool allow_incomplete) {
   if (params_.encoding == MapEncoding::kOccupancy) {
     cells = OccupancyToCostLayer(cells, params_.occupancy, cost_params_.lethal_cost);
   }
-  if (allow_incomplete && tile_size_ > 0) {
+  const auto missing = allow_incomplete ? assembler_.Missing(params_.layer)
+                                        : std::vector<std::pair<int, int>>{};
+  if (tile_size_ > 0) {
     // Tiles the mapper announced but we never got: block them rather than read them as
     // unexplored (which the planners may be allowed to cross).
-    for (const auto& [tx, ty] : assembler_.Missing(params_.layer)) {
+    for (const auto& [tx, ty] : missing) {
       for (int iy = ty * tile_size_; iy < std::min<int>((ty + 1) * tile_size_, cells.cols());
            ++iy) {
         for (int ix = tx * tile_size_; ix < std::min<int>((tx + 1) * tile_size_, cells.rows());
@@ -139,22 +145,26 @@ void LcmMapClient::MaybeBuild(bool allow_incomplete) {
   try {
     auto map = std::make_shared<CostMap>(layer->geometry(), cells, footprint_m_, cost_params_);
     map->set_stamp(version, node_.NowUtime());
+    map->set_missing_tiles(static_cast<int>(missing.size()));
     std::lock_guard<std::mutex> lock(mutex_);
     latest_ = std::move(map);
     built_version_ = version;
+    built_incomplete_ = !missing.empty();
     pending_since_utime_ = 0;
     ++snapshots_;
   } catch (const std::exception& e) {
     node_.CountDropped("bad_map_layers");
     node_.Warn("map_layer", "layer " + params_.layer + " refused: " + e.what());
     built_version_ = version;  // do not retry the same bad version
+    built_incomplete_ = false;
     pending_since_utime_ = 0;
   }
   node_.Count("map_snapshots");
-  if (!allow_incomplete) return;
+  if (missing.empty()) return;
   node_.Count("incomplete_map_snapshots");
-  node_.Warn("map_incomplete",
-             "using an incomplete layer " + params_.layer + " (missing tiles count as lethal)");
+  node_.Warn("map_incomplete", "layer " + params_.layer + " is incomplete (" +
+                                   std::to_string(missing.size()) +
+                                   " tiles missing, asked again): the navigator waits for them");
 }
 
 }  // namespace cairn::planner

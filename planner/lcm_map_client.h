@@ -75,6 +75,7 @@ class LcmMapClient : public MapSource {
   std::shared_ptr<const CostMap> latest_;
   int64_t heard_utime_{0};
   int64_t built_version_{-1};
+  bool built_incomplete_{false};  // the version in use was built with missing tiles
   int64_t pending_since_utime_{0};  // when the newest unbuilt version was announced
   int64_t last_resend_utime_{0};
   int64_t snapshots_{0};

@@ -534,6 +534,11 @@ StepOutput Navigator::Step(double now_s) {
   } else if (map_rx_s_ - now_s > params_.max_clock_skew_s) {
     stale = NavReason::kStaleMap;
     why = Format("the cost layer is stamped %.2f s in the future", map_rx_s_ - now_s);
+  } else if (map_->missing_tiles() > 0) {
+    // Holes read as lethal: planning on them would fail the goal for want of tiles (a mapper
+    // that just restarted), so wait for them like for a late layer.
+    stale = NavReason::kNoMap;
+    why = "the cost layer lacks " + std::to_string(map_->missing_tiles()) + " tiles";
   }
   if (stale != NavReason::kNone) {
     if (status_.state != NavState::kStopped) {

@@ -40,7 +40,8 @@ struct NavigatorConfig {
   MapLayerConfig map;
   /// Ask the mapper again for missing tiles at most this often.
   double resend_interval_s{0.5};
-  /// Use an incomplete layer (absent tiles unknown) after waiting this long for the rest.
+  /// After waiting this long for missing tiles, take the layer with them lethal; the navigator
+  /// holds the robot until they come (it asks for them every resend_interval_s).
   double incomplete_map_timeout_s{1.0};
   CostMapParams cost_map;
   GlobalPlannerParams global_planner;

@@ -5,7 +5,7 @@
 namespace cairn::sim {
 
 cairn::lcmt_odometry ToLcm(const OdometryReading& r) {
-  cairn::lcmt_odometry m;
+  cairn::lcmt_odometry m{};
   m.utime = r.utime;
   m.robot = r.robot;
   m.frame = "odom";
@@ -32,7 +32,7 @@ cairn::lcmt_pose ToLcm(const GroundTruthReading& r) {
 }
 
 cairn::lcmt_imu ToLcm(const ImuReading& r) {
-  cairn::lcmt_imu m;
+  cairn::lcmt_imu m{};
   m.utime = r.utime;
   m.robot = r.robot;
   m.frame = "imu";

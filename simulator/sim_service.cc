@@ -284,7 +284,7 @@ void SimService::PublishOutputs() {
 }
 
 void SimService::PublishClock() {
-  cairn::lcmt_sim_clock clock;
+  cairn::lcmt_sim_clock clock{};
   clock.utime = sim_.utime();
   clock.wall_utime = runtime::Node::WallUtime();
   clock.real_time_factor = rtf_;

@@ -27,7 +27,7 @@ double LaunchService::Now() const {
 void LaunchService::OnMessage(const std::string& channel, const void* data, int size) {
   meter_.Record(channel, size, Now());
   if (channel != channels::kHealth) return;
-  cairn::lcmt_health h;
+  cairn::lcmt_health h{};
   if (h.decode(data, 0, size) < 0) return;
   if (h.process == "cairn-launch" && h.pid == getpid()) return;
   health_by_pid_[h.pid] = h;

@@ -115,9 +115,10 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
       resolver_(std::move(resolver)),
       mode_(mode),
       core_(params_.core),
-      terrain_publisher_(params_.robot, params_.map_name),
       // Versions from the wall clock: a restarted mapper's layers supersede its predecessor's
       // at every receiver (the navigator, the store's mirror for pull saves).
+      terrain_publisher_(params_.robot, params_.map_name, /*extent_tiles=*/4,
+                         mode == Mode::kLive ? runtime::LayerTiler::StartVersionBase() : 0),
       occupancy_tiler_(params_.robot, params_.map_name, runtime::kDefaultTileSize,
                        mode == Mode::kLive ? runtime::LayerTiler::StartVersionBase() : 0) {
   for (const auto& p : profiles) core_.terrain().AddProfile(p);
@@ -189,22 +190,22 @@ void MapperService::HandleLogged(const std::string& channel, const void* data, i
     return true;
   };
   if (channel == Ch(r, channels::kLidar)) {
-    cairn::lcmt_point_cloud_slice m;
+    cairn::lcmt_point_cloud_slice m{};
     if (decode(m)) OnSlice(m);
   } else if (channel == Ch(r, channels::kScan)) {
-    cairn::lcmt_laser_scan m;
+    cairn::lcmt_laser_scan m{};
     if (decode(m)) OnScan(m);
   } else if (channel == Ch(r, channels::kPose)) {
-    cairn::lcmt_pose m;
+    cairn::lcmt_pose m{};
     if (decode(m)) OnPose(m);
   } else if (channel == Ch(r, channels::kOdom)) {
-    cairn::lcmt_odometry m;
+    cairn::lcmt_odometry m{};
     if (decode(m)) OnOdometry(m);
   } else if (channel == Ch(r, channels::kImu)) {
-    cairn::lcmt_imu m;
+    cairn::lcmt_imu m{};
     if (decode(m)) OnImu(m);
   } else if (channel == Ch(r, channels::kMapControl)) {
-    lcmt_map_control_request m;
+    lcmt_map_control_request m{};
     if (decode(m)) OnControl(m);
   }
 }
@@ -519,7 +520,7 @@ void MapperService::ProcessControl(const lcmt_map_control_request& request) {
     node_.Publish(Ch(params_.robot, channels::kMapControlReply), cached->second);
     return;
   }
-  lcmt_map_control_reply reply;
+  lcmt_map_control_reply reply{};
   reply.utime = Now();
   reply.request_id = request.request_id;
   reply.status = lcmt_map_control_reply::STATUS_OK;
@@ -761,7 +762,7 @@ void MapperService::PublishOctomap(bool force) {
   ++octomap_chunk_version_;
   std::vector<cairn::lcmt_octomap> chunks;
   for (int i = 0; i < std::max(1, count); ++i) {
-    cairn::lcmt_octomap m;
+    cairn::lcmt_octomap m{};
     m.utime = Now();
     m.robot = params_.robot;
     m.map_name = params_.map_name;

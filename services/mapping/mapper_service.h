@@ -142,8 +142,8 @@ class MapperService {
     enum class Kind { kRevolution, kScan, kControl, kResend } kind;
     RevolutionJob revolution;
     common::LaserScan scan;
-    cairn::lcmt_map_control_request control;
-    cairn::lcmt_tile_resend_request resend;
+    cairn::lcmt_map_control_request control{};
+    cairn::lcmt_tile_resend_request resend{};
   };
 
   // LCM-thread side (or the replay thread): decode, check, resolve poses, queue.

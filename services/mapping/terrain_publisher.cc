@@ -21,10 +21,12 @@ bool IsBaseLayer(const std::string& layer) {
 
 }  // namespace
 
-TerrainPublisher::TerrainPublisher(std::string robot, std::string map_name, int extent_tiles)
+TerrainPublisher::TerrainPublisher(std::string robot, std::string map_name, int extent_tiles,
+                                   int64_t version_base)
     : robot_(std::move(robot)),
       map_name_(std::move(map_name)),
-      extent_tiles_(std::max(1, extent_tiles)) {}
+      extent_tiles_(std::max(1, extent_tiles)),
+      version_base_(version_base) {}
 
 std::optional<cairn::lcmt_grid_manifest> TerrainPublisher::Manifest(
     const std::string& layer) const {
@@ -101,6 +103,7 @@ TerrainPublisher::Batch TerrainPublisher::Update(const TerrainMap& map,
   for (const std::string& layer : layers) {
     LayerState& state = layers_[layer];
     const bool reset = state.version == 0;
+    if (reset) state.version = version_base_;
     bool changed = false;
     std::map<std::pair<int, int>, TileState> next;
     const bool base = IsBaseLayer(layer);
@@ -158,7 +161,7 @@ TerrainPublisher::Batch TerrainPublisher::Update(const TerrainMap& map,
 cairn::lcmt_grid_tile TerrainPublisher::MakeTile(const std::string& layer, const LayerState& state,
                                                  const std::pair<int, int>& key,
                                                  const TileState& tile) const {
-  cairn::lcmt_grid_tile m;
+  cairn::lcmt_grid_tile m{};
   m.utime = state.utime;
   m.robot = robot_;
   m.map_name = map_name_;
@@ -184,7 +187,7 @@ cairn::lcmt_grid_tile TerrainPublisher::MakeTile(const std::string& layer, const
 
 cairn::lcmt_grid_manifest TerrainPublisher::MakeManifest(const std::string& layer,
                                                          const LayerState& state) const {
-  cairn::lcmt_grid_manifest m;
+  cairn::lcmt_grid_manifest m{};
   m.utime = state.utime;
   m.robot = robot_;
   m.map_name = map_name_;

@@ -29,7 +29,11 @@ namespace cairn::mapping {
 
 class TerrainPublisher {
  public:
-  TerrainPublisher(std::string robot, std::string map_name, int extent_tiles = 4);
+  /// Layer versions start after `version_base`, as with runtime::LayerTiler: a restarted
+  /// mapper given a larger base (LayerTiler::StartVersionBase) supersedes its predecessor's
+  /// layers at every receiver at once.
+  TerrainPublisher(std::string robot, std::string map_name, int extent_tiles = 4,
+                   int64_t version_base = 0);
 
   struct Batch {
     std::vector<cairn::lcmt_grid_tile> tiles;
@@ -52,7 +56,7 @@ class TerrainPublisher {
   /// (empty) manifests so receivers drop what they hold. The next Update starts afresh.
   Batch Reset(int64_t utime);
 
-  /// Current version of a layer (0 before its first change).
+  /// Current version of a layer (0 before its first change, then above the version base).
   int64_t version(const std::string& layer) const;
   const common::GridGeometry& geometry() const { return geometry_; }
   /// Whether this publisher handles `layer` (it has published it).
@@ -79,6 +83,7 @@ class TerrainPublisher {
   std::string robot_;
   std::string map_name_;
   int extent_tiles_;
+  int64_t version_base_;
   int tile_size_{0};
   common::GridGeometry geometry_;
   int origin_tx_{0};

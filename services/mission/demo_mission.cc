@@ -112,7 +112,7 @@ bool DemoMission::WaitForGraph(MissionReport* report) {
   auto health_sub = node_->lcm().subscribeFunction<Flags*>(
       channels::kHealth,
       [](const lcm::ReceiveBuffer* rbuf, const std::string&, Flags* f) {
-        cairn::lcmt_health h;
+        cairn::lcmt_health h{};
         if (h.decode(rbuf->data, 0, rbuf->data_size) < 0) return;
         const bool ready = h.state == cairn::lcmt_health::STATE_READY;
         if (h.process == "cairn-navigator" && h.robot == f->robot && ready) *f->navigator = true;
@@ -156,7 +156,7 @@ bool DemoMission::Drive(MissionReport* report) {
   auto pose_sub = node_->lcm().subscribeFunction<State*>(
       channels::ForRobot(params_.robot, channels::kPose),
       [](const lcm::ReceiveBuffer* rbuf, const std::string&, State* s) {
-        cairn::lcmt_pose m;
+        cairn::lcmt_pose m{};
         if (m.decode(rbuf->data, 0, rbuf->data_size) < 0) return;
         const common::Vector2 p(m.position_m[0], m.position_m[1]);
         if (!p.allFinite()) return;

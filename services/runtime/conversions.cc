@@ -36,7 +36,7 @@ Result<common::Pose3> PoseFromArrays(const double position_m[3], const double or
 }
 
 cairn::lcmt_point_cloud_slice ToLcm(const common::LidarSlice& slice) {
-  cairn::lcmt_point_cloud_slice m;
+  cairn::lcmt_point_cloud_slice m{};
   m.utime = slice.utime;
   m.robot = slice.robot;
   m.frame = "lidar";
@@ -95,7 +95,7 @@ Result<common::LidarSlice> FromLcm(const cairn::lcmt_point_cloud_slice& m) {
 }
 
 cairn::lcmt_laser_scan ToLcm(const common::LaserScan& scan) {
-  cairn::lcmt_laser_scan m;
+  cairn::lcmt_laser_scan m{};
   m.utime = scan.utime;
   m.robot = scan.robot;
   m.frame = "laser";
@@ -139,7 +139,7 @@ Result<common::LaserScan> FromLcm(const cairn::lcmt_laser_scan& m) {
 }
 
 cairn::lcmt_robot_profile ToLcm(const common::RobotProfile& p) {
-  cairn::lcmt_robot_profile m;
+  cairn::lcmt_robot_profile m{};
   m.name = p.name;
   m.content_hash = p.ContentHash();
   switch (p.drive) {
@@ -225,7 +225,7 @@ Result<common::Pose3> FromLcm(const cairn::lcmt_odometry& m) {
 }
 
 cairn::lcmt_obstacle ToLcm(const common::Obstacle& o) {
-  cairn::lcmt_obstacle m;
+  cairn::lcmt_obstacle m{};
   m.id = o.id;
   m.kind = static_cast<int8_t>(o.kind);
   m.centroid_m[0] = o.centroid_m.x();
@@ -244,7 +244,7 @@ cairn::lcmt_obstacle ToLcm(const common::Obstacle& o) {
   m.num_cells = o.num_cells;
   m.num_verdicts = static_cast<int32_t>(o.verdicts.size());
   for (const auto& v : o.verdicts) {
-    cairn::lcmt_obstacle_verdict mv;
+    cairn::lcmt_obstacle_verdict mv{};
     mv.profile = v.profile;
     mv.profile_hash = v.profile_hash;
     mv.crossable = v.crossable;
@@ -283,7 +283,7 @@ Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& m) {
 
 cairn::lcmt_obstacle_registry ToLcm(const common::ObstacleRegistry& r, int64_t utime,
                                     const std::string& robot, const std::string& map_name) {
-  cairn::lcmt_obstacle_registry m;
+  cairn::lcmt_obstacle_registry m{};
   m.utime = utime;
   m.robot = robot;
   m.map_name = map_name;

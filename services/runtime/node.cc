@@ -268,7 +268,7 @@ double Node::uptime_s() const {
 }
 
 cairn::lcmt_health Node::MakeHealth() {
-  cairn::lcmt_health h;
+  cairn::lcmt_health h{};
   h.utime = WallUtime();
   h.sim_utime = sim_utime_;
   h.process = options_.process_name;
@@ -290,7 +290,7 @@ cairn::lcmt_health Node::MakeHealth() {
       const auto& first = c.history.front();
       const double dt = now_s - first.first;
       c.rate_hz = dt > 0.2 ? (c.messages - first.second) / dt : 0.0;
-      cairn::lcmt_channel_stats s;
+      cairn::lcmt_channel_stats s{};
       s.channel = name;
       s.outgoing = outgoing;
       s.messages = c.messages;

@@ -146,7 +146,7 @@ LayerTiler::Batch LayerTiler::Update(const common::GridMap& map, const std::stri
 void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, int ix, int iy,
                             const TileState& tile, Batch* batch) const {
   if (state.encoding == TileEncoding::kFloat) {
-    cairn::lcmt_grid_tile m;
+    cairn::lcmt_grid_tile m{};
     m.utime = state.utime;
     m.robot = robot_;
     m.map_name = map_name_;
@@ -163,7 +163,7 @@ void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, i
     m.data = tile.data;
     batch->tiles.push_back(std::move(m));
   } else {
-    cairn::lcmt_occupancy_tile m;
+    cairn::lcmt_occupancy_tile m{};
     m.utime = state.utime;
     m.robot = robot_;
     m.map_name = map_name_;
@@ -184,7 +184,7 @@ void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, i
 
 cairn::lcmt_grid_manifest LayerTiler::MakeManifest(const std::string& layer,
                                                    const LayerState& state) const {
-  cairn::lcmt_grid_manifest m;
+  cairn::lcmt_grid_manifest m{};
   m.utime = state.utime;
   m.robot = robot_;
   m.map_name = map_name_;
@@ -343,7 +343,7 @@ std::optional<cairn::lcmt_tile_resend_request> LayerAssembler::MakeResendRequest
   if (it == layers_.end() || !it->second.has_manifest) return std::nullopt;
   const auto missing = Missing(layer);
   if (missing.empty()) return std::nullopt;
-  cairn::lcmt_tile_resend_request r;
+  cairn::lcmt_tile_resend_request r{};
   r.utime = utime;
   r.requester = requester;
   r.robot = it->second.robot;

@@ -53,7 +53,7 @@ class LayerTiler {
   struct Batch {
     std::vector<cairn::lcmt_grid_tile> tiles;
     std::vector<cairn::lcmt_occupancy_tile> occupancy_tiles;
-    cairn::lcmt_grid_manifest manifest;
+    cairn::lcmt_grid_manifest manifest{};
     bool changed{false};  ///< false when nothing changed since the last Update
   };
 

@@ -137,6 +137,45 @@ TEST(TerrainPublisherTest, ReceiverRebuildsTheLayersAndOnlyChangesAreSent) {
   }
 }
 
+
+// A restarted mapper (a new publisher with a larger version base) mapping the same ground into
+// the same grid replaces what a receiver holds from its predecessor, tile by tile; without the
+// base its first versions would be older and ignored.
+TEST(TerrainPublisherTest, ASuccessorWithALargerVersionBaseSupersedesItsPredecessor) {
+  const std::vector<std::string> names{layers::kElevation};
+  TerrainMap before;
+  Observe(&before, 1.0, 1.0, 0);
+  Observe(&before, 3.0, 1.0, 1);  // several versions on the predecessor's side
+  TerrainPublisher predecessor("r1", "live", 4, /*version_base=*/1000);
+  runtime::LayerAssembler receiver;
+  for (int64_t scan = 0; scan < 3; ++scan) {
+    Observe(&before, 1.0 + scan, 2.0, 2 + scan);
+    auto batch = predecessor.Update(before, names, 10 + scan);
+    for (const auto& t : batch.tiles) ASSERT_TRUE(receiver.OnTile(t));
+    for (const auto& m : batch.manifests) receiver.OnManifest(m);
+  }
+  const int64_t held = receiver.version(layers::kElevation);
+  ASSERT_GT(held, 1000);
+
+  TerrainMap after;  // the successor starts from nothing and sees the same first ground
+  Observe(&after, 1.0, 1.0, 0);
+  TerrainPublisher successor("r1", "live", 4, /*version_base=*/2000);
+  auto first = successor.Update(after, names, 100);
+  ASSERT_EQ(first.manifests.size(), 1u);
+  EXPECT_GT(first.manifests[0].layer_version, held);
+  for (const auto& t : first.tiles) ASSERT_TRUE(receiver.OnTile(t));
+  for (const auto& m : first.manifests) receiver.OnManifest(m);
+  EXPECT_EQ(receiver.version(layers::kElevation), first.manifests[0].layer_version);
+  ASSERT_TRUE(receiver.Complete(layers::kElevation));
+  const common::GridMap got = *receiver.Layer(layers::kElevation);
+  const common::GridMap expected = after.Export({layers::kElevation}, got.geometry());
+  const common::Layer& a = got.at(layers::kElevation);
+  const common::Layer& b = expected.at(layers::kElevation);
+  for (int64_t i = 0; i < a.size(); ++i) {
+    ASSERT_TRUE((std::isnan(a.data()[i]) && std::isnan(b.data()[i])) || a.data()[i] == b.data()[i])
+        << "cell " << i;
+  }
+}
 // MapperService over memq: slices and poses in, tiles, manifests and the registry out.
 TEST(MapperServiceTest, MapsSlicesOverMemq) {
   runtime::NodeOptions options;

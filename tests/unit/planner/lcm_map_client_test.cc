@@ -140,6 +140,20 @@ TEST_F(LcmMapClientTest, MissingTilesAreLethalAndAskedFor) {
   ASSERT_NE(map, nullptr);
   EXPECT_FLOAT_EQ(map->cost()(25, 5), 100.f);
   EXPECT_FLOAT_EQ(map->cost()(10, 5), 0.f);
+  EXPECT_EQ(map->missing_tiles(), 1);
+  // Polling again neither rebuilds the same holes nor forgets to ask for them.
+  dut->Poll();
+  EXPECT_EQ(dut->Latest(), map);
+  // The resent tile of the same version completes it: rebuilt without holes.
+  for (const auto& t : batch.occupancy_tiles) {
+    if (t.tile_ix == 1 && t.tile_iy == 0) dut->OnTile(t);
+  }
+  const auto complete = dut->Latest();
+  ASSERT_NE(complete, nullptr);
+  EXPECT_NE(complete, map);
+  EXPECT_EQ(complete->version(), map->version());
+  EXPECT_EQ(complete->missing_tiles(), 0);
+  EXPECT_FLOAT_EQ(complete->cost()(25, 5), 0.f);
 }
 
 TEST_F(LcmMapClientTest, RefusesBadThresholds) {

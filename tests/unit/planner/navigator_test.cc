@@ -207,6 +207,29 @@ TEST(NavigatorTest, StaleOrMissingMapStops) {
   EXPECT_NE(sim.nav_.status().message.find("cost layer"), std::string::npos);
 }
 
+// A layer with tiles missing (their cells lethal, here the tile the robot stands in) holds the
+// robot without spending recoveries or failing; the complete layer lets it go on and arrive.
+TEST(NavigatorTest, ALayerWithMissingTilesHoldsTheRobotUntilItIsComplete) {
+  TestLayer holes = WallWithGap();
+  holes.Rect(0.0, 0.0, 4.0, 4.0, 100.0f);  // a missing tile read as lethal
+  auto incomplete = std::make_shared<CostMap>(holes.geometry, holes.cost, PioneerFootprint());
+  incomplete->set_missing_tiles(1);
+  const auto complete = WallWithGap().Build(PioneerFootprint());
+  NavSim sim(incomplete);
+  sim.check_collisions_ = false;
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  sim.Run(5.0);
+  EXPECT_EQ(sim.nav_.status().state, NavState::kStopped);
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kNoMap);
+  EXPECT_NE(sim.nav_.status().message.find("lacks 1 tiles"), std::string::npos)
+      << sim.nav_.status().message;
+  EXPECT_EQ(sim.plans_, 0);
+  EXPECT_EQ(sim.last_sent_.linear_mps, 0.0);
+  sim.map_ = complete;
+  sim.check_collisions_ = true;
+  ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kReached)) << sim.nav_.status().message;
+}
+
 TEST(NavigatorTest, UnknownPlaceFailsAtOnce) {
   NavSim sim(WallWithGap().Build(PioneerFootprint()));
   NavGoal g;

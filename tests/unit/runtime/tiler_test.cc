@@ -110,6 +110,30 @@ TEST(LayerAssemblerTest, RebuildsExactlyAndDetectsMissingTiles) {
   EXPECT_TRUE(*rebuilt == map);
 }
 
+// A receiver may ask for tiles of a layer this publisher has not tiled yet (it restarted and a
+// receiver still holds its predecessor's layer): the answer is empty and its manifest, though
+// not sent, is all zeros and encodes (it once held garbage counts, and encoding read past the
+// end of its vectors).
+TEST(LayerTilerTest, AResendForALayerNotTiledYetIsEmptyAndItsManifestEncodes) {
+  LayerTiler tiler("r1", "live");
+  cairn::lcmt_tile_resend_request request{};
+  request.robot = "r1";
+  request.map_name = "live";
+  request.layer = "cost/pioneer3at";
+  request.num_tiles = 2;
+  request.tile_ix = {3, 4};
+  request.tile_iy = {1, 1};
+  const auto batch = tiler.Resend(request);
+  EXPECT_TRUE(batch.tiles.empty());
+  EXPECT_TRUE(batch.occupancy_tiles.empty());
+  EXPECT_FALSE(batch.changed);
+  EXPECT_EQ(batch.manifest.num_tiles, 0);
+  EXPECT_EQ(batch.manifest.layer_version, 0);
+  std::vector<uint8_t> buffer(static_cast<size_t>(batch.manifest.getEncodedSize()));
+  EXPECT_EQ(batch.manifest.encode(buffer.data(), 0, static_cast<int>(buffer.size())),
+            static_cast<int>(buffer.size()));
+}
+
 TEST(LayerAssemblerTest, CorruptTileIsRefusedAndStaleTileIsMissing) {
   common::GridMap map = MakeMap(120, 50);
   LayerTiler tiler("r1", "live");
