@@ -127,8 +127,8 @@ void LcmMapClient::MaybeBuild(bool allow_incomplete) {
   if (params_.encoding == MapEncoding::kOccupancy) {
     cells = OccupancyToCostLayer(cells, params_.occupancy, cost_params_.lethal_cost);
   }
-  const auto missing = allow_incomplete ? assembler_.Missing(params_.layer)
-                                        : std::vector<std::pair<int, int>>{};
+  const auto missing =
+      allow_incomplete ? assembler_.Missing(params_.layer) : std::vector<std::pair<int, int>>{};
   if (tile_size_ > 0) {
     // Tiles the mapper announced but we never got: block them rather than read them as
     // unexplored (which the planners may be allowed to cross).

@@ -27,10 +27,10 @@ namespace cairn::planner {
 
 struct LcmMapClientParams {
   std::string robot;
-  std::string layer;     ///< "cost/<profile>" (kCost), or "final", "long_term"... (kOccupancy)
+  std::string layer;  ///< "cost/<profile>" (kCost), or "final", "long_term"... (kOccupancy)
   MapEncoding encoding{MapEncoding::kCost};
   OccupancyCostParams occupancy;  ///< kOccupancy: the occupancy-to-cost thresholds
-  std::string map_name;  ///< accept only this map name ("" = any)
+  std::string map_name;           ///< accept only this map name ("" = any)
   std::string requester{"cairn-navigator"};
   double resend_interval_s{0.5};
   /// Build a snapshot from an incomplete version after this long; the cells of tiles that are
@@ -75,7 +75,7 @@ class LcmMapClient : public MapSource {
   std::shared_ptr<const CostMap> latest_;
   int64_t heard_utime_{0};
   int64_t built_version_{-1};
-  bool built_incomplete_{false};  // the version in use was built with missing tiles
+  bool built_incomplete_{false};    // the version in use was built with missing tiles
   int64_t pending_since_utime_{0};  // when the newest unbuilt version was announced
   int64_t last_resend_utime_{0};
   int64_t snapshots_{0};

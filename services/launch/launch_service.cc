@@ -1,9 +1,9 @@
 #include "services/launch/launch_service.h"
 
+#include <chrono>
+
 #include <sys/time.h>
 #include <unistd.h>
-
-#include <chrono>
 
 #include "common/channels.h"
 #include "common/log.h"
@@ -13,9 +13,8 @@ namespace cairn::launch {
 LaunchService::LaunchService(runtime::Node* node, Supervisor* supervisor, PosixRunner* runner,
                              std::string status_path)
     : node_(node), supervisor_(supervisor), runner_(runner), status_path_(std::move(status_path)) {
-  node_->SubscribeRaw(".*", [this](const std::string& channel, const void* data, int size, int64_t) {
-    OnMessage(channel, data, size);
-  });
+  node_->SubscribeRaw(".*", [this](const std::string& channel, const void* data, int size,
+                                   int64_t) { OnMessage(channel, data, size); });
   node_->AddTimer(0.1, [this] { Tick(); });
   node_->AddTimer(1.0, [this] { WriteStatusFile(status_path_, MakeStatus(Now())); });
 }
@@ -36,7 +35,8 @@ void LaunchService::OnMessage(const std::string& channel, const void* data, int 
 
 void LaunchService::Tick() {
   const double now = Now();
-  for (const auto& [channel, rate] : meter_.Rates(now)) supervisor_->SetChannelRate(channel, rate.rate_hz);
+  for (const auto& [channel, rate] : meter_.Rates(now))
+    supervisor_->SetChannelRate(channel, rate.rate_hz);
   if (runtime::ShutdownRequested() && !supervisor_->stopping()) {
     node_->Event("stopping graph '%s'", supervisor_->graph().name.c_str());
     message_ = "stopping on request";
@@ -98,7 +98,8 @@ GraphStatus LaunchService::MakeStatus(double now_s) {
     }
     s.processes.push_back(row);
   }
-  for (const auto& [channel, rate] : meter_.Rates(now_s)) s.channel_rates_hz[channel] = rate.rate_hz;
+  for (const auto& [channel, rate] : meter_.Rates(now_s))
+    s.channel_rates_hz[channel] = rate.rate_hz;
   s.expected_rates_hz = graph.ExpectedRates();
   return s;
 }
@@ -111,8 +112,8 @@ int LaunchService::Run() {
   while (!supervisor_->AllDown()) node_->SpinOnce(50);
   WriteStatusFile(status_path_, MakeStatus(Now()));
   if (auto fatal = supervisor_->FatalFailure()) {
-    std::fprintf(stderr, "cairn-launch: graph '%s' stopped: %s\n", supervisor_->graph().name.c_str(),
-                 fatal->c_str());
+    std::fprintf(stderr, "cairn-launch: graph '%s' stopped: %s\n",
+                 supervisor_->graph().name.c_str(), fatal->c_str());
     return 1;
   }
   node_->Event("graph '%s' stopped", supervisor_->graph().name.c_str());

@@ -13,6 +13,7 @@
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_nav_status.hpp"
 #include "cairn/lcmt_pose.hpp"
+
 #include "common/channels.h"
 #include "common/layers.h"
 #include "common/robot_profile.h"
@@ -33,21 +34,30 @@ double SecondsSince(Clock::time_point t) {
 
 const char* StateName(int8_t state) {
   switch (state) {
-    case NavStatus::STATE_IDLE: return "idle";
-    case NavStatus::STATE_PLANNING: return "planning";
-    case NavStatus::STATE_DRIVING: return "driving";
-    case NavStatus::STATE_RECOVERING: return "recovering";
-    case NavStatus::STATE_REACHED: return "reached";
-    case NavStatus::STATE_FAILED: return "failed";
-    case NavStatus::STATE_CANCELLED: return "cancelled";
-    case NavStatus::STATE_STOPPED: return "stopped";
+    case NavStatus::STATE_IDLE:
+      return "idle";
+    case NavStatus::STATE_PLANNING:
+      return "planning";
+    case NavStatus::STATE_DRIVING:
+      return "driving";
+    case NavStatus::STATE_RECOVERING:
+      return "recovering";
+    case NavStatus::STATE_REACHED:
+      return "reached";
+    case NavStatus::STATE_FAILED:
+      return "failed";
+    case NavStatus::STATE_CANCELLED:
+      return "cancelled";
+    case NavStatus::STATE_STOPPED:
+      return "stopped";
   }
   return "?";
 }
 
 // The part of a map that holds known cells of `layer`, plus a margin: stored maps grow in
 // large blocks, and a render of mostly unknown space shows nothing.
-common::GridMap CropToKnown(const common::GridMap& map, const std::string& layer, int margin_cells) {
+common::GridMap CropToKnown(const common::GridMap& map, const std::string& layer,
+                            int margin_cells) {
   if (!map.HasLayer(layer)) return map;
   const common::Layer& values = map.at(layer);
   int min_x = map.size_x(), min_y = map.size_y(), max_x = -1, max_y = -1;
@@ -66,8 +76,7 @@ common::GridMap CropToKnown(const common::GridMap& map, const std::string& layer
   max_x = std::min(map.size_x() - 1, max_x + margin_cells);
   max_y = std::min(map.size_y() - 1, max_y + margin_cells);
   common::GridGeometry g = map.geometry();
-  g.origin = map.geometry().origin.Compose(
-      {min_x * g.resolution_m, min_y * g.resolution_m, 0.0});
+  g.origin = map.geometry().origin.Compose({min_x * g.resolution_m, min_y * g.resolution_m, 0.0});
   g.size_x = max_x - min_x + 1;
   g.size_y = max_y - min_y + 1;
   common::GridMap out(g);
@@ -120,16 +129,16 @@ bool DemoMission::WaitForGraph(MissionReport* report) {
       },
       &flags);
   const auto start = Clock::now();
-  while (!(have_pose && navigator_ready && mapstore_ready) && SecondsSince(start) < params_.ready_timeout_s &&
-         !node_->stopping()) {
+  while (!(have_pose && navigator_ready && mapstore_ready) &&
+         SecondsSince(start) < params_.ready_timeout_s && !node_->stopping()) {
     node_->SpinOnce(50);
   }
   node_->lcm().unsubscribe(pose_sub);
   node_->lcm().unsubscribe(health_sub);
   if (!(have_pose && navigator_ready && mapstore_ready)) {
     report->error = std::string("the graph is not working after ") +
-                    std::to_string(static_cast<int>(params_.ready_timeout_s)) + " s: " +
-                    (!have_pose ? "no pose from " + params_.robot + "; " : "") +
+                    std::to_string(static_cast<int>(params_.ready_timeout_s)) +
+                    " s: " + (!have_pose ? "no pose from " + params_.robot + "; " : "") +
                     (!navigator_ready ? "no ready cairn-navigator; " : "") +
                     (!mapstore_ready ? "no ready cairn-mapstore" : "");
     return false;
@@ -204,8 +213,9 @@ bool DemoMission::Drive(MissionReport* report) {
     // the goal stops (a restarted navigator starts idle; re-sends of a goal id are idempotent).
     const bool unanswered = !state.status || SecondsSince(state.status_time) > 3.0;
     if (unanswered && SecondsSince(last_goal) > 1.0) {
-      if (state.status) node_->Event("goal %lld: no status for 3 s, sending it again",
-                                     static_cast<long long>(goal.goal_id));
+      if (state.status)
+        node_->Event("goal %lld: no status for 3 s, sending it again",
+                     static_cast<long long>(goal.goal_id));
       goal.utime = node_->NowUtime();
       node_->Publish(channels::ForRobot(params_.robot, channels::kGoal), goal);
       last_goal = Clock::now();
@@ -272,8 +282,8 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
     put.profile_data = runtime::ToLcm(profile);
     auto reply = client.Call(put);
     if (!reply.ok() || reply->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
-      report->error = "storing profile " + name + " failed: " +
-                      (reply.ok() ? reply->message : reply.status().ToString());
+      report->error = "storing profile " + name +
+                      " failed: " + (reply.ok() ? reply->message : reply.status().ToString());
       return false;
     }
   }
@@ -287,12 +297,14 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
   save.profile = params_.source_profile;
   auto saved = client.Call(save);
   if (!saved.ok() || saved->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
-    report->error = "saving the map failed: " + (saved.ok() ? saved->message : saved.status().ToString());
+    report->error =
+        "saving the map failed: " + (saved.ok() ? saved->message : saved.status().ToString());
     return false;
   }
   report->map_version = saved->version;
-  node_->Event("map saved as %s/%s version %lld (%s)", params_.site.c_str(), params_.map_name.c_str(),
-               static_cast<long long>(saved->version), saved->message.c_str());
+  node_->Event("map saved as %s/%s version %lld (%s)", params_.site.c_str(),
+               params_.map_name.c_str(), static_cast<long long>(saved->version),
+               saved->message.c_str());
 
   // Share with every other profile: the store derives their layers and verdicts.
   for (const auto& target : params_.share_profiles) {
@@ -304,8 +316,8 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
     share.profile = target;
     auto shared = client.Call(share);
     if (!shared.ok() || shared->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
-      report->error = "sharing with " + target + " failed: " +
-                      (shared.ok() ? shared->message : shared.status().ToString());
+      report->error = "sharing with " + target +
+                      " failed: " + (shared.ok() ? shared->message : shared.status().ToString());
       return false;
     }
     node_->Event("shared with %s: %d obstacle verdicts differ from %s", target.c_str(),
@@ -328,7 +340,8 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
     for (const auto& o : loaded->obstacles.obstacles) {
       obstacles[o.id] = o;
       const auto* v = o.VerdictFor(name);
-      verdicts[o.id][name] = v == nullptr ? "?" : (v->crossable ? "crossable" : "blocked (" + v->reason + ")");
+      verdicts[o.id][name] =
+          v == nullptr ? "?" : (v->crossable ? "crossable" : "blocked (" + v->reason + ")");
     }
     if (!elevation_done && loaded->layers.HasLayer(layers::kElevation)) {
       mapstore::io::PngOverlay overlay;
@@ -362,7 +375,8 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
   for (const auto& [id, o] : obstacles) {
     std::ostringstream line;
     char head[160];
-    std::snprintf(head, sizeof(head), "#%-3d %-14s at (%5.1f, %5.1f)  slope %4.1f deg  height %5.2f m  width %4.2f m",
+    std::snprintf(head, sizeof(head),
+                  "#%-3d %-14s at (%5.1f, %5.1f)  slope %4.1f deg  height %5.2f m  width %4.2f m",
                   id, common::ObstacleKindName(o.kind), o.centroid_m.x(), o.centroid_m.y(),
                   o.slope_rad * 180.0 / M_PI, o.height_m, o.width_m);
     line << head;
@@ -377,18 +391,21 @@ std::string FormatReport(const MissionParams& params, const MissionReport& r) {
   char line[256];
   out << "\n=== cairn demo mission ===\n";
   std::snprintf(line, sizeof(line), "robot          %s (profile %s), goal (%.2f, %.2f)\n",
-                params.robot.c_str(), params.source_profile.c_str(), params.goal.x_m, params.goal.y_m);
+                params.robot.c_str(), params.source_profile.c_str(), params.goal.x_m,
+                params.goal.y_m);
   out << line;
-  out << "outcome        " << (r.ok() ? "SUCCESS" : "FAILED") << " (navigation " << r.nav_outcome << ")\n";
+  out << "outcome        " << (r.ok() ? "SUCCESS" : "FAILED") << " (navigation " << r.nav_outcome
+      << ")\n";
   if (!r.error.empty()) out << "error          " << r.error << "\n";
   std::snprintf(line, sizeof(line),
                 "distance       %.1f m\nsim time       %.1f s\nwall time      %.1f s\n"
                 "real-time      %.2fx\nreplans        %d\nrecoveries     %d\n",
-                r.distance_m, r.sim_time_s, r.wall_time_s, r.real_time_factor, r.replans, r.recoveries);
+                r.distance_m, r.sim_time_s, r.wall_time_s, r.real_time_factor, r.replans,
+                r.recoveries);
   out << line;
   if (r.map_version > 0) {
-    out << "stored map     " << params.site << "/" << params.map_name << " version " << r.map_version
-        << ", shared with";
+    out << "stored map     " << params.site << "/" << params.map_name << " version "
+        << r.map_version << ", shared with";
     for (const auto& p : params.share_profiles) out << " " << p;
     out << "\n";
   }

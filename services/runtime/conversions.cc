@@ -143,9 +143,15 @@ cairn::lcmt_robot_profile ToLcm(const common::RobotProfile& p) {
   m.name = p.name;
   m.content_hash = p.ContentHash();
   switch (p.drive) {
-    case common::DriveKind::kDifferential: m.drive = cairn::lcmt_robot_profile::DRIVE_DIFFERENTIAL; break;
-    case common::DriveKind::kSkidSteer: m.drive = cairn::lcmt_robot_profile::DRIVE_SKID_STEER; break;
-    case common::DriveKind::kAuv: m.drive = cairn::lcmt_robot_profile::DRIVE_AUV; break;
+    case common::DriveKind::kDifferential:
+      m.drive = cairn::lcmt_robot_profile::DRIVE_DIFFERENTIAL;
+      break;
+    case common::DriveKind::kSkidSteer:
+      m.drive = cairn::lcmt_robot_profile::DRIVE_SKID_STEER;
+      break;
+    case common::DriveKind::kAuv:
+      m.drive = cairn::lcmt_robot_profile::DRIVE_AUV;
+      break;
   }
   m.num_footprint = static_cast<int32_t>(p.footprint_m.size());
   for (const auto& v : p.footprint_m) {
@@ -178,12 +184,20 @@ Result<common::RobotProfile> FromLcm(const cairn::lcmt_robot_profile& m) {
   common::RobotProfile p;
   p.name = m.name;
   switch (m.drive) {
-    case cairn::lcmt_robot_profile::DRIVE_DIFFERENTIAL: p.drive = common::DriveKind::kDifferential; break;
-    case cairn::lcmt_robot_profile::DRIVE_SKID_STEER: p.drive = common::DriveKind::kSkidSteer; break;
-    case cairn::lcmt_robot_profile::DRIVE_AUV: p.drive = common::DriveKind::kAuv; break;
-    default: return InvalidArgumentError("robot profile has unknown drive " + std::to_string(m.drive));
+    case cairn::lcmt_robot_profile::DRIVE_DIFFERENTIAL:
+      p.drive = common::DriveKind::kDifferential;
+      break;
+    case cairn::lcmt_robot_profile::DRIVE_SKID_STEER:
+      p.drive = common::DriveKind::kSkidSteer;
+      break;
+    case cairn::lcmt_robot_profile::DRIVE_AUV:
+      p.drive = common::DriveKind::kAuv;
+      break;
+    default:
+      return InvalidArgumentError("robot profile has unknown drive " + std::to_string(m.drive));
   }
-  for (int i = 0; i < m.num_footprint; ++i) p.footprint_m.emplace_back(m.footprint_x_m[i], m.footprint_y_m[i]);
+  for (int i = 0; i < m.num_footprint; ++i)
+    p.footprint_m.emplace_back(m.footprint_x_m[i], m.footprint_y_m[i]);
   p.max_slope_up_rad = m.max_slope_up_rad;
   p.max_slope_down_rad = m.max_slope_down_rad;
   p.max_step_up_m = m.max_step_up_m;
@@ -260,14 +274,16 @@ Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& m) {
       m.verdicts.size() != static_cast<size_t>(m.num_verdicts)) {
     return InvalidArgumentError("obstacle arrays disagree with their counts");
   }
-  if (m.kind < cairn::lcmt_obstacle::KIND_RAMP || m.kind > cairn::lcmt_obstacle::KIND_WALL_OR_OBJECT) {
+  if (m.kind < cairn::lcmt_obstacle::KIND_RAMP ||
+      m.kind > cairn::lcmt_obstacle::KIND_WALL_OR_OBJECT) {
     return InvalidArgumentError("obstacle has unknown kind " + std::to_string(m.kind));
   }
   common::Obstacle o;
   o.id = m.id;
   o.kind = static_cast<common::ObstacleKind>(m.kind);
   o.centroid_m = {m.centroid_m[0], m.centroid_m[1]};
-  for (int i = 0; i < m.num_outline; ++i) o.outline_m.emplace_back(m.outline_x_m[i], m.outline_y_m[i]);
+  for (int i = 0; i < m.num_outline; ++i)
+    o.outline_m.emplace_back(m.outline_x_m[i], m.outline_y_m[i]);
   o.slope_rad = m.slope_rad;
   o.height_m = m.height_m;
   o.width_m = m.width_m;
@@ -318,4 +334,3 @@ bool FitRegistryToMessageLimit(cairn::lcmt_obstacle_registry* msg) {
 }
 
 }  // namespace cairn::runtime
-

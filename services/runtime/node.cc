@@ -1,14 +1,15 @@
 #include "services/runtime/node.h"
 
-#include <sys/time.h>
-#include <unistd.h>
-
 #include <csignal>
 #include <cstdarg>
 #include <cstdlib>
 #include <stdexcept>
 
+#include <sys/time.h>
+#include <unistd.h>
+
 #include "cairn/lcmt_sim_clock.hpp"
+
 #include "common/channels.h"
 
 namespace cairn::runtime {
@@ -45,7 +46,8 @@ std::string ResolveLcmUrl(const std::string& flag_value) {
   if (url.empty()) url = kDefaultLcmUrl;
   const auto scheme_end = url.find("://");
   if (scheme_end == std::string::npos) {
-    throw std::invalid_argument("LCM URL '" + url + "' has no provider (udpm://, memq://, file://)");
+    throw std::invalid_argument("LCM URL '" + url +
+                                "' has no provider (udpm://, memq://, file://)");
   }
   const std::string scheme = url.substr(0, scheme_end);
   if (scheme != "udpm" && scheme != "memq" && scheme != "file" && scheme != "tcpq" &&
@@ -62,8 +64,9 @@ Node::Node(NodeOptions options) : options_(std::move(options)) {
   options_.lcm_url = ResolveLcmUrl(options_.lcm_url);
   start_ = std::chrono::steady_clock::now();
   if (options_.install_signal_handlers) InstallSignalHandlers();
-  const std::string tag =
-      options_.robot.empty() ? options_.process_name : options_.process_name + "[" + options_.robot + "]";
+  const std::string tag = options_.robot.empty()
+                              ? options_.process_name
+                              : options_.process_name + "[" + options_.robot + "]";
   common::SetLogTag(tag);
   lcm_ = std::make_unique<lcm::LCM>(options_.lcm_url);
   if (!lcm_->good()) {
@@ -71,9 +74,8 @@ Node::Node(NodeOptions options) : options_(std::move(options)) {
                              " (is multicast enabled on the loopback interface?)");
   }
   if (options_.follow_sim_clock) {
-    Subscribe<cairn::lcmt_sim_clock>(channels::kSimClock, [this](const cairn::lcmt_sim_clock& c) {
-      sim_utime_ = c.utime;
-    });
+    Subscribe<cairn::lcmt_sim_clock>(
+        channels::kSimClock, [this](const cairn::lcmt_sim_clock& c) { sim_utime_ = c.utime; });
   }
   if (options_.heartbeat_period_s > 0) {
     AddTimer(options_.heartbeat_period_s, [this] { PublishHealth(); });
@@ -85,22 +87,25 @@ Node::~Node() = default;
 void Node::SubscribeRaw(
     const std::string& channel_regex,
     std::function<void(const std::string&, const void*, int, int64_t)> handler) {
-  auto closure = std::make_unique<std::function<void(const lcm::ReceiveBuffer*, const std::string&)>>(
-      [this, handler](const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-        RecordIn(channel, static_cast<int>(rbuf->data_size));
-        try {
-          handler(channel, rbuf->data, static_cast<int>(rbuf->data_size), rbuf->recv_utime);
-        } catch (const std::exception& e) {
-          RecordHandlerError(channel, e.what());
-        } catch (...) {
-          RecordHandlerError(channel, "unknown exception");
-        }
-      });
+  auto closure =
+      std::make_unique<std::function<void(const lcm::ReceiveBuffer*, const std::string&)>>(
+          [this, handler](const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+            RecordIn(channel, static_cast<int>(rbuf->data_size));
+            try {
+              handler(channel, rbuf->data, static_cast<int>(rbuf->data_size), rbuf->recv_utime);
+            } catch (const std::exception& e) {
+              RecordHandlerError(channel, e.what());
+            } catch (...) {
+              RecordHandlerError(channel, "unknown exception");
+            }
+          });
   auto* fn = closure.get();
   lcm_->subscribeFunction<std::function<void(const lcm::ReceiveBuffer*, const std::string&)>*>(
       channel_regex,
       [](const lcm::ReceiveBuffer* rbuf, const std::string& channel,
-         std::function<void(const lcm::ReceiveBuffer*, const std::string&)>* f) { (*f)(rbuf, channel); },
+         std::function<void(const lcm::ReceiveBuffer*, const std::string&)>* f) {
+        (*f)(rbuf, channel);
+      },
       fn);
   handlers_.push_back(std::move(closure));
 }
@@ -195,7 +200,8 @@ void Node::Warn(const std::string& key, const std::string& message) {
   int64_t suppressed = 0;
   if (limiter->Allow(&suppressed)) {
     if (suppressed > 0) {
-      CAIRN_LOG_WARN("%s (and %lld more like it)", message.c_str(), static_cast<long long>(suppressed));
+      CAIRN_LOG_WARN("%s (and %lld more like it)", message.c_str(),
+                     static_cast<long long>(suppressed));
     } else {
       CAIRN_LOG_WARN("%s", message.c_str());
     }

@@ -1,11 +1,11 @@
 #include "services/runtime/tiler.h"
 
-#include <zlib.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+
+#include <zlib.h>
 
 namespace cairn::runtime {
 namespace {
@@ -57,7 +57,8 @@ LayerTiler::LayerTiler(std::string robot, std::string map_name, int tile_size_ce
       tile_size_(tile_size_cells),
       version_base_(version_base) {
   if (version_base_ < 0) throw std::invalid_argument("the version base must not be negative");
-  if (tile_size_ <= 0 || static_cast<size_t>(tile_size_) * tile_size_ * 4 + 512 > kMaxMessageBytes) {
+  if (tile_size_ <= 0 ||
+      static_cast<size_t>(tile_size_) * tile_size_ * 4 + 512 > kMaxMessageBytes) {
     throw std::invalid_argument("tile size " + std::to_string(tile_size_) +
                                 " cells does not fit a 256 KB message");
   }
@@ -78,8 +79,8 @@ LayerTiler::Batch LayerTiler::Update(const common::GridMap& map, const std::stri
                                      TileEncoding encoding, int64_t utime, bool force_all) {
   const common::Layer& values = map.at(layer);
   LayerState& state = layers_[layer];
-  const bool reset = state.version == 0 || state.geometry != map.geometry() ||
-                     state.encoding != encoding;
+  const bool reset =
+      state.version == 0 || state.geometry != map.geometry() || state.encoding != encoding;
   if (reset) {
     state.tiles.clear();
     state.geometry = map.geometry();
@@ -211,8 +212,8 @@ LayerTiler::Batch LayerTiler::Resend(const cairn::lcmt_tile_resend_request& requ
       AppendTile(request.layer, state, key.first, key.second, tile, &batch);
     }
   } else {
-    const int n = std::min<int>(request.num_tiles,
-                                std::min(request.tile_ix.size(), request.tile_iy.size()));
+    const int n =
+        std::min<int>(request.num_tiles, std::min(request.tile_ix.size(), request.tile_iy.size()));
     for (int i = 0; i < n; ++i) {
       auto t = state.tiles.find({request.tile_ix[i], request.tile_iy[i]});
       if (t != state.tiles.end()) {
@@ -239,8 +240,9 @@ LayerAssembler::LayerState& LayerAssembler::StateFor(const std::string& layer,
 
 template <typename TileMsg>
 bool LayerAssembler::OnTileImpl(const TileMsg& tile, std::vector<float> data, uint32_t crc) {
-  if (static_cast<uint32_t>(tile.checksum) != crc || tile.num_cells != tile.cells_x * tile.cells_y ||
-      tile.tile_size <= 0 || tile.cells_x > tile.tile_size || tile.cells_y > tile.tile_size) {
+  if (static_cast<uint32_t>(tile.checksum) != crc ||
+      tile.num_cells != tile.cells_x * tile.cells_y || tile.tile_size <= 0 ||
+      tile.cells_x > tile.tile_size || tile.cells_y > tile.tile_size) {
     ++checksum_errors_;
     return false;
   }
@@ -380,7 +382,9 @@ std::optional<common::GridMap> LayerAssembler::Layer(const std::string& layer) c
 std::vector<common::LidarSlice> SplitSlice(const common::LidarSlice& whole, size_t max_bytes) {
   constexpr size_t kHeaderBytes = 512;
   const size_t per_slice =
-      max_bytes > kHeaderBytes ? std::max<size_t>(1, (max_bytes - kHeaderBytes) / kBytesPerLidarPoint) : 1;
+      max_bytes > kHeaderBytes
+          ? std::max<size_t>(1, (max_bytes - kHeaderBytes) / kBytesPerLidarPoint)
+          : 1;
   const size_t n = whole.points.size();
   const size_t count = std::max<size_t>(1, (n + per_slice - 1) / per_slice);
   std::vector<common::LidarSlice> slices;
@@ -411,7 +415,8 @@ std::vector<common::LidarRevolution> RevolutionAssembler::OnSlice(common::LidarS
   for (auto it = pending_.begin(); it != pending_.end();) {
     if (it->first.first == slice.robot && it->first.second < slice.revolution) {
       ++incomplete_;
-      missing_slices_ += it->second.expected_slices - static_cast<int64_t>(it->second.slices.size());
+      missing_slices_ +=
+          it->second.expected_slices - static_cast<int64_t>(it->second.slices.size());
       done.push_back(std::move(it->second));
       it = pending_.erase(it);
     } else {
@@ -426,8 +431,9 @@ std::vector<common::LidarRevolution> RevolutionAssembler::OnSlice(common::LidarS
     return s.slice_index == slice.slice_index;
   });
   if (!duplicate) {
-    auto pos = std::lower_bound(rev.slices.begin(), rev.slices.end(), slice.slice_index,
-                                [](const common::LidarSlice& s, int idx) { return s.slice_index < idx; });
+    auto pos =
+        std::lower_bound(rev.slices.begin(), rev.slices.end(), slice.slice_index,
+                         [](const common::LidarSlice& s, int idx) { return s.slice_index < idx; });
     rev.slices.insert(pos, std::move(slice));
   }
   if (rev.complete()) {

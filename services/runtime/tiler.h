@@ -11,6 +11,7 @@
 #include "cairn/lcmt_grid_tile.hpp"
 #include "cairn/lcmt_occupancy_tile.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
+
 #include "common/grid_map.h"
 #include "common/point_cloud.h"
 

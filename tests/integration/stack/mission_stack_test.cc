@@ -316,8 +316,8 @@ TEST(MissionStackTest, ARecordedRunReplaysThroughScriptsReplayIntoTheSameStoredM
         return p.kind == o.kind && OutlineDistance(o.outline_m, p.outline_m) <= 0.4;
       });
       EXPECT_TRUE(found) << (pair == &*oa ? "live" : "replayed") << " obstacle #" << o.id << " at ("
-                         << o.centroid_m.x() << ", " << o.centroid_m.y() << "), "
-                         << o.height_m << " m high, is missing from the other registry";
+                         << o.centroid_m.x() << ", " << o.centroid_m.y() << "), " << o.height_m
+                         << " m high, is missing from the other registry";
     }
   }
   EXPECT_GE(tall_live, 1) << "the live registry has no wall: nothing was compared";

@@ -137,7 +137,6 @@ TEST(TerrainPublisherTest, ReceiverRebuildsTheLayersAndOnlyChangesAreSent) {
   }
 }
 
-
 // A restarted mapper (a new publisher with a larger version base) mapping the same ground into
 // the same grid replaces what a receiver holds from its predecessor, tile by tile; without the
 // base its first versions would be older and ignored.

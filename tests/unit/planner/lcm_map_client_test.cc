@@ -86,11 +86,11 @@ TEST_F(LcmMapClientTest, BuildsACostMapFromOccupancyTiles) {
   ASSERT_NE(map, nullptr);
   EXPECT_EQ(map->version(), batch.manifest.layer_version);
   const common::Layer& cost = map->cost();
-  EXPECT_FLOAT_EQ(cost(0, 3), 100.f);   // wall
-  EXPECT_FLOAT_EQ(cost(10, 10), 0.f);   // free
+  EXPECT_FLOAT_EQ(cost(0, 3), 100.f);    // wall
+  EXPECT_FLOAT_EQ(cost(10, 10), 0.f);    // free
   EXPECT_FLOAT_EQ(cost(31, 20), 100.f);  // at or above the occupied threshold
   EXPECT_FLOAT_EQ(cost(30, 20), 100.f * (12.f - 5.f) / (20.f - 5.f));  // graded
-  EXPECT_TRUE(std::isnan(cost(45, 5)));   // -1 stays unknown
+  EXPECT_TRUE(std::isnan(cost(45, 5)));                                // -1 stays unknown
   EXPECT_TRUE(std::isnan(cost(50, 30)));  // an absent (all unknown) tile too
   EXPECT_TRUE(map->IsBlockedCell({31, 20}));
   EXPECT_FALSE(map->IsBlockedCell({30, 20}));

@@ -187,7 +187,8 @@ TEST(SplitSliceTest, SlicesStayUnderLimitAndKeepEveryPoint) {
   whole.revolution = 3;
   whole.azimuth_start_rad = 0.0;
   whole.azimuth_end_rad = 2 * M_PI;
-  for (int i = 0; i < 57600; ++i) whole.points.push_back({float(i), 0.f, 0.f, 0.f, int16_t(i % 32)});
+  for (int i = 0; i < 57600; ++i)
+    whole.points.push_back({float(i), 0.f, 0.f, 0.f, int16_t(i % 32)});
   auto slices = SplitSlice(whole, 64000);
   EXPECT_GE(slices.size(), 16u);
   size_t total = 0;
