@@ -27,17 +27,27 @@ void ClearanceCritic::Prepare(const CriticContext& context) {
   }
 }
 
+// How far along a trajectory the clearance critic reads the terrain cost.
+constexpr double kTerrainCostReachM = 0.3;
+
 Score ClearanceCritic::Evaluate(const Trajectory& trajectory) const {
   const CostMap& map = *context().map;
   const double inscribed = map.footprint().inscribed_radius_m();
   float worst = 0.0f;
   double closest = std::numeric_limits<double>::infinity();
+  double travelled_m = 0.0;
   for (size_t k = 0; k < trajectory.poses.size(); ++k) {
     const FootprintCost c = escaping_.empty()
                                 ? map.CheckFootprint(trajectory.poses[k])
                                 : map.CheckFootprintIgnoring(trajectory.poses[k], escaping_);
+    if (k > 0) {
+      travelled_m += (trajectory.poses[k].position() - trajectory.poses[k - 1].position()).norm();
+    }
     if (c.valid) {
-      worst = std::max(worst, c.max_cost);
+      // Terrain cost counts over the first kTerrainCostReachM only: over the whole horizon a
+      // faster sample reaches further onto graded terrain (a ramp the global path climbs) and
+      // always scores worse than creeping, until the robot stalls at its foot.
+      if (travelled_m <= kTerrainCostReachM) worst = std::max(worst, c.max_cost);
       closest = std::min(closest, map.SmoothClearanceAt(trajectory.poses[k].position()));
       continue;
     }

@@ -64,7 +64,9 @@ class TrajectoryCritic {
 /// "clearance": the footprint checked at every simulated pose.
 ///
 /// A trajectory that stays on valid cells scores the larger of (a) the highest cost under its
-/// footprint divided by the lethal cost and (b) its closest approach to a blocking cell: 1 when
+/// footprint over its first 0.3 m, divided by the lethal cost (over the whole horizon a faster
+/// sample reaches further onto graded terrain the global path crosses, and creeping would always
+/// win), and (b) its closest approach to a blocking cell: 1 when
 /// the nearest blocking cell is within the footprint's inscribed radius of the centre, falling
 /// linearly to 0 at `inflation_m` beyond it. The cost layer carries no inflation, so (b) is what
 /// keeps the robot off walls and corners (0..1 in all).

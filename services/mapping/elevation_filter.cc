@@ -22,6 +22,8 @@ void ElevationFilterParams::Validate() const {
                                                                         << max_variance_m2);
   CAIRN_THROW_UNLESS(increase_height_alpha >= 0 && increase_height_alpha < 1,
                      "increase_height_alpha must be in [0, 1), got " << increase_height_alpha);
+  CAIRN_THROW_UNLESS(max_spread_slope_rad >= 0 && max_spread_slope_rad < M_PI / 2,
+                     "max_spread_slope_rad must be in [0, pi/2), got " << max_spread_slope_rad);
 }
 
 double PointHeightVariance(const common::Vector3& sensor_m, const common::Vector3& point_m,

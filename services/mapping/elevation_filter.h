@@ -27,6 +27,14 @@ struct ElevationFilterParams {
   double max_variance_m2{0.01};        ///< (10 cm)^2: variances above make the cell unknown
   /// Blend toward a higher point of the same scan: 0 takes the higher point (upstream default).
   double increase_height_alpha{0.0};
+  /// A cell on a slope holds points of different true heights: across a 0.2 m cell a 10 deg
+  /// ramp rises 3.5 cm, several times a grazing ray's height noise. Up to this slope (the last
+  /// one derived for the cell) the rise's variance across the cell, (res tan(slope))^2 / 12, is
+  /// added to each point's. Without it the gate takes the upper part of the cell for another
+  /// surface, the same-scan rule lifts the cell toward its highest points, and neighbouring
+  /// cells on an even ramp differ by up to twice its rise (false step edges). Steeper cells
+  /// (walls, step faces) keep the plain rule. 0 turns it off (upstream behaviour).
+  double max_spread_slope_rad{0.44};
 
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
@@ -46,6 +54,15 @@ inline double PointHeightVariance(double range_m, double beam_z,
   const double bz2 = beam_z * beam_z;
   const double lateral = params.beam_constant_m + params.beam_angle_rad * range_m;
   return params.range_noise_m * params.range_noise_m * bz2 + lateral * lateral * (1.0 - bz2);
+}
+
+/// Variance of the true height across a cell of size res_m on a plane of `slope_rad` (0 for an
+/// unknown slope or one steeper than max_spread_slope_rad).
+inline double SlopeSpreadVariance(double slope_rad, double res_m,
+                                  const ElevationFilterParams& params) {
+  if (!(slope_rad > 0.0) || !(slope_rad <= params.max_spread_slope_rad)) return 0.0;
+  const double rise = res_m * std::tan(slope_rad);
+  return rise * rise / 12.0;
 }
 
 /// What one measurement did to a cell.

@@ -68,6 +68,9 @@ void LoadFilter(common::YamlMap m, ElevationFilterParams* p) {
   m.Get("min_variance_m2", &p->min_variance_m2);
   m.Get("max_variance_m2", &p->max_variance_m2);
   m.Get("increase_height_alpha", &p->increase_height_alpha);
+  double spread_deg = p->max_spread_slope_rad * 180.0 / M_PI;
+  m.Get("max_spread_slope_deg", &spread_deg);
+  p->max_spread_slope_rad = spread_deg * M_PI / 180.0;
   m.Finish();
 }
 
@@ -79,6 +82,7 @@ void LoadTraversability(common::YamlMap m, TraversabilityParams* p) {
   m.Get("graded_cost_max", &p->graded_cost_max);
   m.Get("free_fraction", &p->free_fraction);
   m.Get("min_ditch_depth_m", &p->min_ditch_depth_m);
+  m.Get("unseen_drop_m", &p->unseen_drop_m);
   m.Get("max_ditch_search_m", &p->max_ditch_search_m);
   m.Get("height_tolerance_m", &p->height_tolerance_m);
   m.Get("min_step_edge_cells", &p->min_step_edge_cells);
@@ -110,6 +114,7 @@ void LoadTerrain(common::YamlMap m, TerrainMapParams* p) {
   m.Get("max_height_above_sensor_m", &p->max_height_above_sensor_m);
   m.Get("ray_bound_length_m", &p->ray_bound_length_m);
   m.Get("ray_bound_max_range_m", &p->ray_bound_max_range_m);
+  m.Get("ray_bound_margin_m", &p->ray_bound_margin_m);
   m.Get("commit_epsilon_m", &p->commit_epsilon_m);
   m.Get("visibility_tolerance_m", &p->visibility_tolerance_m);
   m.Get("max_visibility_conflict_m", &p->max_visibility_conflict_m);

@@ -37,6 +37,10 @@ CellRect Grow(const CellRect& r, int m) { return {r.x0 - m, r.y0 - m, r.x1 + m, 
 struct TerrainMap::Tile {
   common::GridMap layers;
   std::vector<float> filter_height;
+  // Where the fused points lie in the cell, relative to its centre (weighted like the height):
+  // a lidar at rest samples each cell along a few ring lines, off its centre.
+  std::vector<float> hit_dx;
+  std::vector<float> hit_dy;
   std::vector<float> raw_bound;
   std::vector<float> conflict_bound;  // as raw_bound, from rays ending two or more cells on
   std::vector<uint32_t> scan;         // low 32 bits of the scan id, 0 = none yet
@@ -45,6 +49,9 @@ struct TerrainMap::Tile {
   float* count{nullptr};
   float* last_seen{nullptr};
   float* bound{nullptr};
+  const float* slope{nullptr};  // the derived slope and normal, once UpdateDerived wrote them
+  const float* normal_x{nullptr};
+  const float* normal_y{nullptr};
   int64_t base_version{0};
   int64_t derived_version{0};
 };
@@ -72,6 +79,8 @@ void TerrainMapParams::Validate() const {
   CAIRN_THROW_UNLESS(max_height_above_sensor_m > 0, "max_height_above_sensor_m must be positive");
   CAIRN_THROW_UNLESS(self_filter_radius_m >= 0, "self_filter_radius_m must be >= 0");
   CAIRN_THROW_UNLESS(std::isfinite(ray_bound_length_m), "ray_bound_length_m must be finite");
+  CAIRN_THROW_UNLESS(std::isfinite(ray_bound_margin_m) && ray_bound_margin_m >= 0,
+                     "ray_bound_margin_m must be >= 0, got " << ray_bound_margin_m);
   CAIRN_THROW_UNLESS(commit_epsilon_m >= 0 && commit_epsilon_m < 0.05,
                      "commit_epsilon_m must be in [0, 0.05), got " << commit_epsilon_m);
   CAIRN_THROW_UNLESS(
@@ -159,6 +168,8 @@ TerrainMap::Tile* TerrainMap::GetTile(int tx, int ty) {
     tile->layers.at(layers::kObservationCount).setZero();
     const size_t n = static_cast<size_t>(params_.tile_size_cells) * params_.tile_size_cells;
     tile->filter_height.assign(n, kNaN);
+    tile->hit_dx.assign(n, 0.f);
+    tile->hit_dy.assign(n, 0.f);
     tile->raw_bound.assign(n, kNaN);
     tile->conflict_bound.assign(n, kNaN);
     tile->scan.assign(n, 0u);
@@ -254,14 +265,32 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
     int lx, ly;
     Tile* tile = TileForCell(cx, cy, &lx, &ly);
     const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
-    const double var_z = PointHeightVariance(range, (pw.z() - origin.z()) / range, params_.filter);
+    double var_z = PointHeightVariance(range, (pw.z() - origin.z()) / range, params_.filter);
+    if (tile->slope != nullptr) var_z += SlopeSpreadVariance(tile->slope[i], res, params_.filter);
     const bool same_scan = tile->scan[i] == scan_tag;
     float h = tile->filter_height[i], var = tile->variance[i];
+    const float var_before = var;
     const FuseOutcome outcome = FuseHeight(&h, &var, pw.z(), var_z, same_scan, params_.filter);
     if (outcome == FuseOutcome::kIgnoredLower) {
       ++stats.ignored_lower;
     } else {
       ++stats.used;
+      // The point's place in the cell, blended into the cell's like its height.
+      const float px = static_cast<float>(pw.x() - (cx + 0.5) * res);
+      const float py = static_cast<float>(pw.y() - (cy + 0.5) * res);
+      float& mx = tile->hit_dx[i];
+      float& my = tile->hit_dy[i];
+      if (outcome == FuseOutcome::kInitialized || outcome == FuseOutcome::kRaised) {
+        const float a = outcome == FuseOutcome::kRaised
+                            ? static_cast<float>(params_.filter.increase_height_alpha)
+                            : 0.f;
+        mx = a * mx + (1.f - a) * px;
+        my = a * my + (1.f - a) * py;
+      } else if (outcome == FuseOutcome::kFused) {
+        const double w = var_before / (var_before + var_z);  // the Kalman gain
+        mx += static_cast<float>(w * (px - mx));
+        my += static_cast<float>(w * (py - my));
+      }
       tile->filter_height[i] = h;
       tile->variance[i] = var;
       tile->scan[i] = scan_tag;
@@ -278,7 +307,11 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
       const size_t ring = static_cast<size_t>(p.ring) & 0xff;
       if (last_end[ring] != end_key) {
         last_end[ring] = end_key;
-        RecordBound(origin, pw);
+        if (range > params_.ray_bound_margin_m) {
+          RecordBound(origin,
+                      origin + (pw - origin) * ((range - params_.ray_bound_margin_m) / range), cx,
+                      cy);
+        }
       }
     }
   }
@@ -292,6 +325,19 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
 // the ray passed beside; they stay.
 void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
   float h = tile->filter_height[i];
+  // The filter's height belongs where its points lay; on a plane of moderate slope (the last
+  // derived for the cell) it is carried to the cell's centre, so an even ramp sampled along a
+  // few ring lines reads even (cell to cell differences of one cell's rise, not up to twice).
+  if (tile->normal_x != nullptr && tile->normal_y != nullptr && !std::isnan(h)) {
+    const double nx = tile->normal_x[i], ny = tile->normal_y[i];
+    const double nz2 = 1.0 - nx * nx - ny * ny;
+    if (std::isfinite(nx) && std::isfinite(ny) && nz2 > 0 &&
+        SlopeSpreadVariance(std::acos(std::min(1.0, std::sqrt(nz2))), params_.resolution_m,
+                            params_.filter) > 0) {
+      const double nz = std::sqrt(nz2);
+      h = static_cast<float>(h + (nx * tile->hit_dx[i] + ny * tile->hit_dy[i]) / nz);
+    }
+  }
   const float bound = tile->conflict_bound[i];
   if (!std::isnan(h) && bound < h - params_.visibility_tolerance_m &&
       h - bound < params_.max_visibility_conflict_m) {
@@ -309,7 +355,8 @@ void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
 // The last stretch of a downward ray: every cell it crosses before the one of its return gets
 // the ray's height where it leaves that cell as an upper bound of the ground there (under the
 // 2.5-D assumption that a cell's surface is one height).
-void TerrainMap::RecordBound(const common::Vector3& from, const common::Vector3& to) {
+void TerrainMap::RecordBound(const common::Vector3& from, const common::Vector3& to,
+                             int64_t return_x, int64_t return_y) {
   const common::Vector3 d = to - from;
   const double length = d.norm();
   if (!(length > 0)) return;
@@ -338,13 +385,10 @@ void TerrainMap::RecordBound(const common::Vector3& from, const common::Vector3&
     t_max_y = (step_y > 0 ? (iy + 1 - y0) : (y0 - iy)) * t_delta_y;
   }
   int64_t remaining_x = std::abs(end_x - ix), remaining_y = std::abs(end_y - iy);
-  while (remaining_x > 0 || remaining_y > 0) {
-    // This cell is left at the next border crossing; the return's own cell is never visited.
-    const bool step_in_x = remaining_y == 0 || (remaining_x > 0 && t_max_x <= t_max_y);
-    const double t_exit = std::min(1.0, step_in_x ? t_max_x : t_max_y);
-    const float z_exit = static_cast<float>(a.z() + std::max(0.0, t_exit) * dz);
+  // `cells_left`: cells the ray crosses after this one before its return's.
+  auto record = [&](int64_t cx, int64_t cy, float z_exit, int64_t cells_left) {
     int lx, ly;
-    Tile* tile = TileForCell(ix, iy, &lx, &ly);
+    Tile* tile = TileForCell(cx, cy, &lx, &ly);
     const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
     float& raw = tile->raw_bound[i];
     if (!(raw <= z_exit)) {
@@ -353,16 +397,26 @@ void TerrainMap::RecordBound(const common::Vector3& from, const common::Vector3&
       if (std::isnan(committed) || raw < committed - eps) {
         committed = raw;
         ++tile->base_version;
-        MarkDirty(ix, iy);
+        MarkDirty(cx, cy);
       }
     }
     // Only a ray that goes on for more than the next cell can say a surface is not there: one
     // that ends right after this cell may have hit a face standing in it.
     float& conflict = tile->conflict_bound[i];
-    if (remaining_x + remaining_y >= 2 && !(conflict <= z_exit)) {
+    if (cells_left >= 1 && !(conflict <= z_exit)) {
       conflict = z_exit;
-      if (!std::isnan(tile->filter_height[i])) CommitHeight(tile, i, ix, iy);
+      if (!std::isnan(tile->filter_height[i])) CommitHeight(tile, i, cx, cy);
     }
+  };
+  // The segment ends short of the return (ray_bound_margin_m): its last cell is the return's
+  // own (never visited: the surface stands in it) or the one before, left at the segment's end.
+  const bool end_is_return = end_x == return_x && end_y == return_y;
+  while (remaining_x > 0 || remaining_y > 0) {
+    // This cell is left at the next border crossing.
+    const bool step_in_x = remaining_y == 0 || (remaining_x > 0 && t_max_x <= t_max_y);
+    const double t_exit = std::min(1.0, step_in_x ? t_max_x : t_max_y);
+    const float z_exit = static_cast<float>(a.z() + std::max(0.0, t_exit) * dz);
+    record(ix, iy, z_exit, remaining_x + remaining_y - 1 + (end_is_return ? 0 : 1));
     if (step_in_x) {
       ix += step_x;
       t_max_x += t_delta_x;
@@ -373,6 +427,7 @@ void TerrainMap::RecordBound(const common::Vector3& from, const common::Vector3&
       --remaining_y;
     }
   }
+  if (!end_is_return) record(end_x, end_y, static_cast<float>(to.z()), 0);
 }
 
 common::GridGeometry TerrainMap::Bounds() const {
@@ -475,7 +530,12 @@ void TerrainMap::WriteBack(const common::GridMap& window, int64_t ox, int64_t oy
       const int64_t y0 = std::max<int64_t>(r.y0, ty * T),
                     y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
       for (const auto& name : names) {
-        if (!tile->layers.HasLayer(name)) tile->layers.AddLayer(name);
+        if (!tile->layers.HasLayer(name)) {
+          tile->layers.AddLayer(name);
+          if (name == layers::kSlope) tile->slope = tile->layers.at(name).data();
+          if (name == kNormalXLayer) tile->normal_x = tile->layers.at(name).data();
+          if (name == kNormalYLayer) tile->normal_y = tile->layers.at(name).data();
+        }
         tile->layers.at(name).block(x0 - tx * T, y0 - ty * T, x1 - x0, y1 - y0) =
             window.at(name).block(x0 - ox, y0 - oy, x1 - x0, y1 - y0);
       }
@@ -690,7 +750,7 @@ size_t TerrainMap::memory_bytes() const {
   size_t bytes = 0;
   for (const auto& [key, tile] : tiles_) {
     bytes += tile->layers.layer_names().size() * sizeof(float) * tile->filter_height.size();
-    bytes += tile->filter_height.size() * (3 * sizeof(float) + sizeof(uint32_t));
+    bytes += tile->filter_height.size() * (5 * sizeof(float) + sizeof(uint32_t));
   }
   return bytes;
 }

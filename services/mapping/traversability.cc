@@ -18,6 +18,14 @@ using common::Layer;
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
+// How far past a known cell the cost layer looks through unknown cells for the lowest ray bound:
+// the cell on an edge is often mixed (part rim, part gap) and published unknown, its bound
+// barely below the rim, while the rays show the drop a cell further.
+constexpr double kUnseenDropReachM = 0.4;
+int UnseenDropReachCells(double resolution_m) {
+  return std::max(1, static_cast<int>(std::ceil(kUnseenDropReachM / resolution_m - 1e-9)));
+}
+
 // The four line directions of the ditch analysis: x, y and both diagonals.
 constexpr std::array<std::array<int, 2>, 4> kLineDirections{{{1, 0}, {0, 1}, {1, 1}, {1, -1}}};
 // 4-neighbourhood: +x, -x, +y, -y (the seed's RIGHT, LEFT, UP, DOWN).
@@ -211,6 +219,8 @@ void TraversabilityParams::Validate() const {
                      "min_ditch_depth_m must be positive, got " << min_ditch_depth_m);
   CAIRN_THROW_UNLESS(std::isfinite(max_ditch_search_m) && max_ditch_search_m > 0,
                      "max_ditch_search_m must be positive, got " << max_ditch_search_m);
+  CAIRN_THROW_UNLESS(std::isfinite(unseen_drop_m) && unseen_drop_m >= 0,
+                     "unseen_drop_m must be >= 0, got " << unseen_drop_m);
   CAIRN_THROW_UNLESS(height_tolerance_m >= 0 && height_tolerance_m < 0.01,
                      "height_tolerance_m must be in [0, 0.01), got " << height_tolerance_m);
   CAIRN_THROW_UNLESS(min_step_edge_cells == 1 || min_step_edge_cells == 2,
@@ -220,8 +230,10 @@ void TraversabilityParams::Validate() const {
 int DependencyRadiusCells(const TraversabilityParams& params, double resolution_m) {
   const int normal = static_cast<int>(std::ceil(params.normal_radius_m / resolution_m));
   // Known ditch bottoms look up to K cells for an unseen ditch cell, which looks K further for
-  // its rims and two beyond them; the cost layer reads the 4-neighbours of each cell.
-  return std::max(normal, 2 * SearchCells(params, resolution_m) + 2) + 1;
+  // its rims and two beyond them; the cost layer reads the 4-neighbours of each cell and the
+  // unknown cells beyond them (UnseenDropReachCells).
+  return std::max(normal, 2 * SearchCells(params, resolution_m) + 2) +
+         UnseenDropReachCells(resolution_m);
 }
 
 void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params) {
@@ -491,6 +503,7 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
   const double cp = std::cos(robot.pitch_rad), sp = std::sin(robot.pitch_rad);
   const bool exact_tilt = compensate && robot.yaw_rad.has_value();
   const double res = map->resolution_m();
+  const int reach_cells = UnseenDropReachCells(res);
   const double cos_heading = std::cos(heading), sin_heading = std::sin(heading);
   std::array<int64_t, 4> neighbour_offset{};
   std::array<double, 4> forward_m{};
@@ -590,12 +603,12 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
           const double up = double(std::max(std::max(a, b), std::max(c, d))) - hc;
           const double down = hc - double(std::min(std::min(a, b), std::min(c, d)));
           if (up <= up_limit + tol && down <= down_limit + tol) {
-            ratio =
-                std::max({ratio, up > 0 ? up * inv_up : 0.0, down > 0 ? down * inv_down : 0.0});
+            ratio = std::max({ratio, up > 0 ? up * inv_up : 0.0, down > 0 ? down * inv_down : 0.0});
             const double r = std::min(1.0, ratio);
-            cost.data()[i] = ratio <= ff ? layers::kCostFree
-                                         : static_cast<float>(std::max(
-                                               1e-3, params.graded_cost_max * (r - ff) / (1.0 - ff)));
+            cost.data()[i] = ratio <= ff
+                                 ? layers::kCostFree
+                                 : static_cast<float>(std::max(
+                                       1e-3, params.graded_cost_max * (r - ff) / (1.0 - ff)));
             continue;
           }
           // A limit is exceeded: the per-neighbour rules below decide (edge length).
@@ -632,10 +645,20 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
             ratio = std::max(ratio, rise > 0 ? rise * inv_up : -rise * inv_down);
           }
         } else if (bound != nullptr && std::isfinite(bound[j])) {
-          // The sensor looked into this neighbour and found nothing down to bound[j].
-          double drop = double(hc) - bound[j];
+          // The sensor looked into this neighbour and found nothing down to bound[j], nor in
+          // the unknown cells beyond it down to theirs.
+          float lowest = bound[j];
+          for (int s = 2; s <= reach_cells; ++s) {
+            const int nx = x + s * kNeighbours[k][0], ny = y + s * kNeighbours[k][1];
+            if (nx < 0 || ny < 0 || nx >= sx || ny >= sy) break;
+            const int64_t jj = nx + static_cast<int64_t>(ny) * sx;
+            if (!std::isnan(h[jj])) break;
+            if (std::isfinite(bound[jj])) lowest = std::min(lowest, bound[jj]);
+          }
+          double drop = double(hc) - lowest;
           if (exact_tilt) drop = drop * cp - forward_m[k] * sp;
-          if (drop > down_limit + tol) {
+          if (drop > down_limit + tol ||
+              (params.unseen_drop_m > 0 && drop >= params.unseen_drop_m - tol)) {
             lethal = true;
           } else if (drop > 0) {
             ratio = std::max(ratio, drop * inv_down);

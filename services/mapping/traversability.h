@@ -54,6 +54,13 @@ struct TraversabilityParams {
   /// How far (m) the ditch analysis looks for the rims on both sides of a gap; wider gaps are
   /// not recognised as ditches (they stay unknown).
   double max_ditch_search_m{1.8};
+  /// A cell next to an unknown cell whose ground a ray proved at least this far below it (a
+  /// drop whose bottom was never seen) is lethal for every profile: the bound is only a lower
+  /// bound of the drop's depth, which grows as the robot nears the edge (seed 000: a gap the
+  /// sensor cannot see into counts as a ditch, not as free). With the profile's step-down
+  /// limit instead (0 here), a 20 cm drop reads lethal only once the sensor is within about a
+  /// metre of its edge. Once the floor below is seen, the measured step decides.
+  double unseen_drop_m{0.05};
   /// Slack on height comparisons (m), for float elevations: makes the inclusive bounds hold.
   double height_tolerance_m{1e-5};
   /// A step between two cells is lethal only when the edge is at least this many cells long:

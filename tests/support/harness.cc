@@ -1,13 +1,6 @@
 #include "tests/support/harness.h"
 
-#include <arpa/inet.h>
-#include <fcntl.h>
-#include <netinet/in.h>
-#include <signal.h>
-#include <sys/socket.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -16,7 +9,14 @@
 #include <stdexcept>
 #include <thread>
 
+#include <arpa/inet.h>
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace cairn::testing {
 namespace fs = std::filesystem;
@@ -39,7 +39,9 @@ std::string PrivateLcmUrl() {
   return "udpm://239.255.76.67:" + std::to_string(port) + "?ttl=0";
 }
 
-std::string BinPath(const std::string& name) { return std::string(CAIRN_BINARY_DIR) + "/bin/" + name; }
+std::string BinPath(const std::string& name) {
+  return std::string(CAIRN_BINARY_DIR) + "/bin/" + name;
+}
 
 std::string SourcePath(const std::string& relative) {
   return std::string(CAIRN_SOURCE_DIR) + "/" + relative;
@@ -52,7 +54,8 @@ std::string MapperConfigWithoutOctomap(const std::string& dir) {
   const std::string on = "octomap:\n  enabled: true";
   const auto at = s.find(on);
   if (at == std::string::npos)
-    throw std::runtime_error("config/mapping/mapper.yaml no longer has 'octomap:\n  enabled: true'");
+    throw std::runtime_error(
+        "config/mapping/mapper.yaml no longer has 'octomap:\n  enabled: true'");
   s.replace(at, on.size(), "octomap:\n  enabled: false");
   const std::string path = dir + "/mapper.yaml";
   std::ofstream(path) << s;
@@ -170,6 +173,20 @@ void ProcessSet::PrintLogs() const {
     std::fprintf(stderr, "\n===== log of %s (pid %d, %s) =====\n%s", p->name().c_str(), p->pid(),
                  p->log_path().c_str(), p->Log().c_str());
   }
+  for (const auto& dir : log_dirs_) {
+    std::error_code ec;
+    std::vector<std::filesystem::path> files;
+    for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+      if (entry.path().extension() == ".log") files.push_back(entry.path());
+    }
+    std::sort(files.begin(), files.end());
+    for (const auto& file : files) {
+      std::ifstream in(file);
+      std::stringstream ss;
+      ss << in.rdbuf();
+      std::fprintf(stderr, "\n===== %s =====\n%s", file.c_str(), ss.str().c_str());
+    }
+  }
   std::fflush(stderr);
 }
 
@@ -189,21 +206,24 @@ bool WaitFor(const std::function<bool()>& condition, double timeout_s,
 
 Bus::Bus(const std::string& url) : lcm_(url) {
   if (!lcm_.good()) throw std::runtime_error("cannot open LCM at " + url);
-  lcm_.subscribeFunction<Bus*>(".*", [](const lcm::ReceiveBuffer* rbuf, const std::string& channel, Bus* self) {
-    const auto* bytes = static_cast<const uint8_t*>(rbuf->data);
-    std::vector<uint8_t> data(bytes, bytes + rbuf->data_size);
-    ++self->counts_[channel];
-    if (channel == "HEALTH") {
-      cairn::lcmt_health h;
-      if (h.decode(data.data(), 0, static_cast<int>(data.size())) >= 0) {
-        self->health_[h.process + "|" + h.robot] = h;
-        self->health_[h.process + "|*"] = h;
-      }
-    }
-    auto kept = self->keep_.find(channel);
-    if (kept != self->keep_.end()) kept->second.push_back(data);
-    self->last_[channel] = std::move(data);
-  }, this);
+  lcm_.subscribeFunction<Bus*>(
+      ".*",
+      [](const lcm::ReceiveBuffer* rbuf, const std::string& channel, Bus* self) {
+        const auto* bytes = static_cast<const uint8_t*>(rbuf->data);
+        std::vector<uint8_t> data(bytes, bytes + rbuf->data_size);
+        ++self->counts_[channel];
+        if (channel == "HEALTH") {
+          cairn::lcmt_health h;
+          if (h.decode(data.data(), 0, static_cast<int>(data.size())) >= 0) {
+            self->health_[h.process + "|" + h.robot] = h;
+            self->health_[h.process + "|*"] = h;
+          }
+        }
+        auto kept = self->keep_.find(channel);
+        if (kept != self->keep_.end()) kept->second.push_back(data);
+        self->last_[channel] = std::move(data);
+      },
+      this);
 }
 
 void Bus::Pump(int timeout_ms) { lcm_.handleTimeout(timeout_ms); }

@@ -1,7 +1,5 @@
 #pragma once
 
-#include <sys/types.h>
-
 #include <chrono>
 #include <functional>
 #include <map>
@@ -11,6 +9,7 @@
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
+#include <sys/types.h>
 
 #include "cairn/lcmt_health.hpp"
 
@@ -79,11 +78,14 @@ class ProcessSet {
   /// Starts an arbitrary command (no --lcm-url added).
   ChildProcess& StartRaw(const std::string& label, std::vector<std::string> argv,
                          std::vector<std::string> env = {});
+  /// Also prints every *.log file of `dir` on failure (a cairn-launch run's process logs).
+  void AddLogDir(const std::string& dir) { log_dirs_.push_back(dir); }
   void PrintLogs() const;
 
  private:
   std::string url_;
   std::string dir_;
+  std::vector<std::string> log_dirs_;
   std::vector<std::unique_ptr<ChildProcess>> processes_;
 };
 
@@ -107,7 +109,8 @@ class Bus {
     auto it = last_.find(channel);
     if (it == last_.end()) return std::nullopt;
     Msg m;
-    if (m.decode(it->second.data(), 0, static_cast<int>(it->second.size())) < 0) return std::nullopt;
+    if (m.decode(it->second.data(), 0, static_cast<int>(it->second.size())) < 0)
+      return std::nullopt;
     return m;
   }
   /// Newest heartbeat of a process (by process name, and robot when given).
@@ -119,7 +122,9 @@ class Bus {
   }
   /// Every message on a channel since the start, decoded (for channels you asked to keep).
   void Keep(const std::string& channel) { keep_[channel]; }
-  const std::vector<std::vector<uint8_t>>& Kept(const std::string& channel) { return keep_[channel]; }
+  const std::vector<std::vector<uint8_t>>& Kept(const std::string& channel) {
+    return keep_[channel];
+  }
 
  private:
   lcm::LCM lcm_;

@@ -55,22 +55,14 @@ bool DriveTo(cairn::testing::Bus& bus, double lane_y, double x_end, double timeo
   return reached;
 }
 
-// A feature on the ramp of the tunnel's lane 2 (simulator/worlds: 10 deg from x = 8 around
-// y = 10). Seen from a standing robot, between sparse lidar rings, the mapper labels the ramp
-// a ramp or, in parts, steps up (issue 4); either way its verdicts differ by profile.
+// The ramp of the tunnel's lane 2 (simulator/worlds: 10 deg from x = 8 around y = 10), as the
+// mapper labels it seen from a robot standing at its foot.
 bool IsLaneRamp(const cairn::lcmt_obstacle& o) {
-  return (o.kind == static_cast<int8_t>(common::ObstacleKind::kRamp) ||
-          o.kind == static_cast<int8_t>(common::ObstacleKind::kStepUp)) &&
-         o.centroid_m[0] > 7.5 && o.centroid_m[0] < 10.5 && o.centroid_m[1] > 8.1 &&
-         o.centroid_m[1] < 11.9;
+  return o.kind == static_cast<int8_t>(common::ObstacleKind::kRamp) && o.centroid_m[0] > 7.5 &&
+         o.centroid_m[0] < 10.5 && o.centroid_m[1] > 8.1 && o.centroid_m[1] < 11.9;
 }
 
-// Disabled: seen from a robot standing short of the ramp, the mapper's labelling of the ramp
-// flickers between revolutions (a ramp, steps up, or nothing), so the registry the store pulls
-// often lacks it (issue 4, open). The live chain is covered by share_stack_test, which passes;
-// the relabelling itself by MapstoreSharingTest on a synthetic ramp. Run it with
-// --gtest_also_run_disabled_tests.
-TEST(MapstoreStackTest, DISABLED_PulledMapOfTheRampIsSharedWithTheRover) {
+TEST(MapstoreStackTest, PulledMapOfTheRampIsSharedWithTheRover) {
   ProcessSet procs(cairn::testing::PrivateLcmUrl());
   procs.Start("cairn-sim",
               {"--world", "tunnel", "--robot", std::string(kRobot) + ":pioneer3at:pioneer3at:5,10",

@@ -264,11 +264,7 @@ TEST_F(NavigatorStackTest, ReachesTheGoalBehindTheCubeWithoutTouchingIt) {
   }
 }
 
-// Disabled: the mapper's labelling of a ramp seen between sparse lidar rings flickers between a
-// ramp and lethal steps up (issue 4, open); when the first plans see the lane blocked they
-// detour through the unexplored lanes and the robot gets stuck in the cross corridor. Passes
-// when the ramp is labelled right; run it with --gtest_also_run_disabled_tests.
-TEST_F(NavigatorStackTest, DISABLED_ClimbsTheFiveDegreeRampToItsTop) {
+TEST_F(NavigatorStackTest, ClimbsTheFiveDegreeRampToItsTop) {
   StartStack(4.0, 6.0, 0.0);
   // Let the mapper integrate a few revolutions (the ramp in view) before asking: on the first
   // revolutions alone the ramp may still show edges, and the plan detours through unexplored
@@ -298,11 +294,10 @@ TEST_F(NavigatorStackTest, ReportsNoPathOntoTheTwentyCentimetreStepAndNeverMount
   ExpectNoPathNeverEntering(4.0, 22.0, 6, 14.0, Box(10.0, 20.1, 24.0, 23.9), 110.0, true);
 }
 
-// Disabled: it found a real defect (issue 6, open). The floor below the drop is hidden until
-// the robot is close, unexplored cells count as traversable, and in one CI run the footprint's
-// front passed the edge before the edge became lethal. Run it with
-// --gtest_also_run_disabled_tests.
-TEST_F(NavigatorStackTest, DISABLED_NeverCrossesTheEdgeOfTheTwentyCentimetreDrop) {
+// The floor below the drop stays hidden until the robot is close; the rays that pass the edge
+// prove only a few centimetres of it from afar, which is enough (traversability.unseen_drop_m):
+// the edge is lethal long before the rays could prove more than the 10 cm step-down limit.
+TEST_F(NavigatorStackTest, NeverCrossesTheEdgeOfTheTwentyCentimetreDrop) {
   // Lane 6: a 5 deg ramp up to a platform at 0.2 m that ends in a 20 cm drop at x = 13.29, wall
   // to wall; the goal lies past the drop (pioneer3at: step down 10 cm). The floor below the
   // edge is hidden from the robot until it is close: whatever it tries, it must not drive off.

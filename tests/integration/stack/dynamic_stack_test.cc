@@ -14,8 +14,6 @@
 //  (d) the navigator carries on with the restarted mapper's layers and plans around the
 //      remembered box from its first plan (seed 001 test 20), driving back past it.
 
-#include <signal.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -28,6 +26,7 @@
 
 #include <gtest/gtest.h>
 #include <lcm/lcm-cpp.hpp>
+#include <signal.h>
 
 #include "cairn/lcmt_goal.hpp"
 #include "cairn/lcmt_grid_manifest.hpp"
@@ -171,14 +170,14 @@ class Watcher {
     const Vector2 c(p->position_m[0], p->position_m[1]);
     position_ = c;
     const auto& q = p->orientation_wxyz;
-    const double yaw = std::atan2(2.0 * (q[0] * q[3] + q[1] * q[2]),
-                                  1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3]));
+    const double yaw =
+        std::atan2(2.0 * (q[0] * q[3] + q[1] * q[2]), 1.0 - 2.0 * (q[2] * q[2] + q[3] * q[3]));
     if (p->utime - traced_utime_ >= 500'000) {
       traced_utime_ = p->utime;
       char line[160];
-      std::snprintf(line, sizeof(line), "  t %.1f s: (%.2f, %.2f, %.2f rad), cmd %.2f m/s %.2f rad/s\n",
-                    p->utime * 1e-6, c.x(), c.y(), yaw, command_.linear_mps,
-                    command_.angular_radps);
+      std::snprintf(
+          line, sizeof(line), "  t %.1f s: (%.2f, %.2f, %.2f rad), cmd %.2f m/s %.2f rad/s\n",
+          p->utime * 1e-6, c.x(), c.y(), yaw, command_.linear_mps, command_.angular_radps);
       trace_.push_back(line);
       if (trace_.size() > 80) trace_.pop_front();
     }
@@ -233,8 +232,9 @@ class DynamicStackTest : public ::testing::Test {
       : url_(PrivateLcmUrl()),
         procs_(url_),
         bus_(url_),
-        watcher_(bus_.lcm(), common::LoadRobotProfileFile(SourcePath("config/profiles/kobuki.yaml"))
-                                 .footprint_m) {}
+        watcher_(
+            bus_.lcm(),
+            common::LoadRobotProfileFile(SourcePath("config/profiles/kobuki.yaml")).footprint_m) {}
 
   void Pump() {
     bus_.Pump(5);
@@ -247,13 +247,13 @@ class DynamicStackTest : public ::testing::Test {
   std::string WriteGraph() {
     const std::string dir = procs_.dir();
     std::ofstream(dir + "/scenario.yaml") << Patched(
-        "config/sim/apartment_kobuki.yaml",
-        {{"spawn: {x_m: 3.0, y_m: 3.0, yaw_deg: 0.0}", "spawn: {x_m: 0.8, y_m: 5.1, yaw_deg: 0.0}"}});
-    std::ofstream(dir + "/mapper.yaml") << Patched(
-        "config/mapping/apartment.yaml",
-        {{"static_map: config/maps/apartment.yaml",
-          "static_map: " + SourcePath("config/maps/apartment.yaml")},
-         {"long_term_save_period_s: 20.0", "long_term_save_period_s: 3.0"}});
+        "config/sim/apartment_kobuki.yaml", {{"spawn: {x_m: 3.0, y_m: 3.0, yaw_deg: 0.0}",
+                                              "spawn: {x_m: 0.8, y_m: 5.1, yaw_deg: 0.0}"}});
+    std::ofstream(dir + "/mapper.yaml")
+        << Patched("config/mapping/apartment.yaml",
+                   {{"static_map: config/maps/apartment.yaml",
+                     "static_map: " + SourcePath("config/maps/apartment.yaml")},
+                    {"long_term_save_period_s: 20.0", "long_term_save_period_s: 3.0"}});
     const std::string graph = dir + "/apartment.yaml";
     std::ofstream out(graph);
     out << "name: apartment-test\n"
@@ -332,6 +332,7 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
   const auto t_start = Clock::now();
   const std::string graph = WriteGraph();
   run_dir_ = procs_.dir() + "/run";
+  procs_.AddLogDir(run_dir_ + "/logs");
   procs_.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir_});
   ASSERT_TRUE(WaitFor(
       [&] {
@@ -387,7 +388,8 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
     ADD_FAILURE() << "goal not reached: " << status->message << "; robot at "
                   << (at ? std::to_string(at->x()) + ", " + std::to_string(at->y()) : "?")
                   << "; critic rejections:" << critics << "; final layer in " << procs_.dir()
-                  << "/final.pgm\n" << watcher_.trace();
+                  << "/final.pgm\n"
+                  << watcher_.trace();
   }
   EXPECT_GE(seen_og, kLethalOg) << "the laser never made the box an obstacle";
   EXPECT_FALSE(watcher_.overlapped())
@@ -409,13 +411,13 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
         return Over(layers::kShortTerm, box1) < kFreeOg && Over(layers::kFinal, box1) < kFreeOg;
       },
       60.0, [&] { Pump(); }))
-      << "the removed box did not fade: short-term " << Over(layers::kShortTerm, box1)
-      << ", final " << Over(layers::kFinal, box1) << " (final " << at_removal << " at removal)";
+      << "the removed box did not fade: short-term " << Over(layers::kShortTerm, box1) << ", final "
+      << Over(layers::kFinal, box1) << " (final " << at_removal << " at removal)";
   const double fade_s = SecondsSince(t_removed);
 
   // (c) Adopted by the long-term layer, then found in the store (saved every 3 s).
-  EXPECT_TRUE(WaitFor([&] { return Over(layers::kLongTerm, box2) >= kAdoptedOg; }, 40.0,
-                      [&] { Pump(); }))
+  EXPECT_TRUE(
+      WaitFor([&] { return Over(layers::kLongTerm, box2) >= kAdoptedOg; }, 40.0, [&] { Pump(); }))
       << "long-term over the second box: " << Over(layers::kLongTerm, box2);
   const double adopt_s = SecondsSince(t_removed);
   mapstore::MapstoreClientOptions options;
@@ -505,8 +507,8 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
       60.0, [&] { Pump(); }));
   const double back_s = SecondsSince(t_back);
   ASSERT_TRUE(status && status->goal_id == 2);
-  EXPECT_EQ(status->state, kStateReached)
-      << status->message << "; the drive back, last 40 s:\n" << watcher_.trace();
+  EXPECT_EQ(status->state, kStateReached) << status->message << "; the drive back, last 40 s:\n"
+                                          << watcher_.trace();
   ASSERT_TRUE(first_path.has_value()) << "no path for the drive back";
   // The first plan already keeps the footprint (radius 0.176 m) off the remembered box.
   double path_clearance_m = 1e9;
@@ -522,8 +524,10 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
 
   std::printf(
       "[ timing ] graph ready %.1f s, drive %.1f s (min clearance %.3f m, box seen at OG %.0f), "
-      "fade %.1f s, second box adopted within %.1f s of its spawn, restart to first long-term layer %.1f s "
-      "(publication %lld, long-term %.0f, short-term %.0f), back past it %.1f s (first plan %.3f m clear), total "
+      "fade %.1f s, second box adopted within %.1f s of its spawn, restart to first long-term "
+      "layer %.1f s "
+      "(publication %lld, long-term %.0f, short-term %.0f), back past it %.1f s (first plan %.3f m "
+      "clear), total "
       "%.1f s\n",
       ready_s, drive_s, watcher_.min_clearance_m(), seen_og, fade_s, adopt_s, restart_s,
       static_cast<long long>(fresh_version - watcher_.FirstFreshVersion(layers::kLongTerm) + 1),

@@ -84,6 +84,7 @@ std::string WriteGraph(const ProcessSet& procs, const std::string& name, const G
 }
 
 ChildProcess& LaunchUp(ProcessSet& procs, const std::string& graph, const std::string& run_dir) {
+  procs.AddLogDir(run_dir + "/logs");  // the graph's processes, printed if the test fails
   return procs.StartRaw("cairn-launch",
                         {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir});
 }

@@ -1,7 +1,10 @@
 #include "services/mapping/terrain_map.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -112,6 +115,70 @@ TEST(TerrainMapTest, FlatGroundFromRevolutions) {
   // Export is tile-aligned with an empty tile of margin: origin on a 20 m grid.
   EXPECT_DOUBLE_EQ(std::fmod(out.geometry().origin.x_m, 20.0), 0.0);
   EXPECT_EQ(out.size_x() % 100, 0);
+}
+
+// A robot at rest looks at a 10 deg ramp with a noisy lidar; returns the RMS error of the
+// published heights against the ramp's true height at the cell centres, over the ramp's
+// well-observed inner cells (the map built with `params`).
+double RampErrorAtCellCentres(const TerrainMapParams& params) {
+  const double tan10 = std::tan(10 * kDeg);
+  auto ground = [&](double x, double) { return std::clamp(x - 2.0, 0.0, 2.0) * tan10; };
+  TerrainMap map(params);
+  SyntheticLidar lidar;
+  lidar.rings = 16;
+  lidar.azimuths = 240;
+  lidar.max_range_m = 6.0;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.018);
+  for (int rev = 0; rev < 25; ++rev) {
+    common::LidarSlice scan = SyntheticRevolution(SensorAt(0.3, 0.05, 0.5), ground, lidar, rev);
+    for (auto& point : scan.points) {  // range noise along each beam
+      common::Vector3 v(point.x_m, point.y_m, point.z_m);
+      v *= 1.0 + noise(rng) / v.norm();
+      point.x_m = static_cast<float>(v.x());
+      point.y_m = static_cast<float>(v.y());
+      point.z_m = static_cast<float>(v.z());
+    }
+    map.Integrate(scan.points, scan.sensor_pose, rev + 1, rev * 0.1);
+    RobotContext robot;
+    robot.xy_m = common::Vector2(0.3, 0.05);
+    map.UpdateDerived(robot);
+  }
+  const GridMap out = map.Export({layers::kElevation, layers::kObservationCount});
+  double sum_sq = 0.0;
+  int cells = 0;
+  for (double x = 2.3; x < 3.7; x += 0.2) {
+    for (double y = -0.5; y <= 0.5; y += 0.2) {
+      const auto c = out.IndexOf({x, y});
+      if (!c) continue;
+      const float h = out.at(layers::kElevation)(c->ix, c->iy);
+      // Cells only the noise of a neighbouring ring line reached hold a point or two.
+      if (std::isnan(h) || out.at(layers::kObservationCount)(c->ix, c->iy) < 20) continue;
+      const common::Vector2 centre = out.geometry().CenterOf(*c);
+      const double error = h - ground(centre.x(), centre.y());
+      sum_sq += error * error;
+      ++cells;
+    }
+  }
+  EXPECT_GT(cells, 20) << "too little of the ramp seen";
+  return std::sqrt(sum_sq / std::max(1, cells));
+}
+
+// A cell on a ramp holds points of several true heights, sampled along a few ring lines off
+// its centre. The filter widens its gate by the slope's rise across the cell and carries the
+// height to the centre, so the ramp reads even. Upstream (gate on the point noise alone, height
+// where the points lay) is about three times further off (3.3 mm RMS against 9.1 mm here).
+TEST(TerrainMapTest, ARampSeenFromRestReadsEvenAtTheCellCentres) {
+  TerrainMapParams params;
+  params.filter.min_variance_m2 = 1e-7;  // as config/mapping/mapper.yaml
+  params.filter.increase_height_alpha = 0.5;
+  const double ours = RampErrorAtCellCentres(params);
+  params.filter.max_spread_slope_rad = 0.0;
+  const double upstream = RampErrorAtCellCentres(params);
+  std::printf("ramp height error at the cell centres, RMS: %.4f m (upstream filter %.4f m)\n", ours,
+              upstream);
+  EXPECT_LT(ours, 0.005);
+  EXPECT_GT(upstream, 0.007);
 }
 
 TEST(TerrainMapTest, GrowsInTilesOverASquareKilometre) {

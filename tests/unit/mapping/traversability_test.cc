@@ -166,7 +166,7 @@ TEST(TraversabilityTest, LoneHighCellIsNoStepButAnEdgeIs) {
   ComputeCostLayer(&lone, p, params);
   EXPECT_LT(Cost(lone, "test", 4, 5), layers::kCostLethal);  // beside the lone cell
   EXPECT_LT(Cost(lone, "test", 5, 4), layers::kCostLethal);
-  EXPECT_GT(Cost(lone, "test", 4, 5), layers::kCostFree);   // at the limit: graded, not free
+  EXPECT_GT(Cost(lone, "test", 4, 5), layers::kCostFree);  // at the limit: graded, not free
   GridMap edge = StepMap(0.04);
   ComputeCostLayer(&edge, p, params);
   for (int iy = 1; iy < 7; ++iy) EXPECT_EQ(Cost(edge, "test", 4, iy), layers::kCostLethal);
@@ -441,7 +441,62 @@ TEST(TraversabilityTest, DropIntoAnUnseenGapIsAStepDown) {
   ComputeCostLayer(&map, LenientProfile(), {});
   EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
   EXPECT_LT(Cost(map, "pioneer3at", 8, 6), layers::kCostLethal);
-  EXPECT_LT(Cost(map, "test", 9, 6), layers::kCostLethal);  // 10 m steps allowed
+  // 10 m steps allowed, but nobody saw how deep it goes: lethal too. Judged by its lower bound
+  // alone (unseen_drop_m 0), 0.3 m is within that profile's limit.
+  EXPECT_EQ(Cost(map, "test", 9, 6), layers::kCostLethal);
+  TraversabilityParams by_bound;
+  by_bound.unseen_drop_m = 0.0;
+  ComputeCostLayer(&map, LenientProfile(), by_bound);
+  EXPECT_LT(Cost(map, "test", 9, 6), layers::kCostLethal);
+}
+
+// Seen from afar, a 20 cm drop's far side is hidden and the grazing rays prove only a few
+// centimetres of it: the edge is lethal already, not once the robot is close enough for the
+// rays to prove more than its step-down limit (10 cm for the pioneer3at).
+TEST(TraversabilityTest, AShallowBoundOfAnUnseenDropIsLethalAlready) {
+  GridMap map =
+      MakeTerrain(30, 12, kRes, [](double x, double) { return x < 2.0 ? 0.2 : std::nan(""); });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int ix = 10; ix < 30; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.2f - 0.06f;  // rays 6 cm below the platform
+  }
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  EXPECT_LT(Cost(map, "pioneer3at", 8, 6), layers::kCostLethal);
+  // Rays only 3 cm below (a gentle crest, or a plate's edge) prove no drop.
+  for (int ix = 10; ix < 30; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.2f - 0.03f;
+  }
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_LT(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  // Upstream rule (the profile's limit alone): 6 cm is crossable.
+  for (int ix = 10; ix < 30; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.2f - 0.06f;
+  }
+  TraversabilityParams by_limit;
+  by_limit.unseen_drop_m = 0.0;
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), by_limit);
+  EXPECT_LT(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+}
+
+// The cell on the edge itself is often mixed (part rim, part gap) and unknown, its bound barely
+// below the rim; the rays show the drop a cell further. The rim looks through the unknown cells
+// beyond it (0.4 m) for the lowest bound.
+TEST(TraversabilityTest, TheRimSeesTheDropBeyondAMixedEdgeCell) {
+  GridMap map =
+      MakeTerrain(30, 12, kRes, [](double x, double) { return x < 2.0 ? 0.2 : std::nan(""); });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int iy = 0; iy < 12; ++iy) {
+    b(10, iy) = 0.18f;                                   // the mixed edge cell
+    b(11, iy) = 0.12f;                                   // the drop, a cell on
+    for (int ix = 12; ix < 30; ++ix) b(ix, iy) = 0.05f;  // beyond the reach
+  }
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  // Without the drop a cell on, only the far bound (0.6 m away) shows it: not the rim's.
+  for (int iy = 0; iy < 12; ++iy) b(11, iy) = 0.18f;
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_LT(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
 }
 
 // The live mapper recomputes windows of a larger map: with DependencyRadiusCells of margin the

@@ -148,6 +148,21 @@ TEST_F(CriticTest, ClearanceKeepsTrajectoriesThatCanStillBrake) {
   EXPECT_FALSE(dut.Evaluate(Arc({5.7, 3.0, 0.0}, {0.05, 0.0})).valid);
 }
 
+// Graded terrain a metre ahead (a ramp the global path climbs) costs a fast sample no more than
+// a slow one: over the whole horizon the fast one would reach it and always score worse, and
+// the robot would creep to a stall at its foot. Terrain within the first 0.3 m still counts.
+TEST_F(CriticTest, GradedTerrainFurtherAheadDoesNotFavourCreeping) {
+  ClearanceCritic dut(1.0, {});
+  dut.Prepare(ctx_);
+  const Pose2 start{3.5, 3.0, M_PI / 2};  // the cost-40 band starts at y = 4
+  const Score slow = dut.Evaluate(Arc(start, {0.05, 0.0}));
+  const Score fast = dut.Evaluate(Arc(start, {0.5, 0.0}));
+  ASSERT_TRUE(slow.valid && fast.valid);
+  EXPECT_DOUBLE_EQ(fast.value, slow.value);
+  const Score close = dut.Evaluate(Arc({3.5, 3.6, M_PI / 2}, {0.5, 0.0}));
+  EXPECT_NEAR(close.value, 0.4, 1e-6);
+}
+
 TEST_F(CriticTest, ClearancePrefersStayingAwayFromWalls) {
   ClearanceCritic dut(1.0, {});  // 0.3 m of inflation beyond the 0.25 m inscribed radius
   dut.Prepare(ctx_);
