@@ -107,8 +107,11 @@ void NavigatorParams::Validate() const {
   CAIRN_THROW_UNLESS(control_period_s > 0.0, "control_period_s must be positive");
   CAIRN_THROW_UNLESS(xy_goal_tolerance_m > 0.0, "xy_goal_tolerance_m must be positive");
   CAIRN_THROW_UNLESS(yaw_goal_tolerance_rad > 0.0, "yaw_goal_tolerance_rad must be positive");
-  CAIRN_THROW_UNLESS(max_pose_age_s > 0.0, "max_pose_age_s must be positive");
-  CAIRN_THROW_UNLESS(max_map_age_s > 0.0, "max_map_age_s must be positive");
+  CAIRN_THROW_UNLESS(
+      max_pose_age_s > control_period_s,
+      "max_pose_age_s must exceed the control period (" << control_period_s << " s)");
+  CAIRN_THROW_UNLESS(max_map_age_s > control_period_s,
+                     "max_map_age_s must exceed the control period (" << control_period_s << " s)");
   CAIRN_THROW_UNLESS(max_clock_skew_s > 0.0, "max_clock_skew_s must be positive");
   CAIRN_THROW_UNLESS(lookahead_m > 0.0, "lookahead_m must be positive");
   CAIRN_THROW_UNLESS(local_path_window_m > 0.0, "local_path_window_m must be positive");
@@ -513,13 +516,14 @@ StepOutput Navigator::Step(double now_s) {
     return out;
   }
 
-  // Safety: stale or missing inputs stop the robot at once.
+  // Safety: stale or missing inputs stop the robot at once. An input counts as stale one control
+  // period early: by the next cycle it would be older than its limit, so the stop goes out by then.
   NavReason stale = NavReason::kNone;
   std::string why;
   if (!pose_) {
     stale = NavReason::kStaleOdom;
     why = "no pose received yet";
-  } else if (now_s - pose_stamp_s_ > params_.max_pose_age_s) {
+  } else if (now_s - pose_stamp_s_ > params_.max_pose_age_s - params_.control_period_s) {
     stale = NavReason::kStaleOdom;
     why = Format("the pose is %.2f s old", now_s - pose_stamp_s_);
   } else if (pose_stamp_s_ - now_s > params_.max_clock_skew_s) {
@@ -528,7 +532,7 @@ StepOutput Navigator::Step(double now_s) {
   } else if (!map_) {
     stale = NavReason::kNoMap;
     why = "no cost layer received yet";
-  } else if (now_s - map_rx_s_ > params_.max_map_age_s) {
+  } else if (now_s - map_rx_s_ > params_.max_map_age_s - params_.control_period_s) {
     stale = NavReason::kStaleMap;
     why = Format("the cost layer is %.2f s old", now_s - map_rx_s_);
   } else if (map_rx_s_ - now_s > params_.max_clock_skew_s) {

@@ -79,8 +79,10 @@ struct NavigatorParams {
   double control_period_s{0.05};  ///< 20 Hz
   double xy_goal_tolerance_m{0.25};
   double yaw_goal_tolerance_rad{0.25};
-  double max_pose_age_s{0.5};       ///< older odometry/pose stops the robot
-  double max_map_age_s{0.5};        ///< an older cost layer stops the robot
+  /// Older odometry/pose stops the robot (checked a control period early, so the stop is out
+  /// before the limit).
+  double max_pose_age_s{0.5};
+  double max_map_age_s{0.5};        ///< the same for the cost layer
   double max_clock_skew_s{1.0};     ///< inputs stamped further in the future count as stale
   double lookahead_m{1.2};          ///< the DWA's local goal this far along the path
   double local_path_window_m{3.0};  ///< path the alignment critic looks at

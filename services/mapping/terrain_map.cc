@@ -323,12 +323,47 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
 // noise spills the rim of a trench into its first cell, a wall's foot into the wall cell) and
 // is published unknown, so the gap keeps its true width. Larger conflicts are thin structures
 // the ray passed beside; they stay.
+bool TerrainMap::NormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy) const {
+  const int n = params_.tile_size_cells;
+  const int lx = static_cast<int>(i % n), ly = static_cast<int>(i / n);
+  const bool inner = lx >= 1 && ly >= 1 && lx <= n - 2 && ly <= n - 2;
+  auto known = [&](int dx, int dy) {
+    if (inner) return !std::isnan(tile.elevation[i + dx + static_cast<int64_t>(dy) * n]);
+    const int64_t x = cx + dx, y = cy + dy;
+    const Tile* t = FindTile(static_cast<int>(FloorDiv(x, n)), static_cast<int>(FloorDiv(y, n)));
+    if (t == nullptr) return false;
+    const int64_t j = (x - FloorDiv(x, n) * n) + (y - FloorDiv(y, n) * n) * n;
+    return !std::isnan(t->elevation[j]);
+  };
+  // A known neighbour on both sides along each axis, and at most two unknown in all.
+  bool west = false, east = false, south = false, north = false;
+  int unknown = 0;
+  for (int dy = -1; dy <= 1; ++dy) {
+    for (int dx = -1; dx <= 1; ++dx) {
+      if (dx == 0 && dy == 0) continue;
+      if (!known(dx, dy)) {
+        ++unknown;
+        continue;
+      }
+      west |= dx < 0;
+      east |= dx > 0;
+      south |= dy < 0;
+      north |= dy > 0;
+    }
+  }
+  return west && east && south && north && unknown <= 2;
+}
+
 void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
   float h = tile->filter_height[i];
   // The filter's height belongs where its points lay; on a plane of moderate slope (the last
   // derived for the cell) it is carried to the cell's centre, so an even ramp sampled along a
   // few ring lines reads even (cell to cell differences of one cell's rise, not up to twice).
-  if (tile->normal_x != nullptr && tile->normal_y != nullptr && !std::isnan(h)) {
+  // Only a normal that interpolates is trusted: at the rim of unseen ground (the blind ring
+  // around a standing robot) the fit extrapolates from one side, is steep from noise alone and
+  // leans further with the cell's own height, so its carry would grow into a false step.
+  if (tile->normal_x != nullptr && tile->normal_y != nullptr && !std::isnan(h) &&
+      NormalInterpolates(*tile, i, cx, cy)) {
     const double nx = tile->normal_x[i], ny = tile->normal_y[i];
     const double nz2 = 1.0 - nx * nx - ny * ny;
     if (std::isfinite(nx) && std::isfinite(ny) && nz2 > 0 &&

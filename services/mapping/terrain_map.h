@@ -189,6 +189,9 @@ class TerrainMap {
   void RecordBound(const common::Vector3& from, const common::Vector3& to, int64_t return_x,
                    int64_t return_y);
   void CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy);
+  /// True when the cell's normal fit interpolates: of its 8 neighbours (in any tile) at most
+  /// two lack a height, and some have one on each side along both axes.
+  bool NormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy) const;
   /// Copies `layers` of the global cell rectangle into a dense map (NaN outside tiles).
   common::GridMap Window(const CellRect& global, const std::vector<std::string>& layers) const;
   /// The same into `out` with geometry `g` (reusing its buffers when the geometry matches).

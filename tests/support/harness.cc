@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <netinet/in.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -80,10 +81,15 @@ ChildProcess::ChildProcess(std::vector<std::string> argv, std::vector<std::strin
     : name_(fs::path(argv.at(0)).filename().string()), log_path_(std::move(log_path)) {
   const int log_fd = open(log_path_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (log_fd < 0) throw std::runtime_error("cannot open " + log_path_);
+  const pid_t parent = getpid();
   pid_ = fork();
   if (pid_ < 0) throw std::runtime_error("fork failed");
   if (pid_ == 0) {
     setpgid(0, 0);
+    // A test killed from outside (a ctest or shell timeout) never runs its destructors: the
+    // children stop with it instead of running on and sharing the next run's directories.
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != parent) _exit(1);
     dup2(log_fd, STDOUT_FILENO);
     dup2(log_fd, STDERR_FILENO);
     for (const auto& kv : env) putenv(const_cast<char*>(kv.c_str()));

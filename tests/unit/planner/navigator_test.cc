@@ -205,6 +205,9 @@ TEST(NavigatorTest, StaleOrMissingMapStops) {
   ASSERT_TRUE(sim.RunUntilState(1.0, NavState::kStopped));
   EXPECT_EQ(sim.nav_.status().reason, NavReason::kStaleMap);
   EXPECT_NE(sim.nav_.status().message.find("cost layer"), std::string::npos);
+  // The stop goes out before the layer is 0.5 s old (max_map_age_s), not in the cycle after.
+  EXPECT_LE(sim.t_ - sim.last_map_s_, NavigatorParams{}.max_map_age_s + 1e-9);
+  EXPECT_GT(sim.t_ - sim.last_map_s_, NavigatorParams{}.max_map_age_s - 0.1);
 }
 
 // A layer with tiles missing (their cells lethal, here the tile the robot stands in) holds the
