@@ -534,5 +534,50 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
       fresh_long, fresh_short, back_s, path_clearance_m, SecondsSince(t_start));
 }
 
+// A goal given as a room's name resolves to a free cell inside the room (seed 001) and the
+// Kobuki reaches it from the corridor through the room's 0.9 m door.
+// Disabled: about one run in three stalls at the door, 0.8 m from the goal, and spends its
+// recoveries (issue 6). Run it with --gtest_also_run_disabled_tests.
+TEST_F(DynamicStackTest, DISABLED_AGoalGivenAsARoomNameIsReachedThroughItsDoor) {
+  const std::string graph = WriteGraph();
+  run_dir_ = procs_.dir() + "/run";
+  procs_.AddLogDir(run_dir_ + "/logs");
+  procs_.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir_});
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        auto s = Status();
+        return s && s->state == "ready";
+      },
+      90.0, [&] { Pump(); }))
+      << "the graph never became ready";
+  ASSERT_TRUE(WaitFor([&] { return watcher_.Complete(layers::kFinal) && watcher_.position(); },
+                      30.0, [&] { Pump(); }));
+  cairn::lcmt_goal goal{};
+  goal.robot = kRobot;
+  goal.goal_id = 7;
+  goal.kind = cairn::lcmt_goal::KIND_PLACE;
+  goal.place = "kitchen";  // x 6..10, y 0..4.5; its door at x 7.5 on the corridor wall
+  std::optional<cairn::lcmt_nav_status> status;
+  // The goal is re-sent until the navigator reports on it (one datagram may be lost).
+  const bool reached = WaitFor(
+      [&] {
+        status = bus_.Last<cairn::lcmt_nav_status>(ch::ForRobot(kRobot, ch::kNavStatus));
+        if (!status || status->goal_id != 7) bus_.Publish(ch::ForRobot(kRobot, ch::kGoal), goal);
+        return status && status->goal_id == 7 &&
+               (status->state == kStateReached || status->state == kStateFailed);
+      },
+      120.0, [&] { Pump(); });
+  ASSERT_TRUE(reached) << "no outcome in 120 s; last status: "
+                       << (status ? std::to_string(status->state) + " " + status->message : "none");
+  ASSERT_EQ(status->state, kStateReached) << status->message;
+  // Ground truth: the robot stands inside the kitchen, clear of its walls.
+  const auto pose = bus_.Last<cairn::lcmt_pose>(ch::ForRobot(kRobot, ch::kPose));
+  ASSERT_TRUE(pose.has_value());
+  EXPECT_GT(pose->position_m[0], 6.2);
+  EXPECT_LT(pose->position_m[0], 9.8);
+  EXPECT_GT(pose->position_m[1], 0.2);
+  EXPECT_LT(pose->position_m[1], 4.3);
+}
+
 }  // namespace
 }  // namespace cairn::testing
