@@ -318,11 +318,6 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
   return stats;
 }
 
-// The published height follows the filter in steps larger than commit_epsilon, except where a
-// ray passed slightly beneath it: such a cell mixes a surface with a gap next to it (range
-// noise spills the rim of a trench into its first cell, a wall's foot into the wall cell) and
-// is published unknown, so the gap keeps its true width. Larger conflicts are thin structures
-// the ray passed beside; they stay.
 bool TerrainMap::NormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy) const {
   const int n = params_.tile_size_cells;
   const int lx = static_cast<int>(i % n), ly = static_cast<int>(i / n);
@@ -354,6 +349,11 @@ bool TerrainMap::NormalInterpolates(const Tile& tile, size_t i, int64_t cx, int6
   return west && east && south && north && unknown <= 2;
 }
 
+// The published height follows the filter in steps larger than commit_epsilon, except where a
+// ray passed slightly beneath it: such a cell mixes a surface with a gap next to it (range
+// noise spills the rim of a trench into its first cell, a wall's foot into the wall cell) and
+// is published unknown, so the gap keeps its true width. Larger conflicts are thin structures
+// the ray passed beside; they stay.
 void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
   float h = tile->filter_height[i];
   // The filter's height belongs where its points lay; on a plane of moderate slope (the last
@@ -362,13 +362,13 @@ void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
   // Only a normal that interpolates is trusted: at the rim of unseen ground (the blind ring
   // around a standing robot) the fit extrapolates from one side, is steep from noise alone and
   // leans further with the cell's own height, so its carry would grow into a false step.
-  if (tile->normal_x != nullptr && tile->normal_y != nullptr && !std::isnan(h) &&
-      NormalInterpolates(*tile, i, cx, cy)) {
+  if (tile->normal_x != nullptr && tile->normal_y != nullptr && !std::isnan(h)) {
     const double nx = tile->normal_x[i], ny = tile->normal_y[i];
     const double nz2 = 1.0 - nx * nx - ny * ny;
     if (std::isfinite(nx) && std::isfinite(ny) && nz2 > 0 &&
         SlopeSpreadVariance(std::acos(std::min(1.0, std::sqrt(nz2))), params_.resolution_m,
-                            params_.filter) > 0) {
+                            params_.filter) > 0 &&
+        NormalInterpolates(*tile, i, cx, cy)) {
       const double nz = std::sqrt(nz2);
       h = static_cast<float>(h + (nx * tile->hit_dx[i] + ny * tile->hit_dy[i]) / nz);
     }
