@@ -47,6 +47,31 @@ using common::Vector2;
 
 namespace {
 
+// " (N cells: the nearest at (x, y), lethal|unknown)" for the cells blocking `pose`.
+std::string BlockingCellText(const CostMap& map, const common::Pose2& pose) {
+  const std::vector<int64_t> cells = map.BlockingCellsUnder(pose);
+  if (cells.empty()) return "";
+  const common::GridGeometry& g = map.geometry();
+  double best = std::numeric_limits<double>::infinity();
+  common::Vector2 nearest = pose.position();
+  for (const int64_t i : cells) {
+    const common::Vector2 c =
+        g.CenterOf({static_cast<int>(i % g.size_x), static_cast<int>(i / g.size_x)});
+    const double d = (c - pose.position()).norm();
+    if (d < best) {
+      best = d;
+      nearest = c;
+    }
+  }
+  const float cost = map.CostAt(nearest);
+  std::ostringstream out;
+  out.precision(3);
+  out << " (" << cells.size() << " cells; the nearest at (" << nearest.x() << ", " << nearest.y()
+      << "), " << (std::isnan(cost) ? std::string("unknown") : "cost " + std::to_string(int(cost)))
+      << ")";
+  return out.str();
+}
+
 using Clock = std::chrono::steady_clock;
 
 // Shortcut attempts per simplification pass: OMPL's default is the number of states, which
@@ -440,8 +465,10 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
       if (map.IsValid({goal.x_m, goal.y_m, yaw})) goal_yaws.push_back(yaw);
     }
   }
-  if (goal_yaws.empty())
-    return finish(PlanStatus::kGoalOccupied, "the footprint at the goal is blocked");
+  if (goal_yaws.empty()) {
+    return finish(PlanStatus::kGoalOccupied,
+                  "the footprint at the goal is blocked" + BlockingCellText(map, goal));
+  }
   if (cancelled()) return finish(PlanStatus::kCancelled, "cancelled");
   if (params_.grid_precheck && !map.MaybeConnected(start.position(), goal.position())) {
     return finish(PlanStatus::kNoPath, "the goal is not connected to the start");

@@ -143,6 +143,9 @@ TEST(GlobalPlannerTest, GoalOccupied) {
   const PlanResult r =
       GlobalPlanner(Params()).Plan(*map, {{2.0, 2.0, 0.0}, {10.0, 3.0, 0.0}, false});
   EXPECT_EQ(r.status, PlanStatus::kGoalOccupied);
+  // The message names what blocks it: the wall cell under the goal, lethal.
+  EXPECT_NE(r.message.find("cells; the nearest at ("), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("cost 100"), std::string::npos) << r.message;
   // With a yaw, only that heading counts: a 2 m × 0.3 m robot fits along the gap, not across.
   TestLayer corridor(100, 100, 0.1);
   corridor.Rect(0.0, 0.0, 10.0, 4.6, 100.0f)
