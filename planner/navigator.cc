@@ -227,7 +227,7 @@ void Navigator::SetGoal(const NavGoal& goal, double now_s) {
   goal_ = goal;
   if (pose_) last_travel_pose_ = pose_;
   progress_anchor_ = pose_ ? pose_->position() : Vector2::Zero();
-  progress_anchor_s_ = now_s;
+  RestartProgressTimer(now_s);
   SetState(NavState::kPlanning, NavReason::kNone,
            goal.is_place ? "planning to place '" + goal.place + "'" : "planning");
   plan_wanted_ = true;
@@ -285,7 +285,7 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
     no_valid_since_s_ = -1.0;
     failure_reason_ = NavReason::kNone;
     if (pose_) progress_anchor_ = pose_->position();
-    progress_anchor_s_ = now_s;
+    RestartProgressTimer(now_s);
     UpdatePathProgress();
     if (stopped) {
       resume_state_ = NavState::kDriving;
@@ -419,7 +419,7 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
            "at the goal position, but turning to the goal heading is blocked");
       return gen.Brake(last_command_);
     }
-    progress_anchor_s_ = now_s;
+    RestartProgressTimer(now_s);
     return RotateInPlaceCommand(gen, last_command_, error, limits_.max_vel_theta_radps);
   }
 
@@ -431,9 +431,9 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
   // No progress for too long: recover.
   if ((pose.position() - progress_anchor_).norm() >= params_.progress_distance_m) {
     progress_anchor_ = pose.position();
-    progress_anchor_s_ = now_s;
+    RestartProgressTimer(now_s);
   } else if (now_s - progress_anchor_s_ > params_.progress_timeout_s) {
-    progress_anchor_s_ = now_s;
+    RestartProgressTimer(now_s);
     StartRecoveryOrFail(NavReason::kNone,
                         Format("no progress for %.1f s", params_.progress_timeout_s), now_s);
     (void)out;
@@ -451,7 +451,12 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
     const Velocity turn{0.0, std::copysign(limits_.max_vel_theta_radps, heading_error)};
     if (MotionClear(map_.get(), pose, turn, params_.recovery.collision_lookahead_s)) {
       no_valid_since_s_ = -1.0;
-      progress_anchor_s_ = std::max(progress_anchor_s_, now_s - params_.progress_timeout_s / 2);
+      // A turn toward the path gets half the no-progress timeout once per timer: turning back
+      // and forth between this branch and the DWA must not hold recoveries off for ever.
+      if (!turn_extended_) {
+        progress_anchor_s_ = std::max(progress_anchor_s_, now_s - params_.progress_timeout_s / 2);
+        turn_extended_ = true;
+      }
       return RotateInPlaceCommand(gen, last_command_, heading_error, limits_.max_vel_theta_radps);
     }
   }
@@ -475,6 +480,11 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
     no_valid_since_s_ = -1.0;
   }
   return r.command;
+}
+
+void Navigator::RestartProgressTimer(double now_s) {
+  progress_anchor_s_ = now_s;
+  turn_extended_ = false;
 }
 
 StepOutput Navigator::Step(double now_s) {
@@ -551,7 +561,7 @@ StepOutput Navigator::Step(double now_s) {
     }
     SetState(NavState::kStopped, stale, why + ": stopped");
     // Timers that measure progress do not run while stopped.
-    progress_anchor_s_ = now_s;
+    RestartProgressTimer(now_s);
     no_valid_since_s_ = -1.0;
     return finish(Velocity{}, true);
   }

@@ -191,6 +191,8 @@ class Navigator {
   void StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s);
   bool PathBlockedAhead() const;
   void UpdatePathProgress();
+  /// The no-progress timer starts again at now_s.
+  void RestartProgressTimer(double now_s);
   Velocity Drive(double now_s, StepOutput* out);
   Velocity Stop(StepOutput* out);
   void ResetGoalState();
@@ -234,6 +236,7 @@ class Navigator {
   double no_valid_since_s_{-1.0};
   common::Vector2 progress_anchor_{common::Vector2::Zero()};
   double progress_anchor_s_{0.0};
+  bool turn_extended_{false};  ///< the turn-in-place extension of this timer is spent
   size_t recovery_index_{0};
   common::Vector2 recovery_anchor_{common::Vector2::Zero()};
   NavReason failure_reason_{NavReason::kNone};

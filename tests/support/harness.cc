@@ -210,7 +210,16 @@ bool WaitFor(const std::function<bool()>& condition, double timeout_s,
   return condition();
 }
 
-Bus::Bus(const std::string& url) : lcm_(url) {
+namespace {
+// The test's bus takes every channel (lidar slices, tiles): a large receive buffer keeps a
+// reply from being dropped behind a burst (the kernel caps it at net.core.rmem_max).
+std::string WithLargeReceiveBuffer(const std::string& url) {
+  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
+  return url + (url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=4194304";
+}
+}  // namespace
+
+Bus::Bus(const std::string& url) : lcm_(WithLargeReceiveBuffer(url)) {
   if (!lcm_.good()) throw std::runtime_error("cannot open LCM at " + url);
   lcm_.subscribeFunction<Bus*>(
       ".*",
