@@ -1,12 +1,18 @@
-# cairn_add_test(NAME SOURCES ... LIBS ... LABELS unit|integration [TIMEOUT s])
-# Builds one GoogleTest executable and registers each of its tests with CTest.
+# cairn_add_test(NAME SOURCES ... LIBS ... LABELS unit|integration [TIMEOUT s] [PROCESSORS n])
+# Builds one GoogleTest executable and registers each of its tests with CTest. PROCESSORS is the
+# number of cores a test keeps busy: a closed-loop graph (a real-time simulator with its lidar, a
+# mapper and a navigator) takes 2, so `ctest -j2` on a 2-core machine runs it alone, as the graph
+# would run on a robot's own computer.
 find_package(GTest REQUIRED)
 include(GoogleTest)
 
 function(cairn_add_test name)
-  cmake_parse_arguments(ARG "" "TIMEOUT" "SOURCES;LIBS;LABELS" ${ARGN})
+  cmake_parse_arguments(ARG "" "TIMEOUT;PROCESSORS" "SOURCES;LIBS;LABELS" ${ARGN})
   if(NOT ARG_TIMEOUT)
     set(ARG_TIMEOUT 120)
+  endif()
+  if(NOT ARG_PROCESSORS)
+    set(ARG_PROCESSORS 1)
   endif()
   add_executable(${name} ${ARG_SOURCES})
   cairn_target_defaults(${name})
@@ -16,6 +22,6 @@ function(cairn_add_test name)
     CAIRN_SOURCE_DIR="${PROJECT_SOURCE_DIR}" CAIRN_BINARY_DIR="${CMAKE_BINARY_DIR}")
   gtest_discover_tests(${name}
     TEST_PREFIX "${name}."
-    PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT}
+    PROPERTIES LABELS "${ARG_LABELS}" TIMEOUT ${ARG_TIMEOUT} PROCESSORS ${ARG_PROCESSORS}
     DISCOVERY_TIMEOUT 60)
 endfunction()

@@ -433,9 +433,10 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
     progress_anchor_ = pose.position();
     RestartProgressTimer(now_s);
   } else if (now_s - progress_anchor_s_ > params_.progress_timeout_s) {
+    const std::string why = Format("no progress for %.1f s", params_.progress_timeout_s) +
+                            DescribeWindow((pose.position() - progress_anchor_).norm());
     RestartProgressTimer(now_s);
-    StartRecoveryOrFail(NavReason::kNone,
-                        Format("no progress for %.1f s", params_.progress_timeout_s), now_s);
+    StartRecoveryOrFail(NavReason::kNone, why, now_s);
     (void)out;
     return gen.Brake(last_command_);
   }
@@ -457,6 +458,7 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
         progress_anchor_s_ = std::max(progress_anchor_s_, now_s - params_.progress_timeout_s / 2);
         turn_extended_ = true;
       }
+      ++window_.turning;
       return RotateInPlaceCommand(gen, last_command_, heading_error, limits_.max_vel_theta_radps);
     }
   }
@@ -470,6 +472,15 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
   in.segment_end = path_.IndexAt(path_arc_m_ + params_.local_path_window_m);
   in.local_goal = carrot;
   const DwaResult r = dwa_.Compute(in);
+  ++window_.dwa;
+  window_.samples = r.samples;
+  window_.sum_v_mps += r.command.linear_mps;
+  window_.sum_abs_w_radps += std::abs(r.command.angular_radps);
+  if (window_.rejections.size() < r.rejections.size()) {
+    window_.rejections.resize(r.rejections.size(), 0);
+  }
+  for (size_t i = 0; i < r.rejections.size(); ++i) window_.rejections[i] += r.rejections[i];
+  if (!r.found) ++window_.dwa_invalid;
   if (!r.found) {
     if (no_valid_since_s_ < 0.0) no_valid_since_s_ = now_s;
     if (now_s - no_valid_since_s_ > params_.no_valid_trajectory_patience_s) {
@@ -485,6 +496,37 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
 void Navigator::RestartProgressTimer(double now_s) {
   progress_anchor_s_ = now_s;
   turn_extended_ = false;
+  window_ = DriveWindow{};
+}
+
+std::string Navigator::DescribeWindow(double moved_m) const {
+  std::ostringstream m;
+  m.setf(std::ios::fixed);
+  m.precision(2);
+  m << " (moved " << moved_m << " m; " << window_.turning << " cycles turning toward the path, "
+    << window_.dwa << " DWA cycles";
+  if (window_.dwa > 0) {
+    m << " at a mean " << window_.sum_v_mps / window_.dwa << " m/s, "
+      << window_.sum_abs_w_radps / window_.dwa << " rad/s, " << window_.dwa_invalid
+      << " without a valid sample";
+    // The critics that rejected most samples, highest first.
+    std::vector<size_t> order(window_.rejections.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(),
+              [&](size_t a, size_t b) { return window_.rejections[a] > window_.rejections[b]; });
+    const auto& names = dwa_.critic_names();
+    const int samples = window_.samples;
+    bool first = true;
+    for (size_t k = 0; k < order.size() && k < 2; ++k) {
+      const size_t i = order[k];
+      if (window_.rejections[i] == 0 || i >= names.size()) break;
+      m << (first ? "; rejected per cycle: " : ", ") << names[i] << " "
+        << static_cast<double>(window_.rejections[i]) / window_.dwa << "/" << samples;
+      first = false;
+    }
+  }
+  m << ")";
+  return m.str();
 }
 
 StepOutput Navigator::Step(double now_s) {

@@ -237,6 +237,18 @@ class Navigator {
   common::Vector2 progress_anchor_{common::Vector2::Zero()};
   double progress_anchor_s_{0.0};
   bool turn_extended_{false};  ///< the turn-in-place extension of this timer is spent
+  /// What the driving did since the progress timer last restarted, for the no-progress message.
+  struct DriveWindow {
+    int turning{0};      ///< cycles turning in place toward the path
+    int dwa{0};          ///< cycles the DWA chose the command
+    int dwa_invalid{0};  ///< ... of which no sample was valid
+    int samples{0};      ///< samples in the last DWA cycle
+    double sum_v_mps{0.0};
+    double sum_abs_w_radps{0.0};
+    std::vector<int64_t> rejections;  ///< per critic, over the window
+  };
+  DriveWindow window_;
+  std::string DescribeWindow(double moved_m) const;
   size_t recovery_index_{0};
   common::Vector2 recovery_anchor_{common::Vector2::Zero()};
   NavReason failure_reason_{NavReason::kNone};

@@ -3,6 +3,7 @@
 
 #include <atomic>
 #include <chrono>
+#include <map>
 #include <thread>
 
 #include <gtest/gtest.h>
@@ -108,25 +109,34 @@ TEST(MapstoreSafetyTest, TwoSaversAndOneReaderOnOneDatabase) {
   for (size_t i = 0; i < urls.size(); ++i) {
     procs.StartRaw("cairn-mapstore", {BinPath("cairn-mapstore"), "--db", db, "--lcm-url", urls[i]});
   }
-  constexpr int kSaves = 8;
+  // Each saver writes at least kMinSaves versions and goes on until the reader has loaded a map
+  // kReadsWanted times while saves were running, so reads and writes really overlap.
+  constexpr int kMinSaves = 8;
+  constexpr int kMaxSaves = 200;
+  constexpr int kReadsWanted = 4;
   std::atomic<int> errors{0};
-  std::atomic<bool> writing{true};
-  std::atomic<int> reads{0};
-  auto saver = [&](const std::string& url, const std::string& name) {
+  std::atomic<int> savers_running{2};
+  std::atomic<int> reads{0};  // loads that returned a map while a saver was still writing
+  std::map<std::string, int> saved;
+  auto saver = [&](const std::string& url, const std::string& name, int* count) {
     lcm::LCM lcm(url);
     MapstoreClient client(lcm, "saver-" + name, TestClientOptions(30.0));
     if (!WaitForStore(client)) {
       ++errors;
+      --savers_running;
       return;
     }
-    for (int i = 0; i < kSaves; ++i) {
+    for (int i = 0; i < kMaxSaves && (i < kMinSaves || reads < kReadsWanted); ++i) {
       auto reply = client.Save(TerrainSnapshot("lab", name, 300, 200, static_cast<float>(i)));
       if (!reply.ok() || reply->status != kStatusOk) {
         ADD_FAILURE() << name << " save " << i << ": "
                       << (reply.ok() ? reply->message : reply.status().ToString());
         ++errors;
+        break;
       }
+      *count = i + 1;
     }
+    --savers_running;
   };
   std::thread reader([&] {
     lcm::LCM lcm(urls[2]);
@@ -135,34 +145,37 @@ TEST(MapstoreSafetyTest, TwoSaversAndOneReaderOnOneDatabase) {
       ++errors;
       return;
     }
-    while (writing) {
+    while (savers_running > 0) {
       for (const char* name : {"north", "south"}) {
         auto loaded = client.Load("lab", name, 0, "");
         if (!loaded.ok() && loaded.status().code() != common::StatusCode::kNotFound) {
           ADD_FAILURE() << "reader: " << loaded.status().ToString();
           ++errors;
         }
-        if (loaded.ok()) ++reads;
+        if (loaded.ok() && savers_running > 0) ++reads;
       }
     }
   });
-  std::thread a(saver, urls[0], "north");
-  std::thread b(saver, urls[1], "south");
+  int north_saves = 0, south_saves = 0;
+  std::thread a(saver, urls[0], "north", &north_saves);
+  std::thread b(saver, urls[1], "south", &south_saves);
   a.join();
   b.join();
-  writing = false;
   reader.join();
+  saved["north"] = north_saves;
+  saved["south"] = south_saves;
   EXPECT_EQ(errors, 0);
-  EXPECT_GT(reads, 0);
+  EXPECT_GE(reads, kReadsWanted) << "the reader never loaded a map while the savers wrote";
 
   // No lost version: both maps hold all their versions, each with its own content.
   lcm::LCM lcm(urls[2]);
   MapstoreClient client(lcm, "verifier", TestClientOptions(30.0));
-  for (const char* name : {"north", "south"}) {
+  for (const auto& [name, count] : saved) {
+    ASSERT_GE(count, kMinSaves) << name;
     auto list = client.Call(MakeRequest(Request::OP_LIST_MAPS, "lab", name));
     ASSERT_TRUE(list.ok());
-    ASSERT_EQ(list->num_maps, kSaves) << name;
-    for (int v = 1; v <= kSaves; ++v) {
+    ASSERT_EQ(list->num_maps, count) << name;
+    for (int v = 1; v <= count; ++v) {
       auto loaded = client.Load("lab", name, v, "", {"elevation"});
       ASSERT_TRUE(loaded.ok()) << loaded.status().ToString();
       EXPECT_TRUE(SameLayer(

@@ -403,20 +403,20 @@ TEST(SimIntegrationTest, HelpListsWorldsRobotsAndSensors) {
 // --- repeatability -----------------------------------------------------------------------------
 
 TEST(SimIntegrationTest, SameSeedAtMaxSpeedRepeatsTheRun) {
-  // Three processes, each on its own bus: seeds 5, 5 and 6.
+  // Three runs, each on its own bus: seeds 5, 5 and 6.
   ProcessSet procs(PrivateLcmUrl());
   // Scripted driving into the cube of lane 0 (contact-rich), noisy laser and odometry.
   const std::string scenario = WriteFile(procs.dir(), "repeat.yaml", R"(
 world: tunnel
 seed: 5
-clock_rate_hz: 10  # at full speed 100 per simulated second would flood the test's bus
+clock_rate_hz: 10  # at full speed (over 100x) the default rates would flood the test's bus
 robots:
   - id: r
     model: pioneer3at
     spawn: {x_m: 4.0, y_m: 2.3, yaw_deg: 0}
     sensors:
       planar_laser: {rate_hz: 5}
-      odometry: {slip_noise_ratio: 0.05}
+      odometry: {rate_hz: 10, slip_noise_ratio: 0.05}
       ground_truth: {rate_hz: 10}
     commands:
       - {at_s: 0.0, duration_s: 12.0, linear_mps: 0.5, angular_radps: 0.05}
@@ -426,6 +426,8 @@ robots:
     ChildProcess* process;
     std::unique_ptr<Bus> bus;
   };
+  // One run after another, each on its own bus: three simulators at full speed at once would
+  // outrun the test's receive buffer on a 2-core machine.
   std::vector<Run> runs;
   for (int seed : {5, 5, 6}) {
     const std::string url = runs.empty() ? procs.url() : PrivateLcmUrl();
@@ -436,19 +438,19 @@ robots:
     run.process =
         &procs.StartRaw("cairn-sim", {BinPath("cairn-sim"), "--scenario", scenario, "--speed",
                                       "max", "--seed", std::to_string(seed), "--lcm-url", url});
-    runs.push_back(std::move(run));
-  }
-  // Until each has published 16 s of simulated time.
-  for (auto& run : runs) {
+    // Until it has published 16 s of simulated time.
     ASSERT_TRUE(WaitFor(
         [&] {
-          for (auto& other : runs) PumpAll(*other.bus);
+          PumpAll(*run.bus);
           auto pose = Pose(*run.bus, "r");
           return pose && pose->utime >= 16000000;
         },
-        120.0));
+        120.0))
+        << "seed " << seed;
+    run.process->Stop();
+    PumpAll(*run.bus);
+    runs.push_back(std::move(run));
   }
-  for (auto& run : runs) run.process->Stop();
   auto poses = [](Bus& bus) {
     std::map<int64_t, cairn::lcmt_pose> out;
     for (const auto& bytes : bus.Kept("r.POSE")) {
