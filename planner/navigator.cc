@@ -338,6 +338,10 @@ void Navigator::StartRecoveryOrFail(NavReason reason, const std::string& why, do
 }
 
 bool Navigator::ResolveGoal() {
+  if (goal_pose_ && goal_ && goal_->is_place) {
+    MovePlaceGoalIfCrowded();
+    return true;
+  }
   if (goal_pose_) return true;
   if (!goal_) return false;
   if (!goal_->is_place) {
@@ -362,6 +366,26 @@ bool Navigator::ResolveGoal() {
     << resolved.pose.y_m << "), " << resolved.clearance_m << " m from walls";
   status_.message = m.str();
   return true;
+}
+
+void Navigator::MovePlaceGoalIfCrowded() {
+  if (!map_ || params_.place.move_margin_m <= 0.0) return;
+  const Place* place = FindPlace(places_, goal_->place);
+  if (place == nullptr) return;
+  const double clearance_now_m = map_->ClearanceAt(goal_pose_->position());
+  if (!std::isfinite(clearance_now_m)) return;
+  const PlaceGoal better = ResolvePlace(*place, *map_, params_.place);
+  if (!better.found || better.clearance_m < clearance_now_m + params_.place.move_margin_m) return;
+  std::ostringstream m;
+  m.setf(std::ios::fixed);
+  m.precision(2);
+  m << "place '" << place->name << "' moves to (" << better.pose.x_m << ", " << better.pose.y_m
+    << "), " << better.clearance_m << " m from obstacles: the map now shows its goal ("
+    << goal_pose_->x_m << ", " << goal_pose_->y_m << ") " << clearance_now_m << " m from one";
+  goal_pose_ = better.pose;
+  status_.message = m.str();
+  status_changed_ = true;
+  pending_events_.push_back("goal " + std::to_string(goal_->id) + ": " + m.str());
 }
 
 void Navigator::UpdatePathProgress() {
@@ -474,6 +498,12 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
   const DwaResult r = dwa_.Compute(in);
   ++window_.dwa;
   window_.samples = r.samples;
+  window_.last_best = r.command;
+  window_.last_values = r.best_values;
+  window_.has_forward = r.has_best_forward;
+  window_.last_forward = r.best_forward;
+  window_.last_forward_values = r.best_forward_values;
+  window_.carrot = carrot;
   window_.sum_v_mps += r.command.linear_mps;
   window_.sum_abs_w_radps += std::abs(r.command.angular_radps);
   if (window_.rejections.size() < r.rejections.size()) {
@@ -524,6 +554,23 @@ std::string Navigator::DescribeWindow(double moved_m) const {
         << static_cast<double>(window_.rejections[i]) / window_.dwa << "/" << samples;
       first = false;
     }
+    m << "; last choice (" << window_.last_best.linear_mps << ", "
+      << window_.last_best.angular_radps << ")";
+    for (size_t i = 0; i < window_.last_values.size() && i < names.size(); ++i) {
+      m << (i == 0 ? " scored " : ", ") << names[i] << " " << window_.last_values[i];
+    }
+    if (window_.has_forward && !(window_.last_forward == window_.last_best)) {
+      m << "; best forward (" << window_.last_forward.linear_mps << ", "
+        << window_.last_forward.angular_radps << ")";
+      for (size_t i = 0; i < window_.last_forward_values.size() && i < names.size(); ++i) {
+        m << (i == 0 ? " scored " : ", ") << names[i] << " " << window_.last_forward_values[i];
+      }
+    }
+  }
+  if (pose_) {
+    m << "; at (" << pose_->x_m << ", " << pose_->y_m << ", " << pose_->yaw_rad << "), carrot ("
+      << window_.carrot.x() << ", " << window_.carrot.y() << "), " << path_.length_m() - path_arc_m_
+      << " m of path left";
   }
   m << ")";
   return m.str();
@@ -549,6 +596,8 @@ StepOutput Navigator::Step(double now_s) {
     }
     out.status_changed = status_changed_;
     status_changed_ = false;
+    out.events = std::move(pending_events_);
+    pending_events_.clear();
     return out;
   };
 

@@ -145,6 +145,7 @@ struct StepOutput {
   bool clear_short_term{false};     ///< ask the mapper to clear its short-term layer
   bool path_changed{false};         ///< path() changed (publish it)
   bool status_changed{false};       ///< state, reason or goal changed (publish the status)
+  std::vector<std::string> events;  ///< notable events of this cycle, one log line each
 };
 
 class Navigator {
@@ -188,6 +189,8 @@ class Navigator {
   void Fail(NavReason reason, const std::string& message);
   void RequestPlan(double now_s, const std::string& why);
   bool ResolveGoal();
+  /// A place goal chosen on an earlier map moves when the map now shows obstacles near it.
+  void MovePlaceGoalIfCrowded();
   void StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s);
   bool PathBlockedAhead() const;
   void UpdatePathProgress();
@@ -246,8 +249,15 @@ class Navigator {
     double sum_v_mps{0.0};
     double sum_abs_w_radps{0.0};
     std::vector<int64_t> rejections;  ///< per critic, over the window
+    Velocity last_best;               ///< the last DWA cycle's choice ...
+    std::vector<double> last_values;  ///< ... and its scale × value per critic
+    bool has_forward{false};          ///< the last cycle's best forward sample ...
+    Velocity last_forward;
+    std::vector<double> last_forward_values;
+    common::Vector2 carrot{common::Vector2::Zero()};
   };
   DriveWindow window_;
+  std::vector<std::string> pending_events_;
   std::string DescribeWindow(double moved_m) const;
   size_t recovery_index_{0};
   common::Vector2 recovery_anchor_{common::Vector2::Zero()};

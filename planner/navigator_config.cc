@@ -82,6 +82,12 @@ void LoadLocal(YamlMap map, DwaParams* p) {
   map.Get("admissible_braking", &p->admissible_braking);
   map.Get("braking_margin_s", &p->braking_margin_s);
   map.Get("clearance_inflation_m", &p->clearance_inflation_m);
+  map.Get("path_tracking", &p->path_tracking);
+  map.Get("stall_speed_mps", &p->stall_speed_mps);
+  map.Get("tracking_lookaheads_m", &p->tracking_lookaheads_m);
+  map.Get("tracking_turn_in_place_rad", &p->tracking_turn_in_place_rad);
+  map.Get("tracking_min_radius_m", &p->tracking_min_radius_m);
+  map.Get("tracking_slow_distance_m", &p->tracking_slow_distance_m);
   YamlMap critics = map.Child("critics");
   critics.Get("path_align_scale", &p->path_align_scale);
   critics.Get("goal_dist_scale", &p->goal_dist_scale);
@@ -144,6 +150,7 @@ void LoadNavigator(YamlMap map, NavigatorParams* p) {
 void LoadPlaceGoal(YamlMap map, PlaceGoalParams* p) {
   map.Get("max_goal_cost", &p->max_goal_cost);
   map.Get("yaw_samples", &p->yaw_samples);
+  map.Get("move_margin_m", &p->move_margin_m);
   map.Finish();
 }
 

@@ -66,8 +66,7 @@ NavigatorService::NavigatorService(runtime::Node& node, NavigatorConfig config,
       "navigating %s as %s on layer %s (%s) with %s (%s), DWA %dx%d over %.1f s at %.0f Hz, pose "
       "from %s",
       robot_.c_str(), profile_.name.c_str(), config_.map.LayerFor(profile_.name).c_str(),
-      MapEncodingName(config_.map.encoding),
-      config_.global_planner.planner.c_str(),
+      MapEncodingName(config_.map.encoding), config_.global_planner.planner.c_str(),
       StateSpaceKindName(config_.global_planner.state_space),
       config_.local_planner.generator.vx_samples, config_.local_planner.generator.vtheta_samples,
       config_.local_planner.generator.sim_time_s, config_.control_rate_hz,
@@ -206,6 +205,7 @@ void NavigatorService::Tick() {
     path.num_poses = static_cast<int32_t>(path.x_m.size());
     node_.Publish(ch::ForRobot(robot_, ch::kPath), path);
   }
+  for (const std::string& event : out.events) node_.Event("%s", event.c_str());
   const NavStatus& s = navigator_.status();
   if (out.status_changed) {
     PublishStatus();

@@ -33,6 +33,10 @@ struct PlaceGoalParams {
   float max_goal_cost{30.0f};
   /// Headings tried for the footprint check.
   int yaw_samples{16};
+  /// The navigator moves a place goal it already chose when the map now shows a cell in the
+  /// place this much farther from obstacles than the chosen one (furniture seen only on the
+  /// way in). 0 never moves it.
+  double move_margin_m{0.3};
 };
 
 struct PlaceGoal {

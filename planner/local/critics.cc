@@ -19,11 +19,39 @@ int Sign(double x, double eps) { return x > eps ? 1 : (x < -eps ? -1 : 0); }
 
 }  // namespace
 
+double ClearanceCritic::Proximity(double clearance_m, double inscribed_m) const {
+  if (params_.inflation_m <= 0.0 || !std::isfinite(clearance_m)) return 0.0;
+  return std::clamp(1.0 - (clearance_m - inscribed_m) / params_.inflation_m, 0.0, 1.0);
+}
+
 void ClearanceCritic::Prepare(const CriticContext& context) {
   TrajectoryCritic::Prepare(context);
   escaping_.clear();
-  if (context.map != nullptr && !context.map->IsValid(context.pose)) {
-    escaping_ = context.map->BlockingCellsUnder(context.pose);
+  path_proximity_ = 0.0;
+  if (context.map == nullptr) return;
+  const CostMap& map = *context.map;
+  if (!map.IsValid(context.pose)) escaping_ = map.BlockingCellsUnder(context.pose);
+  // The path's own proximity within reach: points every half cell along its local window.
+  if (context.path == nullptr || context.path->size() < 2 || params_.inflation_m <= 0.0) return;
+  const auto& poses = context.path->poses();
+  const double inscribed = map.footprint().inscribed_radius_m();
+  const double step = 0.5 * map.resolution_m();
+  const size_t end = std::min(context.segment_end, poses.size() - 1);
+  for (size_t i = context.segment_begin; i < end; ++i) {
+    const Vector2 a = poses[i].position(), b = poses[i + 1].position();
+    const double length = (b - a).norm();
+    const int n = std::max(1, static_cast<int>(std::ceil(length / step)));
+    bool beyond = false;
+    for (int k = 0; k <= n; ++k) {
+      const Vector2 p = a + (b - a) * (static_cast<double>(k) / n);
+      if ((p - context.pose.position()).norm() > params_.path_reach_m) {
+        beyond = k > 0 || beyond;
+        continue;
+      }
+      path_proximity_ = std::max(path_proximity_, Proximity(map.SmoothClearanceAt(p), inscribed));
+    }
+    // Past the reach, stop (the window only grows farther from the robot).
+    if (beyond && (b - context.pose.position()).norm() > params_.path_reach_m) break;
   }
 }
 
@@ -53,17 +81,13 @@ Score ClearanceCritic::Evaluate(const Trajectory& trajectory) const {
     }
     if (!params_.admissible_braking) return {false, 0.0};
     const double t_blocked = (k + 1) * params_.sim_step_s;
-    const double stop_s =
-        std::max(std::abs(trajectory.velocity.linear_mps) / params_.acc_lim_x_mps2,
-                 std::abs(trajectory.velocity.angular_radps) / params_.acc_lim_theta_radps2);
+    const double stop_s = std::max(trajectory.peak_linear_mps / params_.acc_lim_x_mps2,
+                                   trajectory.peak_angular_radps / params_.acc_lim_theta_radps2);
     if (t_blocked <= 0.5 * stop_s + params_.margin_s) return {false, 0.0};
     const double horizon = trajectory.poses.size() * params_.sim_step_s;
     return {true, 2.0 + (1.0 - t_blocked / horizon)};
   }
-  double proximity = 0.0;
-  if (params_.inflation_m > 0.0 && std::isfinite(closest)) {
-    proximity = std::clamp(1.0 - (closest - inscribed) / params_.inflation_m, 0.0, 1.0);
-  }
+  const double proximity = std::max(0.0, Proximity(closest, inscribed) - path_proximity_);
   return {true, std::max(static_cast<double>(worst / map.params().lethal_cost), proximity)};
 }
 
@@ -81,14 +105,16 @@ Score GoalDistCritic::Evaluate(const Trajectory& trajectory) const {
 }
 
 Score SpeedCritic::Evaluate(const Trajectory& trajectory) const {
-  const double v = trajectory.velocity.linear_mps;
+  const double v = trajectory.target.linear_mps;
   if (v >= 0.0) return {true, std::max(0.0, (max_vel_x_mps_ - v) / max_vel_x_mps_)};
   return {true, 1.0 + (-v) / max_vel_x_mps_};
 }
 
 Score OscillationCritic::Evaluate(const Trajectory& trajectory) const {
-  const int lin = Sign(trajectory.velocity.linear_mps, kLinearEps);
-  const int ang = Sign(trajectory.velocity.angular_radps, kAngularEps);
+  // The direction the trajectory heads for (a tracking trajectory's target), not its first
+  // command: one from forward to reverse reverses even while its first command moves forward.
+  const int lin = Sign(trajectory.target.linear_mps, kLinearEps);
+  const int ang = Sign(trajectory.target.angular_radps, kAngularEps);
   const bool lin_reverses = lin != 0 && last_linear_sign_ != 0 && lin != last_linear_sign_;
   const bool ang_reverses = ang != 0 && last_angular_sign_ != 0 && ang != last_angular_sign_;
   if ((linear_flipped_ && lin_reverses) || (angular_flipped_ && ang_reverses)) return {false, 0.0};

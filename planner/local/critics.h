@@ -80,6 +80,12 @@ class TrajectoryCritic {
 /// of obstacles instead of finding every sample rejected at once. With `admissible_braking` off,
 /// any blocked pose rejects the trajectory (Nav2 DWB).
 ///
+/// Proximity counts only beyond what the global path itself needs: the path's own proximity
+/// over the stretch a trajectory can reach (`path_reach_m` from the robot) is subtracted. A path
+/// the global planner bent close around a table leg would otherwise make every slow sample
+/// from rest (the only ones a dynamic window holds) cost more in proximity than it gains in
+/// progress, and the robot would stand still beside the leg for ever.
+///
 /// When the robot already touches blocking cells (an obstacle appeared under it, or a wall grew
 /// by a cell), those cells count as free for the cycle, so trajectories that move away stay
 /// valid and the robot can escape; any other blocking cell still rejects.
@@ -92,6 +98,7 @@ class ClearanceCritic : public TrajectoryCritic {
     double inflation_m{0.3};  ///< proximity to blocking cells costs up to this far
     double acc_lim_x_mps2{0.8};
     double acc_lim_theta_radps2{1.5};
+    double path_reach_m{1.0};  ///< the path's proximity is read this far from the robot
   };
   ClearanceCritic(double scale, const Params& params)
       : TrajectoryCritic("clearance", scale), params_(params) {}
@@ -99,10 +106,15 @@ class ClearanceCritic : public TrajectoryCritic {
   Score Evaluate(const Trajectory& trajectory) const override;
   /// Blocking cells under the robot this cycle (empty when it is clear).
   const std::vector<int64_t>& escaping_cells() const { return escaping_; }
+  /// The proximity (0..1) the global path itself has near the robot this cycle.
+  double path_proximity() const { return path_proximity_; }
 
  private:
+  double Proximity(double clearance_m, double inscribed_m) const;
+
   Params params_;
   std::vector<int64_t> escaping_;
+  double path_proximity_{0.0};
 };
 
 /// "path_align": distance (m) from a point `forward_point_distance_m` ahead of the final pose

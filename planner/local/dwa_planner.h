@@ -36,6 +36,18 @@ struct DwaParams {
   /// Oscillation memory is cleared after this much motion since the first reversal.
   double oscillation_reset_dist_m{0.05};
   double oscillation_reset_angle_rad{0.2};
+  /// Also score trajectories that track the global path by pure pursuit (see
+  /// TrajectoryGenerator::TrackPath), one per lookahead: a short one threads a door beside a
+  /// wall, a long one smooths a straight; each turns in place beyond the angle. They compete
+  /// with the samples, and when the best sample would stand still or creep (forward speed
+  /// below `stall_speed_mps`) while a tracking trajectory is clear over its whole horizon and
+  /// drives on, that one is taken.
+  bool path_tracking{true};
+  double stall_speed_mps{0.1};
+  std::vector<double> tracking_lookaheads_m{0.2, 0.3, 0.45, 0.6};
+  double tracking_turn_in_place_rad{0.8};
+  double tracking_min_radius_m{0.9};     ///< slower on curves tighter than this ...
+  double tracking_slow_distance_m{0.6};  ///< ... and this close to blocking cells
 
   /// @throws std::invalid_argument naming the bad field.
   void Validate() const;
@@ -58,8 +70,15 @@ struct DwaResult {
   Trajectory best;
   int samples{0};
   int valid{0};
-  bool oscillation_reset{false};    ///< every valid sample was an oscillation: memory cleared
-  std::vector<int64_t> rejections;  ///< this cycle, per critic (same order as critic_names())
+  bool oscillation_reset{false};     ///< every valid sample was an oscillation: memory cleared
+  bool tracking_chosen{false};       ///< a path-tracking trajectory was chosen ...
+  bool tracking_broke_stall{false};  ///< ... over a best sample that stood still or crept
+  std::vector<int64_t> rejections;   ///< this cycle, per critic (same order as critic_names())
+  std::vector<double> best_values;   ///< the best trajectory's scale × value, per critic
+  /// The best valid sample that drives forward (for "why does it not move" diagnostics).
+  bool has_best_forward{false};
+  Velocity best_forward;
+  std::vector<double> best_forward_values;
 };
 
 class DwaPlanner {

@@ -4,11 +4,17 @@
 
 #include "common/robot_profile.h"
 #include "common/types.h"
+#include "planner/cost_map.h"
+#include "planner/path.h"
 
 /// @file
-/// The DWA trajectory generator (Nav2 DWB's StandardTrajectoryGenerator shape): a dynamic
-/// window of velocities reachable within one control period under the profile's acceleration
-/// limits, sampled on a grid, each sample simulated at constant velocity over a horizon.
+/// The local planner's trajectory generator (Nav2 DWB's StandardTrajectoryGenerator shape): a
+/// dynamic window of velocities reachable within one control period under the profile's
+/// acceleration limits, sampled on a grid, each sample simulated at constant velocity over a
+/// horizon (Fox, Burgard and Thrun). It also offers path-tracking trajectories (TrackPath): the
+/// robot steering along the global path by regulated pure pursuit under the same limits. No
+/// constant arc threads the S-bend from a corridor through a door beside it, or around a table
+/// leg: every arc that reaches the door clips its frame, and the robot would stand still.
 
 namespace cairn::planner {
 
@@ -59,7 +65,10 @@ struct TrajectoryGeneratorParams {
 /// A sampled command and the poses it leads to (world frame, at sim_step_s, ..., sim_time_s;
 /// the current pose is not included).
 struct Trajectory {
-  Velocity velocity;
+  Velocity velocity;            ///< the command for the next control period
+  Velocity target;              ///< the velocity it heads for (= velocity for a window sample)
+  double peak_linear_mps{0.0};  ///< largest |forward speed| along the trajectory
+  double peak_angular_radps{0.0};
   std::vector<common::Pose2> poses;
 };
 
@@ -78,6 +87,25 @@ class TrajectoryGenerator {
   std::vector<Velocity> Samples(const Velocity& last_command) const;
   /// Poses of a constant-velocity arc from `start` (exact unicycle integration).
   void Simulate(const common::Pose2& start, const Velocity& velocity, Trajectory* out) const;
+  /// The robot tracking `path` from `start` by regulated pure pursuit (Macenski et al., Nav2's
+  /// RPP): toward a point `lookahead_m` ahead of its projection (searched from
+  /// `first_segment`), turning in place first where that point lies more than
+  /// `turn_in_place_rad` off its heading, at the top speed scaled down on curves tighter than
+  /// `min_radius_m`, near blocking cells of `map` (closer than `slow_distance_m` beyond the
+  /// footprint's inscribed radius; no map: no slowing) and over the last metre of the path,
+  /// never below `min_speed_fraction` of it; the same acceleration limits as every sample,
+  /// from `last_command`. `velocity` is the first period's command, `target` the velocity
+  /// asked for at the start. False when the path has fewer than 2 poses.
+  struct TrackingParams {
+    double lookahead_m{0.4};
+    double turn_in_place_rad{0.8};
+    double min_radius_m{0.9};
+    double slow_distance_m{0.6};
+    double min_speed_fraction{0.2};
+  };
+  bool TrackPath(const common::Pose2& start, const Velocity& last_command, const Path& path,
+                 size_t first_segment, const TrackingParams& tracking, const CostMap* map,
+                 Trajectory* out) const;
   /// The command that slows down the most within the window (towards zero on both axes).
   Velocity Brake(const Velocity& last_command) const;
   /// The command closest to `target` within the window (each axis clamped).

@@ -240,8 +240,16 @@ OctomapInsertStats OctomapLayer::InsertRevolution(const common::LidarRevolution&
 }
 
 std::string OctomapLayer::ToBinary() const {
+  // The .bt stream of OcTree::writeBinaryConst, header and data, written here: Debian's
+  // liboctomap is built with its debug output on, and writeBinaryConst prints " done." to stderr
+  // on every call (one log line per publication).
   std::ostringstream out(std::ios::binary);
-  tree_->writeBinaryConst(out);
+  out << "# Octomap OcTree binary file\n#\n"
+      << "id " << tree_->getTreeType() << "\n"
+      << "size " << tree_->size() << "\n"
+      << "res " << tree_->getResolution() << "\n"
+      << "data\n";
+  tree_->writeBinaryData(out);
   return out.str();
 }
 

@@ -38,6 +38,7 @@
 #include "common/layers.h"
 #include "services/runtime/tiler.h"
 #include "tests/support/harness.h"
+#include "tests/support/registry.h"
 
 namespace cairn::testing {
 namespace {
@@ -110,41 +111,6 @@ bool DriveTo(Bus& bus, double lane_y, double x_end, double speed_mps, double tim
       timeout_s, [&] { PumpAll(bus); });
   SendCommand(bus, 0.0, 0.0);
   return reached;
-}
-
-const cairn::lcmt_obstacle_verdict* Verdict(const cairn::lcmt_obstacle& o, const std::string& p) {
-  for (const auto& v : o.verdicts) {
-    if (v.profile == p) return &v;
-  }
-  return nullptr;
-}
-
-// The first obstacle of `kind` whose centroid lies in [x0, x1] x [y0, y1].
-std::optional<cairn::lcmt_obstacle> Find(
-    const cairn::lcmt_obstacle_registry& r, int8_t kind, double x0, double x1, double y0, double y1,
-    const std::function<bool(const cairn::lcmt_obstacle&)>& ok = nullptr) {
-  for (const auto& o : r.obstacles) {
-    if (o.kind != kind) continue;
-    if (o.centroid_m[0] < x0 || o.centroid_m[0] > x1 || o.centroid_m[1] < y0 ||
-        o.centroid_m[1] > y1) {
-      continue;
-    }
-    if (ok && !ok(o)) continue;
-    return o;
-  }
-  return std::nullopt;
-}
-
-std::string Describe(const cairn::lcmt_obstacle_registry& r) {
-  std::ostringstream s;
-  for (const auto& o : r.obstacles) {
-    s << "  kind " << int(o.kind) << " at (" << o.centroid_m[0] << ", " << o.centroid_m[1] << ") h "
-      << o.height_m << " w " << o.width_m << " slope " << o.slope_rad * 180 / M_PI;
-    for (const auto& v : o.verdicts)
-      s << " " << v.profile << ":" << (v.crossable ? "yes" : v.reason);
-    s << "\n";
-  }
-  return s.str();
 }
 
 class MappingProcessTest : public ::testing::Test {
@@ -536,6 +502,67 @@ std::map<std::string, std::string> ReadDir(const std::string& dir) {
     files[entry.path().filename().string()] = s.str();
   }
   return files;
+}
+
+// Seed 000's experiment 8, the combined scene of lane 8 (simulator/worlds/tunnel_lanes.yaml): a
+// 20 cm block on the south half (x 7..8.5), a 5 deg hump wall to wall (x 10..14.4, 0.15 m high),
+// a 1 cm plate from x 15.5 and a 10 deg ramp up to a platform on the north half (x 17.5..19.6).
+// Driven past the block's north side, then over the hump and onto the plate south of the ramp,
+// the Pioneer's mapper labels exactly the block and the 10 deg ramp as obstacles for pioneer3at;
+// the rover (12 deg) may take the ramp; nothing on the hump or at the plate's edge is refused.
+TEST_F(MappingProcessTest, CombinedSceneTwoObstaclesTwoFreeFeatures) {
+  StartSim(4.0, 35.0);
+  StartMapper();
+  ASSERT_TRUE(WaitReady("cairn-mapper", 20.0));
+  ASSERT_TRUE(WaitFor([&] { return bus_->Seen(Ch("POSE")); }, 30.0, [&] { PumpAll(*bus_); }));
+  EXPECT_TRUE(DriveTo(*bus_, 35.0, 9.3, 0.3, 25.0));   // past the block, at the hump's foot
+  ASSERT_TRUE(ResetRobot(*bus_, 9.3, 33.0, 1));        // across to the south half
+  EXPECT_TRUE(DriveTo(*bus_, 33.0, 16.5, 0.3, 40.0));  // over the hump, onto the plate
+
+  using cairn::lcmt_obstacle;
+  const auto tall = [](const lcmt_obstacle& o) { return o.height_m > 0.12; };
+  const auto block_of = [&](const cairn::lcmt_obstacle_registry& r) {
+    return Find(r, lcmt_obstacle::KIND_STEP_UP, 6.8, 8.7, 32.0, 34.2, tall);
+  };
+  const auto ramp_of = [&](const cairn::lcmt_obstacle_registry& r) {
+    auto o = Find(r, lcmt_obstacle::KIND_RAMP, 17.2, 19.0, 33.9, 36.0);
+    return o ? o : Find(r, lcmt_obstacle::KIND_STEP_UP, 17.2, 19.0, 33.9, 36.0);
+  };
+  std::optional<cairn::lcmt_obstacle_registry> registry;
+  const bool found = WaitFor(
+      [&] {
+        registry = Registry();
+        return registry && block_of(*registry) && ramp_of(*registry);
+      },
+      20.0, [&] { PumpAll(*bus_); });
+  ASSERT_TRUE(registry.has_value()) << "no registry on " << Ch("MAP.OBSTACLES");
+  ASSERT_TRUE(found) << "registry:\n" << Describe(*registry);
+  const auto& r = *registry;
+  const auto block = *block_of(r);
+  EXPECT_NEAR(block.height_m, 0.20, 0.04);
+  EXPECT_FALSE(Verdict(block, "pioneer3at")->crossable) << Describe(r);
+  EXPECT_FALSE(Verdict(block, "rover")->crossable) << Describe(r);
+  const auto ramp = *ramp_of(r);
+  EXPECT_FALSE(Verdict(ramp, "pioneer3at")->crossable) << Describe(r);
+  if (ramp.kind == lcmt_obstacle::KIND_RAMP) {
+    EXPECT_NEAR(ramp.slope_rad * 180 / M_PI, 10.0, 2.0) << Describe(r);
+    EXPECT_TRUE(Verdict(ramp, "rover")->crossable) << Describe(r);
+  }
+  // The two free features: whatever the registry lists on the hump or at the plate's edge
+  // (other than the lane walls) is crossable for both profiles.
+  for (const auto& o : r.obstacles) {
+    if (o.kind == lcmt_obstacle::KIND_WALL_OR_OBJECT) continue;
+    const bool on_hump = CentroidIn(o, 9.8, 14.6, 32.3, 35.7);
+    const bool at_plate_edge = CentroidIn(o, 15.2, 15.8, 32.3, 33.9);
+    if (!on_hump && !at_plate_edge) continue;
+    ASSERT_NE(Verdict(o, "pioneer3at"), nullptr);
+    EXPECT_TRUE(Verdict(o, "pioneer3at")->crossable)
+        << (on_hump ? "on the 5 deg hump" : "at the 1 cm plate") << ":\n"
+        << Describe(r);
+    EXPECT_TRUE(Verdict(o, "rover")->crossable)
+        << (on_hump ? "on the 5 deg hump" : "at the 1 cm plate") << ":\n"
+        << Describe(r);
+  }
 }
 
 // Offline: the same lcm-logger file replayed twice gives byte-identical maps.

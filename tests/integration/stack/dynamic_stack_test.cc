@@ -502,6 +502,7 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
   back.x_m = 1.2;
   back.y_m = 5.1;
   watcher_.Watch(box2);
+  bus_.Keep(ch::ForRobot(kRobot, ch::kNavStatus));
   bus_.Publish(ch::ForRobot(kRobot, ch::kGoal), back);
   const auto t_back = Clock::now();
   std::optional<cairn::lcmt_path> first_path;
@@ -527,7 +528,14 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
     path_clearance_m = std::min(path_clearance_m, std::hypot(dx, dy) - 0.176);
   }
   EXPECT_GT(path_clearance_m, 0.0) << "the first plan after the restart crosses the box";
-  EXPECT_EQ(status->replans, 0) << "the box was not known from the first plan";
+  // No replan because the box turned up under the path (a periodic replan that finds a shorter
+  // way past the box may replace the first plan).
+  for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kNavStatus))) {
+    cairn::lcmt_nav_status m;
+    if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0 || m.goal_id != 2) continue;
+    EXPECT_EQ(m.message.find("the map changed under the path"), std::string::npos)
+        << "the box was not known from the first plan: " << m.message;
+  }
   EXPECT_FALSE(watcher_.overlapped()) << "the footprint overlapped the remembered box";
   watcher_.Unwatch();
 
@@ -543,17 +551,21 @@ TEST_F(DynamicStackTest, AvoidsForgetsAndRemembersAcrossAMapperRestart) {
       fresh_long, fresh_short, back_s, path_clearance_m, SecondsSince(t_start));
 }
 
-// A goal given as a room's name resolves to a free cell inside the room (seed 001) and the
-// Kobuki reaches it from the corridor through the room's 0.9 m door.
-// Disabled: about one run in three stalls at the door, 0.8 m from the goal, and spends its
-// recoveries (issue 6). Run it with --gtest_also_run_disabled_tests.
+// A goal given as a room's name resolves to a free cell inside the room, away from its walls
+// (seed 001), and the Kobuki reaches it from the corridor through the room's 0.9 m door.
+// Disabled: in most runs the Kobuki jams at the door's western frame. The global path runs
+// along the corridor 3-4 cm off its north wall's cells and turns into the door beside the frame;
+// the robot drifts those centimetres onto the wall's cells and can then neither pass nor turn
+// (its no-progress messages give the pose and the critics' scores). Issue 6: global paths that
+// keep their clearance in a corridor. Run it with --gtest_also_run_disabled_tests.
 TEST_F(DynamicStackTest, DISABLED_AGoalGivenAsARoomNameIsReachedThroughItsDoor) {
   ASSERT_TRUE(StartGraph());
+  bus_.Keep(ch::ForRobot(kRobot, ch::kPose));
   cairn::lcmt_goal goal{};
   goal.robot = kRobot;
   goal.goal_id = 7;
   goal.kind = cairn::lcmt_goal::KIND_PLACE;
-  goal.place = "kitchen";  // x 6..10, y 0..4.5; its door at x 7.5 on the corridor wall
+  goal.place = "bathroom";  // x 6..10, y 5.7..9; its door x 7.05..7.95 on the corridor wall
   std::optional<cairn::lcmt_nav_status> status;
   // The goal is re-sent until the navigator reports on it (one datagram may be lost).
   const bool reached = WaitFor(
@@ -567,13 +579,25 @@ TEST_F(DynamicStackTest, DISABLED_AGoalGivenAsARoomNameIsReachedThroughItsDoor) 
   ASSERT_TRUE(reached) << "no outcome in 120 s; last status: "
                        << (status ? std::to_string(status->state) + " " + status->message : "none");
   ASSERT_EQ(status->state, kStateReached) << status->message;
-  // Ground truth: the robot stands inside the kitchen, clear of its walls.
+  // Ground truth: the robot stands inside the bathroom, clear of its walls, and came in through
+  // the door (no pose crosses the wall line y = 5.7 outside the door's opening).
   const auto pose = bus_.Last<cairn::lcmt_pose>(ch::ForRobot(kRobot, ch::kPose));
   ASSERT_TRUE(pose.has_value());
-  EXPECT_GT(pose->position_m[0], 6.2);
-  EXPECT_LT(pose->position_m[0], 9.8);
-  EXPECT_GT(pose->position_m[1], 0.2);
-  EXPECT_LT(pose->position_m[1], 4.3);
+  EXPECT_GT(pose->position_m[0], 6.3);
+  EXPECT_LT(pose->position_m[0], 9.7);
+  EXPECT_GT(pose->position_m[1], 6.0);
+  EXPECT_LT(pose->position_m[1], 8.7);
+  bool through_door = false;
+  for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kPose))) {
+    cairn::lcmt_pose p;
+    if (p.decode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0) continue;
+    if (std::abs(p.position_m[1] - 5.7) < 0.05) {
+      EXPECT_GT(p.position_m[0], 7.05 + 0.1) << "crossed the wall west of the door";
+      EXPECT_LT(p.position_m[0], 7.95 - 0.1) << "crossed the wall east of the door";
+      through_door = true;
+    }
+  }
+  EXPECT_TRUE(through_door) << "no pose at the door";
 }
 
 }  // namespace

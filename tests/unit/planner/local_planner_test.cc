@@ -181,6 +181,53 @@ TEST_F(CriticTest, ClearancePrefersStayingAwayFromWalls) {
   EXPECT_LT(closer - close, 0.1);
 }
 
+// A global path bent close around a table leg (seen in the apartment's kitchen): proximity the
+// path itself has is not charged to the trajectories that follow it, so from rest creeping on
+// along the path beats standing beside the leg; getting closer than the path still costs.
+TEST(ClearanceCriticTest, ProximityCountsOnlyBeyondThePathsOwn) {
+  TestLayer layer(60, 60, 0.05, 0.0f, Pose2{6.0, 0.5, 0.0});
+  layer.Rect(7.2, 1.6, 7.3, 1.7, 100.0f);  // the leg (2 x 2 cells)
+  std::vector<Vector2> round;
+  for (int k = 0; k < 8; ++k) {
+    round.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
+  }
+  const auto map = layer.Build(round);
+  const Path path(
+      {{6.92, 1.75, 0.55}, {7.15, 1.91, 0.2}, {7.40, 1.93, -0.3}, {7.675, 1.675, -0.75}});
+  CriticContext ctx;
+  ctx.map = map.get();
+  ctx.pose = {6.999, 1.784, 0.41};
+  ctx.path = &path;
+  ctx.segment_begin = 0;
+  ctx.segment_end = path.size();
+  ClearanceCritic::Params params;
+  params.inflation_m = 0.15;
+  params.path_reach_m = 1.15;
+  ClearanceCritic dut(1.0, params);
+  dut.Prepare(ctx);
+  // The path passes about 0.25 m from the leg's cells: proximity 0.5 with 0.15 m of inflation.
+  EXPECT_GT(dut.path_proximity(), 0.4);
+  EXPECT_LT(dut.path_proximity(), 0.6);
+  VelocityLimits kobuki;
+  kobuki.acc_lim_x_mps2 = 1.0;
+  kobuki.acc_lim_theta_radps2 = 2.0;
+  TrajectoryGenerator gen(kobuki, {});
+  Trajectory creep, stand, closer;
+  gen.Simulate(ctx.pose, {0.016, 0.0}, &creep);
+  gen.Simulate(ctx.pose, {0.0, 0.0}, &stand);
+  gen.Simulate(ctx.pose, {0.04, -0.3}, &closer);  // curving in towards the leg
+  EXPECT_DOUBLE_EQ(dut.Evaluate(stand).value, 0.0);
+  EXPECT_LT(dut.Evaluate(creep).value, 0.05);
+  EXPECT_GT(dut.Evaluate(closer).value, 0.2);
+  // Without a path the same creep pays its whole proximity.
+  CriticContext no_path = ctx;
+  no_path.path = nullptr;
+  dut.Prepare(no_path);
+  EXPECT_DOUBLE_EQ(dut.path_proximity(), 0.0);
+  gen.Simulate(ctx.pose, {0.04, 0.0}, &creep);
+  EXPECT_GT(dut.Evaluate(creep).value, 0.4);
+}
+
 TEST_F(CriticTest, PathAlignPrefersStayingOnAndFacingAlongThePath) {
   PathAlignCritic dut(1.0, 0.325);
   dut.Prepare(ctx_);
@@ -310,7 +357,11 @@ TEST(DwaPlannerTest, BrakesWhenNothingIsValid) {
       .Rect(2.6, 2.7, 3.4, 3.3, 0.0f);  // a tight box of free cells
   const auto map = layer.Build(PioneerFootprint());
   const Path path({{3.0, 3.0, 0.0}, {5.0, 3.0, 0.0}});
-  DwaPlanner dut(Limits(), {});
+  // The window holds only speeds near 0.3 m/s, all blocked. (Path tracking would find its ramp
+  // down to a stop inside the box valid, which is what braking does.)
+  DwaParams params;
+  params.path_tracking = false;
+  DwaPlanner dut(Limits(), params);
   const Velocity last{0.3, 0.2};
   const DwaResult r = dut.Compute(Input(*map, path, {3.0, 3.0, 0.0}, last, {4.0, 3.0}));
   EXPECT_FALSE(r.found);
@@ -345,7 +396,9 @@ TEST(DwaPlannerTest, OscillationAloneNeverStallsTheRobot) {
   TestLayer layer(100, 100, 0.1);
   const auto map = layer.Build(PioneerFootprint());
   const Path path({{5.0, 5.0, 0.0}, {5.0, 9.0, 0.0}});
-  DwaPlanner dut(Limits(), {});
+  DwaParams params;
+  params.path_tracking = false;  // tracking the path north would be a way out of the memory
+  DwaPlanner dut(Limits(), params);
   const Pose2 pose{5.0, 5.0, 0.0};
   dut.Commit({0.0, 0.3}, pose);
   dut.Commit({0.0, -0.3}, pose);
@@ -355,6 +408,119 @@ TEST(DwaPlannerTest, OscillationAloneNeverStallsTheRobot) {
   EXPECT_TRUE(r.found);
   EXPECT_TRUE(r.oscillation_reset);
   EXPECT_GT(r.command.angular_radps, 0.4);
+}
+
+// A Kobuki (round, 0.176 m) at rest in the apartment's corridor, just west of the bathroom's
+// 0.8 m door, facing 30 deg off the corridor: the path runs on east and bends north through the
+// door, 5 cm from its western frame (the map as the navigator had it when it stalled there).
+// Every constant arc that reaches the door clips the frame, and the rest gain less than
+// standing still costs, so the dynamic window alone stands still for ever; the path-tracking
+// candidates follow the bend.
+struct DoorScene {
+  DoorScene() : layer(100, 100, 0.05, 0.0f, Pose2{5.0, 4.0, 0.0}) {
+    layer.Rect(5.0, 5.68, 7.5, 5.86, 100.0f).Rect(8.32, 5.68, 10.0, 5.86, 100.0f);
+    for (int k = 0; k < 8; ++k) {
+      round.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
+    }
+    map = layer.Build(round);
+    kobuki.max_vel_x_mps = 0.5;
+    kobuki.min_vel_x_mps = -0.1;
+    kobuki.max_vel_theta_radps = 1.5;
+    kobuki.acc_lim_x_mps2 = 1.0;
+    kobuki.acc_lim_theta_radps2 = 2.0;
+  }
+  // Closed loop at 20 Hz with the navigator's carrot (1.2 m ahead) and path window (3 m); the
+  // cycles it took to pass y = 6.3, or -1.
+  int Drive(const DwaParams& params, Pose2 pose, const Path& path, double done_y) {
+    DwaPlanner dut(kobuki, params);
+    Velocity last;
+    for (int k = 0; k < 400; ++k) {
+      if (pose.y_m >= done_y) return k;
+      const auto proj = path.Project(pose.position());
+      DwaInput in =
+          Input(*map, path, pose, last,
+                path.PoseAt(std::min(path.length_m(), proj.arc_length_m + 1.2)).position());
+      in.segment_begin = proj.segment;
+      in.segment_end = path.IndexAt(proj.arc_length_m + 3.0);
+      const DwaResult r = dut.Compute(in);
+      EXPECT_TRUE(kobuki.Allows(last, r.command, 0.05, 1e-12)) << "cycle " << k;
+      dut.Commit(r.command, pose);
+      pose.x_m += r.command.linear_mps * 0.05 * std::cos(pose.yaw_rad);
+      pose.y_m += r.command.linear_mps * 0.05 * std::sin(pose.yaw_rad);
+      pose.yaw_rad = common::WrapAngle(pose.yaw_rad + r.command.angular_radps * 0.05);
+      if (!map->IsValid(pose)) {
+        ADD_FAILURE() << "touched the door frame at cycle " << k;
+        return -1;
+      }
+      last = r.command;
+    }
+    return -1;
+  }
+  TestLayer layer;
+  std::vector<Vector2> round;
+  std::shared_ptr<const CostMap> map;
+  VelocityLimits kobuki;
+};
+
+TEST(DwaPlannerTest, ThreadsADoorBesideTheWallFromRestByTrackingThePath) {
+  DoorScene scene;
+  const Path path({{7.07, 5.39, 0.2},
+                   {7.36, 5.44, 0.2},
+                   {7.64, 5.50, 0.5},
+                   {7.68, 5.56, 1.0},
+                   {7.74, 5.71, 1.2},
+                   {7.77, 5.79, 1.57},
+                   {7.74, 5.98, 1.6},
+                   {7.71, 6.17, 1.6},
+                   {7.7, 7.0, 1.6}});
+  const Pose2 start{7.36, 5.46, 0.60};
+  DwaParams params;
+  params.clearance_inflation_m = 0.15;  // config/navigator/apartment.yaml
+  const int cycles = scene.Drive(params, start, path, 6.3);
+  EXPECT_GT(cycles, 0);
+  EXPECT_LT(cycles, 300);
+  // Without the tracking candidates, for the record: the dynamic window stands still.
+  params.path_tracking = false;
+  EXPECT_EQ(scene.Drive(params, start, path, 6.3), -1);
+}
+
+TEST(TrajectoryGeneratorTest, TrackPathFollowsTheBendAndSlowsNearWalls) {
+  DoorScene scene;
+  const Path path({{7.07, 5.39, 0.2},
+                   {7.36, 5.44, 0.2},
+                   {7.64, 5.50, 0.5},
+                   {7.68, 5.56, 1.0},
+                   {7.74, 5.71, 1.2},
+                   {7.77, 5.79, 1.57},
+                   {7.74, 5.98, 1.6},
+                   {7.71, 6.17, 1.6},
+                   {7.7, 7.0, 1.6}});
+  TrajectoryGeneratorParams p;
+  p.sim_time_s = 4.0;
+  const TrajectoryGenerator gen(scene.kobuki, p);
+  TrajectoryGenerator::TrackingParams tracking;
+  tracking.lookahead_m = 0.3;
+  Trajectory t;
+  ASSERT_TRUE(gen.TrackPath({7.36, 5.46, 0.2}, {0.0, 0.0}, path, 0, tracking, scene.map.get(), &t));
+  // The first command is one period of acceleration; the trajectory goes on along the path into
+  // the bend, never touching the frame, never near the top speed beside it.
+  EXPECT_NEAR(t.velocity.linear_mps, 0.05, 1e-12);
+  EXPECT_GT(path.Project(t.poses.back().position()).arc_length_m,
+            path.Project({7.36, 5.46}).arc_length_m + 0.3);
+  EXPECT_LT(path.Project(t.poses.back().position()).distance_m, 0.1);
+  for (const Pose2& q : t.poses) EXPECT_TRUE(scene.map->IsValid(q)) << q.x_m << ", " << q.y_m;
+  EXPECT_LT(t.peak_linear_mps, 0.3);
+  // Without a map nothing slows it but the bend and the path's end.
+  Trajectory free;
+  ASSERT_TRUE(gen.TrackPath({7.36, 5.46, 0.2}, {0.0, 0.0}, path, 0, tracking, nullptr, &free));
+  EXPECT_GT(free.peak_linear_mps, t.peak_linear_mps);
+  // Far off its heading, the robot turns in place first.
+  Trajectory turn;
+  ASSERT_TRUE(gen.TrackPath({7.36, 5.46, M_PI}, {0.0, 0.0}, path, 0, tracking, nullptr, &turn));
+  EXPECT_EQ(turn.target.linear_mps, 0.0);
+  EXPECT_NE(turn.target.angular_radps, 0.0);
+  EXPECT_FALSE(gen.TrackPath({7.36, 5.46, 0.2}, {0.0, 0.0}, Path({{1.0, 1.0, 0.0}}), 0, tracking,
+                             nullptr, &turn));
 }
 
 TEST(DwaPlannerTest, CommandsNeverExceedTheLimitsInRandomSituations) {

@@ -20,9 +20,10 @@ using testing::TestLayer;
 class NavSim {
  public:
   explicit NavSim(std::shared_ptr<const CostMap> map, NavigatorParams params = {},
-                  std::vector<Place> places = {}, uint32_t seed = 3)
+                  std::vector<Place> places = {}, uint32_t seed = 3,
+                  common::RobotProfile profile = testing::PioneerProfile())
       : map_(std::move(map)),
-        profile_(testing::PioneerProfile()),
+        profile_(std::move(profile)),
         nav_(profile_, params, DwaParams{}, std::move(places)),
         planner_(PlannerParams(seed)) {}
 
@@ -49,6 +50,7 @@ class NavSim {
         nav_.OnPlanResult(out.plan->request_id, last_plan_, t_);
       }
       if (out.clear_short_term) ++clears_;
+      events_.insert(events_.end(), out.events.begin(), out.events.end());
       if (out.status_changed && (states_.empty() || states_.back() != nav_.status().state)) {
         states_.push_back(nav_.status().state);
         if (getenv("NAV_DEBUG"))
@@ -107,6 +109,7 @@ class NavSim {
   int commands_{0};
   int emergency_stops_{0};
   std::vector<NavState> states_;
+  std::vector<std::string> events_;
 };
 
 // 20 m × 10 m, a wall across x = 10 with a gap at y in [6, 7.2].
@@ -138,6 +141,35 @@ TEST(NavigatorTest, ReachesAGoalThroughTheGap) {
   const int commands = sim.commands_;
   sim.Run(1.0);
   EXPECT_EQ(sim.commands_, commands);
+}
+
+// The kitchen of the apartment world as a laser-only Kobuki sees it: the corridor wall with its
+// 0.9 m door, the counter, and the four legs of the table the goal lies under.
+TEST(NavigatorTest, AKobukiReachesAGoalAmongTableLegsFromTheCorridor) {
+  TestLayer kitchen(240, 140, 0.05);
+  kitchen.Rect(0.0, 4.425, 7.05, 4.575, 100.0f).Rect(7.95, 4.425, 12.0, 4.575, 100.0f);
+  kitchen.Rect(9.35, 0.0, 10.0, 4.0, 100.0f).Rect(10.0, 0.0, 10.15, 7.0, 100.0f);
+  for (const auto& leg :
+       {Vector2(7.25, 1.65), Vector2(7.25, 2.35), Vector2(8.35, 1.65), Vector2(8.35, 2.35)}) {
+    kitchen.Rect(leg.x() - 0.03, leg.y() - 0.03, leg.x() + 0.03, leg.y() + 0.03, 100.0f);
+  }
+  common::RobotProfile kobuki = testing::PioneerProfile();
+  kobuki.name = "kobuki";
+  kobuki.drive = common::DriveKind::kDifferential;
+  kobuki.footprint_m.clear();
+  for (int k = 0; k < 8; ++k) {
+    kobuki.footprint_m.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
+  }
+  kobuki.max_vel_x_mps = 0.5;
+  kobuki.min_vel_x_mps = -0.1;
+  kobuki.max_vel_theta_radps = 1.5;
+  kobuki.acc_lim_x_mps2 = 1.0;
+  kobuki.acc_lim_theta_radps2 = 2.0;
+  NavSim sim(kitchen.Build(kobuki.footprint_m), {}, {}, 3, kobuki);
+  sim.pose_ = {5.0, 5.1, 0.0};
+  sim.nav_.SetGoal(PoseGoal(7.675, 1.675), 0.0);
+  ASSERT_TRUE(sim.RunUntilState(60.0, NavState::kReached)) << sim.nav_.status().message;
+  EXPECT_EQ(sim.nav_.status().recoveries, 0) << sim.nav_.status().message;
 }
 
 TEST(NavigatorTest, TurnsToTheGoalHeading) {
@@ -258,6 +290,30 @@ TEST(NavigatorTest, DrivesToAPlace) {
   // The place resolves to its middle (farthest from the map border and the wall).
   EXPECT_NEAR(sim.pose_.x_m, 15.1, 0.6);
   EXPECT_NEAR(sim.pose_.y_m, 5.0, 0.6);
+}
+
+// Seed 001's place goals pick the cell farthest from obstacles on the map of the moment; a
+// table first seen on the way in may stand right there. The goal moves to the cell now
+// farthest from obstacles, says so once, and the robot arrives clear of the table.
+TEST(NavigatorTest, APlaceGoalMovesOffFurnitureSeenOnTheWayIn) {
+  std::vector<Place> places = {{"east", {{12.0, 0.0}, {20.0, 0.0}, {20.0, 10.0}, {12.0, 10.0}}}};
+  TestLayer layer = WallWithGap();
+  NavSim sim(layer.Build(PioneerFootprint()), {}, places);
+  NavGoal g;
+  g.is_place = true;
+  g.place = "east";
+  sim.nav_.SetGoal(g, 0.0);
+  sim.Run(2.0);
+  ASSERT_EQ(sim.nav_.status().state, NavState::kDriving) << sim.nav_.status().message;
+  ASSERT_TRUE(sim.events_.empty());
+  // A table over the middle of the place, where the goal was resolved.
+  layer.Rect(14.0, 3.5, 16.2, 6.5, 100.0f);
+  sim.map_ = layer.Build(PioneerFootprint());
+  ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kReached)) << sim.nav_.status().message;
+  ASSERT_EQ(sim.events_.size(), 1u);
+  EXPECT_NE(sim.events_[0].find("place 'east' moves to"), std::string::npos) << sim.events_[0];
+  EXPECT_GT(sim.nav_.path().poses().back().position().x(), 12.0);
+  EXPECT_GT(sim.map_->ClearanceAt(sim.pose_.position()), 1.0);
 }
 
 TEST(NavigatorTest, ReplansWhenAnObstacleAppearsOnThePath) {
