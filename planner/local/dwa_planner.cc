@@ -52,7 +52,9 @@ DwaPlanner::DwaPlanner(const VelocityLimits& limits, const DwaParams& params)
   clearance.acc_lim_theta_radps2 = limits.acc_lim_theta_radps2;
   // As far as the fastest sample goes over the horizon, plus the footprint's reach.
   clearance.path_reach_m = limits.max_vel_x_mps * params_.generator.sim_time_s + 0.3;
-  critics_.push_back(std::make_unique<ClearanceCritic>(params_.clearance_scale, clearance));
+  auto clearance_critic = std::make_unique<ClearanceCritic>(params_.clearance_scale, clearance);
+  clearance_ = clearance_critic.get();
+  critics_.push_back(std::move(clearance_critic));
   for (const auto& c : critics_) names_.push_back(c->name());
   rejections_.assign(critics_.size(), 0);
 }
@@ -151,13 +153,18 @@ DwaResult DwaPlanner::Compute(const DwaInput& input) {
   // tracking the global path is clear and drives on. Near an obstacle the path bends past (a
   // door beside a wall, a table leg) every constant arc that gains ground clips the obstacle or
   // costs more than it gains, and the dynamic window alone would stand there for ever.
+  // And where the path itself runs within the clearance inflation of a blocking cell (a door,
+  // a gap between table legs) it is the local plan: samples that score better by leaving it
+  // take the robot off a line with centimetres to spare.
+  const bool stalled = std::abs(result.best.target.linear_mps) < params_.stall_speed_mps &&
+                       tracking_trajectory.target.linear_mps >= params_.stall_speed_mps;
+  const bool tight = clearance_->path_proximity() > 0.0;
   if (result.valid > 0 && !result.tracking_chosen && std::isfinite(best_tracking) &&
-      std::abs(result.best.target.linear_mps) < params_.stall_speed_mps &&
-      tracking_trajectory.target.linear_mps >= params_.stall_speed_mps) {
+      (stalled || tight)) {
     result.best = tracking_trajectory;
     result.best_values = tracking_values;
     result.tracking_chosen = true;
-    result.tracking_broke_stall = true;
+    result.tracking_broke_stall = stalled;
     best = best_tracking;
   }
   if (result.valid > 0) {

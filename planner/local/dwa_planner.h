@@ -39,9 +39,9 @@ struct DwaParams {
   /// Also score trajectories that track the global path by pure pursuit (see
   /// TrajectoryGenerator::TrackPath), one per lookahead: a short one threads a door beside a
   /// wall, a long one smooths a straight; each turns in place beyond the angle. They compete
-  /// with the samples, and when the best sample would stand still or creep (forward speed
-  /// below `stall_speed_mps`) while a tracking trajectory is clear over its whole horizon and
-  /// drives on, that one is taken.
+  /// with the samples; a tracking trajectory clear over its whole horizon is taken when the best
+  /// sample would stand still or creep (forward speed below `stall_speed_mps`), or when the path
+  /// near the robot runs within the clearance inflation of a blocking cell (a door, a gap).
   bool path_tracking{true};
   double stall_speed_mps{0.1};
   std::vector<double> tracking_lookaheads_m{0.2, 0.3, 0.45, 0.6};
@@ -108,6 +108,7 @@ class DwaPlanner {
   DwaParams params_;
   TrajectoryGenerator generator_;
   std::vector<std::unique_ptr<TrajectoryCritic>> critics_;
+  ClearanceCritic* clearance_{nullptr};
   OscillationCritic* oscillation_{nullptr};
   std::vector<std::string> names_;
   std::vector<int64_t> rejections_;
