@@ -1,3 +1,4 @@
+#include <functional>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -416,9 +417,9 @@ TEST(DwaPlannerTest, OscillationAloneNeverStallsTheRobot) {
 // Every constant arc that reaches the door clips the frame, and the rest gain less than
 // standing still costs, so the dynamic window alone stands still for ever; the path-tracking
 // candidates follow the bend.
-struct DoorScene {
-  DoorScene() : layer(100, 100, 0.05, 0.0f, Pose2{5.0, 4.0, 0.0}) {
-    layer.Rect(5.0, 5.68, 7.5, 5.86, 100.0f).Rect(8.32, 5.68, 10.0, 5.86, 100.0f);
+struct KobukiScene {
+  KobukiScene() : layer(100, 100, 0.05, 0.0f, Pose2{5.0, 4.0, 0.0}) {
+    layer.Rect(5.0, 5.68, 7.5, 5.86, 100.0f).Rect(8.32, 5.68, 10.0, 5.86, 100.0f);  // the door
     for (int k = 0; k < 8; ++k) {
       round.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
     }
@@ -429,16 +430,17 @@ struct DoorScene {
     kobuki.acc_lim_x_mps2 = 1.0;
     kobuki.acc_lim_theta_radps2 = 2.0;
   }
-  // Closed loop at 20 Hz with the navigator's carrot (1.2 m ahead) and path window (3 m); the
-  // cycles it took to pass y = 6.3, or -1.
-  int Drive(const DwaParams& params, Pose2 pose, const Path& path, double done_y) {
+  // Closed loop at 20 Hz with the navigator's carrot (1.2 m ahead) and path window (3 m), from
+  // rest at `pose` until `done`; the cycles that took, or -1 (400 cycles, or a collision).
+  int Drive(const DwaParams& params, const CostMap& on, Pose2 pose, const Path& path,
+            const std::function<bool(const Pose2&)>& done, Pose2* end = nullptr) {
     DwaPlanner dut(kobuki, params);
     Velocity last;
-    for (int k = 0; k < 400; ++k) {
-      if (pose.y_m >= done_y) return k;
+    int k = 0;
+    for (; k < 400 && !done(pose); ++k) {
       const auto proj = path.Project(pose.position());
       DwaInput in =
-          Input(*map, path, pose, last,
+          Input(on, path, pose, last,
                 path.PoseAt(std::min(path.length_m(), proj.arc_length_m + 1.2)).position());
       in.segment_begin = proj.segment;
       in.segment_end = path.IndexAt(proj.arc_length_m + 3.0);
@@ -448,13 +450,16 @@ struct DoorScene {
       pose.x_m += r.command.linear_mps * 0.05 * std::cos(pose.yaw_rad);
       pose.y_m += r.command.linear_mps * 0.05 * std::sin(pose.yaw_rad);
       pose.yaw_rad = common::WrapAngle(pose.yaw_rad + r.command.angular_radps * 0.05);
-      if (!map->IsValid(pose)) {
-        ADD_FAILURE() << "touched the door frame at cycle " << k;
-        return -1;
+      if (!on.IsValid(pose)) {
+        ADD_FAILURE() << "touched an obstacle at cycle " << k << ", (" << pose.x_m << ", "
+                      << pose.y_m << ")";
+        k = 400;
+        break;
       }
       last = r.command;
     }
-    return -1;
+    if (end != nullptr) *end = pose;
+    return k < 400 ? k : -1;
   }
   TestLayer layer;
   std::vector<Vector2> round;
@@ -462,26 +467,31 @@ struct DoorScene {
   VelocityLimits kobuki;
 };
 
+// The path from the corridor through the bathroom door, as the navigator had it.
+Path DoorPath() {
+  return Path({{7.07, 5.39, 0.2},
+               {7.36, 5.44, 0.2},
+               {7.64, 5.50, 0.5},
+               {7.68, 5.56, 1.0},
+               {7.74, 5.71, 1.2},
+               {7.77, 5.79, 1.57},
+               {7.74, 5.98, 1.6},
+               {7.71, 6.17, 1.6},
+               {7.7, 7.0, 1.6}});
+}
+
 TEST(DwaPlannerTest, ThreadsADoorBesideTheWallFromRestByTrackingThePath) {
-  DoorScene scene;
-  const Path path({{7.07, 5.39, 0.2},
-                   {7.36, 5.44, 0.2},
-                   {7.64, 5.50, 0.5},
-                   {7.68, 5.56, 1.0},
-                   {7.74, 5.71, 1.2},
-                   {7.77, 5.79, 1.57},
-                   {7.74, 5.98, 1.6},
-                   {7.71, 6.17, 1.6},
-                   {7.7, 7.0, 1.6}});
+  KobukiScene scene;
   const Pose2 start{7.36, 5.46, 0.60};
+  const auto through = [](const Pose2& p) { return p.y_m >= 6.3; };
   DwaParams params;
   params.clearance_inflation_m = 0.15;  // config/navigator/apartment.yaml
-  const int cycles = scene.Drive(params, start, path, 6.3);
+  const int cycles = scene.Drive(params, *scene.map, start, DoorPath(), through);
   EXPECT_GT(cycles, 0);
   EXPECT_LT(cycles, 300);
   // Without the tracking candidates, for the record: the dynamic window stands still.
   params.path_tracking = false;
-  EXPECT_EQ(scene.Drive(params, start, path, 6.3), -1);
+  EXPECT_EQ(scene.Drive(params, *scene.map, start, DoorPath(), through), -1);
 }
 
 // The apartment's kitchen as a laser-only Kobuki saw it: the global path bends around a table
@@ -489,7 +499,7 @@ TEST(DwaPlannerTest, ThreadsADoorBesideTheWallFromRestByTrackingThePath) {
 // window's creeping arcs gained less than they cost and it stood beside the leg until its
 // recoveries ran out; tracking the bend, it arrives without touching the leg.
 TEST(DwaPlannerTest, FollowsAPathBentCloseAroundATableLegFromRest) {
-  DoorScene scene;  // the Kobuki's limits and footprint
+  KobukiScene scene;
   TestLayer layer(60, 60, 0.05, 0.0f, Pose2{6.0, 0.5, 0.0});
   layer.Rect(7.2, 1.6, 7.3, 1.7, 100.0f);  // the leg (2 x 2 cells)
   const auto map = layer.Build(scene.round);
@@ -498,41 +508,18 @@ TEST(DwaPlannerTest, FollowsAPathBentCloseAroundATableLegFromRest) {
   const Path path(
       {{6.92, 1.75, 0.55}, {7.15, 1.91, 0.2}, {7.40, 1.93, -0.3}, {7.675, 1.675, -0.75}});
   const Vector2 goal{7.675, 1.675};
-  for (const bool tracking : {false, true}) {
-    params.path_tracking = tracking;
-    DwaPlanner dut(scene.kobuki, params);
-    Pose2 pose{6.92, 1.75, 0.39};
-    Velocity last;
-    for (int k = 0; k < 300 && (pose.position() - goal).norm() > 0.2; ++k) {
-      const DwaResult r = dut.Compute(Input(*map, path, pose, last, goal));
-      ASSERT_TRUE(scene.kobuki.Allows(last, r.command, 0.05, 1e-12));
-      dut.Commit(r.command, pose);
-      pose.x_m += r.command.linear_mps * 0.05 * std::cos(pose.yaw_rad);
-      pose.y_m += r.command.linear_mps * 0.05 * std::sin(pose.yaw_rad);
-      pose.yaw_rad = common::WrapAngle(pose.yaw_rad + r.command.angular_radps * 0.05);
-      ASSERT_TRUE(map->IsValid(pose)) << "touched the leg at cycle " << k;
-      last = r.command;
-    }
-    if (tracking) {
-      EXPECT_LE((pose.position() - goal).norm(), 0.2)
-          << "stopped at (" << pose.x_m << ", " << pose.y_m << ")";
-    } else {
-      EXPECT_GT((pose.position() - goal).norm(), 0.2) << "the window alone, for the record";
-    }
-  }
+  const auto arrived = [&](const Pose2& p) { return (p.position() - goal).norm() <= 0.2; };
+  const Pose2 start{6.92, 1.75, 0.39};
+  Pose2 end;
+  EXPECT_GT(scene.Drive(params, *map, start, path, arrived, &end), 0)
+      << "stopped at (" << end.x_m << ", " << end.y_m << ")";
+  params.path_tracking = false;  // the window alone, for the record
+  EXPECT_EQ(scene.Drive(params, *map, start, path, arrived), -1);
 }
 
 TEST(TrajectoryGeneratorTest, TrackPathFollowsTheBendAndSlowsNearWalls) {
-  DoorScene scene;
-  const Path path({{7.07, 5.39, 0.2},
-                   {7.36, 5.44, 0.2},
-                   {7.64, 5.50, 0.5},
-                   {7.68, 5.56, 1.0},
-                   {7.74, 5.71, 1.2},
-                   {7.77, 5.79, 1.57},
-                   {7.74, 5.98, 1.6},
-                   {7.71, 6.17, 1.6},
-                   {7.7, 7.0, 1.6}});
+  KobukiScene scene;
+  const Path path = DoorPath();
   TrajectoryGeneratorParams p;
   p.sim_time_s = 4.0;
   const TrajectoryGenerator gen(scene.kobuki, p);
