@@ -1,5 +1,7 @@
 #include "common/yaml_reader.h"
 
+#include <set>
+
 namespace cairn::common {
 
 YamlMap::YamlMap(YAML::Node node, std::string where, std::string context)
@@ -7,6 +9,17 @@ YamlMap::YamlMap(YAML::Node node, std::string where, std::string context)
   if (node_.IsNull()) node_ = YAML::Node(YAML::NodeType::Map);
   if (!node_.IsMap()) {
     Fail(node_, context_.empty() ? "expected a map" : "'" + context_ + "' must be a map");
+  }
+  // yaml-cpp keeps a key given twice and answers with one of the values: a line lost silently
+  // (a process entry that lost its name under a pasted block, say). Refuse it.
+  std::set<std::string> seen;
+  for (const auto& entry : node_) {
+    if (!entry.first.IsScalar()) continue;
+    const std::string key = entry.first.Scalar();
+    if (!seen.insert(key).second) {
+      Fail(entry.first,
+           "key '" + (context_.empty() ? key : context_ + "." + key) + "' given twice");
+    }
   }
 }
 

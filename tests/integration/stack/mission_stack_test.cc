@@ -7,6 +7,9 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -135,6 +138,38 @@ TEST(MissionStackTest, MapperAndNavigatorKilledMidMissionAreRestartedAndTheMissi
       "cairn-mission", {"--robot", kRobot, "--goal", "21,38", "--site", "tunnel", "--map", "demo",
                         "--share", "rover", "--profiles-dir", SourcePath("config/profiles"),
                         "--out", procs.dir() + "/renders", "--timeout", "200"});
+  // While the robot drives, cairn-spy --once --strict against the shipped demo graph's expected
+  // rates: every channel decoded by type, none slow or missing.
+  ASSERT_TRUE(WaitFor([&] { return PoseX(bus) > 4.5; }, 60.0, [&] { bus.Pump(20); }))
+      << "the robot never set off";
+  ChildProcess& spy = procs.StartRaw(
+      "cairn-spy", {BinPath("cairn-spy"), "--once", "--strict", "--duration", "3", "--graph",
+                    SourcePath("config/graphs/demo.yaml"), "--lcm-url", procs.url()});
+  const auto spy_status = spy.WaitExit(30.0);
+  ASSERT_TRUE(spy_status.has_value()) << "cairn-spy --once did not finish";
+  EXPECT_TRUE(WIFEXITED(*spy_status) && WEXITSTATUS(*spy_status) == 0) << spy.Log();
+  const std::string table = spy.Log();
+  for (const auto& [channel, type] : std::vector<std::pair<std::string, std::string>>{
+           {"SIM.CLOCK", "cairn.lcmt_sim_clock"},
+           {"HEALTH", "cairn.lcmt_health"},
+           {"p3at.LIDAR", "cairn.lcmt_point_cloud_slice"},
+           {"p3at.SCAN", "cairn.lcmt_laser_scan"},
+           {"p3at.ODOM", "cairn.lcmt_odometry"},
+           {"p3at.POSE", "cairn.lcmt_pose"},
+           {"p3at.IMU", "cairn.lcmt_imu"},
+           {"p3at.MAP.MANIFEST", "cairn.lcmt_grid_manifest"},
+           {"p3at.MAP.TILES", "cairn.lcmt_grid_tile"},
+           {"p3at.MAP.OBSTACLES", "cairn.lcmt_obstacle_registry"},
+           {"p3at.MAP.OCCUPANCY", "cairn.lcmt_occupancy_tile"},
+           {"p3at.CMD_VEL", "cairn.lcmt_velocity_command"},
+           {"p3at.NAV_STATUS", "cairn.lcmt_nav_status"}}) {
+    const size_t at = table.find("\n" + channel + " ");
+    ASSERT_NE(at, std::string::npos) << channel << " is not in the table:\n" << table;
+    const std::string row = table.substr(at + 1, table.find('\n', at + 1) - at - 1);
+    EXPECT_NE(row.find(type), std::string::npos) << row;
+    EXPECT_EQ(row.find("SLOW"), std::string::npos) << row;
+  }
+
   // Mid-mission (demo lane: start x = 4, goal x = 21), first the mapper, then the navigator.
   ASSERT_TRUE(WaitFor([&] { return PoseX(bus) > 8.0; }, 90.0, [&] { bus.Pump(20); }))
       << "the robot never passed x = 8";

@@ -37,5 +37,22 @@ TEST(YamlMapTest, BadValueAndMissingKey) {
   EXPECT_THROW(YamlMap::LoadFile("/nonexistent/file.yaml"), ConfigError);
 }
 
+TEST(YamlMapTest, AKeyGivenTwiceIsRefusedWithItsLine) {
+  try {
+    YamlMap::FromString("a: 1\nb: 2\na: 3\n", "cfg.yaml");
+    FAIL() << "accepted a duplicate key";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "cfg.yaml:3: key 'a' given twice");
+  }
+  // Nested maps too, named by their path.
+  YamlMap outer = YamlMap::FromString("p:\n  command: x\n  command: y\n", "g.yaml");
+  try {
+    outer.Child("p");
+    FAIL() << "accepted a duplicate nested key";
+  } catch (const ConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), "g.yaml:3: key 'p.command' given twice");
+  }
+}
+
 }  // namespace
 }  // namespace cairn::common
