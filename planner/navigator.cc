@@ -106,6 +106,8 @@ NavReason ReasonOf(PlanStatus status) {
 void NavigatorParams::Validate() const {
   CAIRN_THROW_UNLESS(control_period_s > 0.0, "control_period_s must be positive");
   CAIRN_THROW_UNLESS(xy_goal_tolerance_m > 0.0, "xy_goal_tolerance_m must be positive");
+  CAIRN_THROW_UNLESS(occupied_goal_far_m >= 0.0, "occupied_goal_far_m must not be negative");
+  CAIRN_THROW_UNLESS(occupied_goal_shift_m >= 0.0, "occupied_goal_shift_m must not be negative");
   CAIRN_THROW_UNLESS(yaw_goal_tolerance_rad > 0.0, "yaw_goal_tolerance_rad must be positive");
   CAIRN_THROW_UNLESS(
       max_pose_age_s > control_period_s,
@@ -707,6 +709,9 @@ StepOutput Navigator::Step(double now_s) {
       job.request.goal = *goal_pose_;
       job.request.goal_has_yaw = goal_has_yaw_;
       job.request.time_budget_s = params_.plan_time_budget_s;
+      if (to_goal > params_.occupied_goal_far_m) {
+        job.request.goal_shift_radius_m = params_.occupied_goal_shift_m;
+      }
       job.map = map_;
       pending_request_ = job.request_id;
       last_plan_request_s_ = now_s;

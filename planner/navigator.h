@@ -94,6 +94,12 @@ struct NavigatorParams {
   double replace_path_ratio{0.9};  ///< ... and switch when the new path costs less than this
                                    ///< fraction of what is left of the current one
   double plan_time_budget_s{1.0};
+  /// Farther than `occupied_goal_far_m` from its goal, a plan whose goal footprint is blocked
+  /// ends at the nearest valid pose within `occupied_goal_shift_m` instead of failing: cells
+  /// seen from afar at a grazing angle (a platform's top beyond a ramp) may read as a step that
+  /// the approach then measures away. Nearer, a blocked goal is GOAL_OCCUPIED as before.
+  double occupied_goal_far_m{3.0};
+  double occupied_goal_shift_m{1.0};
   double no_valid_trajectory_patience_s{1.5};
   double progress_distance_m{0.2};        ///< must move this far ...
   double progress_timeout_s{10.0};        ///< ... within this time, else recover

@@ -142,6 +142,8 @@ void LoadNavigator(YamlMap map, NavigatorParams* p) {
   map.Get("no_valid_trajectory_patience_s", &p->no_valid_trajectory_patience_s);
   map.Get("progress_distance_m", &p->progress_distance_m);
   map.Get("progress_timeout_s", &p->progress_timeout_s);
+  map.Get("occupied_goal_far_m", &p->occupied_goal_far_m);
+  map.Get("occupied_goal_shift_m", &p->occupied_goal_shift_m);
   map.Get("recovery_reset_distance_m", &p->recovery_reset_distance_m);
   map.Get("stop_repeat_cycles", &p->stop_repeat_cycles);
   map.Finish();

@@ -433,7 +433,7 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
     return result;
   };
   auto cancelled = [&] { return cancel != nullptr && cancel->load(); };
-  const Pose2& goal = request.goal;
+  Pose2 goal = request.goal;
 
   // Cheap outcomes first: bounds, occupied start or goal, cancellation, grid connectivity.
   const bool finite = std::isfinite(request.start.x_m) && std::isfinite(request.start.y_m) &&
@@ -454,8 +454,24 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
     result.start_moved_m = (rescued->position() - start.position()).norm();
     start = *rescued;
   }
+  // A goal whose footprint is blocked at every heading: with a shift radius, the nearest valid
+  // pose close by (a mapping artefact seen from afar need not end the goal).
+  bool goal_fits = request.goal_has_yaw ? map.IsValid(goal) : false;
+  for (int k = 0; !goal_fits && !request.goal_has_yaw && k < params_.goal_yaw_samples; ++k) {
+    goal_fits = map.IsValid({goal.x_m, goal.y_m, 2.0 * M_PI * k / params_.goal_yaw_samples});
+  }
+  std::string goal_note;
+  if (!goal_fits && request.goal_shift_radius_m > 0.0) {
+    if (const auto shifted = RescueStart(map, goal, request.goal_shift_radius_m)) {
+      goal_note = BlockingCellText(map, goal);
+      result.goal_moved_m = (shifted->position() - goal.position()).norm();
+      goal = *shifted;
+    }
+  }
   std::vector<double> goal_yaws;
-  if (request.goal_has_yaw) {
+  if (request.goal_has_yaw && result.goal_moved_m > 0.0) {
+    goal_yaws.push_back(goal.yaw_rad);
+  } else if (request.goal_has_yaw) {
     if (map.IsValid(goal)) goal_yaws.push_back(goal.yaw_rad);
   } else {
     // Try the heading that points from the start first, then evenly spaced ones.
@@ -772,6 +788,14 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
   }
   result.length_m = PositionLength(result.poses);
   result.cost = chosen.cost(objective).value();
+  if (result.goal_moved_m > 0.0) {
+    std::ostringstream m;
+    m.setf(std::ios::fixed);
+    m.precision(2);
+    m << "the footprint at the goal is blocked" << goal_note << "; the path ends "
+      << result.goal_moved_m << " m from it, at (" << goal.x_m << ", " << goal.y_m << ")";
+    return finish(PlanStatus::kSuccess, m.str());
+  }
   return finish(PlanStatus::kSuccess, "");
 }
 

@@ -113,6 +113,9 @@ struct PlanRequest {
   common::Pose2 goal;
   bool goal_has_yaw{false};   ///< else any heading at the goal position will do
   double time_budget_s{0.0};  ///< 0: the params' budget
+  /// > 0: a goal whose footprint is blocked moves to the nearest valid pose this close (any
+  /// heading) instead of failing with kGoalOccupied; PlanResult::goal_moved_m says how far.
+  double goal_shift_radius_m{0.0};
 };
 
 struct PlanResult {
@@ -128,6 +131,7 @@ struct PlanResult {
   bool simplified{false};            ///< the simplified path passed re-validation
   bool grid_route_chosen{false};     ///< the grid A* candidate beat the sampled paths
   double start_moved_m{0.0};         ///< how far an occupied start was moved to free space
+  double goal_moved_m{0.0};          ///< how far an occupied goal was moved (goal_shift_radius_m)
 
   bool ok() const { return status == PlanStatus::kSuccess; }
 };

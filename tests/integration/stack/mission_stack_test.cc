@@ -143,7 +143,7 @@ TEST(MissionStackTest, MapperAndNavigatorKilledMidMissionAreRestartedAndTheMissi
   ASSERT_TRUE(WaitFor([&] { return PoseX(bus) > 4.5; }, 60.0, [&] { bus.Pump(20); }))
       << "the robot never set off";
   ChildProcess& spy = procs.StartRaw(
-      "cairn-spy", {BinPath("cairn-spy"), "--once", "--strict", "--duration", "3", "--graph",
+      "cairn-spy", {BinPath("cairn-spy"), "--once", "--strict", "--duration", "5", "--graph",
                     SourcePath("config/graphs/demo.yaml"), "--lcm-url", procs.url()});
   const auto spy_status = spy.WaitExit(30.0);
   ASSERT_TRUE(spy_status.has_value()) << "cairn-spy --once did not finish";

@@ -138,6 +138,28 @@ TEST(GlobalPlannerTest, StartOccupied) {
   EXPECT_TRUE(map->IsValid(rescued.poses[1]));
 }
 
+// With a shift radius a blocked goal moves to the nearest valid pose close by: the path ends
+// there, says how far and why; a radius too small to leave the blockage still fails.
+TEST(GlobalPlannerTest, AnOccupiedGoalShiftsWithinTheRadiusWhenAsked) {
+  TestLayer open(200, 100, 0.1);
+  open.Rect(14.85, 4.85, 15.15, 5.15, 100.0f);  // a 0.3 m blob on the goal
+  const auto map = open.Build(PioneerFootprint());
+  PlanRequest request{{2.0, 5.0, 0.0}, {15.0, 5.0, 0.0}, false};
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*map, request).status, PlanStatus::kGoalOccupied);
+  request.goal_shift_radius_m = 1.0;
+  const PlanResult r = GlobalPlanner(Params()).Plan(*map, request);
+  ASSERT_EQ(r.status, PlanStatus::kSuccess) << r.message;
+  EXPECT_GT(r.goal_moved_m, 0.0);
+  EXPECT_LE(r.goal_moved_m, 1.0 + 1e-9);
+  const Pose2 end = r.poses.back();
+  EXPECT_NEAR((end.position() - Vector2(15.0, 5.0)).norm(), r.goal_moved_m, 0.06);
+  EXPECT_TRUE(map->IsValid(end));
+  EXPECT_NE(r.message.find("the footprint at the goal is blocked"), std::string::npos) << r.message;
+  EXPECT_NE(r.message.find("m from it"), std::string::npos) << r.message;
+  request.goal_shift_radius_m = 0.1;  // the footprint cannot leave the blob within 0.1 m
+  EXPECT_EQ(GlobalPlanner(Params()).Plan(*map, request).status, PlanStatus::kGoalOccupied);
+}
+
 TEST(GlobalPlannerTest, GoalOccupied) {
   const auto map = WallWithGap().Build(PioneerFootprint());
   const PlanResult r =

@@ -316,6 +316,37 @@ TEST(NavigatorTest, APlaceGoalMovesOffFurnitureSeenOnTheWayIn) {
   EXPECT_GT(sim.map_->ClearanceAt(sim.pose_.position()), 1.0);
 }
 
+// A blob on the goal seen from afar (a false step at a grazing angle): the robot heads for the
+// nearest free pose by it instead of failing at once. When the approach measures the blob away
+// the goal is reached; when it stays, the goal fails GOAL_OCCUPIED once the robot is near, and
+// the robot never drives into it.
+TEST(NavigatorTest, AGoalBlockedFromAfarIsApproachedAndJudgedNear) {
+  for (const bool blob_stays : {false, true}) {
+    TestLayer open(200, 100, 0.1);
+    TestLayer blocked = open;
+    blocked.Rect(14.85, 4.85, 15.15, 5.15, 100.0f);
+    NavSim sim(blocked.Build(PioneerFootprint()));
+    sim.pose_ = {2.0, 5.0, 0.0};
+    sim.nav_.SetGoal(PoseGoal(15.0, 5.0), 0.0);
+    ASSERT_TRUE(sim.Run(20.0, [&] { return sim.pose_.x_m > 8.0; })) << sim.nav_.status().message;
+    EXPECT_EQ(sim.nav_.status().recoveries, 0) << sim.nav_.status().message;
+    if (!blob_stays) sim.map_ = open.Build(PioneerFootprint());  // measured away on the approach
+    const bool ended = sim.Run(120.0, [&] {
+      const NavState s = sim.nav_.status().state;
+      return s == NavState::kReached || s == NavState::kFailed;
+    });
+    ASSERT_TRUE(ended) << sim.nav_.status().message;
+    if (blob_stays) {
+      EXPECT_EQ(sim.nav_.status().state, NavState::kFailed);
+      EXPECT_EQ(sim.nav_.status().reason, NavReason::kGoalOccupied) << sim.nav_.status().message;
+      EXPECT_GT(std::hypot(sim.pose_.x_m - 15.0, sim.pose_.y_m - 5.0), 0.3);
+    } else {
+      EXPECT_EQ(sim.nav_.status().state, NavState::kReached) << sim.nav_.status().message;
+      EXPECT_LT(std::hypot(sim.pose_.x_m - 15.0, sim.pose_.y_m - 5.0), 0.3);
+    }
+  }
+}
+
 TEST(NavigatorTest, ReplansWhenAnObstacleAppearsOnThePath) {
   TestLayer open(200, 100, 0.1);
   NavSim sim(open.Build(PioneerFootprint()));
