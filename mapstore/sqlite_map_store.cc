@@ -116,11 +116,16 @@ Status SqliteMapStore::Initialise() {
   const auto not_cairn = [&](const std::string& why) {
     return common::CorruptError("'" + path_ + "' is not a cairn map database: " + why);
   };
+  // The three header reads share one read transaction: another process creating the schema
+  // commits tables, application id and version together, and this one must see all or none.
+  s = db_->Exec("BEGIN");
+  if (!s.ok()) return s;
   auto app = db_->QueryInt("PRAGMA application_id");
-  if (!app.ok()) return not_cairn(app.status().message());
   auto version = db_->QueryInt("PRAGMA user_version");
-  if (!version.ok()) return not_cairn(version.status().message());
   auto tables = db_->QueryInt("SELECT count(*) FROM sqlite_master");
+  db_->Exec("COMMIT");
+  if (!app.ok()) return not_cairn(app.status().message());
+  if (!version.ok()) return not_cairn(version.status().message());
   if (!tables.ok()) return not_cairn(tables.status().message());
   const bool memory = path_ == ":memory:";
 

@@ -345,6 +345,35 @@ TEST(SqliteMapStoreTest, TwoWritersAndAReaderOnOneFileAllSucceed) {
   EXPECT_TRUE(dut->Check().value().ok);
 }
 
+TEST(SqliteMapStoreTest, ThreeOpenersOfANewFileAllGetTheSchema) {
+  // Services started together on one new file: one creates the schema while the others read
+  // its header; none may see half of it (tables but no application id) and refuse the file.
+  const std::string dir = TempDir();
+  constexpr int kRounds = 40;
+  constexpr int kOpeners = 3;
+  for (int round = 0; round < kRounds; ++round) {
+    const std::string path = dir + "/site" + std::to_string(round) + ".db";
+    std::atomic<int> waiting{kOpeners};
+    std::vector<std::string> errors(kOpeners);
+    std::vector<std::thread> openers;
+    for (int k = 0; k < kOpeners; ++k) {
+      openers.emplace_back([&, k] {
+        --waiting;
+        while (waiting > 0) std::this_thread::yield();  // start together
+        auto store = SqliteMapStore::Open(path, {});
+        if (!store.ok()) errors[k] = store.status().ToString();
+      });
+    }
+    for (auto& t : openers) t.join();
+    for (int k = 0; k < kOpeners; ++k) {
+      EXPECT_EQ(errors[k], "") << "round " << round << ", opener " << k;
+    }
+    auto dut = OpenOrDie(path, ReadOnly());
+    ASSERT_TRUE(dut);
+    EXPECT_TRUE(dut->Check().value().ok);
+  }
+}
+
 TEST(SqliteMapStoreTest, VacuumKeepsEverythingReferenced) {
   const std::string path = TempDir() + "/site.db";
   auto dut = OpenOrDie(path);
