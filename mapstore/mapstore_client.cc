@@ -328,7 +328,7 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site, con
       first = false;
     }
     if (grid->geometry() == loaded.layers.geometry())
-      loaded.layers.AddLayer(layer) = grid->at(layer);
+      loaded.layers.AddLayer(layer) = std::move(grid->at(layer));
   }
   for (const auto& m : reply->obstacles) {
     auto o = runtime::FromLcm(m);

@@ -86,7 +86,12 @@ GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double rim_
       }
       if (hc >= rim_threshold) {
         // A rim is ground that goes on beyond it at about its height for two more cells; a
-        // wall or an object (ground again, or nothing known, behind it) bounds no ditch.
+        // wall or an object (ground again, or nothing known, behind it) bounds no ditch. Nor
+        // does a cell some ray crossed within half the depth of the gap's own bound: that
+        // cell's height is a face's returns, not ground at the rim (the floor cells in front of
+        // a step, raised by returns from its face, with an unhit cell between them). A rim cell
+        // that holds the ditch's edge is crossed lower than its height, but well above the gap.
+        if (v.B(cx, cy) < rim_threshold - 0.5 * flatness_m) return line;
         for (int e = 1; e <= 2; ++e) {
           const int ox = cx + e * sdx, oy = cy + e * sdy;
           if (!v.Inside(ox, oy)) return line;

@@ -366,14 +366,15 @@ std::optional<common::GridMap> LayerAssembler::Layer(const std::string& layer) c
   const LayerState& state = it->second;
   common::GridMap map(state.geometry);
   common::Layer& values = map.AddLayer(layer);
+  // Rows are contiguous (x fastest): one copy per tile row, clipped to the layer.
   for (const auto& [key, held] : state.tiles) {
     const int x0 = key.first * state.tile_size, y0 = key.second * state.tile_size;
-    for (int y = 0; y < held.cells_y; ++y) {
-      for (int x = 0; x < held.cells_x; ++x) {
-        if (x0 + x < map.size_x() && y0 + y < map.size_y()) {
-          values(x0 + x, y0 + y) = held.data[y * held.cells_x + x];
-        }
-      }
+    if (x0 < 0 || y0 < 0 || x0 >= map.size_x() || y0 >= map.size_y()) continue;
+    const int nx = std::min(held.cells_x, map.size_x() - x0);
+    const int ny = std::min(held.cells_y, map.size_y() - y0);
+    for (int y = 0; y < ny; ++y) {
+      const float* src = held.data.data() + static_cast<size_t>(y) * held.cells_x;
+      std::copy(src, src + nx, &values(x0, y0 + y));
     }
   }
   return map;

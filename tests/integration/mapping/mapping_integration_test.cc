@@ -202,6 +202,7 @@ TEST_F(MappingProcessTest, TunnelRegistryVerdicts) {
   ASSERT_TRUE(registry.has_value()) << "no registry on " << Ch("MAP.OBSTACLES");
   ASSERT_TRUE(found) << "registry:\n" << Describe(*registry);
   const auto& r = *registry;
+  std::printf("[ info ] registry:\n%s", Describe(r).c_str());
   EXPECT_EQ(r.robot, kRobot);
   EXPECT_EQ(r.map_name, "live");
 

@@ -429,6 +429,35 @@ TEST(TraversabilityTest, SeenBottomJoinsTheDitchButGroundAtRimLevelDoesNot) {
   EXPECT_TRUE(std::isnan(map.at(layers::kDitchDepth)(15, 6)));
 }
 
+TEST(TraversabilityTest, AnUnhitCellAmongAStepsFaceCellsIsNoDitch) {
+  // A 20 cm block from x = 3.0 (a cell border). Returns from its face raise the floor cells in
+  // front of it (x in [2.8, 3.0)) to about 18 cm, except one that no return fell in; rays
+  // crossed all of them at floor level on their way to the face (values seen by the mapper in
+  // the tunnel). That cell lies between two 18 cm "rims" along the face, but they are no rims:
+  // neither it nor the floor in front of it is a ditch, and the block's edge stays a step.
+  GridMap map = MakeTerrain(30, 12, kRes, [](double x, double) {
+    if (x > 2.8 && x < 3.0) return 0.18;
+    return x > 3.0 ? 0.2 : 0.0;
+  });
+  Layer& h = map.at(layers::kElevation);
+  h(14, 6) = std::nanf("");
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int iy = 0; iy < 12; ++iy) {
+    for (int ix = 0; ix <= 14; ++ix) b(ix, iy) = 0.002f;
+  }
+  ComputeGeometricLayers(&map, {});
+  for (int ix = 8; ix <= 16; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) {
+      EXPECT_TRUE(std::isnan(map.at(layers::kDitchDepth)(ix, iy))) << ix << "," << iy;
+    }
+  }
+  // The same cell between two rims that rays crossed well above the gap: a narrow ditch.
+  for (int ix = 0; ix <= 14; ++ix) b(ix, 5) = b(ix, 7) = 0.25f;
+  b(14, 6) = -0.1f;
+  ComputeGeometricLayers(&map, {});
+  EXPECT_FALSE(std::isnan(map.at(layers::kDitchDepth)(14, 6)));
+}
+
 TEST(TraversabilityTest, DropIntoAnUnseenGapIsAStepDown) {
   // A platform 0.3 m high ends at x = 2; beyond it nothing was seen, but rays went down to 0.
   GridMap map =
