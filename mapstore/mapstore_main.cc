@@ -39,6 +39,7 @@ void LoadParams(const std::string& path, cairn::mapstore::MapstoreServiceParams*
     s.Get("tiles_per_burst", &service->tiles_per_burst);
     s.Get("burst_pause_ms", &service->burst_pause_ms);
     s.Get("worker_threads", &service->worker_threads);
+    s.Get("compress_reply_tiles", &service->compress_reply_tiles);
     s.Finish();
   }
   if (root.Has("database")) {

@@ -9,6 +9,7 @@
 
 #include "common/channels.h"
 #include "common/layers.h"
+#include "mapstore/blob_codec.h"
 #include "mapstore/map_operations.h"
 #include "mapstore/map_transfer.h"
 #include "mapstore/mapstore_conversions.h"
@@ -744,6 +745,14 @@ std::shared_ptr<MapstoreService::Outgoing> MapstoreService::MakeOutgoing(
           out->tiler->Update(*result.layers, name, runtime::TileEncoding::kFloat, utime, true));
       out->layers.push_back(name);
       out->cells += result.layers->geometry().num_cells();
+    }
+    if (params_.compress_reply_tiles) {
+      std::vector<cairn::lcmt_grid_tile*> tiles;
+      for (auto& batch : out->first_send) {
+        for (auto& tile : batch.tiles) tiles.push_back(&tile);
+      }
+      ParallelFor(tiles.size(), std::max(1, params_.worker_threads),
+                  [&](size_t i) { CompressTile(tiles[i]); });
     }
   }
   return out;

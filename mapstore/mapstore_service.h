@@ -69,6 +69,9 @@ struct MapstoreServiceParams {
   double burst_pause_ms{0.1};                ///< the pause between bursts: UDP drops what a
                                              ///< receiver's socket buffer (~200 KB) cannot hold
   int worker_threads{2};                     ///< loads, shares, exports and imports run on these
+  /// Reply tiles travel compressed (the store's zstd codec): a third of the bytes of smooth
+  /// terrain, a tenth of a cost layer's. Resent tiles travel as floats.
+  bool compress_reply_tiles{true};
 };
 
 class MapstoreService {

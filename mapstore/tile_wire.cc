@@ -2,6 +2,8 @@
 
 #include <cstring>
 
+#include "mapstore/blob_codec.h"
+
 namespace cairn::mapstore {
 namespace {
 
@@ -26,6 +28,9 @@ cairn::lcmt_grid_tile Header(const cairn::lcmt_grid_tile& t) {
   h.cells_x = t.cells_x;
   h.cells_y = t.cells_y;
   h.checksum = t.checksum;
+  h.encoding = t.encoding;
+  h.num_bytes = t.num_bytes;
+  h.bytes = t.bytes;
   h.num_cells = 0;
   return h;
 }
@@ -74,6 +79,9 @@ bool FastPathMatches() {
     t.cells_x = 1;
     t.cells_y = 3;
     t.checksum = 0x1234abcd;
+    t.encoding = 0;
+    t.num_bytes = 2;
+    t.bytes = {7, 9};
     t.num_cells = 3;
     t.data = {1.5f, -0.f, 1e-30f};
     std::vector<uint8_t> a, b;
@@ -88,11 +96,59 @@ bool FastPathMatches() {
 
 void EncodeTile(const cairn::lcmt_grid_tile& tile, std::vector<uint8_t>* out) {
   if (tile.num_cells >= 0 && static_cast<size_t>(tile.num_cells) == tile.data.size() &&
+      tile.num_bytes >= 0 && static_cast<size_t>(tile.num_bytes) == tile.bytes.size() &&
       FastPathMatches()) {
     Fast(tile, out);
   } else {
     Generated(tile, out);
   }
+}
+
+bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level) {
+  using T = cairn::lcmt_grid_tile;
+  if (tile->encoding != T::ENCODING_FLOAT32 || tile->data.empty() ||
+      static_cast<size_t>(tile->num_cells) != tile->data.size()) {
+    return false;
+  }
+  const EncodedBlob blob = EncodeBlob(tile->data.data(), tile->data.size() * sizeof(float),
+                                      Codec::kZstdShuffle4, zstd_level);
+  if (blob.codec != Codec::kZstdShuffle4 || blob.data.size() >= tile->data.size() * sizeof(float)) {
+    return false;  // incompressible: the floats travel as they are
+  }
+  tile->bytes.assign(blob.data.begin(), blob.data.end());
+  tile->num_bytes = static_cast<int32_t>(tile->bytes.size());
+  tile->encoding = T::ENCODING_ZSTD_SHUFFLE4;
+  tile->data.clear();
+  tile->data.shrink_to_fit();
+  tile->num_cells = 0;
+  return true;
+}
+
+common::Status DecompressTile(cairn::lcmt_grid_tile* tile) {
+  using T = cairn::lcmt_grid_tile;
+  if (tile->encoding == T::ENCODING_FLOAT32) return common::Status::Ok();
+  if (tile->encoding != T::ENCODING_ZSTD_SHUFFLE4) {
+    return common::InvalidArgumentError("tile encoding " + std::to_string(tile->encoding) +
+                                        " is not known");
+  }
+  if (tile->cells_x <= 0 || tile->cells_y <= 0 || tile->cells_x > 4096 || tile->cells_y > 4096 ||
+      static_cast<size_t>(tile->num_bytes) != tile->bytes.size()) {
+    return common::InvalidArgumentError("compressed tile with a bad size");
+  }
+  const size_t cells = static_cast<size_t>(tile->cells_x) * tile->cells_y;
+  std::vector<float> data(cells);
+  const common::Status s =
+      DecodeBlobTo(Codec::kZstdShuffle4, reinterpret_cast<const char*>(tile->bytes.data()),
+                   tile->bytes.size(), static_cast<int64_t>(cells * sizeof(float)),
+                   static_cast<uint32_t>(tile->checksum), reinterpret_cast<uint8_t*>(data.data()),
+                   /*verify_crc=*/true);
+  if (!s.ok()) return s;
+  tile->data = std::move(data);
+  tile->num_cells = static_cast<int32_t>(cells);
+  tile->encoding = T::ENCODING_FLOAT32;
+  tile->bytes.clear();
+  tile->num_bytes = 0;
+  return common::Status::Ok();
 }
 
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile) {

@@ -8,6 +8,8 @@
 
 #include "cairn/lcmt_grid_tile.hpp"
 
+#include "common/status.h"
+
 /// @file
 /// Fast publishing of grid tiles. lcmt_grid_tile::encode byte-swaps its cells one call at a time;
 /// a map of four 1000 x 1000 layers spends more time there than in the database. The encoding
@@ -19,6 +21,15 @@ namespace cairn::mapstore {
 
 /// Encodes a tile exactly as lcmt_grid_tile::encode does.
 void EncodeTile(const cairn::lcmt_grid_tile& tile, std::vector<uint8_t>* out);
+
+/// Compresses a float tile in place (ENCODING_ZSTD_SHUFFLE4, the store's own blob codec); false,
+/// and the tile unchanged, when it is not a float tile or would not get smaller.
+bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level = 1);
+
+/// Turns a compressed tile back into a float tile in place, checking the float bytes against
+/// the tile's checksum; a float tile is left as it is. kInvalidArgument for an unknown encoding
+/// or a bad size, kCorrupt for damaged bytes.
+common::Status DecompressTile(cairn::lcmt_grid_tile* tile);
 
 /// Encodes and publishes a tile; false when LCM refuses it.
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile);

@@ -265,7 +265,9 @@ bool LayerAssembler::OnTileImpl(const TileMsg& tile, std::vector<float> data, ui
 }
 
 bool LayerAssembler::OnTile(const cairn::lcmt_grid_tile& tile) {
-  if (tile.data.size() != static_cast<size_t>(std::max(0, tile.num_cells))) {
+  // Compressed tiles are decoded by their receiver (the map store's client) before they get here.
+  if (tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 ||
+      tile.data.size() != static_cast<size_t>(std::max(0, tile.num_cells))) {
     ++checksum_errors_;
     return false;
   }

@@ -100,7 +100,8 @@ class LayerTiler {
 /// Receiver side: rebuilds layers from tiles and manifests.
 class LayerAssembler {
  public:
-  /// Returns false (and counts a checksum error) when the tile's data do not match its CRC.
+  /// Returns false (and counts a checksum error) when the tile's data do not match its CRC, or
+  /// when the tile is compressed (its receiver decodes it first: mapstore::DecompressTile).
   bool OnTile(const cairn::lcmt_grid_tile& tile);
   bool OnTile(const cairn::lcmt_occupancy_tile& tile);
   void OnManifest(const cairn::lcmt_grid_manifest& manifest);
