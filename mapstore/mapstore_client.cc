@@ -9,6 +9,7 @@
 #include "cairn/lcmt_obstacle_registry.hpp"
 
 #include "common/channels.h"
+#include "mapstore/blob_codec.h"
 #include "mapstore/tile_wire.h"
 #include "services/runtime/conversions.h"
 
@@ -202,9 +203,13 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snaps
   push_->tiler =
       std::make_unique<runtime::LayerTiler>(push_->robot, push_->map_name, options_.tile_size);
   for (const std::string& layer : request.layers) {
-    const auto batch =
+    auto batch =
         push_->tiler->Update(snapshot.base, layer, runtime::TileEncoding::kFloat, utime, true);
     lcm_.publish(channels::kMapstorePushManifest, &batch.manifest);
+    if (options_.compress_tiles) {
+      ParallelFor(batch.tiles.size(), std::max(1, options_.compression_threads),
+                  [&](size_t i) { CompressTile(&batch.tiles[i]); });
+    }
     for (const auto& t : batch.tiles) PublishPaced(t);
   }
   if (request.expect_obstacles) {

@@ -35,6 +35,8 @@ struct MapstoreClientOptions {
   int tile_size{100};              ///< cells per side of pushed tiles
   int tiles_per_burst{2};          ///< pushed tiles sent back to back before a short pause
   double burst_pause_ms{0.1};      ///< lets the store's receive buffer drain (UDP drops the rest)
+  bool compress_tiles{true};       ///< pushed tiles travel compressed (resent ones as floats)
+  int compression_threads{2};      ///< threads compressing a push
 };
 
 class MapstoreClient {

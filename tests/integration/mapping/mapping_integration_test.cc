@@ -145,14 +145,22 @@ class MappingProcessTest : public ::testing::Test {
   std::optional<cairn::lcmt_obstacle_registry> Registry() {
     return bus_->Last<cairn::lcmt_obstacle_registry>(Ch("MAP.OBSTACLES"));
   }
+  // Sends a control request and waits for its reply, sending it again (the same id: replays
+  // are idempotent) every second without one, as a client on a busy bus must: a datagram can
+  // be dropped while the mapper's socket is full of its own tile bursts.
   ControlReply Control(ControlRequest request) {
     request.requester = "mapping_integration_test";
     bus_->Publish(Ch("MAP.CONTROL"), request);
+    auto sent = std::chrono::steady_clock::now();
     std::optional<ControlReply> reply;
     WaitFor(
         [&] {
           auto r = bus_->Last<ControlReply>(Ch("MAP.CONTROL_REPLY"));
           if (r && r->request_id == request.request_id) reply = r;
+          if (!reply && std::chrono::steady_clock::now() - sent > std::chrono::seconds(1)) {
+            bus_->Publish(Ch("MAP.CONTROL"), request);
+            sent = std::chrono::steady_clock::now();
+          }
           return reply.has_value();
         },
         15.0, [&] { PumpAll(*bus_); });

@@ -103,15 +103,21 @@ class MapstoreServiceUnitTest : public ::testing::Test {
   }
 
   // Pushes a snapshot's layers (dropping the tiles named in `drop`), then OP_SAVE.
-  Reply Push(const MapSnapshot& s, std::set<std::pair<int, int>> drop = {}) {
+  // Pushes a snapshot's tiles (compressed when `compress`, as MapstoreClient does) without the
+  // tiles in `drop`, then OP_SAVE, answering resend requests with float tiles.
+  Reply Push(const MapSnapshot& s, std::set<std::pair<int, int>> drop = {}, bool compress = false,
+             std::set<std::pair<int, int>> damage = {}) {
     const int64_t id = ++next_id_;
     const std::string map_name = std::to_string(id) + "/" + s.name;
     runtime::LayerTiler tiler(s.provenance.source_robot, map_name, 10);
     for (const std::string& layer : s.base.layer_names()) {
       auto batch = tiler.Update(s.base, layer, runtime::TileEncoding::kFloat, 1, true);
       node_.Publish(channels::kMapstorePushManifest, batch.manifest);
-      for (const auto& t : batch.tiles) {
-        if (!drop.count({t.tile_ix, t.tile_iy})) node_.Publish(channels::kMapstorePushTiles, t);
+      for (auto t : batch.tiles) {
+        if (drop.count({t.tile_ix, t.tile_iy})) continue;
+        if (compress) CompressTile(&t);
+        if (damage.count({t.tile_ix, t.tile_iy}) && !t.bytes.empty()) t.bytes[0] ^= 0x5a;
+        node_.Publish(channels::kMapstorePushTiles, t);
       }
     }
     if (!s.obstacles.obstacles.empty()) {
@@ -180,6 +186,24 @@ TEST_F(MapstoreServiceUnitTest, PushedSaveWithALostTileIsCompletedByResend) {
   EXPECT_EQ(stored->at("observation_count"), s.base.at("observation_count"));
   auto obstacles = store_.LoadObstacles({"lab", "corridor", 0});
   ASSERT_EQ(obstacles->obstacles.size(), 2u);
+}
+
+TEST_F(MapstoreServiceUnitTest, CompressedPushIsStoredExactlyAndADamagedTileIsAskedForAgain) {
+  const MapSnapshot s = testing::SampleSnapshot("corridor", 37, 23);
+  const Reply reply = Push(s, {}, /*compress=*/true, /*damage=*/{{2, 1}});
+  ASSERT_EQ(reply.status, kOk) << reply.message;
+  EXPECT_GE(resends_answered_, 1);  // the damaged tile was dropped and asked for again
+  auto stored = store_.LoadLayers({"lab", "corridor", 0}, {});
+  ASSERT_TRUE(stored.ok());
+  for (const std::string& name : s.base.layer_names()) {
+    const common::Layer& a = stored->at(name);
+    const common::Layer& b = s.base.at(name);
+    for (Eigen::Index i = 0; i < a.size(); ++i) {
+      ASSERT_TRUE((std::isnan(a.data()[i]) && std::isnan(b.data()[i])) ||
+                  a.data()[i] == b.data()[i])
+          << name << " cell " << i;
+    }
+  }
 }
 
 TEST_F(MapstoreServiceUnitTest, LoadSendsTilesAndAManifestPerLayer) {
