@@ -102,14 +102,12 @@ void MapstoreClient::OnReply(const lcm::ReceiveBuffer*, const std::string&,
 void MapstoreClient::OnTile(const lcm::ReceiveBuffer*, const std::string&,
                             const cairn::lcmt_grid_tile* m) {
   if (!incoming_ || m->map_name != incoming_->map_name) return;
-  if (m->encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
-    if (incoming_->assembler.OnTile(*m)) incoming_->last_progress = Clock::now();
-    return;
-  }
   // A compressed tile that does not decode is dropped: the resend asks for it again.
-  cairn::lcmt_grid_tile tile = *m;
-  if (!DecompressTile(&tile).ok()) return;
-  if (incoming_->assembler.OnTile(tile)) incoming_->last_progress = Clock::now();
+  cairn::lcmt_grid_tile scratch;
+  const cairn::lcmt_grid_tile* tile = FloatTile(*m, &scratch);
+  if (tile != nullptr && incoming_->assembler.OnTile(*tile)) {
+    incoming_->last_progress = Clock::now();
+  }
 }
 
 void MapstoreClient::OnManifest(const lcm::ReceiveBuffer*, const std::string&,

@@ -1160,15 +1160,13 @@ int64_t StagedCells(const Map& staging) {
 
 void MapstoreService::OnPushTile(const cairn::lcmt_grid_tile& pushed) {
   // A compressed tile is decoded (and checked) before the lock is taken.
-  std::optional<cairn::lcmt_grid_tile> decoded;
-  if (pushed.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
-    decoded = pushed;
-    if (!DecompressTile(&*decoded).ok()) {
-      node_.CountDropped("bad_push_tiles");
-      return;
-    }
+  cairn::lcmt_grid_tile scratch;
+  const cairn::lcmt_grid_tile* decoded = FloatTile(pushed, &scratch);
+  if (decoded == nullptr) {
+    node_.CountDropped("bad_push_tiles");
+    return;
   }
-  const cairn::lcmt_grid_tile& tile = decoded ? *decoded : pushed;
+  const cairn::lcmt_grid_tile& tile = *decoded;
   std::lock_guard<std::mutex> lock(mutex_);
   if (tile.map_name.find('/') == std::string::npos) {
     node_.CountDropped("bad_push_tiles");

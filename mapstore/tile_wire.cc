@@ -1,6 +1,7 @@
 #include "mapstore/tile_wire.h"
 
 #include <cstring>
+#include <exception>
 
 #include "mapstore/blob_codec.h"
 
@@ -95,7 +96,8 @@ bool FastPathMatches() {
 }  // namespace
 
 void EncodeTile(const cairn::lcmt_grid_tile& tile, std::vector<uint8_t>* out) {
-  if (tile.num_cells >= 0 && static_cast<size_t>(tile.num_cells) == tile.data.size() &&
+  // A compressed tile has no cells to swap: the generated encoder copies its bytes in one go.
+  if (tile.num_cells > 0 && static_cast<size_t>(tile.num_cells) == tile.data.size() &&
       tile.num_bytes >= 0 && static_cast<size_t>(tile.num_bytes) == tile.bytes.size() &&
       FastPathMatches()) {
     Fast(tile, out);
@@ -110,9 +112,14 @@ bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level) {
       static_cast<size_t>(tile->num_cells) != tile->data.size()) {
     return false;
   }
-  const EncodedBlob blob = EncodeBlob(tile->data.data(), tile->data.size() * sizeof(float),
-                                      Codec::kZstdShuffle4, zstd_level);
-  if (blob.codec != Codec::kZstdShuffle4 || blob.data.size() >= tile->data.size() * sizeof(float)) {
+  EncodedBlob blob;
+  try {
+    blob = EncodeBlob(tile->data.data(), tile->data.size() * sizeof(float), Codec::kZstdShuffle4,
+                      zstd_level);
+  } catch (const std::exception&) {
+    return false;  // zstd failed (out of memory): the floats travel as they are
+  }
+  if (blob.data.size() >= tile->data.size() * sizeof(float)) {
     return false;  // incompressible: the floats travel as they are
   }
   tile->bytes.assign(blob.data.begin(), blob.data.end());
@@ -149,6 +156,13 @@ common::Status DecompressTile(cairn::lcmt_grid_tile* tile) {
   tile->bytes.clear();
   tile->num_bytes = 0;
   return common::Status::Ok();
+}
+
+const cairn::lcmt_grid_tile* FloatTile(const cairn::lcmt_grid_tile& tile,
+                                       cairn::lcmt_grid_tile* scratch) {
+  if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) return &tile;
+  *scratch = tile;
+  return DecompressTile(scratch).ok() ? scratch : nullptr;
 }
 
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile) {

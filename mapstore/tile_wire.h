@@ -31,6 +31,11 @@ bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level = 1);
 /// or a bad size, kCorrupt for damaged bytes.
 common::Status DecompressTile(cairn::lcmt_grid_tile* tile);
 
+/// The float form of a received tile: the tile itself when it is one, else its decoded copy in
+/// `*scratch`; nullptr when it does not decode.
+const cairn::lcmt_grid_tile* FloatTile(const cairn::lcmt_grid_tile& tile,
+                                       cairn::lcmt_grid_tile* scratch);
+
 /// Encodes and publishes a tile; false when LCM refuses it.
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile);
 
