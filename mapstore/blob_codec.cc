@@ -462,4 +462,44 @@ common::Result<std::vector<common::Vector2>> ParsePolygon(const std::string& byt
   return polygon;
 }
 
+common::Status CheckStoredTile(const StoredTile& tile) {
+  if (tile.cells_x <= 0 || tile.cells_y <= 0) {
+    return common::CorruptError("a stored tile with no cells");
+  }
+  thread_local std::vector<uint8_t> scratch;
+  const int64_t raw_size =
+      int64_t{tile.cells_x} * tile.cells_y * static_cast<int64_t>(sizeof(float));
+  scratch.resize(static_cast<size_t>(raw_size));
+  return DecodeBlobTo(static_cast<Codec>(tile.codec), tile.data.data(), tile.data.size(), raw_size,
+                      tile.raw_crc32, scratch.data());
+}
+
+common::Result<std::vector<StoredLayer>> MapStore::LoadStoredTiles(
+    const MapRef& ref, const std::vector<std::string>& layers, int tile_size) const {
+  if (tile_size <= 0) return common::InvalidArgumentError("the tile size must be positive");
+  auto map = LoadLayers(ref, {layers, std::nullopt});
+  if (!map.ok()) return map.status();
+  const std::vector<TileSpec> specs = TilesOf(map->geometry(), tile_size);
+  std::vector<StoredLayer> out;
+  try {
+    for (const std::string& name : map->layer_names()) {
+      StoredLayer layer;
+      layer.name = name;
+      layer.tile_size = tile_size;
+      for (const TileSpec& spec : specs) {
+        const std::vector<float> cells = ExtractTile(map->at(name), spec);
+        if (AllUnknown(cells)) continue;
+        EncodedBlob blob =
+            EncodeBlob(cells.data(), cells.size() * sizeof(float), Codec::kZstdShuffle4);
+        layer.tiles.push_back({spec.tile_ix, spec.tile_iy, spec.cells_x, spec.cells_y,
+                               static_cast<int>(blob.codec), blob.raw_crc32, std::move(blob.data)});
+      }
+      out.push_back(std::move(layer));
+    }
+  } catch (const std::exception& e) {
+    return common::InternalError(std::string("compressing tiles: ") + e.what());
+  }
+  return out;
+}
+
 }  // namespace cairn::mapstore

@@ -77,6 +77,10 @@ bool AllUnknown(const std::vector<float>& cells);
 void PasteTile(const TileSpec& tile, const float* cells, int offset_ix, int offset_iy,
                common::Layer* layer);
 
+/// kOk when a stored tile's bytes decode to its size and checksums; kCorrupt saying what did
+/// not match otherwise. Thread-safe.
+common::Status CheckStoredTile(const StoredTile& tile);
+
 /// The box clipped to a grid; empty when they do not overlap.
 CellBox ClipBox(const CellBox& box, const common::GridGeometry& geometry);
 /// Geometry of a box of a grid (same resolution and yaw, origin at the box's minimum corner).

@@ -109,6 +109,26 @@ struct LayerQuery {
   std::optional<CellBox> region;
 };
 
+/// One stored tile of a base layer as the store keeps it, so that a load reply can send it
+/// without decoding and encoding it again. Tile (tile_ix, tile_iy) covers cells
+/// [tile_ix * tile_size, + cells_x) x [tile_iy * tile_size, + cells_y) of the version's grid.
+struct StoredTile {
+  int tile_ix{0};
+  int tile_iy{0};
+  int cells_x{0};
+  int cells_y{0};
+  int codec{0};           ///< how `data` is encoded (mapstore::Codec)
+  uint32_t raw_crc32{0};  ///< CRC-32 of the float cells (x fastest, host byte order)
+  std::string data;       ///< the stored bytes
+};
+
+/// A base layer as stored tiles. Tiles the store does not hold are all unknown.
+struct StoredLayer {
+  std::string name;
+  int tile_size{0};
+  std::vector<StoredTile> tiles;  ///< row by row
+};
+
 /// Which maps to list.
 struct MapFilter {
   std::string site;          ///< empty = every site
@@ -220,6 +240,12 @@ class MapStore {
   /// Base layers of a version. kNotFound for an unknown layer, kCorrupt for a bad blob.
   virtual common::Result<common::GridMap> LoadLayers(const MapRef& ref,
                                                      const LayerQuery& query) const = 0;
+  /// Base layers of a version (`layers` empty = all) as their stored tiles, each blob checked
+  /// (kCorrupt when its bytes do not decode to what its checksums say). The default cuts
+  /// LoadLayers' grid into tiles of `tile_size` and compresses them as SqliteMapStore stores
+  /// them; SqliteMapStore returns its own blobs (tiles of the size the version was saved with).
+  virtual common::Result<std::vector<StoredLayer>> LoadStoredTiles(
+      const MapRef& ref, const std::vector<std::string>& layers, int tile_size = 100) const;
   virtual common::Result<common::ObstacleRegistry> LoadObstacles(const MapRef& ref) const = 0;
   /// kNotFound when the version has no OctoMap.
   virtual common::Result<OctomapData> LoadOctomap(const MapRef& ref) const = 0;

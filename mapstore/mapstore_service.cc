@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <set>
+#include <stdexcept>
 #include <thread>
 
 #include "cairn/lcmt_map_control_request.hpp"
@@ -165,6 +167,9 @@ struct MapstoreService::Outgoing {
   std::vector<std::string> layers;
   std::optional<OctomapData> octomap;
   int64_t cells{0};
+  double tile_ms{0.0};      // cutting the layers into tiles
+  double compress_ms{0.0};  // compressing the tiles
+  int64_t bytes{0};         // of the first send's tiles
 };
 
 struct MapstoreService::Staging {
@@ -494,7 +499,40 @@ void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
   }
   const bool only_octomap = want_octomap && wanted.empty();
   ProfileView view;
-  if (only_octomap) {
+  bool stored = false;
+  if (!only_octomap && request.profile.empty() && params_.compress_reply_tiles) {
+    // Base layers only: the stored blobs go out as they are, neither decoded nor tiled nor
+    // compressed again (each is still checked). A derived layer's name falls through to
+    // LoadForProfile, which explains why it cannot be had.
+    auto info = store_.GetMapInfo({site, request.map_name, request.version});
+    if (!info.ok()) {
+      out->status = info.status();
+      return;
+    }
+    const std::set<std::string> base(info->layers.begin(), info->layers.end());
+    if (std::all_of(wanted.begin(), wanted.end(),
+                    [&](const std::string& l) { return base.count(l) > 0; })) {
+      const MapRef exact{info->site, info->name, info->version};
+      auto tiles = store_.LoadStoredTiles(exact, wanted, params_.reply_tile_size);
+      if (!tiles.ok()) {
+        out->status = tiles.status();
+        return;
+      }
+      auto obstacles = store_.LoadObstacles(exact);
+      if (!obstacles.ok()) {
+        out->status = obstacles.status();
+        return;
+      }
+      view.info = *info;
+      view.obstacles = std::move(obstacles).value();
+      out->stored_layers = std::move(tiles).value();
+      out->stored_geometry = info->geometry;
+      stored = true;
+    }
+  }
+  if (stored) {
+    // view is complete
+  } else if (only_octomap) {
     auto info = store_.GetMapInfo({site, request.map_name, request.version});
     if (!info.ok()) {
       out->status = info.status();
@@ -521,7 +559,9 @@ void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
   reply->version = view.info.version;
   reply->maps.push_back(ToLcm(view.info));
   out->robot = view.info.provenance.source_robot;
-  if (!only_octomap) {
+  if (stored) {
+    for (const auto& layer : out->stored_layers) reply->layers.push_back(layer.name);
+  } else if (!only_octomap) {
     reply->layers = view.layers.layer_names();
     out->layers = std::move(view.layers);
   }
@@ -704,14 +744,21 @@ void MapstoreService::WorkerLoop() {
       queue_.pop_front();
     }
     // The work and the tiling of the payload run without the lock ...
+    const auto work_started = Clock::now();
     JobResult result = RunJob(job->request, job->reply);
+    const double work_ms = SecondsSince(work_started) * 1e3;
     Reply reply = std::move(result.reply);
     std::shared_ptr<Outgoing> payload;
-    if (result.status.ok() && (result.layers || result.octomap)) {
-      payload = MakeOutgoing(std::to_string(job->request.request_id) + "/" + job->request.map_name,
-                             result);
-      for (const auto& batch : payload->first_send) {
-        reply.num_tiles += static_cast<int32_t>(batch.tiles.size());
+    if (result.status.ok() && (result.layers || result.octomap || !result.stored_layers.empty())) {
+      try {
+        payload = MakeOutgoing(
+            std::to_string(job->request.request_id) + "/" + job->request.map_name, result);
+        for (const auto& batch : payload->first_send) {
+          reply.num_tiles += static_cast<int32_t>(batch.tiles.size());
+        }
+      } catch (const std::exception& e) {
+        payload.reset();
+        result.status = common::InternalError(std::string("preparing the reply: ") + e.what());
       }
     }
     SetStatus(result.status, &reply);
@@ -725,7 +772,18 @@ void MapstoreService::WorkerLoop() {
     }
     // ... and the sending after it: the reply, then the payload it announces.
     Publish(reply);
+    const auto send_started = Clock::now();
     if (payload) Resend(*payload, nullptr);
+    if (result.status.ok() && payload && payload->cells > 0) {
+      // Where a load's time goes, one line per load.
+      node_.Event(
+          "%s '%s' v%lld: %d tiles%s, %.1f MB; read %.0f ms, tiled %.0f ms, compressed %.0f ms, "
+          "sent %.0f ms",
+          result.counter == "loads" ? "load of" : "reply with", job->request.map_name.c_str(),
+          static_cast<long long>(reply.version), reply.num_tiles,
+          result.stored_layers.empty() ? "" : " as stored", payload->bytes / 1e6, work_ms,
+          payload->tile_ms, payload->compress_ms, SecondsSince(send_started) * 1e3);
+    }
     if (result.status.ok() && !result.event.empty()) node_.Event("%s", result.event.c_str());
   }
 }
@@ -736,10 +794,46 @@ std::shared_ptr<MapstoreService::Outgoing> MapstoreService::MakeOutgoing(
   out->map_name = map_name;
   out->robot = result.robot;
   out->octomap = result.octomap;
-  if (result.layers) {
+  if (!result.stored_layers.empty()) {
+    const auto tile_started = Clock::now();
+    out->tiler = std::make_unique<runtime::LayerTiler>(result.robot, map_name,
+                                                       result.stored_layers.front().tile_size);
+    const int64_t utime = node_.NowUtime();
+    for (const StoredLayer& layer : result.stored_layers) {
+      std::vector<runtime::LayerTiler::EncodedTile> tiles;
+      tiles.reserve(layer.tiles.size());
+      for (const StoredTile& t : layer.tiles) {
+        runtime::LayerTiler::EncodedTile e;
+        e.tile_ix = t.tile_ix;
+        e.tile_iy = t.tile_iy;
+        e.cells_x = t.cells_x;
+        e.cells_y = t.cells_y;
+        e.checksum = t.raw_crc32;
+        if (static_cast<Codec>(t.codec) == Codec::kZstdShuffle4) {
+          e.encoding = cairn::lcmt_grid_tile::ENCODING_ZSTD_SHUFFLE4;
+          e.bytes.assign(t.data.begin(), t.data.end());
+        } else {
+          // Another codec (raw, plain zstd): the cells travel as floats.
+          e.encoding = cairn::lcmt_grid_tile::ENCODING_FLOAT32;
+          e.data.resize(static_cast<size_t>(t.cells_x) * t.cells_y);
+          const Status s = DecodeBlobTo(static_cast<Codec>(t.codec), t.data.data(), t.data.size(),
+                                        static_cast<int64_t>(e.data.size() * sizeof(float)),
+                                        t.raw_crc32, reinterpret_cast<uint8_t*>(e.data.data()));
+          if (!s.ok()) throw std::runtime_error(s.message());  // checked when loaded
+        }
+        tiles.push_back(std::move(e));
+      }
+      out->first_send.push_back(
+          out->tiler->Adopt(layer.name, result.stored_geometry, std::move(tiles), utime));
+      out->layers.push_back(layer.name);
+      out->cells += result.stored_geometry.num_cells();
+    }
+    out->tile_ms = SecondsSince(tile_started) * 1e3;
+  } else if (result.layers) {
     out->tiler =
         std::make_unique<runtime::LayerTiler>(result.robot, map_name, params_.reply_tile_size);
     const int64_t utime = node_.NowUtime();
+    const auto tile_started = Clock::now();
     for (const std::string& name : result.layers->layer_names()) {
       out->first_send.push_back(
           out->tiler->Update(*result.layers, name, runtime::TileEncoding::kFloat, utime, true));
@@ -751,8 +845,20 @@ std::shared_ptr<MapstoreService::Outgoing> MapstoreService::MakeOutgoing(
       for (auto& batch : out->first_send) {
         for (auto& tile : batch.tiles) tiles.push_back(&tile);
       }
+      out->tile_ms = SecondsSince(tile_started) * 1e3;
+      const auto compress_started = Clock::now();
       ParallelFor(tiles.size(), std::max(1, params_.worker_threads),
                   [&](size_t i) { CompressTile(tiles[i]); });
+      out->compress_ms = SecondsSince(compress_started) * 1e3;
+    } else {
+      out->tile_ms = SecondsSince(tile_started) * 1e3;
+    }
+  }
+  for (const auto& batch : out->first_send) {
+    for (const auto& tile : batch.tiles) {
+      out->bytes += tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32
+                        ? static_cast<int64_t>(tile.data.size() * sizeof(float))
+                        : static_cast<int64_t>(tile.bytes.size());
     }
   }
   return out;

@@ -103,10 +103,13 @@ class MapstoreService {
     cairn::lcmt_mapstore_reply reply{};
     common::Status status;
     std::optional<common::GridMap> layers;  ///< payload sent as tiles
-    std::string robot;                      ///< robot field of the payload tiles
-    std::optional<OctomapData> octomap;     ///< payload sent as chunks
-    std::string event;                      ///< one log line, when notable
-    std::string counter;                    ///< a HEALTH counter to bump
+    /// Or base layers as the store keeps them, sent as they are (a load without a profile).
+    std::vector<StoredLayer> stored_layers;
+    common::GridGeometry stored_geometry;
+    std::string robot;                   ///< robot field of the payload tiles
+    std::optional<OctomapData> octomap;  ///< payload sent as chunks
+    std::string event;                   ///< one log line, when notable
+    std::string counter;                 ///< a HEALTH counter to bump
   };
   struct Job {
     cairn::lcmt_mapstore_request request{};

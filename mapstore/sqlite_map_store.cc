@@ -662,6 +662,88 @@ Result<common::GridMap> SqliteMapStore::LoadLayers(const MapRef& ref,
   return map;
 }
 
+Result<std::vector<StoredLayer>> SqliteMapStore::LoadStoredTiles(
+    const MapRef& ref, const std::vector<std::string>& layers, int /*tile_size*/) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto row = Resolve(ref);
+  if (!row.ok()) return row.status();
+  std::map<std::string, int64_t> layer_ids;
+  {
+    sqlite::Statement st = db_->Prepare("SELECT name, id FROM layers WHERE map_version_id = ?");
+    st.Bind(1, row->id);
+    while (st.Step()) layer_ids[st.Text(0)] = st.Int(1);
+    if (!st.status().ok()) return st.status();
+  }
+  std::vector<std::string> wanted = layers;
+  if (wanted.empty()) {
+    for (const auto& [name, id] : layer_ids) wanted.push_back(name);
+  }
+  for (const std::string& name : wanted) {
+    if (!layer_ids.count(name)) {
+      return common::NotFoundError(LayerNotFoundMessage(ref, row->version, name, layer_ids));
+    }
+  }
+  const int ts = row->tile_size;
+  const common::GridGeometry& full = row->geometry;
+  const int tiles_x = (full.size_x + ts - 1) / ts;
+  const int tiles_y = (full.size_y + ts - 1) / ts;
+  sqlite::Statement st = db_->Prepare(std::string("SELECT ") + kTileColumns +
+                                      " FROM layer_tiles t JOIN blobs b ON b.id = t.blob_id "
+                                      "WHERE t.layer_id = ? ORDER BY t.tile_iy, t.tile_ix");
+  std::vector<StoredLayer> out;
+  std::vector<std::pair<size_t, size_t>> all;  // (layer, tile) of every tile, for the checks
+  for (const std::string& name : wanted) {
+    StoredLayer layer;
+    layer.name = name;
+    layer.tile_size = ts;
+    st.Reset();
+    st.Bind(1, layer_ids[name]);
+    while (st.Step()) {
+      StoredTile t;
+      t.tile_ix = static_cast<int>(st.Int(0));
+      t.tile_iy = static_cast<int>(st.Int(1));
+      t.codec = static_cast<int>(st.Int(2));
+      const int64_t raw_size = st.Int(3);
+      t.raw_crc32 = static_cast<uint32_t>(st.Int(4));
+      t.data = st.Blob(5);
+      const std::string where = "layer '" + name + "' of map '" + row->site + "/" + row->name +
+                                "' version " + std::to_string(row->version) + " tile (" +
+                                std::to_string(t.tile_ix) + ", " + std::to_string(t.tile_iy) + ")";
+      if (t.tile_ix < 0 || t.tile_iy < 0 || t.tile_ix >= tiles_x || t.tile_iy >= tiles_y) {
+        return common::CorruptError(where + " lies outside the grid");
+      }
+      t.cells_x = std::min(ts, full.size_x - t.tile_ix * ts);
+      t.cells_y = std::min(ts, full.size_y - t.tile_iy * ts);
+      if (raw_size != int64_t{t.cells_x} * t.cells_y * static_cast<int64_t>(sizeof(float))) {
+        return common::CorruptError(where + " has " + std::to_string(raw_size) + " bytes for " +
+                                    std::to_string(t.cells_x * t.cells_y) + " cells");
+      }
+      layer.tiles.push_back(std::move(t));
+    }
+    if (!st.status().ok()) return st.status();
+    out.push_back(std::move(layer));
+  }
+  for (size_t l = 0; l < out.size(); ++l) {
+    for (size_t t = 0; t < out[l].tiles.size(); ++t) all.emplace_back(l, t);
+  }
+  // The blobs are checked (decoded, not kept) as LoadLayers checks them.
+  std::vector<Status> errors(all.size());
+  ParallelFor(all.size(), options_.compression_threads, [&](size_t i) {
+    const StoredTile& t = out[all[i].first].tiles[all[i].second];
+    Status s = CheckStoredTile(t);
+    if (!s.ok()) {
+      errors[i] = common::CorruptError(
+          "layer '" + out[all[i].first].name + "' of map '" + row->site + "/" + row->name +
+          "' version " + std::to_string(row->version) + " tile (" + std::to_string(t.tile_ix) +
+          ", " + std::to_string(t.tile_iy) + "): " + s.message());
+    }
+  });
+  for (const Status& e : errors) {
+    if (!e.ok()) return e;
+  }
+  return out;
+}
+
 Result<common::ObstacleRegistry> SqliteMapStore::LoadObstacles(const MapRef& ref) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);

@@ -61,6 +61,9 @@ class SqliteMapStore final : public MapStore {
   common::Result<std::vector<MapInfo>> ListMaps(const MapFilter& filter) const override;
   common::Result<common::GridMap> LoadLayers(const MapRef& ref,
                                              const LayerQuery& query) const override;
+  common::Result<std::vector<StoredLayer>> LoadStoredTiles(const MapRef& ref,
+                                                           const std::vector<std::string>& layers,
+                                                           int tile_size = 100) const override;
   common::Result<common::ObstacleRegistry> LoadObstacles(const MapRef& ref) const override;
   common::Result<OctomapData> LoadOctomap(const MapRef& ref) const override;
   common::Status DeleteMap(const MapRef& ref, const WriteContext& ctx) override;

@@ -131,7 +131,7 @@ bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level) {
   return true;
 }
 
-common::Status DecompressTile(cairn::lcmt_grid_tile* tile) {
+common::Status DecompressTile(cairn::lcmt_grid_tile* tile, bool verify_checksum) {
   using T = cairn::lcmt_grid_tile;
   if (tile->encoding == T::ENCODING_FLOAT32) return common::Status::Ok();
   if (tile->encoding != T::ENCODING_ZSTD_SHUFFLE4) {
@@ -144,11 +144,10 @@ common::Status DecompressTile(cairn::lcmt_grid_tile* tile) {
   }
   const size_t cells = static_cast<size_t>(tile->cells_x) * tile->cells_y;
   std::vector<float> data(cells);
-  const common::Status s =
-      DecodeBlobTo(Codec::kZstdShuffle4, reinterpret_cast<const char*>(tile->bytes.data()),
-                   tile->bytes.size(), static_cast<int64_t>(cells * sizeof(float)),
-                   static_cast<uint32_t>(tile->checksum), reinterpret_cast<uint8_t*>(data.data()),
-                   /*verify_crc=*/true);
+  const common::Status s = DecodeBlobTo(
+      Codec::kZstdShuffle4, reinterpret_cast<const char*>(tile->bytes.data()), tile->bytes.size(),
+      static_cast<int64_t>(cells * sizeof(float)), static_cast<uint32_t>(tile->checksum),
+      reinterpret_cast<uint8_t*>(data.data()), verify_checksum);
   if (!s.ok()) return s;
   tile->data = std::move(data);
   tile->num_cells = static_cast<int32_t>(cells);
@@ -162,7 +161,7 @@ const cairn::lcmt_grid_tile* FloatTile(const cairn::lcmt_grid_tile& tile,
                                        cairn::lcmt_grid_tile* scratch) {
   if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) return &tile;
   *scratch = tile;
-  return DecompressTile(scratch).ok() ? scratch : nullptr;
+  return DecompressTile(scratch, /*verify_checksum=*/false).ok() ? scratch : nullptr;
 }
 
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile) {

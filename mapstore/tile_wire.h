@@ -26,13 +26,15 @@ void EncodeTile(const cairn::lcmt_grid_tile& tile, std::vector<uint8_t>* out);
 /// and the tile unchanged, when it is not a float tile or would not get smaller.
 bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level = 1);
 
-/// Turns a compressed tile back into a float tile in place, checking the float bytes against
-/// the tile's checksum; a float tile is left as it is. kInvalidArgument for an unknown encoding
-/// or a bad size, kCorrupt for damaged bytes.
-common::Status DecompressTile(cairn::lcmt_grid_tile* tile);
+/// Turns a compressed tile back into a float tile in place, checking zstd's frame checksum
+/// and, with `verify_checksum`, the float bytes against the tile's checksum; a float tile is
+/// left as it is. kInvalidArgument for an unknown encoding or a bad size, kCorrupt for damaged
+/// bytes.
+common::Status DecompressTile(cairn::lcmt_grid_tile* tile, bool verify_checksum = true);
 
 /// The float form of a received tile: the tile itself when it is one, else its decoded copy in
-/// `*scratch`; nullptr when it does not decode.
+/// `*scratch`; nullptr when it does not decode. The tile's checksum is left to the
+/// LayerAssembler it goes to (one CRC pass over the cells, not two).
 const cairn::lcmt_grid_tile* FloatTile(const cairn::lcmt_grid_tile& tile,
                                        cairn::lcmt_grid_tile* scratch);
 

@@ -276,6 +276,10 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
     if (result.cost >= params_.replace_path_ratio * left) return;
     ++status_.replans;
     status_.message = "periodic replan found a better path";
+    pending_events_.push_back(
+        Format("periodic replan: a path of cost %.1f replaces what is left of the current one, ",
+               result.cost) +
+        Format("cost %.1f", left));
   }
   if (result.ok()) {
     path_ = Path(result.poses);
@@ -682,6 +686,7 @@ StepOutput Navigator::Step(double now_s) {
     if (!periodic_replan_) {
       ++status_.replans;
       status_.message = "replanning: " + replan_why_;
+      pending_events_.push_back(status_.message);
     }
     replan_why_.clear();
     plan_wanted_ = true;

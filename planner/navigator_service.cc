@@ -1,6 +1,7 @@
 #include "planner/navigator_service.h"
 
 #include <cmath>
+#include <cstdio>
 
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_path.hpp"
@@ -133,9 +134,21 @@ void NavigatorService::HandlePlanResults(double now_s) {
     node_.Count("plans");
     if (!r.ok()) node_.Count(std::string("plan_") + PlanStatusName(r.status));
     if (r.status != PlanStatus::kCancelled) {
+      // The extent of the path tells a detour from a way round an obstacle at a glance.
+      std::string shape;
+      if (r.ok() && !r.poses.empty()) {
+        Eigen::Vector2d lo = r.poses.front().position(), hi = lo;
+        for (const auto& p : r.poses) {
+          lo = lo.cwiseMin(p.position());
+          hi = hi.cwiseMax(p.position());
+        }
+        char text[160];
+        std::snprintf(text, sizeof(text), ", %.2f m, cost %.1f, x %.1f..%.1f, y %.1f..%.1f",
+                      r.length_m, r.cost, lo.x(), hi.x(), lo.y(), hi.y());
+        shape = text;
+      }
       node_.Event("plan %lld: %s in %.0f ms%s%s", static_cast<long long>(id),
-                  PlanStatusName(r.status), r.total_time_s * 1e3,
-                  r.ok() ? (", " + std::to_string(r.length_m).substr(0, 6) + " m").c_str() : "",
+                  PlanStatusName(r.status), r.total_time_s * 1e3, shape.c_str(),
                   r.message.empty() ? "" : (" (" + r.message + ")").c_str());
     }
     navigator_.OnPlanResult(id, r, now_s);

@@ -161,6 +161,13 @@ Result RunCase(const char* self, const std::string& url, bool sliced, double rat
   }
   int complete = 0;
   for (const auto& g : got) complete += std::all_of(g.begin(), g.end(), [](bool b) { return b; });
+  // Which slices were lost tells a stalled receiver (a run of them) from scattered drops.
+  int listed = 0;
+  for (int r = 0; r < revolutions && sliced; ++r) {
+    for (size_t s = 0; s < got[r].size(); ++s) {
+      if (!got[r][s] && listed++ < 20) std::printf("  lost: revolution %d slice %zu\n", r, s);
+    }
+  }
   std::sort(latencies_ms.begin(), latencies_ms.end());
   auto pct = [&](double p) {
     if (latencies_ms.empty()) return std::nan("");

@@ -144,6 +144,51 @@ LayerTiler::Batch LayerTiler::Update(const common::GridMap& map, const std::stri
   return batch;
 }
 
+LayerTiler::Batch LayerTiler::Adopt(const std::string& layer, const common::GridGeometry& geometry,
+                                    std::vector<EncodedTile> tiles, int64_t utime) {
+  const int nx = (geometry.size_x + tile_size_ - 1) / tile_size_;
+  const int ny = (geometry.size_y + tile_size_ - 1) / tile_size_;
+  std::map<std::pair<int, int>, TileState> next_tiles;
+  LayerState& state = layers_[layer];
+  const int64_t next_version = (state.version == 0 ? version_base_ : state.version) + 1;
+  for (EncodedTile& t : tiles) {
+    if (t.tile_ix < 0 || t.tile_iy < 0 || t.tile_ix >= nx || t.tile_iy >= ny ||
+        t.cells_x != std::min(tile_size_, geometry.size_x - t.tile_ix * tile_size_) ||
+        t.cells_y != std::min(tile_size_, geometry.size_y - t.tile_iy * tile_size_)) {
+      throw std::invalid_argument("tile (" + std::to_string(t.tile_ix) + ", " +
+                                  std::to_string(t.tile_iy) + ") of layer '" + layer +
+                                  "' does not fit its grid");
+    }
+    TileState tile;
+    tile.tile_version = next_version;
+    tile.checksum = t.checksum;
+    tile.cells_x = t.cells_x;
+    tile.cells_y = t.cells_y;
+    tile.encoding = t.encoding;
+    tile.bytes = std::move(t.bytes);
+    tile.data = std::move(t.data);
+    if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
+        tile.data.size() != static_cast<size_t>(tile.cells_x) * tile.cells_y) {
+      throw std::invalid_argument("float tile (" + std::to_string(t.tile_ix) + ", " +
+                                  std::to_string(t.tile_iy) + ") of layer '" + layer +
+                                  "' has the wrong number of cells");
+    }
+    next_tiles[{t.tile_ix, t.tile_iy}] = std::move(tile);
+  }
+  state.geometry = geometry;
+  state.encoding = TileEncoding::kFloat;
+  state.version = next_version;
+  state.utime = utime;
+  state.tiles = std::move(next_tiles);
+  Batch batch;
+  batch.changed = true;
+  for (const auto& [key, tile] : state.tiles) {
+    AppendTile(layer, state, key.first, key.second, tile, &batch);
+  }
+  batch.manifest = MakeManifest(layer, state);
+  return batch;
+}
+
 void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, int ix, int iy,
                             const TileState& tile, Batch* batch) const {
   if (state.encoding == TileEncoding::kFloat) {
@@ -160,8 +205,11 @@ void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, i
     m.cells_x = tile.cells_x;
     m.cells_y = tile.cells_y;
     m.checksum = tile.checksum;
+    m.encoding = tile.encoding;
     m.num_cells = static_cast<int32_t>(tile.data.size());
     m.data = tile.data;
+    m.num_bytes = static_cast<int32_t>(tile.bytes.size());
+    m.bytes = tile.bytes;
     batch->tiles.push_back(std::move(m));
   } else {
     cairn::lcmt_occupancy_tile m{};

@@ -63,6 +63,24 @@ class LayerTiler {
   /// version is bumped when any did. @throws std::out_of_range if the layer is missing.
   Batch Update(const common::GridMap& map, const std::string& layer, TileEncoding encoding,
                int64_t utime, bool force_all = false);
+  /// A float tile encoded elsewhere (a map store's blob sent as it is): its place and size, the
+  /// CRC-32 of its float cells, and its wire encoding (lcmt_grid_tile::ENCODING_*) and bytes.
+  struct EncodedTile {
+    int tile_ix{0};
+    int tile_iy{0};
+    int cells_x{0};
+    int cells_y{0};
+    uint32_t checksum{0};
+    int8_t encoding{0};
+    std::vector<uint8_t> bytes;  ///< compressed encodings
+    std::vector<float> data;     ///< ENCODING_FLOAT32: the cells, x fastest
+  };
+  /// Publishes a float layer of `geometry` from encoded tiles (absent tiles are all unknown):
+  /// every tile is sent, the layer version bumps, and Resend serves the tiles as they are.
+  /// @throws std::invalid_argument for a tile outside the grid or of the wrong size.
+  Batch Adopt(const std::string& layer, const common::GridGeometry& geometry,
+              std::vector<EncodedTile> tiles, int64_t utime);
+
   /// Tiles named by a resend request (all current tiles when it names none), from the last
   /// Update; an unknown layer gives an empty batch.
   Batch Resend(const cairn::lcmt_tile_resend_request& request) const;
@@ -78,6 +96,8 @@ class LayerTiler {
     int cells_y{0};
     std::vector<float> data;        // kFloat
     std::vector<int8_t> occupancy;  // kOccupancy
+    int8_t encoding{0};             // kFloat adopted: its wire encoding ...
+    std::vector<uint8_t> bytes;     // ... and bytes (data stays empty)
   };
   struct LayerState {
     common::GridGeometry geometry;

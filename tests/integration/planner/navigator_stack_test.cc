@@ -13,6 +13,7 @@
 #include "cairn/lcmt_goal.hpp"
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_nav_status.hpp"
+#include "cairn/lcmt_obstacle_registry.hpp"
 #include "cairn/lcmt_path.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_sim_clock.hpp"
@@ -26,6 +27,7 @@
 #include "services/runtime/conversions.h"
 #include "tests/support/geometry.h"
 #include "tests/support/harness.h"
+#include "tests/support/registry.h"
 
 namespace cairn::planner {
 namespace {
@@ -172,6 +174,10 @@ class NavigatorStackTest : public ::testing::Test {
     if (!s) return "no status";
     std::ostringstream out;
     out << "state " << int(s->state) << " reason " << int(s->reason) << ": " << s->message;
+    // What the mapper found explains most failures (a feature labelled wrong blocks a route).
+    const auto registry =
+        bus_.Last<cairn::lcmt_obstacle_registry>(ch::ForRobot(kRobot, ch::kMapObstacles));
+    if (registry) out << "\nthe mapper's registry:\n" << testing::Describe(*registry);
     return out.str();
   }
 

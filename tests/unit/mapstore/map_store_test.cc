@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "common/layers.h"
+#include "mapstore/blob_codec.h"
 #include "mapstore/in_memory_map_store.h"
 #include "mapstore/map_operations.h"
 #include "mapstore/sqlite_map_store.h"
@@ -211,6 +212,50 @@ TYPED_TEST(MapStoreTest, BadNamesAndBadMapsAreRefused) {
   MapSnapshot cost = SampleSnapshot("ok");
   cost.base.AddLayer("cost/pioneer3at", 0.f);
   EXPECT_TRUE(this->dut_->SaveMap(cost, this->ctx_).ok());
+}
+
+// A load reply sends stored tiles as they are: they must hold exactly the loaded layers.
+TYPED_TEST(MapStoreTest, StoredTilesHoldExactlyTheLoadedLayers) {
+  MapSnapshot s = SampleSnapshot("corridor", 53, 41);
+  for (int iy = 0; iy < 16; ++iy) {
+    for (int ix = 0; ix < 16; ++ix) s.base.at(layers::kElevation)(ix, iy) = common::kUnknown;
+  }
+  this->Save(s);
+  auto stored = this->dut_->LoadStoredTiles({"lab", "corridor", 0}, {}, 16);
+  ASSERT_TRUE(stored.ok()) << stored.status().ToString();
+  ASSERT_EQ(stored->size(), 2u);
+  for (const StoredLayer& layer : *stored) {
+    SCOPED_TRACE(layer.name);
+    ASSERT_EQ(layer.tile_size, 16);
+    common::Layer rebuilt = common::Layer::Constant(53, 41, common::kUnknown);
+    std::pair<int, int> previous{-1, -1};
+    bool has_first_tile = false;
+    for (const StoredTile& t : layer.tiles) {
+      EXPECT_LT(previous, std::make_pair(t.tile_iy, t.tile_ix)) << "tiles go row by row";
+      previous = {t.tile_iy, t.tile_ix};
+      has_first_tile |= t.tile_ix == 0 && t.tile_iy == 0;
+      EXPECT_EQ(t.cells_x, std::min(16, 53 - 16 * t.tile_ix));
+      EXPECT_EQ(t.cells_y, std::min(16, 41 - 16 * t.tile_iy));
+      std::vector<float> cells(static_cast<size_t>(t.cells_x) * t.cells_y);
+      ASSERT_TRUE(DecodeBlobTo(static_cast<Codec>(t.codec), t.data.data(), t.data.size(),
+                               static_cast<int64_t>(cells.size() * sizeof(float)), t.raw_crc32,
+                               reinterpret_cast<uint8_t*>(cells.data()), /*verify_crc=*/true)
+                      .ok());
+      PasteTile({t.tile_ix, t.tile_iy, t.tile_ix * 16, t.tile_iy * 16, t.cells_x, t.cells_y},
+                cells.data(), 0, 0, &rebuilt);
+    }
+    EXPECT_TRUE(SameLayer(rebuilt, s.base.at(layer.name)));
+    // An all-unknown tile is not stored (absent = unknown); the other layer has that tile.
+    EXPECT_EQ(has_first_tile, layer.name != layers::kElevation);
+  }
+  auto one = this->dut_->LoadStoredTiles({"lab", "corridor", 0}, {layers::kElevation}, 16);
+  ASSERT_TRUE(one.ok());
+  ASSERT_EQ(one->size(), 1u);
+  EXPECT_EQ(one->front().name, layers::kElevation);
+  EXPECT_EQ(this->dut_->LoadStoredTiles({"lab", "corridor", 0}, {"nope"}, 16).status().code(),
+            StatusCode::kNotFound);
+  EXPECT_EQ(this->dut_->LoadStoredTiles({"lab", "hall", 0}, {}, 16).status().code(),
+            StatusCode::kNotFound);
 }
 
 TYPED_TEST(MapStoreTest, RegionLoadsMatchTheFullMap) {

@@ -150,6 +150,12 @@ TEST(SqliteMapStoreTest, CorruptBlobIsRefusedAndReportedByCheck) {
   EXPECT_NE(map.status().message().find("elevation"), std::string::npos) << map.status().message();
   EXPECT_NE(map.status().message().find("tile (1, 0)"), std::string::npos)
       << map.status().message();
+  // A load reply's stored tiles are checked as well.
+  auto stored = dut->LoadStoredTiles({"lab", "corridor", 0}, {"elevation"});
+  EXPECT_EQ(stored.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(stored.status().message().find("tile (1, 0)"), std::string::npos)
+      << stored.status().message();
+  EXPECT_TRUE(dut->LoadStoredTiles({"lab", "corridor", 0}, {"observation_count"}).ok());
   // The other layer still loads, and so does a region away from the bad tile.
   EXPECT_TRUE(dut->LoadLayers({"lab", "corridor", 0}, {{"observation_count"}, std::nullopt}).ok());
   EXPECT_TRUE(dut->LoadLayers({"lab", "corridor", 0}, {{"elevation"}, CellBox{0, 0, 10, 10}}).ok());

@@ -1,5 +1,6 @@
 #include "planner/navigator.h"
 
+#include <algorithm>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -310,8 +311,11 @@ TEST(NavigatorTest, APlaceGoalMovesOffFurnitureSeenOnTheWayIn) {
   layer.Rect(14.0, 3.5, 16.2, 6.5, 100.0f);
   sim.map_ = layer.Build(PioneerFootprint());
   ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kReached)) << sim.nav_.status().message;
-  ASSERT_EQ(sim.events_.size(), 1u);
-  EXPECT_NE(sim.events_[0].find("place 'east' moves to"), std::string::npos) << sim.events_[0];
+  // Said once (replans are events of their own).
+  const auto moves = std::count_if(sim.events_.begin(), sim.events_.end(), [](const auto& e) {
+    return e.find("place 'east' moves to") != std::string::npos;
+  });
+  EXPECT_EQ(moves, 1) << ::testing::PrintToString(sim.events_);
   EXPECT_GT(sim.nav_.path().poses().back().position().x(), 12.0);
   EXPECT_GT(sim.map_->ClearanceAt(sim.pose_.position()), 1.0);
 }

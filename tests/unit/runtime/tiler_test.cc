@@ -110,6 +110,68 @@ TEST(LayerAssemblerTest, RebuildsExactlyAndDetectsMissingTiles) {
   EXPECT_TRUE(*rebuilt == map);
 }
 
+// A map store sends its stored tiles as they are: adopted tiles go out and come back on a
+// resend byte for byte, with the manifest of what Update would have listed.
+TEST(LayerTilerTest, AdoptedTilesAreSentAndResentAsTheyAre) {
+  common::GridMap map = MakeMap(250, 130);
+  LayerTiler reference("r1", "stored");
+  const auto expected = reference.Update(map, "elevation", TileEncoding::kFloat, 1);
+  std::vector<LayerTiler::EncodedTile> encoded;
+  for (const auto& t : expected.tiles) {
+    LayerTiler::EncodedTile e;
+    e.tile_ix = t.tile_ix;
+    e.tile_iy = t.tile_iy;
+    e.cells_x = t.cells_x;
+    e.cells_y = t.cells_y;
+    e.checksum = static_cast<uint32_t>(t.checksum);
+    if (t.tile_ix == 1) {
+      // Stands for a compressed tile: opaque bytes the tiler must not touch.
+      e.encoding = cairn::lcmt_grid_tile::ENCODING_ZSTD_SHUFFLE4;
+      e.bytes = {1, 2, 3, static_cast<uint8_t>(t.tile_iy)};
+    } else {
+      e.data = t.data;
+    }
+    encoded.push_back(std::move(e));
+  }
+  LayerTiler tiler("r1", "stored");
+  const auto batch = tiler.Adopt("elevation", map.geometry(), encoded, 7);
+  ASSERT_EQ(batch.tiles.size(), 6u);
+  EXPECT_EQ(batch.manifest.num_tiles, 6);
+  EXPECT_EQ(batch.manifest.checksum, expected.manifest.checksum);
+  EXPECT_EQ(batch.manifest.tile_ix, expected.manifest.tile_ix);
+  LayerAssembler assembler;
+  assembler.OnManifest(batch.manifest);
+  for (const auto& t : batch.tiles) {
+    if (t.tile_ix == 1) {
+      EXPECT_EQ(t.encoding, +cairn::lcmt_grid_tile::ENCODING_ZSTD_SHUFFLE4);
+      EXPECT_EQ(t.num_cells, 0);
+      EXPECT_EQ(t.bytes, (std::vector<uint8_t>{1, 2, 3, static_cast<uint8_t>(t.tile_iy)}));
+      EXPECT_FALSE(assembler.OnTile(t));  // the assembler knows no codec
+    } else {
+      EXPECT_TRUE(assembler.OnTile(t));
+    }
+  }
+  EXPECT_EQ(assembler.Missing("elevation"), (std::vector<std::pair<int, int>>{{1, 0}, {1, 1}}));
+  // The resend of a compressed tile is the same bytes.
+  auto request = assembler.MakeResendRequest("elevation", "test", 8);
+  ASSERT_TRUE(request.has_value());
+  const auto resent = tiler.Resend(*request);
+  ASSERT_EQ(resent.tiles.size(), 2u);
+  for (const auto& t : resent.tiles) {
+    EXPECT_EQ(t.bytes, (std::vector<uint8_t>{1, 2, 3, static_cast<uint8_t>(t.tile_iy)}));
+    EXPECT_EQ(t.num_bytes, 4);
+  }
+  // Adopting again bumps the version; a tile that does not fit the grid is refused.
+  EXPECT_EQ(tiler.Adopt("elevation", map.geometry(), encoded, 9).manifest.layer_version,
+            batch.manifest.layer_version + 1);
+  auto wrong = encoded;
+  wrong[0].cells_x -= 1;
+  EXPECT_THROW(tiler.Adopt("elevation", map.geometry(), wrong, 10), std::invalid_argument);
+  auto outside = encoded;
+  outside[0].tile_ix = 3;
+  EXPECT_THROW(tiler.Adopt("elevation", map.geometry(), outside, 11), std::invalid_argument);
+}
+
 // A receiver may ask for tiles of a layer this publisher has not tiled yet (it restarted and a
 // receiver still holds its predecessor's layer): the answer is empty and its manifest, though
 // not sent, is all zeros and encodes (it once held garbage counts, and encoding read past the
