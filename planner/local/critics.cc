@@ -78,7 +78,11 @@ Score ClearanceCritic::Evaluate(const Trajectory& trajectory) const {
         std::max((pose.position() - previous.position()).norm(),
                  reach_m * std::abs(common::WrapAngle(pose.yaw_rad - previous.yaw_rad)));
     FootprintCost c = check(pose);
-    const int between = static_cast<int>(std::ceil(step_m / max_step_m)) - 1;
+    // The first step also at its middle: the robot stands there after one control period
+    // (20 Hz against the 0.1 s simulation step), and a footprint edge passing a cell's centre
+    // can cover it there and at neither end (a slow arc grazing an obstacle).
+    const int between =
+        std::max(k == 0 ? 1 : 0, static_cast<int>(std::ceil(step_m / max_step_m)) - 1);
     for (int j = 1; j <= between && c.valid; ++j) {
       const double f = static_cast<double>(j) / (between + 1);
       const Pose2 p{previous.x_m + f * (pose.x_m - previous.x_m),

@@ -130,6 +130,35 @@ TEST_F(CriticTest, ClearanceRejectsCollisionsAndGradesCost) {
   EXPECT_NEAR(graded.value, 0.4, 1e-6);
 }
 
+// Where the robot stands after one control period (0.05 s, half a simulation step) is checked
+// too: a slow arc beside a blob passed between two valid 0.1 s poses over a cell neither
+// covered, and the navigator drove a Pioneer's corner into the blob (pose and command from
+// that run).
+TEST(ClearanceCriticTest, AnArcIsRefusedWhenThePoseAfterOneControlPeriodCollides) {
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(14.85, 4.85, 15.15, 5.15, 100.0f);
+  const auto map = layer.Build(PioneerFootprint());
+  const Pose2 start{15.152042353397055, 5.5774276655325812, -1.2524082744070004};
+  const Velocity v{0.033684210526315803, -0.22602339181286565};
+  ASSERT_TRUE(map->IsValid(start));
+  const TrajectoryGenerator gen(Limits(), {});
+  Trajectory t;
+  gen.Simulate(start, v, &t);
+  ASSERT_TRUE(map->IsValid(t.poses[0])) << "the first 0.1 s pose is clear";
+  const Pose2 after{start.x_m + v.linear_mps * 0.05 * std::cos(start.yaw_rad),
+                    start.y_m + v.linear_mps * 0.05 * std::sin(start.yaw_rad),
+                    start.yaw_rad + v.angular_radps * 0.05};
+  ASSERT_FALSE(map->IsValid(after)) << "the pose after 0.05 s is not";
+  ClearanceCritic::Params strict;
+  strict.admissible_braking = false;
+  ClearanceCritic dut(1.0, strict);
+  CriticContext ctx;
+  ctx.map = map.get();
+  ctx.pose = start;
+  dut.Prepare(ctx);
+  EXPECT_FALSE(dut.Evaluate(t).valid);
+}
+
 TEST_F(CriticTest, ClearanceKeepsTrajectoriesThatCanStillBrake) {
   ClearanceCritic dut(1.0, {});  // admissible braking, 0.8 m/s^2, 0.15 s margin
   dut.Prepare(ctx_);

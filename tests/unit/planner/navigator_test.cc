@@ -80,7 +80,7 @@ class NavSim {
       if (check_collisions_) {
         EXPECT_TRUE(map_->IsValid(pose_)) << "collision at t=" << t_;
       }
-      if (getenv("NAV_DEBUG") && k % 20 == 0) {
+      if (getenv("NAV_DEBUG") && (k % 20 == 0 || getenv("NAV_DEBUG_ALL"))) {
         printf("  t=%.1f pose (%.2f, %.2f, %.2f) cmd (%.2f, %.2f)\n", t_, pose_.x_m, pose_.y_m,
                pose_.yaw_rad, last_sent_.linear_mps, last_sent_.angular_radps);
       }
