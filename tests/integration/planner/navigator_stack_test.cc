@@ -1,10 +1,12 @@
 // The whole navigation stack as real processes on a private LCM bus: cairn-sim (MuJoCo, the
 // tunnel world of seed 000, one Pioneer 3-AT), cairn-mapper (terrain and cost layers) and
-// cairn-navigator. Lanes, starts and goals: simulator/worlds/tunnel_lanes.yaml.
+// cairn-navigator, a graph under cairn-launch. Lanes, starts and goals:
+// simulator/worlds/tunnel_lanes.yaml.
 
 #include <chrono>
 #include <csignal>
 #include <fstream>
+#include <optional>
 #include <regex>
 #include <sstream>
 
@@ -24,6 +26,7 @@
 #include "common/channels.h"
 #include "common/robot_profile.h"
 #include "planner/footprint.h"
+#include "services/launch/status.h"
 #include "services/runtime/conversions.h"
 #include "tests/support/geometry.h"
 #include "tests/support/harness.h"
@@ -93,23 +96,62 @@ class NavigatorStackTest : public ::testing::Test {
     return path;
   }
 
+  // The three processes as a graph under cairn-launch (as a user starts them), on the test's
+  // private bus; their logs are printed when a test fails. Nothing restarts: a crash fails the
+  // test instead of hiding in a restart.
   void StartStack(double x, double y, double yaw_deg, const std::string& nav_config = "") {
+    const std::string dir = procs_.dir();
     std::ostringstream robot;
     robot << kRobot << ":pioneer3at:pioneer3at:" << x << "," << y << "," << yaw_deg;
-    sim_ =
-        &procs_.Start("cairn-sim", {"--world", "tunnel", "--robot", robot.str(), "--speed", "1"});
-    mapper_ = &procs_.Start("cairn-mapper", {"--robot", kRobot, "--config", MapperConfig()});
-    std::vector<std::string> nav_args = {"--robot", kRobot, "--profile", "pioneer3at"};
-    if (!nav_config.empty()) nav_args.insert(nav_args.end(), {"--config", nav_config});
-    nav_ = &procs_.Start("cairn-navigator", nav_args);
-    // Ready when the cost layer is on the bus and the navigator reports.
+    const std::string graph = dir + "/tunnel.yaml";
+    {
+      std::ofstream out(graph);
+      out << "name: tunnel-test\n"
+          << "lcm_url: " << url_ << "\n"
+          << "processes:\n"
+          << "  sim:\n"
+          << "    command: " << testing::BinPath("cairn-sim") << "\n"
+          << "    args: [--world, tunnel, --robot, '" << robot.str() << "', --speed, '1']\n"
+          << "    restart: never\n"
+          << "  mapper:\n"
+          << "    command: " << testing::BinPath("cairn-mapper") << "\n"
+          << "    args: [--robot, " << kRobot << ", --config, " << MapperConfig() << "]\n"
+          << "    robot: " << kRobot << "\n"
+          << "    depends_on: [sim]\n"
+          << "    restart: never\n"
+          << "    required: false\n"  // one test kills it and watches the navigator stop
+          << "  navigator:\n"
+          << "    command: " << testing::BinPath("cairn-navigator") << "\n"
+          << "    args: [--robot, " << kRobot << ", --profile, pioneer3at"
+          << (nav_config.empty() ? std::string() : ", --config, " + nav_config) << "]\n"
+          << "    robot: " << kRobot << "\n"
+          << "    depends_on: [mapper]\n"
+          << "    restart: never\n";
+    }
+    run_dir_ = dir + "/run";
+    procs_.AddLogDir(run_dir_ + "/logs");
+    procs_.StartRaw("cairn-launch",
+                    {testing::BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir_});
+    // Ready when cairn-launch says so, the cost layer is on the bus and the navigator reports.
     ASSERT_TRUE(WaitFor(
         [&] {
-          auto m = bus_.Last<cairn::lcmt_grid_manifest>(ch::ForRobot(kRobot, ch::kMapManifest));
-          return CostManifestSeen() && bus_.Health("cairn-navigator", kRobot).has_value();
+          const auto status = GraphStatus();
+          return status && status->state == "ready" && CostManifestSeen() &&
+                 bus_.Health("cairn-navigator", kRobot).has_value();
         },
-        60.0, [&] { bus_.Pump(20); }))
+        90.0, [&] { bus_.Pump(20); }))
         << "the stack did not come up";
+  }
+  std::optional<launch::GraphStatus> GraphStatus() const {
+    std::string error;
+    return launch::ReadStatusFile(run_dir_ + "/status.json", &error);
+  }
+  // A process of the graph as cairn-launch reports it.
+  std::optional<launch::ProcessRow> Process(const std::string& name) const {
+    const auto status = GraphStatus();
+    if (!status) return std::nullopt;
+    const launch::ProcessRow* row = launch::FindProcess(*status, name);
+    return row ? std::optional<launch::ProcessRow>(*row) : std::nullopt;
   }
   bool CostManifestSeen() {
     for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kMapManifest))) {
@@ -245,9 +287,7 @@ class NavigatorStackTest : public ::testing::Test {
   ProcessSet procs_;
   Bus bus_;
   std::vector<Vector2> footprint_;
-  testing::ChildProcess* sim_{nullptr};
-  testing::ChildProcess* mapper_{nullptr};
-  testing::ChildProcess* nav_{nullptr};
+  std::string run_dir_;
   int64_t request_id_{0};
 };
 
@@ -359,8 +399,16 @@ TEST_F(NavigatorStackTest, StopsWithinHalfASecondOfSimTimeWhenTheMapperStops) {
   const auto before_kill = bus_.Last<cairn::lcmt_pose>(ch::ForRobot(kRobot, ch::kPose));
   ASSERT_TRUE(before_kill.has_value());
   const int64_t killed_utime = before_kill->utime;
-  mapper_->Signal(SIGKILL);
-  ASSERT_TRUE(mapper_->WaitExit(5.0).has_value());
+  const auto mapper = Process("mapper");
+  ASSERT_TRUE(mapper.has_value() && mapper->pid > 0);
+  ASSERT_EQ(kill(mapper->pid, SIGKILL), 0);
+  // cairn-launch sees it go (the graph restarts nothing).
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        const auto row = Process("mapper");
+        return row && row->state != "ready" && row->state != "starting";
+      },
+      5.0, [&] { bus_.Pump(20); }));
   ASSERT_TRUE(WaitState(kStateStopped, 10.0)) << StatusText();
   EXPECT_EQ(Status()->reason, kReasonStaleMap);
   // The first zero command after the kill (sim time).
