@@ -619,27 +619,33 @@ Status SqliteMapStore::ReadTiles(sqlite::Statement* stmt, const std::string& lab
   return Status::Ok();
 }
 
+Result<std::map<std::string, int64_t>> SqliteMapStore::LayerIds(
+    const MapRef& ref, const VersionRow& row, std::vector<std::string>* wanted) const {
+  std::map<std::string, int64_t> layer_ids;
+  sqlite::Statement st = db_->Prepare("SELECT name, id FROM layers WHERE map_version_id = ?");
+  st.Bind(1, row.id);
+  while (st.Step()) layer_ids[st.Text(0)] = st.Int(1);
+  if (!st.status().ok()) return st.status();
+  if (wanted->empty()) {
+    for (const auto& [name, id] : layer_ids) wanted->push_back(name);
+  }
+  for (const std::string& name : *wanted) {
+    if (!layer_ids.count(name)) {
+      return common::NotFoundError(LayerNotFoundMessage(ref, row.version, name, layer_ids));
+    }
+  }
+  return layer_ids;
+}
+
 Result<common::GridMap> SqliteMapStore::LoadLayers(const MapRef& ref,
                                                    const LayerQuery& query) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
   if (!row.ok()) return row.status();
-  std::map<std::string, int64_t> layer_ids;
-  {
-    sqlite::Statement st = db_->Prepare("SELECT name, id FROM layers WHERE map_version_id = ?");
-    st.Bind(1, row->id);
-    while (st.Step()) layer_ids[st.Text(0)] = st.Int(1);
-    if (!st.status().ok()) return st.status();
-  }
   std::vector<std::string> wanted = query.layers;
-  if (wanted.empty()) {
-    for (const auto& [name, id] : layer_ids) wanted.push_back(name);
-  }
-  for (const std::string& name : wanted) {
-    if (!layer_ids.count(name)) {
-      return common::NotFoundError(LayerNotFoundMessage(ref, row->version, name, layer_ids));
-    }
-  }
+  auto ids = LayerIds(ref, *row, &wanted);
+  if (!ids.ok()) return ids.status();
+  const std::map<std::string, int64_t>& layer_ids = *ids;
   const CellBox box = query.region ? ClipBox(*query.region, row->geometry)
                                    : CellBox{0, 0, row->geometry.size_x, row->geometry.size_y};
   if (box.empty()) return common::InvalidArgumentError("the region does not overlap the map");
@@ -651,7 +657,7 @@ Result<common::GridMap> SqliteMapStore::LoadLayers(const MapRef& ref,
                    "t.tile_iy BETWEEN ? AND ? AND t.tile_ix BETWEEN ? AND ?");
   for (const std::string& name : wanted) {
     st.Reset();
-    st.Bind(1, layer_ids[name]).Bind(2, box.min_iy / ts).Bind(3, (box.max_iy - 1) / ts);
+    st.Bind(1, layer_ids.at(name)).Bind(2, box.min_iy / ts).Bind(3, (box.max_iy - 1) / ts);
     st.Bind(4, box.min_ix / ts).Bind(5, (box.max_ix - 1) / ts);
     Status read = ReadTiles(&st,
                             "layer '" + name + "' of map '" + row->site + "/" + row->name +
@@ -667,22 +673,10 @@ Result<std::vector<StoredLayer>> SqliteMapStore::LoadStoredTiles(
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
   if (!row.ok()) return row.status();
-  std::map<std::string, int64_t> layer_ids;
-  {
-    sqlite::Statement st = db_->Prepare("SELECT name, id FROM layers WHERE map_version_id = ?");
-    st.Bind(1, row->id);
-    while (st.Step()) layer_ids[st.Text(0)] = st.Int(1);
-    if (!st.status().ok()) return st.status();
-  }
   std::vector<std::string> wanted = layers;
-  if (wanted.empty()) {
-    for (const auto& [name, id] : layer_ids) wanted.push_back(name);
-  }
-  for (const std::string& name : wanted) {
-    if (!layer_ids.count(name)) {
-      return common::NotFoundError(LayerNotFoundMessage(ref, row->version, name, layer_ids));
-    }
-  }
+  auto ids = LayerIds(ref, *row, &wanted);
+  if (!ids.ok()) return ids.status();
+  const std::map<std::string, int64_t>& layer_ids = *ids;
   const int ts = row->tile_size;
   const common::GridGeometry& full = row->geometry;
   const int tiles_x = (full.size_x + ts - 1) / ts;
@@ -697,7 +691,7 @@ Result<std::vector<StoredLayer>> SqliteMapStore::LoadStoredTiles(
     layer.name = name;
     layer.tile_size = ts;
     st.Reset();
-    st.Bind(1, layer_ids[name]);
+    st.Bind(1, layer_ids.at(name));
     while (st.Step()) {
       StoredTile t;
       t.tile_ix = static_cast<int>(st.Int(0));

@@ -110,6 +110,10 @@ class SqliteMapStore final : public MapStore {
   common::Status Initialise();
   common::Result<VersionRow> Resolve(const MapRef& ref) const;
   common::Result<MapInfo> InfoOf(const VersionRow& row) const;
+  /// Layer ids of a version by name; fills an empty `wanted` with every layer, and gives
+  /// kNotFound for a wanted layer the version lacks.
+  common::Result<std::map<std::string, int64_t>> LayerIds(const MapRef& ref, const VersionRow& row,
+                                                          std::vector<std::string>* wanted) const;
   common::Result<int64_t> SiteId(const std::string& site, bool create, int64_t utime);
   common::Status Audit(const WriteContext& ctx, int64_t utime, const std::string& op,
                        const std::string& site, const std::string& map, int64_t version,
