@@ -498,20 +498,23 @@ void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
     }
   }
   const bool only_octomap = want_octomap && wanted.empty();
+  // A load without a profile, of base layers only, sends the stored blobs as they are, neither
+  // decoded nor tiled nor compressed again (each is still checked). A derived layer's name goes
+  // to LoadForProfile, which explains why it cannot be had.
+  const bool may_send_stored =
+      !only_octomap && request.profile.empty() && params_.compress_reply_tiles;
   ProfileView view;
   bool stored = false;
-  if (!only_octomap && request.profile.empty() && params_.compress_reply_tiles) {
-    // Base layers only: the stored blobs go out as they are, neither decoded nor tiled nor
-    // compressed again (each is still checked). A derived layer's name falls through to
-    // LoadForProfile, which explains why it cannot be had.
+  if (only_octomap || may_send_stored) {
     auto info = store_.GetMapInfo({site, request.map_name, request.version});
     if (!info.ok()) {
       out->status = info.status();
       return;
     }
+    view.info = *info;
     const std::set<std::string> base(info->layers.begin(), info->layers.end());
-    if (std::all_of(wanted.begin(), wanted.end(),
-                    [&](const std::string& l) { return base.count(l) > 0; })) {
+    if (may_send_stored && std::all_of(wanted.begin(), wanted.end(),
+                                       [&](const std::string& l) { return base.count(l) > 0; })) {
       const MapRef exact{info->site, info->name, info->version};
       auto tiles = store_.LoadStoredTiles(exact, wanted, params_.reply_tile_size);
       if (!tiles.ok()) {
@@ -523,23 +526,13 @@ void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
         out->status = obstacles.status();
         return;
       }
-      view.info = *info;
       view.obstacles = std::move(obstacles).value();
       out->stored_layers = std::move(tiles).value();
       out->stored_geometry = info->geometry;
       stored = true;
     }
   }
-  if (stored) {
-    // view is complete
-  } else if (only_octomap) {
-    auto info = store_.GetMapInfo({site, request.map_name, request.version});
-    if (!info.ok()) {
-      out->status = info.status();
-      return;
-    }
-    view.info = *info;
-  } else {
+  if (!only_octomap && !stored) {
     auto loaded = LoadForProfile(store_, &deriver_, {site, request.map_name, request.version},
                                  request.profile, {wanted, std::nullopt});
     if (!loaded.ok()) {

@@ -149,8 +149,8 @@ LayerTiler::Batch LayerTiler::Adopt(const std::string& layer, const common::Grid
   const int nx = (geometry.size_x + tile_size_ - 1) / tile_size_;
   const int ny = (geometry.size_y + tile_size_ - 1) / tile_size_;
   std::map<std::pair<int, int>, TileState> next_tiles;
-  LayerState& state = layers_[layer];
-  const int64_t next_version = (state.version == 0 ? version_base_ : state.version) + 1;
+  const int64_t previous = version(layer);
+  const int64_t next_version = (previous == 0 ? version_base_ : previous) + 1;
   for (EncodedTile& t : tiles) {
     if (t.tile_ix < 0 || t.tile_iy < 0 || t.tile_ix >= nx || t.tile_iy >= ny ||
         t.cells_x != std::min(tile_size_, geometry.size_x - t.tile_ix * tile_size_) ||
@@ -175,6 +175,8 @@ LayerTiler::Batch LayerTiler::Adopt(const std::string& layer, const common::Grid
     }
     next_tiles[{t.tile_ix, t.tile_iy}] = std::move(tile);
   }
+  // Only a batch that fits its grid replaces what was published.
+  LayerState& state = layers_[layer];
   state.geometry = geometry;
   state.encoding = TileEncoding::kFloat;
   state.version = next_version;
