@@ -77,8 +77,6 @@ using Clock = std::chrono::steady_clock;
 // Shortcut attempts per simplification pass: OMPL's default is the number of states, which
 // for the few long motions of RRTConnect is far too few.
 constexpr unsigned kShortcutSteps = 200;
-// Perturbations of path vertices in the cost-aware simplification, metres.
-constexpr double kPerturbStepM = 0.2;
 
 double SecondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
@@ -646,31 +644,15 @@ PlanResult GlobalPlanner::Plan(const CostMap& map, const PlanRequest& request,
   result.raw_length_m = PositionLength(raw_poses);
 
   // Shortcutting passes until they stop helping (or the time cap): deterministic for a seed.
-  // With a traversal or clearance cost, only moves that lower the objective count: OMPL's
-  // reduceVertices and collapseCloseVertices keep a path valid but not cheap, and cut every
-  // corner as close as the footprint allows (a path 3 cm off a corridor wall, turning into a
-  // door beside its frame); shortcutPath and perturbPath weigh the cost, and perturbing the
-  // vertices moves the path off walls and through the middle of doors, as Nav2's inflation
-  // gradient does.
   og::PathSimplifier simplifier(si, setup.getProblemDefinition()->getGoal(), objective);
-  const bool cost_aware = params_.traversal_cost_weight > 0.0 || params_.clearance_weight > 0.0;
-  auto measure = [&](const og::PathGeometric& path) {
-    return cost_aware ? path.cost(objective).value() : path.length();
-  };
   auto simplify = [&](og::PathGeometric* path) {
     const auto t_start = Clock::now();
     for (int pass = 0; pass < 8; ++pass) {
-      const double before = measure(*path);
-      if (!cost_aware) simplifier.reduceVertices(*path, 0, 0, 0.33);
+      const double before = path->length();
+      simplifier.reduceVertices(*path, 0, 0, 0.33);
       simplifier.shortcutPath(*path, kShortcutSteps, kShortcutSteps / 4, 0.33, 0.005);
-      if (cost_aware) {
-        simplifier.perturbPath(*path, kPerturbStepM, kShortcutSteps, kShortcutSteps / 4, 0.005);
-      } else {
-        simplifier.collapseCloseVertices(*path);
-      }
-      if (measure(*path) > before - 1e-3 || SecondsSince(t_start) > params_.simplify_time_s) {
-        break;
-      }
+      simplifier.collapseCloseVertices(*path);
+      if (path->length() > before - 1e-3 || SecondsSince(t_start) > params_.simplify_time_s) break;
     }
   };
 
