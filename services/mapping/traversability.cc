@@ -152,7 +152,7 @@ DitchCell TestUnseenCell(const TerrainView& v, int x, int y, const Traversabilit
 
 // Surface normal and roughness by PCA over the cells within the normal radius (grid_map's
 // NormalVectorsFilter "area" method): fewer than 3 points or a degenerate spread gives the
-// vertical normal.
+// vertical normal, and cells on one line the slope along it.
 struct NormalResult {
   Eigen::Vector3d normal{0.0, 0.0, 1.0};
   double roughness_m{0.0};
@@ -191,6 +191,29 @@ NormalResult FitNormal(const float* h, int sx, int sy, int x, int y,
   c(0, 1) = c(1, 0) = sxy / n - mx * my;
   c(0, 2) = c(2, 0) = sxz / n - mx * mz;
   c(1, 2) = c(2, 1) = syz / n - my * mz;
+  // Cells on one line of the grid (a lidar ring seen from afar crosses a ramp as a one-cell-wide
+  // strip between unknown cells) fix the tilt along the line only. The 3-D fit would pass the
+  // plane through the line vertically, and read a strip across a 5 degree ramp as a 90 degree
+  // wall. Such a fit keeps the slope along the line (a lower bound of the true slope) instead.
+  const double cxx = c(0, 0), cyy = c(1, 1), cxy = c(0, 1);
+  const double half_trace = 0.5 * (cxx + cyy);
+  const double spread = std::sqrt(std::max(0.0, 0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy));
+  const double minor_xy = half_trace - spread, major_xy = half_trace + spread;
+  const double line_spread = 0.05 * res;  // m, across the line
+  if (major_xy > 0 && minor_xy < line_spread * line_spread) {
+    // Direction of the line: the major axis of the cells' horizontal spread.
+    const double angle = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
+    const double ux = std::cos(angle), uy = std::sin(angle);
+    const double var_s = ux * ux * cxx + 2 * ux * uy * cxy + uy * uy * cyy;
+    const double cov_sz = ux * c(0, 2) + uy * c(1, 2);
+    if (!(var_s > 0)) return r;
+    const double gradient = cov_sz / var_s;  // dz per m along the line
+    const Eigen::Vector3d normal(-gradient * ux, -gradient * uy, 1.0);
+    if (!normal.allFinite()) return r;
+    r.normal = normal.normalized();
+    r.roughness_m = std::sqrt(std::max(0.0, c(2, 2) - cov_sz * gradient));
+    return r;
+  }
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(c);
   const Eigen::Vector3d ev = eig.eigenvalues();  // ascending

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -172,6 +173,19 @@ ChildProcess& ProcessSet::StartRaw(const std::string& label, std::vector<std::st
   const std::string log = dir_ + "/" + label + "." + std::to_string(processes_.size()) + ".log";
   processes_.push_back(std::make_unique<ChildProcess>(std::move(argv), std::move(env), log));
   return *processes_.back();
+}
+
+std::string TailOfFile(const std::string& path, int lines) {
+  std::ifstream in(path);
+  std::deque<std::string> tail;
+  std::string line;
+  while (std::getline(in, line)) {
+    tail.push_back(line);
+    if (static_cast<int>(tail.size()) > lines) tail.pop_front();
+  }
+  std::string out;
+  for (const auto& l : tail) out += l + "\n";
+  return out;
 }
 
 void ProcessSet::PrintLogs() const {

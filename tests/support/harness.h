@@ -38,6 +38,10 @@ std::string TestTempDir();
 /// <dir>/mapper.yaml; returns that path.
 std::string MapperConfigWithoutOctomap(const std::string& dir);
 
+/// The last `lines` lines of a text file ("" when it cannot be read): a failure message quotes
+/// the events of the process that decided, before the full logs.
+std::string TailOfFile(const std::string& path, int lines);
+
 class ChildProcess {
  public:
   /// Starts argv[0] with argv; env entries "K=V" are added to the environment. Output goes to

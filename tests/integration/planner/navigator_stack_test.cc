@@ -216,6 +216,13 @@ class NavigatorStackTest : public ::testing::Test {
     if (!s) return "no status";
     std::ostringstream out;
     out << "state " << int(s->state) << " reason " << int(s->reason) << ": " << s->message;
+    out << "\nthe navigator's last events:\n"
+        << testing::TailOfFile(run_dir_ + "/logs/navigator.log", 25);
+    const auto poses = Poses();
+    if (!poses.empty()) {
+      out << "the robot is at x " << poses.back().position_m[0] << ", y "
+          << poses.back().position_m[1] << "\n";
+    }
     // What the mapper found explains most failures (a feature labelled wrong blocks a route).
     const auto registry =
         bus_.Last<cairn::lcmt_obstacle_registry>(ch::ForRobot(kRobot, ch::kMapObstacles));

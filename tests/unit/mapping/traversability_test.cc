@@ -80,6 +80,33 @@ TEST(TraversabilityTest, FewerThanThreePointsGiveVerticalNormal) {
   EXPECT_TRUE(std::isnan(map.at(layers::kSlope)(0, 0)));
 }
 
+// A lidar ring seen from afar crosses a ramp as a strip one cell wide between unknown cells: the
+// cells fix the slope along the strip only. On a 5 deg ramp rising in x, a strip along y (heights
+// with a millimetre of noise) is level along its length; a strip along x rises at 5 deg; a
+// diagonal strip at 5 deg x cos 45. None of them is a wall.
+TEST(TraversabilityTest, CellsOnOneLineGiveTheSlopeAlongTheLine) {
+  const double t = std::tan(5 * kDeg);
+  auto cell = [](double v) { return static_cast<int>(std::floor(v / kRes)); };
+  auto noise = [](int i) { return (i % 3 - 1) * 0.001; };
+  GridMap across = MakeTerrain(12, 12, kRes, [&](double x, double y) {
+    return cell(x) == 6 ? t * x + noise(cell(y)) : std::nan("");
+  });
+  GridMap along = MakeTerrain(
+      12, 12, kRes, [&](double x, double y) { return cell(y) == 6 ? t * x : std::nan(""); });
+  GridMap diagonal = MakeTerrain(
+      12, 12, kRes, [&](double x, double y) { return cell(x) == cell(y) ? t * x : std::nan(""); });
+  for (GridMap* map : {&across, &along, &diagonal}) ComputeGeometricLayers(map, {});
+  for (int i = 3; i <= 8; ++i) {
+    EXPECT_LT(across.at(layers::kSlope)(6, i) / kDeg, 1.0) << "cell 6," << i;
+    EXPECT_NEAR(along.at(layers::kSlope)(i, 6) / kDeg, 5.0, 0.05) << "cell " << i << ",6";
+    // Along the diagonal the height rises t per metre of x, over sqrt(2) m.
+    EXPECT_NEAR(diagonal.at(layers::kSlope)(i, i), std::atan(t / std::sqrt(2.0)), 0.05 * kDeg)
+        << "cell " << i;
+  }
+  // The cost layer: a 5 deg ramp is free for the pioneer3at; a strip is no wall.
+  ComputeCostLayer(&across, ShippedProfile("pioneer3at"), {});
+  for (int i = 3; i <= 8; ++i) EXPECT_LT(Cost(across, "pioneer3at", 6, i), 100.f) << i;
+}
 // Seed 000 test 3: 5 and 7.5 deg planes are crossable for an 8 deg profile, 8.5 and 10 deg not.
 TEST(TraversabilityTest, SlopeThresholdAgainstPioneer) {
   const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
