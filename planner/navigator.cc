@@ -116,6 +116,8 @@ void NavigatorParams::Validate() const {
                      "max_map_age_s must exceed the control period (" << control_period_s << " s)");
   CAIRN_THROW_UNLESS(max_clock_skew_s > 0.0, "max_clock_skew_s must be positive");
   CAIRN_THROW_UNLESS(lookahead_m > 0.0, "lookahead_m must be positive");
+  CAIRN_THROW_UNLESS(min_lookahead_m >= 0.0 && min_lookahead_m <= lookahead_m,
+                     "min_lookahead_m must be in [0, lookahead_m], got " << min_lookahead_m);
   CAIRN_THROW_UNLESS(local_path_window_m > 0.0, "local_path_window_m must be positive");
   CAIRN_THROW_UNLESS(rotate_to_heading_threshold_rad > 0.0,
                      "rotate_to_heading_threshold_rad must be positive");
@@ -471,10 +473,12 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
     return gen.Brake(last_command_);
   }
 
-  // The local goal: a carrot `lookahead_m` along the path, or the goal itself near the end.
+  // The local goal: a carrot `lookahead_m` along the path (nearer where a corner hides it), or
+  // the goal itself near the end.
   Vector2 carrot = goal.position();
   if (path_arc_m_ + params_.lookahead_m < path_.length_m()) {
-    carrot = path_.PoseAt(path_arc_m_ + params_.lookahead_m).position();
+    carrot = VisibleCarrot(*map_, path_, pose, path_arc_m_, params_.lookahead_m,
+                           params_.min_lookahead_m);
   }
   const Vector2 d = carrot - pose.position();
   const double heading_error = common::WrapAngle(std::atan2(d.y(), d.x()) - pose.yaw_rad);
@@ -580,6 +584,29 @@ std::string Navigator::DescribeWindow(double moved_m) const {
   }
   m << ")";
   return m.str();
+}
+
+Vector2 VisibleCarrot(const CostMap& map, const Path& path, const Pose2& pose, double arc_m,
+                      double lookahead_m, double min_lookahead_m) {
+  const double step = std::max(0.05, 0.5 * map.resolution_m());
+  const double skip = map.footprint().circumscribed_radius_m();
+  auto sees = [&](const Vector2& target) {
+    const Vector2 d = target - pose.position();
+    const double length = d.norm();
+    if (length <= skip) return true;
+    const double yaw = std::atan2(d.y(), d.x());
+    for (double s = skip; s < length + 0.5 * step; s += step) {
+      const Vector2 p = pose.position() + d * (std::min(s, length) / length);
+      if (!map.IsValid({p.x(), p.y(), yaw})) return false;
+    }
+    return true;
+  };
+  const double nearest = std::min(min_lookahead_m, lookahead_m);
+  for (double ahead = lookahead_m; ahead > nearest; ahead -= step) {
+    const Vector2 carrot = path.PoseAt(arc_m + ahead).position();
+    if (sees(carrot)) return carrot;
+  }
+  return path.PoseAt(arc_m + nearest).position();
 }
 
 StepOutput Navigator::Step(double now_s) {

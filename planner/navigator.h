@@ -75,6 +75,16 @@ const char* NavStateName(NavState state);
 const char* NavReasonName(NavReason reason);
 NavReason ReasonOf(PlanStatus status);
 
+/// The DWA's local goal: the path point `lookahead_m` past `arc_m`, brought back along the path
+/// (in steps of half a cell and at least 5 cm, not nearer than `min_lookahead_m`) until the robot's
+/// footprint could slide straight to it, heading along the way, without touching a blocking cell.
+/// Where the path turns round a corner (into a door), a carrot beyond the corner pulls the robot
+/// into the corner's cells, where it can neither go on nor turn; Nav2's pure pursuit checks the
+/// lookahead's line the same way. Poses within the footprint's circumscribed radius of the
+/// robot are not checked (a robot touching a cell must still get a goal).
+common::Vector2 VisibleCarrot(const CostMap& map, const Path& path, const common::Pose2& pose,
+                              double arc_m, double lookahead_m, double min_lookahead_m);
+
 struct NavigatorParams {
   double control_period_s{0.05};  ///< 20 Hz
   double xy_goal_tolerance_m{0.25};
@@ -84,7 +94,8 @@ struct NavigatorParams {
   double max_pose_age_s{0.5};
   double max_map_age_s{0.5};        ///< the same for the cost layer
   double max_clock_skew_s{1.0};     ///< inputs stamped further in the future count as stale
-  double lookahead_m{1.2};          ///< the DWA's local goal this far along the path
+  double lookahead_m{1.2};          ///< the DWA's local goal this far along the path ...
+  double min_lookahead_m{0.3};      ///< ... or nearer, down to this, until the robot sees it
   double local_path_window_m{3.0};  ///< path the alignment critic looks at
   double rotate_to_heading_threshold_rad{0.8};  ///< turn in place first above this error
   double max_path_deviation_m{1.0};             ///< farther from the path: replan

@@ -131,6 +131,7 @@ void LoadNavigator(YamlMap map, NavigatorParams* p) {
   map.Get("max_map_age_s", &p->max_map_age_s);
   map.Get("max_clock_skew_s", &p->max_clock_skew_s);
   map.Get("lookahead_m", &p->lookahead_m);
+  map.Get("min_lookahead_m", &p->min_lookahead_m);
   map.Get("local_path_window_m", &p->local_path_window_m);
   map.Get("rotate_to_heading_threshold_rad", &p->rotate_to_heading_threshold_rad);
   map.Get("max_path_deviation_m", &p->max_path_deviation_m);

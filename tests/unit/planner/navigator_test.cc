@@ -173,6 +173,46 @@ TEST(NavigatorTest, AKobukiReachesAGoalAmongTableLegsFromTheCorridor) {
   EXPECT_EQ(sim.nav_.status().recoveries, 0) << sim.nav_.status().message;
 }
 
+// The corridor wall of the apartment with its 0.9 m door (x 7.05..7.95) and a path that runs
+// along the corridor and turns south through the door 0.25 m off its western frame. A carrot
+// 1.2 m along the path lies beyond the corner: the Kobuki's footprint cannot slide straight to
+// it, so the carrot comes back along the path until it can (a robot steering at the hidden
+// carrot drifts into the frame's cells). In the open corridor the carrot stays at 1.2 m.
+TEST(NavigatorTest, TheCarrotComesBackAlongThePathUntilTheRobotSeesIt) {
+  TestLayer corridor(240, 140, 0.05);
+  corridor.Rect(0.0, 4.425, 7.05, 4.575, 100.0f).Rect(7.95, 4.425, 12.0, 4.575, 100.0f);
+  std::vector<Vector2> kobuki;
+  for (int k = 0; k < 8; ++k)
+    kobuki.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
+  const auto map = corridor.Build(kobuki);
+  std::vector<Pose2> poses;
+  for (double x = 5.0; x < 7.3 - 1e-9; x += 0.1) poses.push_back({x, 5.1, 0.0});
+  for (double y = 5.1; y > 3.5 - 1e-9; y -= 0.1) poses.push_back({7.3, y, -M_PI / 2});
+  const Path path(poses);
+  auto sees = [&](const Pose2& from, const Vector2& to) {
+    const Vector2 d = to - from.position();
+    const double yaw = std::atan2(d.y(), d.x());
+    for (double s = 0.18; s <= d.norm(); s += 0.01) {
+      const Vector2 p = from.position() + d.normalized() * s;
+      if (!map->IsValid({p.x(), p.y(), yaw})) return false;
+    }
+    return true;
+  };
+  // Beside the door, 0.2 m off the path towards the wall: the full lookahead is hidden.
+  const Pose2 robot{6.75, 4.95, 0.0};
+  const double arc = 1.75;
+  const Vector2 hidden = path.PoseAt(arc + 1.2).position();
+  ASSERT_FALSE(sees(robot, hidden)) << "the scenario must hide the full lookahead";
+  const Vector2 carrot = VisibleCarrot(*map, path, robot, arc, 1.2, 0.3);
+  EXPECT_TRUE(sees(robot, carrot)) << carrot.transpose();
+  const double carrot_arc = path.Project(carrot).arc_length_m;
+  EXPECT_LT(carrot_arc, arc + 1.2 - 0.05);
+  EXPECT_GE(carrot_arc, arc + 0.3 - 1e-6);
+  // Down the open corridor the carrot is the full lookahead.
+  const Pose2 open{5.2, 5.1, 0.0};
+  EXPECT_EQ(VisibleCarrot(*map, path, open, 0.2, 1.2, 0.3), path.PoseAt(0.2 + 1.2).position());
+}
+
 TEST(NavigatorTest, TurnsToTheGoalHeading) {
   TestLayer open(100, 100, 0.1);
   NavSim sim(open.Build(PioneerFootprint()));
