@@ -383,8 +383,14 @@ TEST_F(NavigatorStackTest, ReplansAroundAnObjectSpawnedOnItsPathAndArrives) {
   ASSERT_EQ(reply->status, +cairn::lcmt_sim_control_reply::STATUS_OK) << reply->message;
   ASSERT_TRUE(WaitState(kStateReached, 100.0)) << StatusText();
   EXPECT_GE(Status()->replans, 1);
+  // Seed 000 exp 5: the robot crossed onto the 1 cm plate (x >= 10) and stands on it.
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  EXPECT_GT(poses.back().position_m[0], 13.5);
+  EXPECT_NEAR(poses.back().position_m[2] - poses.front().position_m[2], 0.01, 0.005)
+      << "not on the plate";
   const auto crate = Box(9.6, 17.6, 10.4, 18.4);
-  for (const auto& p : Poses()) {
+  for (const auto& p : poses) {
     ASSERT_FALSE(ConvexOverlap(FootprintAt(ToPose2(p)), crate, 0.0))
         << "touched the crate at x " << p.position_m[0] << ", y " << p.position_m[1];
   }
