@@ -217,11 +217,7 @@ TEST_F(CriticTest, ClearancePrefersStayingAwayFromWalls) {
 TEST(ClearanceCriticTest, ProximityCountsOnlyBeyondThePathsOwn) {
   TestLayer layer(60, 60, 0.05, 0.0f, Pose2{6.0, 0.5, 0.0});
   layer.Rect(7.2, 1.6, 7.3, 1.7, 100.0f);  // the leg (2 x 2 cells)
-  std::vector<Vector2> round;
-  for (int k = 0; k < 8; ++k) {
-    round.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
-  }
-  const auto map = layer.Build(round);
+  const auto map = layer.Build(testing::KobukiFootprint());
   const Path path(
       {{6.92, 1.75, 0.55}, {7.15, 1.91, 0.2}, {7.40, 1.93, -0.3}, {7.675, 1.675, -0.75}});
   CriticContext ctx;
@@ -449,9 +445,7 @@ TEST(DwaPlannerTest, OscillationAloneNeverStallsTheRobot) {
 struct KobukiScene {
   KobukiScene() : layer(100, 100, 0.05, 0.0f, Pose2{5.0, 4.0, 0.0}) {
     layer.Rect(5.0, 5.68, 7.5, 5.86, 100.0f).Rect(8.32, 5.68, 10.0, 5.86, 100.0f);  // the door
-    for (int k = 0; k < 8; ++k) {
-      round.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
-    }
+    round = testing::KobukiFootprint();
     map = layer.Build(round);
     kobuki.max_vel_x_mps = 0.5;
     kobuki.min_vel_x_mps = -0.1;

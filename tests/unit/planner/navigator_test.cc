@@ -157,10 +157,7 @@ TEST(NavigatorTest, AKobukiReachesAGoalAmongTableLegsFromTheCorridor) {
   common::RobotProfile kobuki = testing::PioneerProfile();
   kobuki.name = "kobuki";
   kobuki.drive = common::DriveKind::kDifferential;
-  kobuki.footprint_m.clear();
-  for (int k = 0; k < 8; ++k) {
-    kobuki.footprint_m.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
-  }
+  kobuki.footprint_m = testing::KobukiFootprint();
   kobuki.max_vel_x_mps = 0.5;
   kobuki.min_vel_x_mps = -0.1;
   kobuki.max_vel_theta_radps = 1.5;
@@ -181,10 +178,7 @@ TEST(NavigatorTest, AKobukiReachesAGoalAmongTableLegsFromTheCorridor) {
 TEST(NavigatorTest, TheCarrotComesBackAlongThePathUntilTheRobotSeesIt) {
   TestLayer corridor(240, 140, 0.05);
   corridor.Rect(0.0, 4.425, 7.05, 4.575, 100.0f).Rect(7.95, 4.425, 12.0, 4.575, 100.0f);
-  std::vector<Vector2> kobuki;
-  for (int k = 0; k < 8; ++k)
-    kobuki.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
-  const auto map = corridor.Build(kobuki);
+  const auto map = corridor.Build(testing::KobukiFootprint());
   std::vector<Pose2> poses;
   for (double x = 5.0; x < 7.3 - 1e-9; x += 0.1) poses.push_back({x, 5.1, 0.0});
   for (double y = 5.1; y > 3.5 - 1e-9; y -= 0.1) poses.push_back({7.3, y, -M_PI / 2});

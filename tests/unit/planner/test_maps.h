@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -43,6 +44,15 @@ struct TestLayer {
 /// The pioneer3at footprint (0.63 m × 0.50 m).
 inline std::vector<common::Vector2> PioneerFootprint() {
   return common::RectangleFootprint(0.63, 0.50);
+}
+
+/// The Kobuki's round base as the octagon of config/profiles/kobuki.yaml (radius 0.176 m).
+inline std::vector<common::Vector2> KobukiFootprint() {
+  std::vector<common::Vector2> out;
+  for (int k = 0; k < 8; ++k) {
+    out.push_back({0.176 * std::cos(k * M_PI / 4), 0.176 * std::sin(k * M_PI / 4)});
+  }
+  return out;
 }
 
 /// A small square robot (0.3 m × 0.3 m).
