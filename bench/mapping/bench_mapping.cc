@@ -173,6 +173,7 @@ int Main(int argc, char** argv) {
   mapping::MapperCore core(params);
   core.terrain().AddProfile(Profile("pioneer3at"));
   core.terrain().AddProfile(Profile("rover"));
+  mapping::ObstacleBand band(params.band);  // as MapperCore keeps one
   std::vector<double> total_ms, wall_ms, elevation_ms, derived_ms, registry_ms, occupancy_ms;
   size_t obstacles = 0;
   for (const auto& rev : revs) {
@@ -189,8 +190,8 @@ int Main(int argc, char** argv) {
     const common::ObstacleRegistry registry = core.terrain().BuildRegistry();
     const double c3 = CpuMs();
     // The occupancy stage exactly as MapperCore runs it (band from the ground under the robot).
-    const std::vector<mapping::PlanarRay> rays = mapping::ProjectObstacleBand(
-        rev, params.band, sensor.position_m.z() - params.band.sensor_height_m);
+    const std::vector<mapping::PlanarRay>& rays =
+        band.Project(rev, sensor.position_m.z() - params.band.sensor_height_m);
     core.occupancy()->InsertRays(rays);
     const double c4 = CpuMs();
     const auto w1 = Clock::now();

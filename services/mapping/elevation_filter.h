@@ -93,8 +93,9 @@ inline FuseOutcome FuseHeight(float* height_m, float* variance_m2, double z, dou
     // falls outside the gate, so the height freezes across scans and, within a scan, climbs to
     // the highest noisy point. Gating on var + var_z keeps noise in the fusion and still
     // separates true second surfaces (a wall face, an object) that lie many sigmas away.
-    const double mahalanobis = std::fabs(z - h) / std::sqrt(var + var_z);
-    if (mahalanobis >= p.mahalanobis_threshold) {
+    // Compared squared: no square root and division per point.
+    const double d = z - h;
+    if (d * d >= p.mahalanobis_threshold * p.mahalanobis_threshold * (var + var_z)) {
       if (same_scan && z < h) {
         return FuseOutcome::kIgnoredLower;  // nothing changes, no clamp needed
       } else if (same_scan) {

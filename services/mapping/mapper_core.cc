@@ -40,7 +40,8 @@ void MapperCoreParams::Validate() const {
   }
 }
 
-MapperCore::MapperCore(const MapperCoreParams& params) : params_(params), terrain_(params.terrain) {
+MapperCore::MapperCore(const MapperCoreParams& params)
+    : params_(params), terrain_(params.terrain), band_(params.band) {
   params_.Validate();
   if (params_.occupancy_enabled) occupancy_ = std::make_unique<OccupancyGrid>(params_.occupancy);
   if (params_.octomap_enabled) octomap_ = std::make_unique<OctomapLayer>(params_.octomap);
@@ -109,8 +110,7 @@ RevolutionReport MapperCore::ProcessRevolution(const common::LidarRevolution& re
       }
       if (n > 0) ground_z = sum / n;
     }
-    const std::vector<PlanarRay> rays =
-        ProjectObstacleBand(revolution, params_.band, ground_z, &report.band);
+    const std::vector<PlanarRay>& rays = band_.Project(revolution, ground_z, &report.band);
     report.occupancy = occupancy_->InsertRays(rays);
     if (dynamic_) pending_rays_.insert(pending_rays_.end(), rays.begin(), rays.end());
   }

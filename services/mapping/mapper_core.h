@@ -95,6 +95,7 @@ class MapperCore {
  private:
   MapperCoreParams params_;
   TerrainMap terrain_;
+  ObstacleBand band_;  // keeps its buffers from one revolution to the next
   std::unique_ptr<OccupancyGrid> occupancy_;
   std::unique_ptr<OctomapLayer> octomap_;
   std::unique_ptr<DynamicLayers> dynamic_;

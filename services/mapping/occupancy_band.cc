@@ -63,8 +63,9 @@ const std::vector<PlanarRay>& ObstacleBand::Project(const common::LidarRevolutio
   const double max_range_sq = params_.max_range_m * params_.max_range_m;
 
   // 1. Points in world, with bin and horizontal range around their slice's sensor.
-  points_.clear();
-  points_.reserve(revolution.num_points());
+  // Filled field by field: a braced temporary copied in stalled on store forwarding.
+  points_.resize(revolution.num_points());
+  size_t kept = 0;
   origins_.assign(revolution.slices.size(), common::Vector2::Zero());
   for (size_t si = 0; si < revolution.slices.size(); ++si) {
     const common::LidarSlice& slice = revolution.slices[si];
@@ -94,12 +95,17 @@ const std::vector<PlanarRay>& ObstacleBand::Project(const common::LidarRevolutio
       const double range = std::sqrt(range_sq);
       int bin = static_cast<int>((FastAtan2(offset.y(), offset.x()) + M_PI) * bins_per_rad);
       bin = std::clamp(bin, 0, bins - 1);
-      points_.push_back({bin, static_cast<int32_t>(si), static_cast<float>(range),
-                         static_cast<float>(sensor.z() + offset.z()),
-                         static_cast<float>(ground + range * tan_slope), sensor.x() + offset.x(),
-                         sensor.y() + offset.y()});
+      Point& out = points_[kept++];
+      out.bin = bin;
+      out.slice = static_cast<int32_t>(si);
+      out.range_m = static_cast<float>(range);
+      out.z_m = static_cast<float>(sensor.z() + offset.z());
+      out.ground_cap_m = static_cast<float>(ground + range * tan_slope);
+      out.x_m = sensor.x() + offset.x();
+      out.y_m = sensor.y() + offset.y();
     }
   }
+  points_.resize(kept);
 
   // 2. Counting sort by bin into compact records, then by range inside each bin (insertion
   //    sort: a bin holds a few dozen points; ties keep input order).

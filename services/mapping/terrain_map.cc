@@ -15,6 +15,12 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
+// std::floor for a finite value well inside int64_t, without the libm call (no SSE4.1 here).
+inline int64_t FloorToInt(double v) {
+  const int64_t t = static_cast<int64_t>(v);
+  return t - (v < static_cast<double>(t) ? 1 : 0);
+}
+
 // Derived layers that are not cost layers.
 const std::vector<std::string>& GeometricLayers() {
   static const std::vector<std::string> names{
@@ -92,6 +98,8 @@ void TerrainMapParams::Validate() const {
 
 TerrainMap::TerrainMap(const TerrainMapParams& params) : params_(params) {
   params_.Validate();
+  const double cos_max_spread = std::cos(params_.filter.max_spread_slope_rad);
+  min_spread_nz2_ = cos_max_spread * cos_max_spread;
   // Blocks (the unit of recomputation) divide the tile evenly.
   block_cells_ = params_.tile_size_cells;
   for (int b = 25; b >= 5; --b) {
@@ -199,8 +207,13 @@ TerrainMap::Tile* TerrainMap::TileForCell(int64_t cx, int64_t cy, int* lx, int* 
 }
 
 void TerrainMap::MarkDirty(int64_t cx, int64_t cy) {
-  dirty_blocks_.insert(
-      {static_cast<int>(FloorDiv(cx, block_cells_)), static_cast<int>(FloorDiv(cy, block_cells_))});
+  // Points come ring by ring: most fall in the block the previous one marked.
+  const Key key{static_cast<int>(FloorDiv(cx, block_cells_)),
+                static_cast<int>(FloorDiv(cy, block_cells_))};
+  if (has_last_dirty_ && key == last_dirty_) return;
+  dirty_blocks_.insert(key);
+  last_dirty_ = key;
+  has_last_dirty_ = true;
 }
 
 common::GridGeometry TerrainMap::TileGeometry(int tx, int ty) const {
@@ -238,6 +251,11 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
       static_cast<uint32_t>(scan_id) | (static_cast<uint32_t>(scan_id) == 0 ? 0x80000000u : 0u);
   std::array<int64_t, 256> last_end;
   last_end.fill(std::numeric_limits<int64_t>::min());
+  // Runs of points fall in one cell: the spread variance of the last slope is kept (a tangent
+  // per point was a tenth of the fusion's time).
+  float spread_slope = kNaN;
+  double spread_var = 0.0;
+  interpolates_tile_ = nullptr;
   for (const auto& p : points) {
     const common::Vector3 ps(p.x_m, p.y_m, p.z_m);
     if (!ps.allFinite()) {
@@ -260,13 +278,20 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
       ++stats.overhang;
       continue;
     }
-    const int64_t cx = static_cast<int64_t>(std::floor(pw.x() / res));
-    const int64_t cy = static_cast<int64_t>(std::floor(pw.y() / res));
+    const int64_t cx = FloorToInt(pw.x() / res);
+    const int64_t cy = FloorToInt(pw.y() / res);
     int lx, ly;
     Tile* tile = TileForCell(cx, cy, &lx, &ly);
     const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
     double var_z = PointHeightVariance(range, (pw.z() - origin.z()) / range, params_.filter);
-    if (tile->slope != nullptr) var_z += SlopeSpreadVariance(tile->slope[i], res, params_.filter);
+    if (tile->slope != nullptr) {
+      const float slope = tile->slope[i];
+      if (!(slope == spread_slope)) {
+        spread_slope = slope;
+        spread_var = SlopeSpreadVariance(slope, res, params_.filter);
+      }
+      var_z += spread_var;
+    }
     const bool same_scan = tile->scan[i] == scan_tag;
     float h = tile->filter_height[i], var = tile->variance[i];
     const float var_before = var;
@@ -349,6 +374,16 @@ bool TerrainMap::NormalInterpolates(const Tile& tile, size_t i, int64_t cx, int6
   return west && east && south && north && unknown <= 2;
 }
 
+bool TerrainMap::CachedNormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy) {
+  if (interpolates_tile_ != &tile || interpolates_i_ != i || interpolates_epoch_ != known_epoch_) {
+    interpolates_tile_ = &tile;
+    interpolates_i_ = i;
+    interpolates_epoch_ = known_epoch_;
+    interpolates_ = NormalInterpolates(tile, i, cx, cy);
+  }
+  return interpolates_;
+}
+
 // The published height follows the filter in steps larger than commit_epsilon, except where a
 // ray passed slightly beneath it: such a cell mixes a surface with a gap next to it (range
 // noise spills the rim of a trench into its first cell, a wall's foot into the wall cell) and
@@ -365,10 +400,9 @@ void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
   if (tile->normal_x != nullptr && tile->normal_y != nullptr && !std::isnan(h)) {
     const double nx = tile->normal_x[i], ny = tile->normal_y[i];
     const double nz2 = 1.0 - nx * nx - ny * ny;
-    if (std::isfinite(nx) && std::isfinite(ny) && nz2 > 0 &&
-        SlopeSpreadVariance(std::acos(std::min(1.0, std::sqrt(nz2))), params_.resolution_m,
-                            params_.filter) > 0 &&
-        NormalInterpolates(*tile, i, cx, cy)) {
+    // A slope in (0, max_spread_slope_rad], as SlopeSpreadVariance > 0 asks, without an acos.
+    if (std::isfinite(nx) && std::isfinite(ny) && nz2 < 1.0 && nz2 >= min_spread_nz2_ &&
+        CachedNormalInterpolates(*tile, i, cx, cy)) {
       const double nz = std::sqrt(nz2);
       h = static_cast<float>(h + (nx * tile->hit_dx[i] + ny * tile->hit_dy[i]) / nz);
     }
@@ -381,6 +415,7 @@ void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
   float& committed = tile->elevation[i];
   if (std::isnan(h) != std::isnan(committed) ||
       (!std::isnan(h) && std::fabs(double(h) - committed) > params_.commit_epsilon_m)) {
+    if (std::isnan(h) != std::isnan(committed)) ++known_epoch_;
     committed = h;
     ++tile->base_version;
     MarkDirty(cx, cy);
@@ -640,6 +675,7 @@ DerivedStats TerrainMap::UpdateDerived(const RobotContext& robot) {
     }
   }
   dirty_blocks_.clear();
+  has_last_dirty_ = false;
   // Cost-only blocks: the blind zone at the robot's previous and current position, and with
   // IMU compensation the robot's surroundings (the pitch changes every cell's slope there).
   std::set<Key> cost_region = region;
@@ -770,6 +806,7 @@ void TerrainMap::Clear() {
   tiles_.clear();
   last_tile_ = nullptr;
   dirty_blocks_.clear();
+  has_last_dirty_ = false;
 }
 
 int64_t TerrainMap::known_cells() const {

@@ -192,6 +192,8 @@ class TerrainMap {
   /// True when the cell's normal fit interpolates: of its 8 neighbours (in any tile) at most
   /// two lack a height, and some have one on each side along both axes.
   bool NormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy) const;
+  /// NormalInterpolates, answered again without looking while nothing it reads changed.
+  bool CachedNormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy);
   /// Copies `layers` of the global cell rectangle into a dense map (NaN outside tiles).
   common::GridMap Window(const CellRect& global, const std::vector<std::string>& layers) const;
   /// The same into `out` with geometry `g` (reusing its buffers when the geometry matches).
@@ -212,6 +214,16 @@ class TerrainMap {
   Tile* last_tile_{nullptr};
   Key last_key_{0, 0};
   std::set<Key> dirty_blocks_;  ///< blocks whose base layers changed
+  Key last_dirty_{0, 0};        ///< the block MarkDirty inserted last (valid when has_last_dirty_)
+  bool has_last_dirty_{false};
+  double min_spread_nz2_{1.0};  ///< cos^2(filter.max_spread_slope_rad): CommitHeight's gate
+  // NormalInterpolates of the last cell asked, while no committed height turned known or
+  // unknown (runs of points fall in one cell). Reset by each Integrate.
+  uint64_t known_epoch_{0};
+  const Tile* interpolates_tile_{nullptr};
+  size_t interpolates_i_{0};
+  uint64_t interpolates_epoch_{0};
+  bool interpolates_{false};
   std::optional<common::Vector2> last_robot_xy_;
   common::GridMap scratch_;                   // recomputation windows
   mutable common::GridMap registry_scratch_;  // BuildRegistry's copy of the map
