@@ -129,6 +129,13 @@ struct StoredLayer {
   std::vector<StoredTile> tiles;  ///< row by row
 };
 
+/// A cached derivation with its layers as stored tiles (FindDerived without decoding them).
+struct StoredDerived {
+  std::string profile_name;
+  common::ObstacleRegistry registry;  ///< the obstacles with this profile's verdict
+  std::vector<StoredLayer> layers;
+};
+
 /// Which maps to list.
 struct MapFilter {
   std::string site;          ///< empty = every site
@@ -266,6 +273,12 @@ class MapStore {
   virtual common::Result<std::optional<DerivedProfile>> FindDerived(
       const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
       const LayerQuery& query) const = 0;
+  /// The cached derivation as FindDerived finds it, its layers (`layers` empty = all) as stored
+  /// tiles, each blob checked; nullopt on a miss. The default cuts FindDerived's layers into
+  /// tiles of `tile_size` and compresses them; SqliteMapStore returns its own blobs.
+  virtual common::Result<std::optional<StoredDerived>> FindDerivedTiles(
+      const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
+      const std::vector<std::string>& layers, int tile_size = 100) const;
   /// Every cached derivation of a map version, by profile name.
   virtual common::Result<std::vector<DerivedInfo>> ListDerived(const MapRef& ref) const = 0;
   /// Caches a derivation (a second put of the same key keeps the first).

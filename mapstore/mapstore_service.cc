@@ -532,6 +532,39 @@ void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
       stored = true;
     }
   }
+  // A load of cached derived layers alone for a profile sends the cache's blobs as they are too.
+  if (!only_octomap && !stored && !request.profile.empty() && params_.compress_reply_tiles &&
+      !wanted.empty() && deriver_.valid()) {
+    auto info = store_.GetMapInfo({site, request.map_name, request.version});
+    if (!info.ok()) {
+      out->status = info.status();
+      return;
+    }
+    const std::set<std::string> base(info->layers.begin(), info->layers.end());
+    auto profile = store_.GetProfile(request.profile);
+    if (!profile.ok()) {
+      out->status = profile.status();
+      return;
+    }
+    if (std::none_of(wanted.begin(), wanted.end(),
+                     [&](const std::string& l) { return base.count(l) > 0; })) {
+      const MapRef exact{info->site, info->name, info->version};
+      auto cached = store_.FindDerivedTiles(exact, profile->content_hash, deriver_.code_version,
+                                            wanted, params_.reply_tile_size);
+      if (!cached.ok()) {
+        out->status = cached.status();
+        return;
+      }
+      if (cached->has_value()) {
+        view.info = *info;
+        view.obstacles = std::move((*cached)->registry);
+        view.from_cache = true;
+        out->stored_layers = std::move((*cached)->layers);
+        out->stored_geometry = info->geometry;
+        stored = true;
+      }
+    }
+  }
   if (!only_octomap && !stored) {
     auto loaded = LoadForProfile(store_, &deriver_, {site, request.map_name, request.version},
                                  request.profile, {wanted, std::nullopt});
@@ -848,11 +881,7 @@ std::shared_ptr<MapstoreService::Outgoing> MapstoreService::MakeOutgoing(
     }
   }
   for (const auto& batch : out->first_send) {
-    for (const auto& tile : batch.tiles) {
-      out->bytes += tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32
-                        ? static_cast<int64_t>(tile.data.size() * sizeof(float))
-                        : static_cast<int64_t>(tile.bytes.size());
-    }
+    for (const auto& tile : batch.tiles) out->bytes += TilePayloadBytes(tile);
   }
   return out;
 }

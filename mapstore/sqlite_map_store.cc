@@ -668,6 +668,60 @@ Result<common::GridMap> SqliteMapStore::LoadLayers(const MapRef& ref,
   return map;
 }
 
+Status SqliteMapStore::ReadStoredTiles(sqlite::Statement* stmt, const std::string& label,
+                                       const VersionRow& row, StoredLayer* layer) const {
+  const int ts = row.tile_size;
+  const common::GridGeometry& full = row.geometry;
+  const int tiles_x = (full.size_x + ts - 1) / ts;
+  const int tiles_y = (full.size_y + ts - 1) / ts;
+  layer->tile_size = ts;
+  while (stmt->Step()) {
+    StoredTile t;
+    t.tile_ix = static_cast<int>(stmt->Int(0));
+    t.tile_iy = static_cast<int>(stmt->Int(1));
+    t.codec = static_cast<int>(stmt->Int(2));
+    const int64_t raw_size = stmt->Int(3);
+    t.raw_crc32 = static_cast<uint32_t>(stmt->Int(4));
+    t.data = stmt->Blob(5);
+    const std::string where =
+        label + " tile (" + std::to_string(t.tile_ix) + ", " + std::to_string(t.tile_iy) + ")";
+    if (t.tile_ix < 0 || t.tile_iy < 0 || t.tile_ix >= tiles_x || t.tile_iy >= tiles_y) {
+      return common::CorruptError(where + " lies outside the grid");
+    }
+    t.cells_x = std::min(ts, full.size_x - t.tile_ix * ts);
+    t.cells_y = std::min(ts, full.size_y - t.tile_iy * ts);
+    if (raw_size != int64_t{t.cells_x} * t.cells_y * static_cast<int64_t>(sizeof(float))) {
+      return common::CorruptError(where + " has " + std::to_string(raw_size) + " bytes for " +
+                                  std::to_string(t.cells_x * t.cells_y) + " cells");
+    }
+    layer->tiles.push_back(std::move(t));
+  }
+  return stmt->status();
+}
+
+Status SqliteMapStore::CheckStoredLayers(const std::vector<StoredLayer>& layers,
+                                         const std::string& label) const {
+  std::vector<std::pair<size_t, size_t>> all;  // (layer, tile) of every tile
+  for (size_t l = 0; l < layers.size(); ++l) {
+    for (size_t t = 0; t < layers[l].tiles.size(); ++t) all.emplace_back(l, t);
+  }
+  // The blobs are checked (decoded, not kept) as LoadLayers checks them.
+  std::vector<Status> errors(all.size());
+  ParallelFor(all.size(), options_.compression_threads, [&](size_t i) {
+    const StoredTile& t = layers[all[i].first].tiles[all[i].second];
+    Status s = CheckStoredTile(t);
+    if (!s.ok()) {
+      errors[i] = common::CorruptError("layer '" + layers[all[i].first].name + "' of " + label +
+                                       " tile (" + std::to_string(t.tile_ix) + ", " +
+                                       std::to_string(t.tile_iy) + "): " + s.message());
+    }
+  });
+  for (const Status& e : errors) {
+    if (!e.ok()) return e;
+  }
+  return Status::Ok();
+}
+
 Result<std::vector<StoredLayer>> SqliteMapStore::LoadStoredTiles(
     const MapRef& ref, const std::vector<std::string>& layers, int /*tile_size*/) const {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -677,64 +731,23 @@ Result<std::vector<StoredLayer>> SqliteMapStore::LoadStoredTiles(
   auto ids = LayerIds(ref, *row, &wanted);
   if (!ids.ok()) return ids.status();
   const std::map<std::string, int64_t>& layer_ids = *ids;
-  const int ts = row->tile_size;
-  const common::GridGeometry& full = row->geometry;
-  const int tiles_x = (full.size_x + ts - 1) / ts;
-  const int tiles_y = (full.size_y + ts - 1) / ts;
+  const std::string label =
+      "map '" + row->site + "/" + row->name + "' version " + std::to_string(row->version);
   sqlite::Statement st = db_->Prepare(std::string("SELECT ") + kTileColumns +
                                       " FROM layer_tiles t JOIN blobs b ON b.id = t.blob_id "
                                       "WHERE t.layer_id = ? ORDER BY t.tile_iy, t.tile_ix");
   std::vector<StoredLayer> out;
-  std::vector<std::pair<size_t, size_t>> all;  // (layer, tile) of every tile, for the checks
   for (const std::string& name : wanted) {
     StoredLayer layer;
     layer.name = name;
-    layer.tile_size = ts;
     st.Reset();
     st.Bind(1, layer_ids.at(name));
-    while (st.Step()) {
-      StoredTile t;
-      t.tile_ix = static_cast<int>(st.Int(0));
-      t.tile_iy = static_cast<int>(st.Int(1));
-      t.codec = static_cast<int>(st.Int(2));
-      const int64_t raw_size = st.Int(3);
-      t.raw_crc32 = static_cast<uint32_t>(st.Int(4));
-      t.data = st.Blob(5);
-      const std::string where = "layer '" + name + "' of map '" + row->site + "/" + row->name +
-                                "' version " + std::to_string(row->version) + " tile (" +
-                                std::to_string(t.tile_ix) + ", " + std::to_string(t.tile_iy) + ")";
-      if (t.tile_ix < 0 || t.tile_iy < 0 || t.tile_ix >= tiles_x || t.tile_iy >= tiles_y) {
-        return common::CorruptError(where + " lies outside the grid");
-      }
-      t.cells_x = std::min(ts, full.size_x - t.tile_ix * ts);
-      t.cells_y = std::min(ts, full.size_y - t.tile_iy * ts);
-      if (raw_size != int64_t{t.cells_x} * t.cells_y * static_cast<int64_t>(sizeof(float))) {
-        return common::CorruptError(where + " has " + std::to_string(raw_size) + " bytes for " +
-                                    std::to_string(t.cells_x * t.cells_y) + " cells");
-      }
-      layer.tiles.push_back(std::move(t));
-    }
-    if (!st.status().ok()) return st.status();
+    Status read = ReadStoredTiles(&st, "layer '" + name + "' of " + label, *row, &layer);
+    if (!read.ok()) return read;
     out.push_back(std::move(layer));
   }
-  for (size_t l = 0; l < out.size(); ++l) {
-    for (size_t t = 0; t < out[l].tiles.size(); ++t) all.emplace_back(l, t);
-  }
-  // The blobs are checked (decoded, not kept) as LoadLayers checks them.
-  std::vector<Status> errors(all.size());
-  ParallelFor(all.size(), options_.compression_threads, [&](size_t i) {
-    const StoredTile& t = out[all[i].first].tiles[all[i].second];
-    Status s = CheckStoredTile(t);
-    if (!s.ok()) {
-      errors[i] = common::CorruptError(
-          "layer '" + out[all[i].first].name + "' of map '" + row->site + "/" + row->name +
-          "' version " + std::to_string(row->version) + " tile (" + std::to_string(t.tile_ix) +
-          ", " + std::to_string(t.tile_iy) + "): " + s.message());
-    }
-  });
-  for (const Status& e : errors) {
-    if (!e.ok()) return e;
-  }
+  Status checked = CheckStoredLayers(out, label);
+  if (!checked.ok()) return checked;
   return out;
 }
 
@@ -911,27 +924,28 @@ Result<std::vector<StoredProfile>> SqliteMapStore::ListProfiles() const {
   return out;
 }
 
-Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& ref,
-                                                                  const std::string& profile_hash,
-                                                                  const std::string& code_version,
-                                                                  const LayerQuery& query) const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+struct SqliteMapStore::DerivedHeader {
+  int64_t id{0};
+  std::string profile_name;
+  int64_t created_utime{0};
+  common::ObstacleRegistry registry;
+  std::set<std::string> layers;
+};
+
+Result<std::optional<SqliteMapStore::DerivedHeader>> SqliteMapStore::FindDerivedHeader(
+    const VersionRow& row, const std::string& profile_hash, const std::string& code_version) const {
   sqlite::Statement st = db_->Prepare(
       "SELECT d.id, d.profile_name, d.created_utime, b.codec, b.raw_size, b.raw_crc32, b.data "
       "FROM derived d JOIN blobs b ON b.id = d.registry_blob_id "
       "WHERE d.map_version_id = ? AND d.profile_hash = ? AND d.code_version = ?");
-  st.Bind(1, row->id).Bind(2, profile_hash).Bind(3, code_version);
+  st.Bind(1, row.id).Bind(2, profile_hash).Bind(3, code_version);
   if (!st.Step()) {
     if (!st.status().ok()) return st.status();
-    return std::optional<DerivedProfile>();
+    return std::optional<DerivedHeader>();
   }
-  DerivedProfile out;
-  const int64_t derived_id = st.Int(0);
+  DerivedHeader out;
+  out.id = st.Int(0);
   out.profile_name = st.Text(1);
-  out.profile_hash = profile_hash;
-  out.code_version = code_version;
   out.created_utime = st.Int(2);
   auto registry_bytes = DecodeBlob(static_cast<Codec>(st.Int(3)), st.Blob(6), st.Int(4),
                                    static_cast<uint32_t>(st.Int(5)));
@@ -941,19 +955,52 @@ Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& 
   auto registry = ParseRegistry(*registry_bytes);
   if (!registry.ok()) return registry.status();
   out.registry = std::move(registry).value();
-
-  std::set<std::string> names;
   sqlite::Statement ln = db_->Prepare("SELECT name FROM derived_layers WHERE derived_id = ?");
-  ln.Bind(1, derived_id);
-  while (ln.Step()) names.insert(ln.Text(0));
-  std::vector<std::string> wanted = query.layers;
-  if (wanted.empty()) wanted.assign(names.begin(), names.end());
+  ln.Bind(1, out.id);
+  while (ln.Step()) out.layers.insert(ln.Text(0));
+  if (!ln.status().ok()) return ln.status();
+  return std::optional<DerivedHeader>(std::move(out));
+}
+
+namespace {
+
+// The wanted cached layers (all when none is named), or kNotFound naming the first missing one.
+Result<std::vector<std::string>> CachedLayersWanted(const std::set<std::string>& cached,
+                                                    const std::vector<std::string>& wanted_in,
+                                                    const std::string& profile_name) {
+  std::vector<std::string> wanted = wanted_in;
+  if (wanted.empty()) wanted.assign(cached.begin(), cached.end());
   for (const std::string& name : wanted) {
-    if (!names.count(name)) {
-      return common::NotFoundError("the cached layers of profile '" + out.profile_name +
+    if (!cached.count(name)) {
+      return common::NotFoundError("the cached layers of profile '" + profile_name +
                                    "' have no layer '" + name + "'");
     }
   }
+  return wanted;
+}
+
+}  // namespace
+
+Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& ref,
+                                                                  const std::string& profile_hash,
+                                                                  const std::string& code_version,
+                                                                  const LayerQuery& query) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto row = Resolve(ref);
+  if (!row.ok()) return row.status();
+  auto header = FindDerivedHeader(*row, profile_hash, code_version);
+  if (!header.ok()) return header.status();
+  std::optional<DerivedHeader> found = std::move(header).value();
+  if (!found) return std::optional<DerivedProfile>();
+  DerivedHeader& h = *found;
+  DerivedProfile out;
+  out.profile_name = h.profile_name;
+  out.profile_hash = profile_hash;
+  out.code_version = code_version;
+  out.created_utime = h.created_utime;
+  out.registry = std::move(h.registry);
+  auto wanted = CachedLayersWanted(h.layers, query.layers, out.profile_name);
+  if (!wanted.ok()) return wanted.status();
   const CellBox box = query.region ? ClipBox(*query.region, row->geometry)
                                    : CellBox{0, 0, row->geometry.size_x, row->geometry.size_y};
   if (box.empty()) return common::InvalidArgumentError("the region does not overlap the map");
@@ -963,15 +1010,52 @@ Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& 
       std::string("SELECT ") + kTileColumns +
       " FROM derived_tiles t JOIN blobs b ON b.id = t.blob_id WHERE t.derived_id = ? AND "
       "t.layer = ? AND t.tile_iy BETWEEN ? AND ? AND t.tile_ix BETWEEN ? AND ?");
-  for (const std::string& name : wanted) {
+  for (const std::string& name : *wanted) {
     tiles.Reset();
-    tiles.Bind(1, derived_id).Bind(2, name).Bind(3, box.min_iy / ts).Bind(4, (box.max_iy - 1) / ts);
+    tiles.Bind(1, h.id).Bind(2, name).Bind(3, box.min_iy / ts).Bind(4, (box.max_iy - 1) / ts);
     tiles.Bind(5, box.min_ix / ts).Bind(6, (box.max_ix - 1) / ts);
     Status read = ReadTiles(&tiles, "derived layer '" + name + "'", ts, row->geometry, box,
                             &out.layers.AddLayer(name));
     if (!read.ok()) return read;
   }
   return std::optional<DerivedProfile>(std::move(out));
+}
+
+Result<std::optional<StoredDerived>> SqliteMapStore::FindDerivedTiles(
+    const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
+    const std::vector<std::string>& layers, int /*tile_size*/) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  auto row = Resolve(ref);
+  if (!row.ok()) return row.status();
+  auto header = FindDerivedHeader(*row, profile_hash, code_version);
+  if (!header.ok()) return header.status();
+  std::optional<DerivedHeader> found = std::move(header).value();
+  if (!found) return std::optional<StoredDerived>();
+  DerivedHeader& h = *found;
+  StoredDerived out;
+  out.profile_name = h.profile_name;
+  out.registry = std::move(h.registry);
+  auto wanted = CachedLayersWanted(h.layers, layers, out.profile_name);
+  if (!wanted.ok()) return wanted.status();
+  const std::string label = "the cache of profile '" + out.profile_name + "' for map '" +
+                            row->site + "/" + row->name + "' version " +
+                            std::to_string(row->version);
+  sqlite::Statement tiles = db_->Prepare(
+      std::string("SELECT ") + kTileColumns +
+      " FROM derived_tiles t JOIN blobs b ON b.id = t.blob_id WHERE t.derived_id = ? AND "
+      "t.layer = ? ORDER BY t.tile_iy, t.tile_ix");
+  for (const std::string& name : *wanted) {
+    StoredLayer layer;
+    layer.name = name;
+    tiles.Reset();
+    tiles.Bind(1, h.id).Bind(2, name);
+    Status read = ReadStoredTiles(&tiles, "derived layer '" + name + "' of " + label, *row, &layer);
+    if (!read.ok()) return read;
+    out.layers.push_back(std::move(layer));
+  }
+  Status checked = CheckStoredLayers(out.layers, label);
+  if (!checked.ok()) return checked;
+  return std::optional<StoredDerived>(std::move(out));
 }
 
 Result<std::vector<DerivedInfo>> SqliteMapStore::ListDerived(const MapRef& ref) const {

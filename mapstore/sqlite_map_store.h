@@ -74,6 +74,9 @@ class SqliteMapStore final : public MapStore {
                                                             const std::string& profile_hash,
                                                             const std::string& code_version,
                                                             const LayerQuery& query) const override;
+  common::Result<std::optional<StoredDerived>> FindDerivedTiles(
+      const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
+      const std::vector<std::string>& layers, int tile_size = 100) const override;
   common::Result<std::vector<DerivedInfo>> ListDerived(const MapRef& ref) const override;
   common::Status PutDerived(const MapRef& ref, const DerivedProfile& derived,
                             const WriteContext& ctx) override;
@@ -123,6 +126,19 @@ class SqliteMapStore final : public MapStore {
   common::Status ReadTiles(sqlite::Statement* stmt, const std::string& label, int tile_size,
                            const common::GridGeometry& full, const CellBox& box,
                            common::Layer* layer) const;
+  /// The cache entry of (version, profile hash, code version): its id, profile name, creation
+  /// time, registry and layer names; nullopt on a miss.
+  struct DerivedHeader;
+  common::Result<std::optional<DerivedHeader>> FindDerivedHeader(
+      const VersionRow& row, const std::string& profile_hash,
+      const std::string& code_version) const;
+  /// Appends the tiles a bound statement yields (row by row) to `layer` as stored, checking
+  /// their place and size; `label` names the layer in errors.
+  common::Status ReadStoredTiles(sqlite::Statement* stmt, const std::string& label,
+                                 const VersionRow& row, StoredLayer* layer) const;
+  /// Decodes every tile of `layers` against its checksum (in parallel), naming the first bad one.
+  common::Status CheckStoredLayers(const std::vector<StoredLayer>& layers,
+                                   const std::string& label) const;
   /// Writes tiles of layers and returns their blob ids through `insert_tile`.
   common::Status WriteBlobs(const std::vector<EncodedBlob>& blobs, std::vector<int64_t>* ids);
   /// Runs `body` inside BEGIN IMMEDIATE ... COMMIT, retrying while the database is busy.

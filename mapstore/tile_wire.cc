@@ -170,4 +170,10 @@ bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_gr
   return lcm.publish(channel, buffer.data(), static_cast<unsigned>(buffer.size())) == 0;
 }
 
+int64_t TilePayloadBytes(const cairn::lcmt_grid_tile& tile) {
+  return tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32
+             ? static_cast<int64_t>(tile.data.size() * sizeof(float))
+             : static_cast<int64_t>(tile.bytes.size());
+}
+
 }  // namespace cairn::mapstore

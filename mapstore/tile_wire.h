@@ -41,4 +41,7 @@ const cairn::lcmt_grid_tile* FloatTile(const cairn::lcmt_grid_tile& tile,
 /// Encodes and publishes a tile; false when LCM refuses it.
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile);
 
+/// Bytes of a tile's cells on the bus (its floats, or its encoded bytes): what pacing counts.
+int64_t TilePayloadBytes(const cairn::lcmt_grid_tile& tile);
+
 }  // namespace cairn::mapstore

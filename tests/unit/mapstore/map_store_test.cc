@@ -340,6 +340,61 @@ TYPED_TEST(MapStoreTest, PlacesAreAddedAndReplacedByName) {
   EXPECT_EQ(this->dut_->ListSites().value(), std::vector<std::string>{"flat"});
 }
 
+// A load of cached derived layers sends the cache's tiles as they are: they must rebuild
+// exactly the cached layer and come with the cached verdicts.
+TYPED_TEST(MapStoreTest, CachedDerivedTilesRebuildTheCachedLayer) {
+  MapSnapshot s = SampleSnapshot("corridor", 53, 41);
+  this->Save(s);
+  const MapRef ref{"lab", "corridor", 1};
+  DerivedProfile d;
+  d.profile_name = "rover";
+  d.profile_hash = "h1";
+  d.code_version = "c1";
+  d.layers = common::GridMap(s.base.geometry());
+  common::Layer& cost = d.layers.AddLayer("cost/rover", 0.f);
+  for (int iy = 0; iy < 41; ++iy) {
+    for (int ix = 0; ix < 53; ++ix) cost(ix, iy) = ix < 10 ? common::kUnknown : (ix * 7 + iy) % 101;
+  }
+  d.layers.AddLayer("slope", 0.1f);
+  d.registry.obstacles = {s.obstacles.obstacles[1]};
+  ASSERT_TRUE(this->dut_->PutDerived(ref, d, this->ctx_).ok());
+
+  auto hit = this->dut_->FindDerivedTiles(ref, "h1", "c1", {"cost/rover"}, 16);
+  ASSERT_TRUE(hit.ok()) << hit.status().ToString();
+  ASSERT_TRUE(hit->has_value());
+  EXPECT_EQ((*hit)->profile_name, "rover");
+  ASSERT_EQ((*hit)->registry.obstacles.size(), 1u);
+  EXPECT_EQ((*hit)->registry.obstacles[0].id, s.obstacles.obstacles[1].id);
+  ASSERT_EQ((*hit)->layers.size(), 1u);
+  const StoredLayer& layer = (*hit)->layers.front();
+  EXPECT_EQ(layer.name, "cost/rover");
+  ASSERT_GT(layer.tile_size, 0);
+  const int ts = layer.tile_size;
+  common::Layer rebuilt = common::Layer::Constant(53, 41, common::kUnknown);
+  for (const StoredTile& t : layer.tiles) {
+    EXPECT_EQ(t.cells_x, std::min(ts, 53 - ts * t.tile_ix));
+    EXPECT_EQ(t.cells_y, std::min(ts, 41 - ts * t.tile_iy));
+    std::vector<float> cells(static_cast<size_t>(t.cells_x) * t.cells_y);
+    ASSERT_TRUE(DecodeBlobTo(static_cast<Codec>(t.codec), t.data.data(), t.data.size(),
+                             static_cast<int64_t>(cells.size() * sizeof(float)), t.raw_crc32,
+                             reinterpret_cast<uint8_t*>(cells.data()), /*verify_crc=*/true)
+                    .ok());
+    PasteTile({t.tile_ix, t.tile_iy, t.tile_ix * ts, t.tile_iy * ts, t.cells_x, t.cells_y},
+              cells.data(), 0, 0, &rebuilt);
+  }
+  EXPECT_TRUE(SameLayer(rebuilt, cost));
+  auto both = this->dut_->FindDerivedTiles(ref, "h1", "c1", {}, 16);
+  ASSERT_TRUE(both.ok() && both->has_value());
+  EXPECT_EQ((*both)->layers.size(), 2u);
+
+  EXPECT_FALSE(this->dut_->FindDerivedTiles(ref, "h2", "c1", {}, 16)->has_value());
+  EXPECT_FALSE(this->dut_->FindDerivedTiles(ref, "h1", "c2", {}, 16)->has_value());
+  EXPECT_EQ(this->dut_->FindDerivedTiles(ref, "h1", "c1", {"cost/pioneer3at"}, 16).status().code(),
+            StatusCode::kNotFound);
+  EXPECT_EQ(this->dut_->FindDerivedTiles({"lab", "hall", 0}, "h1", "c1", {}, 16).status().code(),
+            StatusCode::kNotFound);
+}
+
 TYPED_TEST(MapStoreTest, DerivedCacheIsKeyedByVersionProfileHashAndCodeVersion) {
   MapSnapshot s = SampleSnapshot("corridor");
   this->Save(s);

@@ -170,6 +170,61 @@ TEST(SqliteMapStoreTest, CorruptBlobIsRefusedAndReportedByCheck) {
   EXPECT_NE(report->problems[0].find("blob"), std::string::npos) << report->problems[0];
 }
 
+TEST(SqliteMapStoreTest, CachedDerivedTilesAreTheStoredBlobsAndAreChecked) {
+  const std::string path = TempDir() + "/site.db";
+  const MapRef ref{"lab", "corridor", 1};
+  {
+    SqliteOptions small_tiles;
+    small_tiles.tile_size_cells = 16;
+    auto dut = OpenOrDie(path, small_tiles);
+    const MapSnapshot s = SampleSnapshot("corridor");
+    ASSERT_TRUE(dut->SaveMap(s, kCtx).ok());
+    DerivedProfile d;
+    d.profile_name = "rover";
+    d.profile_hash = "h1";
+    d.code_version = "c1";
+    d.layers = common::GridMap(s.base.geometry());
+    common::Layer& cost = d.layers.AddLayer("cost/rover", 0.f);
+    for (int64_t i = 0; i < cost.size(); ++i) cost.data()[i] = static_cast<float>(i % 97);
+    ASSERT_TRUE(dut->PutDerived(ref, d, kCtx).ok());
+    // The tiles are the stored rows themselves, not compressed again.
+    auto hit = dut->FindDerivedTiles(ref, "h1", "c1", {"cost/rover"});
+    ASSERT_TRUE(hit.ok() && hit->has_value()) << hit.status().ToString();
+    ASSERT_EQ((*hit)->layers.size(), 1u);
+    EXPECT_EQ((*hit)->layers[0].tile_size, 16);
+    const StoredTile& first = (*hit)->layers[0].tiles.at(0);
+    ASSERT_EQ(first.tile_ix, 0);
+    ASSERT_EQ(first.tile_iy, 0);
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+    sqlite3_stmt* st = nullptr;
+    ASSERT_EQ(sqlite3_prepare_v2(db,
+                                 "SELECT b.data FROM derived_tiles t JOIN blobs b ON b.id = "
+                                 "t.blob_id WHERE t.tile_ix = 0 AND t.tile_iy = 0",
+                                 -1, &st, nullptr),
+              SQLITE_OK);
+    ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+    const std::string stored(static_cast<const char*>(sqlite3_column_blob(st, 0)),
+                             static_cast<size_t>(sqlite3_column_bytes(st, 0)));
+    sqlite3_finalize(st);
+    sqlite3_close(db);
+    EXPECT_EQ(first.data, stored);
+  }
+  // Another program damages one cached tile: it is refused, naming it.
+  RawExec(path,
+          "DROP TRIGGER blobs_immutable;"
+          "UPDATE blobs SET data = substr(data, 1, 20) || CASE WHEN substr(data, 21, 1) = X'00' "
+          "THEN X'01' ELSE X'00' END || substr(data, 22) WHERE id = (SELECT blob_id FROM "
+          "derived_tiles WHERE tile_ix = 1 AND tile_iy = 0);");
+  auto dut = OpenOrDie(path);
+  auto damaged = dut->FindDerivedTiles(ref, "h1", "c1", {"cost/rover"});
+  EXPECT_EQ(damaged.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(damaged.status().message().find("tile (1, 0)"), std::string::npos)
+      << damaged.status().message();
+  EXPECT_NE(damaged.status().message().find("cost/rover"), std::string::npos)
+      << damaged.status().message();
+}
+
 TEST(SqliteMapStoreTest, StoredBlobsAndVersionsCannotBeRewritten) {
   const std::string path = TempDir() + "/site.db";
   auto dut = OpenOrDie(path);
