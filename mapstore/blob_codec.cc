@@ -231,6 +231,26 @@ EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level
   }
 }
 
+common::Result<EncodedBlob> AdoptEncodedBlob(Codec codec, std::string data, int64_t raw_size,
+                                             uint32_t raw_crc32) {
+  if (codec != Codec::kZstd && codec != Codec::kZstdShuffle4) {
+    return common::InvalidArgumentError("only zstd blobs are adopted, not codec " +
+                                        std::to_string(static_cast<int>(codec)));
+  }
+  if (!HasContentChecksum(data.data(), data.size()) || data.size() < 9 || raw_size < 0) {
+    return common::InvalidArgumentError("the blob is no zstd frame with a content checksum");
+  }
+  EncodedBlob blob;
+  blob.codec = codec;
+  blob.raw_size = raw_size;
+  blob.raw_crc32 = raw_crc32;
+  uint32_t frame_checksum = 0;
+  std::memcpy(&frame_checksum, data.data() + data.size() - 4, 4);
+  blob.key = Hex32(raw_crc32) + "-" + Hex32(frame_checksum) + "-" + std::to_string(raw_size) + "z";
+  blob.data = std::move(data);
+  return blob;
+}
+
 common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t raw_size,
                             uint32_t raw_crc32, uint8_t* out, bool verify_crc) {
   if (raw_size < 0) return common::CorruptError("blob has a negative size");

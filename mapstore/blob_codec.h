@@ -45,6 +45,13 @@ uint32_t Crc32(const void* data, size_t size);
 /// Encodes raw bytes. kZstdShuffle4 needs a size that is a multiple of 4.
 /// @throws std::invalid_argument for a bad codec or size, std::runtime_error if zstd fails.
 EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level = 1);
+/// A zstd blob made by EncodeBlob elsewhere (a pushed tile's bytes), as EncodeBlob would have
+/// returned it, without compressing again: its content address comes from the CRC-32 the sender
+/// declared and the frame's own checksum. The caller vouches that the bytes decode to raw_size
+/// bytes with that CRC (checked on receipt); kInvalidArgument for another codec or a frame
+/// without a content checksum.
+common::Result<EncodedBlob> AdoptEncodedBlob(Codec codec, std::string data, int64_t raw_size,
+                                             uint32_t raw_crc32);
 /// Decodes stored bytes into `out` (raw_size bytes) and verifies them: zstd's frame checksum
 /// when the frame has one, and the CRC-32 of the raw bytes when it has none or `verify_crc`.
 /// kCorrupt says what did not match. Thread-safe.

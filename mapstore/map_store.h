@@ -68,6 +68,26 @@ struct OctomapData {
   }
 };
 
+/// One stored tile of a base layer as the store keeps it, so that a load reply can send it
+/// without decoding and encoding it again. Tile (tile_ix, tile_iy) covers cells
+/// [tile_ix * tile_size, + cells_x) x [tile_iy * tile_size, + cells_y) of the version's grid.
+struct StoredTile {
+  int tile_ix{0};
+  int tile_iy{0};
+  int cells_x{0};
+  int cells_y{0};
+  int codec{0};           ///< how `data` is encoded (mapstore::Codec)
+  uint32_t raw_crc32{0};  ///< CRC-32 of the float cells (x fastest, host byte order)
+  std::string data;       ///< the stored bytes
+};
+
+/// A base layer as stored tiles. Tiles the store does not hold are all unknown.
+struct StoredLayer {
+  std::string name;
+  int tile_size{0};
+  std::vector<StoredTile> tiles;  ///< row by row
+};
+
 /// Everything one save stores.
 struct MapSnapshot {
   std::string site{kDefaultSite};
@@ -76,6 +96,11 @@ struct MapSnapshot {
   common::GridMap base;                ///< robot-agnostic layers (at least one)
   common::ObstacleRegistry obstacles;  ///< measurements and the verdicts known at save time
   std::optional<OctomapData> octomap;
+  /// Optional: base tiles the caller already holds compressed (a pushed save's, as they came),
+  /// by layer. A store may keep such a blob instead of compressing its tile again when the
+  /// tile is one of its own (same tile size, place and cells) and the blob's CRC is that of the
+  /// base's cells there; `base` stays what is saved.
+  std::vector<StoredLayer> encoded_layers;
 };
 
 /// A stored map version as listed.
@@ -107,26 +132,6 @@ struct CellBox {
 struct LayerQuery {
   std::vector<std::string> layers;
   std::optional<CellBox> region;
-};
-
-/// One stored tile of a base layer as the store keeps it, so that a load reply can send it
-/// without decoding and encoding it again. Tile (tile_ix, tile_iy) covers cells
-/// [tile_ix * tile_size, + cells_x) x [tile_iy * tile_size, + cells_y) of the version's grid.
-struct StoredTile {
-  int tile_ix{0};
-  int tile_iy{0};
-  int cells_x{0};
-  int cells_y{0};
-  int codec{0};           ///< how `data` is encoded (mapstore::Codec)
-  uint32_t raw_crc32{0};  ///< CRC-32 of the float cells (x fastest, host byte order)
-  std::string data;       ///< the stored bytes
-};
-
-/// A base layer as stored tiles. Tiles the store does not hold are all unknown.
-struct StoredLayer {
-  std::string name;
-  int tile_size{0};
-  std::vector<StoredTile> tiles;  ///< row by row
 };
 
 /// A cached derivation with its layers as stored tiles (FindDerived without decoding them).

@@ -175,6 +175,13 @@ struct MapstoreService::Outgoing {
 struct MapstoreService::Staging {
   std::string invalid;  // why pushed data were refused (the save fails with INVALID)
   runtime::LayerAssembler assembler;
+  // Compressed tiles as they came, by layer and (tile_ix, tile_iy): the store keeps these bytes
+  // rather than compressing the cells again (SaveMap checks each against the cells' CRC).
+  struct EncodedLayer {
+    int tile_size{0};
+    std::map<std::pair<int, int>, StoredTile> tiles;
+  };
+  std::map<std::string, EncodedLayer> encoded;
   std::set<std::string> manifests;
   std::optional<common::ObstacleRegistry> obstacles;
   OctomapChunks octomap;
@@ -1031,6 +1038,7 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
 
   // What must be there, and what is missing.
   runtime::LayerAssembler* assembler = nullptr;
+  Staging* push_staging = nullptr;  // a push: its compressed tiles go to the store as they are
   std::vector<std::string> wanted(request.layers.begin(), request.layers.end());
   std::vector<std::string> missing;
   std::optional<common::ObstacleRegistry> obstacles;
@@ -1095,6 +1103,7 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
         return true;
       }
       assembler = &staging.assembler;
+      push_staging = &staging;
       push_robot = staging.robot;
       for (const std::string& layer : wanted) {
         if (!staging.manifests.count(layer) || !assembler->Complete(layer))
@@ -1200,6 +1209,18 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
       if (ValidateName("robot", snapshot.provenance.source_robot).code() !=
           common::StatusCode::kOk) {
         snapshot.provenance.source_robot.clear();
+      }
+      if (push_staging != nullptr) {
+        for (const std::string& layer : groups[g]) {
+          auto e = push_staging->encoded.find(layer);
+          if (e == push_staging->encoded.end() || e->second.tiles.empty()) continue;
+          StoredLayer stored;
+          stored.name = layer;
+          stored.tile_size = e->second.tile_size;
+          for (auto& [key, t] : e->second.tiles) stored.tiles.push_back(std::move(t));
+          e->second.tiles.clear();
+          snapshot.encoded_layers.push_back(std::move(stored));
+        }
       }
       if (g == 0 && obstacles) snapshot.obstacles = *obstacles;
       if (g == 0 && octomap) snapshot.octomap = *octomap;
@@ -1313,6 +1334,21 @@ void MapstoreService::OnPushTile(const cairn::lcmt_grid_tile& pushed) {
   if (!staging.assembler.OnTile(tile)) {
     node_.CountDropped("bad_push_tiles");
     return;
+  }
+  Staging::EncodedLayer& encoded = staging.encoded[tile.layer];
+  const std::pair<int, int> key{tile.tile_ix, tile.tile_iy};
+  if (pushed.encoding == cairn::lcmt_grid_tile::ENCODING_ZSTD_SHUFFLE4 &&
+      (encoded.tiles.empty() || encoded.tile_size == pushed.tile_size)) {
+    encoded.tile_size = pushed.tile_size;
+    encoded.tiles[key] = StoredTile{pushed.tile_ix,
+                                    pushed.tile_iy,
+                                    pushed.cells_x,
+                                    pushed.cells_y,
+                                    static_cast<int>(Codec::kZstdShuffle4),
+                                    static_cast<uint32_t>(pushed.checksum),
+                                    std::string(pushed.bytes.begin(), pushed.bytes.end())};
+  } else {
+    encoded.tiles.erase(key);  // a newer copy came as floats: it is compressed when stored
   }
   staging.robot = tile.robot;
   staging.cells += tile.num_cells;

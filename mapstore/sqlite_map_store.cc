@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <set>
 #include <thread>
 
@@ -373,15 +374,52 @@ Result<MapInfo> SqliteMapStore::SaveMap(const MapSnapshot& snapshot, const Write
   for (size_t l = 0; l < layer_names.size(); ++l) {
     for (size_t t = 0; t < specs.size(); ++t) jobs.push_back({l, t});
   }
+  // Blobs the caller already compressed (a pushed save's) for tiles that are the store's own.
+  std::vector<const StoredTile*> encoded(jobs.size(), nullptr);
+  {
+    std::map<std::string, const StoredLayer*> by_name;
+    for (const StoredLayer& l : snapshot.encoded_layers) {
+      if (l.tile_size == tile_size) by_name[l.name] = &l;
+    }
+    const int tiles_x = (g.size_x + tile_size - 1) / tile_size;
+    std::vector<std::vector<const StoredTile*>> index(layer_names.size());
+    for (size_t l = 0; l < layer_names.size(); ++l) {
+      auto it = by_name.find(layer_names[l]);
+      if (it == by_name.end()) continue;
+      index[l].assign(specs.size(), nullptr);
+      for (const StoredTile& t : it->second->tiles) {
+        const size_t k = static_cast<size_t>(t.tile_iy) * tiles_x + t.tile_ix;
+        if (t.tile_ix >= 0 && t.tile_iy >= 0 && t.tile_ix < tiles_x && k < specs.size()) {
+          index[l][k] = &t;
+        }
+      }
+    }
+    for (size_t i = 0; i < jobs.size(); ++i) {
+      if (!index[jobs[i].layer].empty()) encoded[i] = index[jobs[i].layer][jobs[i].spec];
+    }
+  }
   std::vector<EncodedBlob> blobs(jobs.size());
   std::vector<char> present(jobs.size(), 0);
   try {
     ParallelFor(jobs.size(), options_.compression_threads, [&](size_t i) {
+      const TileSpec& spec = specs[jobs[i].spec];
       const std::vector<float> cells =
-          ExtractTile(snapshot.base.at(layer_names[jobs[i].layer]), specs[jobs[i].spec]);
+          ExtractTile(snapshot.base.at(layer_names[jobs[i].layer]), spec);
       if (AllUnknown(cells)) return;
-      blobs[i] = EncodeBlob(cells.data(), cells.size() * sizeof(float), Codec::kZstdShuffle4,
-                            options_.zstd_level);
+      const size_t bytes = cells.size() * sizeof(float);
+      if (const StoredTile* e = encoded[i];
+          e != nullptr && e->codec == static_cast<int>(Codec::kZstdShuffle4) &&
+          e->cells_x == spec.cells_x && e->cells_y == spec.cells_y &&
+          e->raw_crc32 == Crc32(cells.data(), bytes)) {
+        auto blob = AdoptEncodedBlob(static_cast<Codec>(e->codec), e->data,
+                                     static_cast<int64_t>(bytes), e->raw_crc32);
+        if (blob.ok()) {
+          blobs[i] = std::move(blob).value();
+          present[i] = 1;
+          return;
+        }
+      }
+      blobs[i] = EncodeBlob(cells.data(), bytes, Codec::kZstdShuffle4, options_.zstd_level);
       present[i] = 1;
     });
   } catch (const std::exception& e) {

@@ -4,11 +4,14 @@
 #include <limits>
 #include <string>
 
+#include <gtest/gtest.h>
+
 #include "common/grid_map.h"
 #include "common/layers.h"
 #include "mapstore/map_store.h"
 
-// Test doubles for the map store unit tests: a deterministic fake derivation and sample maps.
+// Test doubles for the map store unit tests: a deterministic fake derivation, sample maps and a
+// layer comparison.
 
 namespace cairn::mapstore::testing {
 
@@ -56,6 +59,23 @@ inline common::RobotProfile Profile(const std::string& name, double max_slope_de
   p.max_step_up_m = max_step_m;
   p.sensors = {"hdl32e"};
   return p;
+}
+
+// Layers equal cell by cell, NaN equal to NaN.
+inline ::testing::AssertionResult SameLayer(const common::Layer& a, const common::Layer& b) {
+  if (a.rows() != b.rows() || a.cols() != b.cols()) {
+    return ::testing::AssertionFailure() << "sizes differ";
+  }
+  for (int iy = 0; iy < a.cols(); ++iy) {
+    for (int ix = 0; ix < a.rows(); ++ix) {
+      const float x = a(ix, iy), y = b(ix, iy);
+      if (!(std::isnan(x) && std::isnan(y)) && x != y) {
+        return ::testing::AssertionFailure()
+               << "cell (" << ix << ", " << iy << "): " << x << " != " << y;
+      }
+    }
+  }
+  return ::testing::AssertionSuccess();
 }
 
 /// A map with a known pattern: elevation rises 0.05 m per cell in x from column 10 on (a
@@ -114,6 +134,18 @@ inline MapSnapshot SampleSnapshot(const std::string& name, int size_x = 37, int 
   step.num_cells = 5;
   s.obstacles.obstacles = {ramp, step};
   return s;
+}
+
+/// A cache entry for profile "rover" (hash "h1", code version "c1") on `geometry`, with a
+/// cost layer of zeros and no obstacles: tests fill in what they check.
+inline DerivedProfile RoverDerivation(const common::GridGeometry& geometry) {
+  DerivedProfile d;
+  d.profile_name = "rover";
+  d.profile_hash = "h1";
+  d.code_version = "c1";
+  d.layers = common::GridMap(geometry);
+  d.layers.AddLayer("cost/rover", 0.f);
+  return d;
 }
 
 }  // namespace cairn::mapstore::testing

@@ -18,6 +18,7 @@ namespace {
 using common::StatusCode;
 using testing::FakeDeriver;
 using testing::Profile;
+using testing::SameLayer;
 using testing::SampleSnapshot;
 
 // Builds the store under test.
@@ -36,23 +37,6 @@ std::unique_ptr<MapStore> MakeStore<SqliteMapStore>() {
   auto store = SqliteMapStore::Open(":memory:", options);
   if (!store.ok()) throw std::runtime_error(store.status().ToString());
   return std::move(store).value();
-}
-
-// Layers equal cell by cell, NaN equal to NaN.
-::testing::AssertionResult SameLayer(const common::Layer& a, const common::Layer& b) {
-  if (a.rows() != b.rows() || a.cols() != b.cols()) {
-    return ::testing::AssertionFailure() << "sizes differ";
-  }
-  for (int iy = 0; iy < a.cols(); ++iy) {
-    for (int ix = 0; ix < a.rows(); ++ix) {
-      const float x = a(ix, iy), y = b(ix, iy);
-      if (!(std::isnan(x) && std::isnan(y)) && x != y) {
-        return ::testing::AssertionFailure()
-               << "cell (" << ix << ", " << iy << "): " << x << " != " << y;
-      }
-    }
-  }
-  return ::testing::AssertionSuccess();
 }
 
 template <typename T>
@@ -346,12 +330,8 @@ TYPED_TEST(MapStoreTest, CachedDerivedTilesRebuildTheCachedLayer) {
   MapSnapshot s = SampleSnapshot("corridor", 53, 41);
   this->Save(s);
   const MapRef ref{"lab", "corridor", 1};
-  DerivedProfile d;
-  d.profile_name = "rover";
-  d.profile_hash = "h1";
-  d.code_version = "c1";
-  d.layers = common::GridMap(s.base.geometry());
-  common::Layer& cost = d.layers.AddLayer("cost/rover", 0.f);
+  DerivedProfile d = testing::RoverDerivation(s.base.geometry());
+  common::Layer& cost = d.layers.at("cost/rover");
   for (int iy = 0; iy < 41; ++iy) {
     for (int ix = 0; ix < 53; ++ix) cost(ix, iy) = ix < 10 ? common::kUnknown : (ix * 7 + iy) % 101;
   }
@@ -399,12 +379,8 @@ TYPED_TEST(MapStoreTest, DerivedCacheIsKeyedByVersionProfileHashAndCodeVersion) 
   MapSnapshot s = SampleSnapshot("corridor");
   this->Save(s);
   const MapRef ref{"lab", "corridor", 1};
-  DerivedProfile d;
-  d.profile_name = "rover";
-  d.profile_hash = "h1";
-  d.code_version = "c1";
-  d.layers = common::GridMap(s.base.geometry());
-  d.layers.AddLayer("cost/rover", 0.f)(3, 4) = 100.f;
+  DerivedProfile d = testing::RoverDerivation(s.base.geometry());
+  d.layers.at("cost/rover")(3, 4) = 100.f;
   d.registry.obstacles = {s.obstacles.obstacles[1]};
   ASSERT_TRUE(this->dut_->PutDerived(ref, d, this->ctx_).ok());
   auto hit = this->dut_->FindDerived(ref, "h1", "c1", {});

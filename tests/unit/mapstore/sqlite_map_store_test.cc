@@ -27,6 +27,7 @@ namespace fs = std::filesystem;
 using common::StatusCode;
 using testing::FakeDeriver;
 using testing::Profile;
+using testing::SameLayer;
 using testing::SampleSnapshot;
 
 std::string TempDir() {
@@ -179,12 +180,8 @@ TEST(SqliteMapStoreTest, CachedDerivedTilesAreTheStoredBlobsAndAreChecked) {
     auto dut = OpenOrDie(path, small_tiles);
     const MapSnapshot s = SampleSnapshot("corridor");
     ASSERT_TRUE(dut->SaveMap(s, kCtx).ok());
-    DerivedProfile d;
-    d.profile_name = "rover";
-    d.profile_hash = "h1";
-    d.code_version = "c1";
-    d.layers = common::GridMap(s.base.geometry());
-    common::Layer& cost = d.layers.AddLayer("cost/rover", 0.f);
+    DerivedProfile d = testing::RoverDerivation(s.base.geometry());
+    common::Layer& cost = d.layers.at("cost/rover");
     for (int64_t i = 0; i < cost.size(); ++i) cost.data()[i] = static_cast<float>(i % 97);
     ASSERT_TRUE(dut->PutDerived(ref, d, kCtx).ok());
     // The tiles are the stored rows themselves, not compressed again.
@@ -223,6 +220,55 @@ TEST(SqliteMapStoreTest, CachedDerivedTilesAreTheStoredBlobsAndAreChecked) {
       << damaged.status().message();
   EXPECT_NE(damaged.status().message().find("cost/rover"), std::string::npos)
       << damaged.status().message();
+}
+
+// A pushed save's tiles arrive compressed: the store keeps those bytes for a tile that is one
+// of its own and whose CRC is that of the saved cells, and compresses the others itself.
+TEST(SqliteMapStoreTest, SaveKeepsTheCallersCompressedTilesThatMatchTheCells) {
+  SqliteOptions small_tiles;
+  small_tiles.tile_size_cells = 16;
+  auto dut = OpenOrDie(TempDir() + "/site.db", small_tiles);
+  MapSnapshot s = SampleSnapshot("corridor");  // 37 x 23 cells: tiles 3 x 2
+  const common::Layer& elevation = s.base.at(layers::kElevation);
+  auto encode = [&](const common::Layer& cells_of, int ix, int iy) {
+    const TileSpec spec = TilesOf(s.base.geometry(), 16)[static_cast<size_t>(iy * 3 + ix)];
+    const std::vector<float> cells = ExtractTile(cells_of, spec);
+    // Another compression level than the store's: the bytes show whose they are.
+    EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * sizeof(float), Codec::kZstdShuffle4,
+                                  /*zstd_level=*/9);
+    return StoredTile{
+        ix,       iy, spec.cells_x, spec.cells_y, static_cast<int>(blob.codec), blob.raw_crc32,
+        blob.data};
+  };
+  common::Layer other = elevation;
+  other.array() += 1.f;
+  StoredLayer pushed;
+  pushed.name = layers::kElevation;
+  pushed.tile_size = 16;
+  pushed.tiles = {encode(elevation, 1, 0), encode(other, 2, 1)};  // the second is not the cells'
+  s.encoded_layers = {pushed};
+  ASSERT_TRUE(dut->SaveMap(s, kCtx).ok());
+
+  auto bytes = dut->BaseBlobBytes({"lab", "corridor", 1});
+  ASSERT_TRUE(bytes.ok()) << bytes.status().ToString();
+  EXPECT_EQ(bytes->at("elevation/1/0"), pushed.tiles[0].data) << "the pushed bytes are kept";
+  EXPECT_NE(bytes->at("elevation/2/1"), pushed.tiles[1].data) << "a tile of other cells is not";
+  auto loaded = dut->LoadLayers({"lab", "corridor", 1}, {});
+  ASSERT_TRUE(loaded.ok()) << loaded.status().ToString();
+  EXPECT_TRUE(SameLayer(loaded->at(layers::kElevation), elevation));
+  EXPECT_TRUE(dut->Check().value().ok);
+
+  // Tiles of another size are no tiles of the store: all compressed again (in a fresh file, as
+  // a blob of the same content is stored once).
+  auto fresh = OpenOrDie(TempDir() + "/other.db", small_tiles);
+  pushed.tile_size = 8;
+  s.encoded_layers = {pushed};
+  ASSERT_TRUE(fresh->SaveMap(s, kCtx).ok());
+  auto again = fresh->BaseBlobBytes({"lab", "corridor", 1});
+  ASSERT_TRUE(again.ok());
+  EXPECT_NE(again->at("elevation/1/0"), pushed.tiles[0].data);
+  EXPECT_TRUE(
+      SameLayer(fresh->LoadLayers({"lab", "corridor", 1}, {})->at(layers::kElevation), elevation));
 }
 
 TEST(SqliteMapStoreTest, StoredBlobsAndVersionsCannotBeRewritten) {
