@@ -548,13 +548,13 @@ void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
       return;
     }
     const std::set<std::string> base(info->layers.begin(), info->layers.end());
-    auto profile = store_.GetProfile(request.profile);
-    if (!profile.ok()) {
-      out->status = profile.status();
-      return;
-    }
     if (std::none_of(wanted.begin(), wanted.end(),
                      [&](const std::string& l) { return base.count(l) > 0; })) {
+      auto profile = store_.GetProfile(request.profile);
+      if (!profile.ok()) {
+        out->status = profile.status();
+        return;
+      }
       const MapRef exact{info->site, info->name, info->version};
       auto cached = store_.FindDerivedTiles(exact, profile->content_hash, deriver_.code_version,
                                             wanted, params_.reply_tile_size);

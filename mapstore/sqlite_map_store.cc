@@ -1000,6 +1000,19 @@ Result<std::optional<SqliteMapStore::DerivedHeader>> SqliteMapStore::FindDerived
   return std::optional<DerivedHeader>(std::move(out));
 }
 
+Result<std::optional<std::pair<SqliteMapStore::VersionRow, SqliteMapStore::DerivedHeader>>>
+SqliteMapStore::ResolveDerived(const MapRef& ref, const std::string& profile_hash,
+                               const std::string& code_version) const {
+  using Found = std::optional<std::pair<VersionRow, DerivedHeader>>;
+  auto row = Resolve(ref);
+  if (!row.ok()) return row.status();
+  auto header = FindDerivedHeader(*row, profile_hash, code_version);
+  if (!header.ok()) return header.status();
+  std::optional<DerivedHeader> found = std::move(header).value();
+  if (!found) return Found();
+  return Found(std::make_pair(std::move(row).value(), std::move(*found)));
+}
+
 namespace {
 
 // The wanted cached layers (all when none is named), or kNotFound naming the first missing one.
@@ -1024,13 +1037,12 @@ Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& 
                                                                   const std::string& code_version,
                                                                   const LayerQuery& query) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
-  auto header = FindDerivedHeader(*row, profile_hash, code_version);
-  if (!header.ok()) return header.status();
-  std::optional<DerivedHeader> found = std::move(header).value();
+  auto resolved = ResolveDerived(ref, profile_hash, code_version);
+  if (!resolved.ok()) return resolved.status();
+  auto found = std::move(resolved).value();
   if (!found) return std::optional<DerivedProfile>();
-  DerivedHeader& h = *found;
+  const VersionRow* row = &found->first;
+  DerivedHeader& h = found->second;
   DerivedProfile out;
   out.profile_name = h.profile_name;
   out.profile_hash = profile_hash;
@@ -1063,13 +1075,12 @@ Result<std::optional<StoredDerived>> SqliteMapStore::FindDerivedTiles(
     const MapRef& ref, const std::string& profile_hash, const std::string& code_version,
     const std::vector<std::string>& layers, int /*tile_size*/) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
-  auto header = FindDerivedHeader(*row, profile_hash, code_version);
-  if (!header.ok()) return header.status();
-  std::optional<DerivedHeader> found = std::move(header).value();
+  auto resolved = ResolveDerived(ref, profile_hash, code_version);
+  if (!resolved.ok()) return resolved.status();
+  auto found = std::move(resolved).value();
   if (!found) return std::optional<StoredDerived>();
-  DerivedHeader& h = *found;
+  const VersionRow* row = &found->first;
+  DerivedHeader& h = found->second;
   StoredDerived out;
   out.profile_name = h.profile_name;
   out.registry = std::move(h.registry);

@@ -132,6 +132,10 @@ class SqliteMapStore final : public MapStore {
   common::Result<std::optional<DerivedHeader>> FindDerivedHeader(
       const VersionRow& row, const std::string& profile_hash,
       const std::string& code_version) const;
+  /// Resolve and FindDerivedHeader together: the version and its cache entry, nullopt on a
+  /// miss. The caller holds mutex_.
+  common::Result<std::optional<std::pair<VersionRow, DerivedHeader>>> ResolveDerived(
+      const MapRef& ref, const std::string& profile_hash, const std::string& code_version) const;
   /// Appends the tiles a bound statement yields (row by row) to `layer` as stored, checking
   /// their place and size; `label` names the layer in errors.
   common::Status ReadStoredTiles(sqlite::Statement* stmt, const std::string& label,

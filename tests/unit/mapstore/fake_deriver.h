@@ -4,14 +4,12 @@
 #include <limits>
 #include <string>
 
-#include <gtest/gtest.h>
-
 #include "common/grid_map.h"
 #include "common/layers.h"
 #include "mapstore/map_store.h"
+#include "tests/support/layers.h"
 
-// Test doubles for the map store unit tests: a deterministic fake derivation, sample maps and a
-// layer comparison.
+// Test doubles for the map store unit tests: a deterministic fake derivation and sample maps.
 
 namespace cairn::mapstore::testing {
 
@@ -61,22 +59,7 @@ inline common::RobotProfile Profile(const std::string& name, double max_slope_de
   return p;
 }
 
-// Layers equal cell by cell, NaN equal to NaN.
-inline ::testing::AssertionResult SameLayer(const common::Layer& a, const common::Layer& b) {
-  if (a.rows() != b.rows() || a.cols() != b.cols()) {
-    return ::testing::AssertionFailure() << "sizes differ";
-  }
-  for (int iy = 0; iy < a.cols(); ++iy) {
-    for (int ix = 0; ix < a.rows(); ++ix) {
-      const float x = a(ix, iy), y = b(ix, iy);
-      if (!(std::isnan(x) && std::isnan(y)) && x != y) {
-        return ::testing::AssertionFailure()
-               << "cell (" << ix << ", " << iy << "): " << x << " != " << y;
-      }
-    }
-  }
-  return ::testing::AssertionSuccess();
-}
+using cairn::testing::SameLayer;
 
 /// A map with a known pattern: elevation rises 0.05 m per cell in x from column 10 on (a
 /// "ramp"), NaN in one corner; a second layer "observation_count".
