@@ -16,6 +16,7 @@ inline constexpr char kSimControlReply[] = "SIM.CONTROL_REPLY";
 inline constexpr char kMapstoreRequest[] = "MAPSTORE.REQUEST";
 inline constexpr char kMapstoreReply[] = "MAPSTORE.REPLY";
 inline constexpr char kMapstoreTiles[] = "MAPSTORE.TILES";
+inline constexpr char kMapstoreTileBatches[] = "MAPSTORE.TILE_BATCHES";  // compressed reply tiles
 inline constexpr char kMapstoreTileResend[] = "MAPSTORE.TILE_RESEND";
 inline constexpr char kMapstoreManifest[] = "MAPSTORE.MANIFEST";  // manifests of reply layers
 inline constexpr char kMapstoreOctomap[] = "MAPSTORE.OCTOMAP";    // OctoMap chunks of replies
@@ -39,13 +40,13 @@ inline constexpr char kCmdVel[] = "CMD_VEL";
 inline constexpr char kGoal[] = "GOAL";
 inline constexpr char kPath[] = "PATH";
 inline constexpr char kNavStatus[] = "NAV_STATUS";
-inline constexpr char kMapTiles[] = "MAP.TILES";            // grid-map layer tiles
-inline constexpr char kMapManifest[] = "MAP.MANIFEST";      // layer versions and tile checksums
+inline constexpr char kMapTiles[] = "MAP.TILES";             // grid-map layer tiles
+inline constexpr char kMapManifest[] = "MAP.MANIFEST";       // layer versions and tile checksums
 inline constexpr char kMapTileResend[] = "MAP.TILE_RESEND";  // receivers ask for missed tiles
-inline constexpr char kMapOccupancy[] = "MAP.OCCUPANCY";    // 2-D occupancy tiles
+inline constexpr char kMapOccupancy[] = "MAP.OCCUPANCY";     // 2-D occupancy tiles
 inline constexpr char kMapOctomap[] = "MAP.OCTOMAP";
 inline constexpr char kMapObstacles[] = "MAP.OBSTACLES";
-inline constexpr char kMapControl[] = "MAP.CONTROL";        // mapper requests (clear layer, reload)
+inline constexpr char kMapControl[] = "MAP.CONTROL";  // mapper requests (clear layer, reload)
 inline constexpr char kMapControlReply[] = "MAP.CONTROL_REPLY";
 
 /// "<robot>.<stream>".

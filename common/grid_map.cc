@@ -13,9 +13,9 @@ void GridGeometry::Validate() const {
                      "grid resolution must be positive, got " << resolution_m);
   CAIRN_THROW_UNLESS(size_x >= 0 && size_y >= 0,
                      "grid size must not be negative, got " << size_x << " x " << size_y);
-  CAIRN_THROW_UNLESS(std::isfinite(origin.x_m) && std::isfinite(origin.y_m) &&
-                         std::isfinite(origin.yaw_rad),
-                     "grid origin must be finite");
+  CAIRN_THROW_UNLESS(
+      std::isfinite(origin.x_m) && std::isfinite(origin.y_m) && std::isfinite(origin.yaw_rad),
+      "grid origin must be finite");
 }
 
 Vector2 GridGeometry::ContinuousIndexOf(const Vector2& world_m) const {
@@ -47,6 +47,17 @@ Layer& GridMap::AddLayer(const std::string& name, float fill) {
   CAIRN_THROW_UNLESS(!name.empty(), "a layer needs a name");
   Layer& layer = layers_[name];
   layer.setConstant(geometry_.size_x, geometry_.size_y, fill);
+  return layer;
+}
+
+Layer& GridMap::AddLayer(const std::string& name, Layer&& cells) {
+  CAIRN_THROW_UNLESS(!name.empty(), "a layer needs a name");
+  CAIRN_THROW_UNLESS(cells.rows() == geometry_.size_x && cells.cols() == geometry_.size_y,
+                     "layer '" << name << "' has " << cells.rows() << " x " << cells.cols()
+                               << " cells, the grid " << geometry_.size_x << " x "
+                               << geometry_.size_y);
+  Layer& layer = layers_[name];
+  layer = std::move(cells);
   return layer;
 }
 

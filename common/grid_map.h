@@ -6,9 +6,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
 #include "common/types.h"
+#include <Eigen/Core>
 
 /// @file
 /// GridMap: named float layers over one rectangular grid (grid_map's data model without ROS).
@@ -83,6 +82,9 @@ class GridMap {
 
   /// Adds (or resets) a layer filled with `fill` (NaN by default).
   Layer& AddLayer(const std::string& name, float fill = kUnknown);
+  /// Adds (or replaces) a layer with the given cells.
+  /// @throws std::invalid_argument when they are not size_x x size_y.
+  Layer& AddLayer(const std::string& name, Layer&& cells);
   bool HasLayer(const std::string& name) const { return layers_.count(name) > 0; }
   /// @throws std::out_of_range naming the layer if it does not exist.
   Layer& at(const std::string& name);

@@ -5,14 +5,15 @@
 /// @file
 /// Names of grid-map layers and the cost convention shared by mapper, map store and planner.
 ///
-/// Cost layers ("cost/<profile>") hold per cell: 0 free, (0, 100) graded (harder terrain costs
-/// more), 100 lethal, NaN unknown. This matches the ROS occupancy convention (0..100, -1
-/// unknown) that exports use.
+/// Cost layers ("cost/<profile>") hold per cell: 0 free, a whole number in [1, 99] graded
+/// (harder terrain costs more), 100 lethal, NaN unknown. This matches the ROS occupancy
+/// convention (0..100, -1 unknown) that exports use, and a cost layer stored or sent by the map
+/// store packs into one byte per cell without loss.
 
 namespace cairn::layers {
 
 // Robot-agnostic base layers (stored once per site).
-inline constexpr char kElevation[] = "elevation";                  // m, world z
+inline constexpr char kElevation[] = "elevation";                   // m, world z
 inline constexpr char kElevationVariance[] = "elevation_variance";  // m^2
 inline constexpr char kObservationCount[] = "observation_count";    // fused measurements
 inline constexpr char kLastSeen[] = "last_seen_s";                  // sim time, s
@@ -28,9 +29,9 @@ inline constexpr char kFinal[] = "final";                           // max(short
 inline constexpr char kGroundBound[] = "ground_bound";
 
 // Geometric layers derived from the elevation (profile independent).
-inline constexpr char kSlope[] = "slope";          // rad, unsigned
-inline constexpr char kStepMax[] = "step";         // m, largest height difference to a neighbour
-inline constexpr char kRoughness[] = "roughness";  // m, residual of the local plane fit
+inline constexpr char kSlope[] = "slope";             // rad, unsigned
+inline constexpr char kStepMax[] = "step";            // m, largest height difference to a neighbour
+inline constexpr char kRoughness[] = "roughness";     // m, residual of the local plane fit
 inline constexpr char kDitchDepth[] = "ditch_depth";  // m below the rims (a lower bound if unseen)
 inline constexpr char kDitchWidth[] = "ditch_width";  // m, gap between the rims
 

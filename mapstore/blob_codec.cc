@@ -9,11 +9,13 @@
 #endif
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
@@ -60,6 +62,51 @@ void Unshuffle4(const uint8_t* in, size_t n, uint8_t* out) {
     out[4 * i + 2] = in[2 * n + i];
     out[4 * i + 3] = in[3 * n + i];
   }
+}
+
+// The byte codec: cell value k in 0..254 is byte k, the product's NaN (common::kUnknown) is
+// byte 255. Only values whose float bits come back unchanged qualify (not -0, not another NaN).
+constexpr uint8_t kByteUnknown = 255;
+
+uint32_t FloatBits(float v) {
+  uint32_t b;
+  std::memcpy(&b, &v, 4);
+  return b;
+}
+
+const std::array<uint32_t, 256>& ByteCodeBits() {
+  static const std::array<uint32_t, 256> table = [] {
+    std::array<uint32_t, 256> t{};
+    for (int k = 0; k < 255; ++k) t[k] = FloatBits(static_cast<float>(k));
+    t[kByteUnknown] = FloatBits(std::numeric_limits<float>::quiet_NaN());
+    return t;
+  }();
+  return table;
+}
+
+// Writes the byte code of every float to out (when not null); false as soon as one has none.
+bool ToByteCodes(const uint8_t* raw, size_t n, uint8_t* out) {
+  const std::array<uint32_t, 256>& bits = ByteCodeBits();
+  for (size_t i = 0; i < n; ++i) {
+    uint32_t b;
+    std::memcpy(&b, raw + 4 * i, 4);
+    float v;
+    std::memcpy(&v, &b, 4);
+    uint8_t code;
+    if (v >= 0.f && v <= 254.f) {
+      code = static_cast<uint8_t>(v);
+    } else {
+      code = kByteUnknown;
+    }
+    if (bits[code] != b) return false;
+    if (out != nullptr) out[i] = code;
+  }
+  return true;
+}
+
+void FromByteCodes(const uint8_t* codes, size_t n, uint8_t* out) {
+  const std::array<uint32_t, 256>& bits = ByteCodeBits();
+  for (size_t i = 0; i < n; ++i) std::memcpy(out + 4 * i, &bits[codes[i]], 4);
 }
 
 std::string Hex32(uint32_t v) {
@@ -184,6 +231,11 @@ std::vector<uint8_t>& ThreadScratch() {
 
 }  // namespace
 
+Codec FloatCodec(const float* cells, size_t n) {
+  return ToByteCodes(reinterpret_cast<const uint8_t*>(cells), n, nullptr) ? Codec::kZstdBytes
+                                                                          : Codec::kZstdShuffle4;
+}
+
 EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level) {
   EncodedBlob blob;
   blob.codec = codec;
@@ -198,14 +250,25 @@ EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level
                  std::to_string(size) + "r";
       return blob;
     case Codec::kZstd:
-    case Codec::kZstdShuffle4: {
+    case Codec::kZstdShuffle4:
+    case Codec::kZstdBytes: {
       const void* src = raw;
+      size_t src_size = size;
       if (codec == Codec::kZstdShuffle4) {
         if (size % 4 != 0) throw std::invalid_argument("shuffle4 needs a multiple of 4 bytes");
         std::vector<uint8_t>& shuffled = ThreadScratch();
         shuffled.resize(size);
         Shuffle4(static_cast<const uint8_t*>(raw), size / 4, shuffled.data());
         src = shuffled.data();
+      } else if (codec == Codec::kZstdBytes) {
+        std::vector<uint8_t>& codes = ThreadScratch();
+        codes.resize(size / 4);
+        if (size % 4 != 0 ||
+            !ToByteCodes(static_cast<const uint8_t*>(raw), size / 4, codes.data())) {
+          throw std::invalid_argument("the byte codec takes floats that are 0..254 or NaN only");
+        }
+        src = codes.data();
+        src_size = size / 4;
       }
       // The frame carries zstd's own content checksum (XXH64): it is verified on every
       // decompression and, with the CRC-32, makes the content address.
@@ -213,8 +276,8 @@ EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level
       ZSTD_CCtx_reset(ctx, ZSTD_reset_session_and_parameters);
       ZSTD_CCtx_setParameter(ctx, ZSTD_c_compressionLevel, zstd_level);
       ZSTD_CCtx_setParameter(ctx, ZSTD_c_checksumFlag, 1);
-      blob.data.resize(ZSTD_compressBound(size));
-      const size_t n = ZSTD_compress2(ctx, blob.data.data(), blob.data.size(), src, size);
+      blob.data.resize(ZSTD_compressBound(src_size));
+      const size_t n = ZSTD_compress2(ctx, blob.data.data(), blob.data.size(), src, src_size);
       if (ZSTD_isError(n) || n < 4) {
         throw std::runtime_error(std::string("zstd compression failed: ") +
                                  (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short frame"));
@@ -233,7 +296,7 @@ EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level
 
 common::Result<EncodedBlob> AdoptEncodedBlob(Codec codec, std::string data, int64_t raw_size,
                                              uint32_t raw_crc32) {
-  if (codec != Codec::kZstd && codec != Codec::kZstdShuffle4) {
+  if (codec != Codec::kZstd && codec != Codec::kZstdShuffle4 && codec != Codec::kZstdBytes) {
     return common::InvalidArgumentError("only zstd blobs are adopted, not codec " +
                                         std::to_string(static_cast<int>(codec)));
   }
@@ -263,27 +326,32 @@ common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t 
       std::memcpy(out, data, size);
       break;
     case Codec::kZstd:
-    case Codec::kZstdShuffle4: {
+    case Codec::kZstdShuffle4:
+    case Codec::kZstdBytes: {
+      if (codec != Codec::kZstd && raw_size % 4 != 0) {
+        return common::CorruptError("float blob size not a multiple of 4");
+      }
+      // The byte codec's frame holds one byte per float.
+      const size_t frame_size =
+          static_cast<size_t>(codec == Codec::kZstdBytes ? raw_size / 4 : raw_size);
       const unsigned long long frame = ZSTD_getFrameContentSize(data, size);
-      if (frame == ZSTD_CONTENTSIZE_ERROR || frame != static_cast<unsigned long long>(raw_size)) {
-        return common::CorruptError("blob is not a zstd frame of " + std::to_string(raw_size) +
+      if (frame == ZSTD_CONTENTSIZE_ERROR || frame != static_cast<unsigned long long>(frame_size)) {
+        return common::CorruptError("blob is not a zstd frame of " + std::to_string(frame_size) +
                                     " bytes");
       }
       uint8_t* target = out;
-      if (codec == Codec::kZstdShuffle4) {
-        if (raw_size % 4 != 0)
-          return common::CorruptError("shuffled blob size not a multiple of 4");
+      if (codec != Codec::kZstd) {
         std::vector<uint8_t>& scratch = ThreadScratch();
-        scratch.resize(static_cast<size_t>(raw_size));
+        scratch.resize(frame_size);
         target = scratch.data();
       }
-      const size_t n = ZSTD_decompressDCtx(ThreadDecompressor(), target,
-                                           static_cast<size_t>(raw_size), data, size);
-      if (ZSTD_isError(n) || n != static_cast<size_t>(raw_size)) {
+      const size_t n = ZSTD_decompressDCtx(ThreadDecompressor(), target, frame_size, data, size);
+      if (ZSTD_isError(n) || n != frame_size) {
         return common::CorruptError(std::string("blob does not decompress: ") +
                                     (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short output"));
       }
       if (codec == Codec::kZstdShuffle4) Unshuffle4(target, n / 4, out);
+      if (codec == Codec::kZstdBytes) FromByteCodes(target, n, out);
       // zstd verified its content checksum (XXH64) while decompressing: that covers damage to
       // the stored bytes, so the CRC-32 pass is only needed for frames without one.
       if (!verify_crc && HasContentChecksum(data, size)) return common::Status::Ok();
@@ -486,12 +554,35 @@ common::Status CheckStoredTile(const StoredTile& tile) {
   if (tile.cells_x <= 0 || tile.cells_y <= 0) {
     return common::CorruptError("a stored tile with no cells");
   }
-  thread_local std::vector<uint8_t> scratch;
   const int64_t raw_size =
       int64_t{tile.cells_x} * tile.cells_y * static_cast<int64_t>(sizeof(float));
-  scratch.resize(static_cast<size_t>(raw_size));
-  return DecodeBlobTo(static_cast<Codec>(tile.codec), tile.data.data(), tile.data.size(), raw_size,
-                      tile.raw_crc32, scratch.data());
+  const Codec codec = static_cast<Codec>(tile.codec);
+  const bool zstd =
+      codec == Codec::kZstd || codec == Codec::kZstdShuffle4 || codec == Codec::kZstdBytes;
+  if (zstd && HasContentChecksum(tile.data.data(), tile.data.size())) {
+    // zstd checks its frame against its content checksum while decompressing: the frame alone
+    // is decoded, not turned back into floats.
+    const size_t frame_size =
+        static_cast<size_t>(codec == Codec::kZstdBytes ? raw_size / 4 : raw_size);
+    const unsigned long long frame = ZSTD_getFrameContentSize(tile.data.data(), tile.data.size());
+    if (frame != static_cast<unsigned long long>(frame_size)) {
+      return common::CorruptError("blob is not a zstd frame of " + std::to_string(frame_size) +
+                                  " bytes");
+    }
+    std::vector<uint8_t>& scratch = ThreadScratch();
+    scratch.resize(frame_size);
+    const size_t n = ZSTD_decompressDCtx(ThreadDecompressor(), scratch.data(), frame_size,
+                                         tile.data.data(), tile.data.size());
+    if (ZSTD_isError(n) || n != frame_size) {
+      return common::CorruptError(std::string("blob does not decompress: ") +
+                                  (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short output"));
+    }
+    return common::Status::Ok();
+  }
+  thread_local std::vector<uint8_t> out;
+  out.resize(static_cast<size_t>(raw_size));
+  return DecodeBlobTo(codec, tile.data.data(), tile.data.size(), raw_size, tile.raw_crc32,
+                      out.data());
 }
 
 namespace {
@@ -509,8 +600,8 @@ common::Result<std::vector<StoredLayer>> TileLayers(const common::GridMap& map, 
       for (const TileSpec& spec : specs) {
         const std::vector<float> cells = ExtractTile(map.at(name), spec);
         if (AllUnknown(cells)) continue;
-        EncodedBlob blob =
-            EncodeBlob(cells.data(), cells.size() * sizeof(float), Codec::kZstdShuffle4);
+        EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * sizeof(float),
+                                      FloatCodec(cells.data(), cells.size()));
         layer.tiles.push_back({spec.tile_ix, spec.tile_iy, spec.cells_x, spec.cells_y,
                                static_cast<int>(blob.codec), blob.raw_crc32, std::move(blob.data)});
       }

@@ -22,6 +22,10 @@ enum class Codec : int {
   kRaw = 0,           ///< bytes as they are
   kZstd = 1,          ///< zstd frame
   kZstdShuffle4 = 2,  ///< 4-byte elements split into byte planes, then zstd
+  /// Floats that are each a whole number in 0..254 or NaN (cost layers, counts, 0..100 layers):
+  /// one byte per float (255 = NaN), then zstd. Lossless: chosen only when every float's bits
+  /// come back unchanged (see FloatCodec).
+  kZstdBytes = 3,
 };
 
 /// A blob ready to store.
@@ -42,7 +46,12 @@ void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
 /// CRC-32 (zlib polynomial) of a buffer.
 uint32_t Crc32(const void* data, size_t size);
 
-/// Encodes raw bytes. kZstdShuffle4 needs a size that is a multiple of 4.
+/// The codec for float cells: kZstdBytes when every cell is a whole number in 0..254 or the
+/// product's NaN (bit for bit), else kZstdShuffle4.
+Codec FloatCodec(const float* cells, size_t n);
+
+/// Encodes raw bytes. kZstdShuffle4 needs a size that is a multiple of 4; kZstdBytes floats
+/// FloatCodec accepts.
 /// @throws std::invalid_argument for a bad codec or size, std::runtime_error if zstd fails.
 EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level = 1);
 /// A zstd blob made by EncodeBlob elsewhere (a pushed tile's bytes), as EncodeBlob would have

@@ -79,6 +79,8 @@ MapstoreClient::MapstoreClient(lcm::LCM& lcm, std::string requester, MapstoreCli
       lcm_.subscribe(channels::kMapstoreReply, &MapstoreClient::OnReply, this));
   subscriptions_.push_back(lcm_.subscribe(channels::kMapstoreTiles, &MapstoreClient::OnTile, this));
   subscriptions_.push_back(
+      lcm_.subscribe(channels::kMapstoreTileBatches, &MapstoreClient::OnTileBatch, this));
+  subscriptions_.push_back(
       lcm_.subscribe(channels::kMapstoreManifest, &MapstoreClient::OnManifest, this));
   subscriptions_.push_back(
       lcm_.subscribe(channels::kMapstoreOctomap, &MapstoreClient::OnOctomap, this));
@@ -101,13 +103,28 @@ void MapstoreClient::OnReply(const lcm::ReceiveBuffer*, const std::string&,
 
 void MapstoreClient::OnTile(const lcm::ReceiveBuffer*, const std::string&,
                             const cairn::lcmt_grid_tile* m) {
+  HoldTile(*m);
+}
+
+void MapstoreClient::OnTileBatch(const lcm::ReceiveBuffer*, const std::string&,
+                                 const cairn::lcmt_grid_tile_batch* m) {
   if (!incoming_ || m->map_name != incoming_->map_name) return;
-  // A compressed tile that does not decode is dropped: the resend asks for it again.
-  cairn::lcmt_grid_tile scratch;
-  const cairn::lcmt_grid_tile* tile = FloatTile(*m, &scratch);
-  if (tile != nullptr && incoming_->assembler.OnTile(*tile)) {
-    incoming_->last_progress = Clock::now();
+  for (const cairn::lcmt_grid_tile& tile : m->tiles) HoldTile(tile);
+}
+
+void MapstoreClient::HoldTile(const cairn::lcmt_grid_tile& tile) {
+  if (!incoming_ || tile.map_name != incoming_->map_name) return;
+  // A compressed tile that does not decode is dropped: the resend asks for it again. One that
+  // does was checked by zstd against the bytes the store compressed, whose CRC it declares.
+  bool held = false;
+  if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
+    held = incoming_->assembler.OnTile(tile);
+  } else {
+    std::vector<float> cells;
+    held = DecodeTileCells(tile, &cells).ok() &&
+           incoming_->assembler.OnDecodedTile(tile, std::move(cells));
   }
+  if (held) incoming_->last_progress = Clock::now();
 }
 
 void MapstoreClient::OnManifest(const lcm::ReceiveBuffer*, const std::string&,
@@ -337,8 +354,9 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site, con
       loaded.layers = common::GridMap(grid->geometry());
       first = false;
     }
-    if (grid->geometry() == loaded.layers.geometry())
-      loaded.layers.AddLayer(layer) = std::move(grid->at(layer));
+    if (grid->geometry() == loaded.layers.geometry()) {
+      loaded.layers.AddLayer(layer, std::move(grid->at(layer)));
+    }
   }
   for (const auto& m : reply->obstacles) {
     auto o = runtime::FromLcm(m);

@@ -11,6 +11,7 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_grid_tile_batch.hpp"
 #include "cairn/lcmt_mapstore_reply.hpp"
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_octomap.hpp"
@@ -76,6 +77,9 @@ class MapstoreClient {
   struct Incoming;
   void OnReply(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_mapstore_reply* m);
   void OnTile(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_grid_tile* m);
+  void OnTileBatch(const lcm::ReceiveBuffer*, const std::string&,
+                   const cairn::lcmt_grid_tile_batch* m);
+  void HoldTile(const cairn::lcmt_grid_tile& tile);
   void OnManifest(const lcm::ReceiveBuffer*, const std::string&,
                   const cairn::lcmt_grid_manifest* m);
   void OnOctomap(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_octomap* m);

@@ -37,6 +37,7 @@ void LoadParams(const std::string& path, cairn::mapstore::MapstoreServiceParams*
     s.Get("reply_tile_size", &service->reply_tile_size);
     s.Get("max_reply_obstacles", &service->max_reply_obstacles);
     s.Get("tiles_per_burst", &service->tiles_per_burst);
+    s.Get("batch_bytes", &service->batch_bytes);
     s.Get("burst_pause_ms", &service->burst_pause_ms);
     s.Get("worker_threads", &service->worker_threads);
     s.Get("compress_reply_tiles", &service->compress_reply_tiles);
@@ -56,6 +57,14 @@ void LoadParams(const std::string& path, cairn::mapstore::MapstoreServiceParams*
     d.Finish();
   }
   root.Finish();
+  if (service->batch_bytes < 0 || service->batch_bytes > 200000) {
+    root.Fail(root.Raw("service"),
+              "service.batch_bytes must be in 0..200000 (bus messages stay "
+              "under 256 KB)");
+  }
+  if (service->tiles_per_burst < 1) {
+    root.Fail(root.Raw("service"), "service.tiles_per_burst must be >= 1");
+  }
   if (service->reply_tile_size <= 0 || service->reply_tile_size > 250) {
     root.Fail(root.Raw("service"), "service.reply_tile_size must be in 1..250");
   }
@@ -85,7 +94,8 @@ int main(int argc, char** argv) {
       "Channels",
       "in:  MAPSTORE.REQUEST, MAPSTORE.TILE_RESEND, MAPSTORE.PUSH.{TILES,MANIFEST,OBSTACLES,"
       "OCTOMAP}, <robot>.MAP.{TILES,OCCUPANCY,MANIFEST,OBSTACLES,OCTOMAP} (pull saves)\n"
-      "out: MAPSTORE.REPLY, MAPSTORE.{TILES,MANIFEST,OCTOMAP}, MAPSTORE.PUSH.TILE_RESEND, "
+      "out: MAPSTORE.REPLY, MAPSTORE.{TILES,TILE_BATCHES,MANIFEST,OCTOMAP}, "
+      "MAPSTORE.PUSH.TILE_RESEND, "
       "<robot>.MAP.{CONTROL,TILE_RESEND}, HEALTH");
   const int rc = flags.Parse(argc, argv);
   if (rc >= 0) return rc;

@@ -7,6 +7,9 @@
 #include <stdexcept>
 #include <thread>
 
+#include <sys/prctl.h>
+
+#include "cairn/lcmt_grid_tile_batch.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 
 #include "common/channels.h"
@@ -842,8 +845,8 @@ std::shared_ptr<MapstoreService::Outgoing> MapstoreService::MakeOutgoing(
         e.cells_x = t.cells_x;
         e.cells_y = t.cells_y;
         e.checksum = t.raw_crc32;
-        if (static_cast<Codec>(t.codec) == Codec::kZstdShuffle4) {
-          e.encoding = cairn::lcmt_grid_tile::ENCODING_ZSTD_SHUFFLE4;
+        e.encoding = WireEncoding(static_cast<Codec>(t.codec));
+        if (e.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
           e.bytes.assign(t.data.begin(), t.data.end());
         } else {
           // Another codec (raw, plain zstd): the cells travel as floats.
@@ -917,19 +920,53 @@ void MapstoreService::KeepOutgoing(std::shared_ptr<Outgoing> out) {
 void MapstoreService::Resend(Outgoing& out, const cairn::lcmt_tile_resend_request* request) {
   // A null request sends the whole payload: every layer's manifest and tiles, then the OctoMap.
   std::lock_guard<std::mutex> sending(out.sending);
-  int sent = 0;
+  // The pauses are a tenth of a millisecond: the kernel's default 50 us timer slack would make
+  // each half as long again.
+  thread_local const bool tight_timer = prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0) == 0;
+  (void)tight_timer;
+  // Compressed tiles travel several to a message, up to batch_bytes, with a pause after each
+  // message; float tiles (resends) travel singly, in bursts of tiles_per_burst.
+  auto pause = [&] {
+    if (params_.burst_pause_ms > 0) {
+      std::this_thread::sleep_for(
+          std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
+    }
+  };
+  cairn::lcmt_grid_tile_batch pending{};
+  int64_t pending_bytes = 0;
+  auto flush = [&] {
+    if (pending.tiles.empty()) return;
+    pending.utime = node_.NowUtime();
+    pending.map_name = out.map_name;
+    pending.num_tiles = static_cast<int32_t>(pending.tiles.size());
+    node_.Publish(channels::kMapstoreTileBatches, pending);
+    node_.Count("tiles_sent", pending.num_tiles);
+    pending.tiles.clear();
+    pending_bytes = 0;
+    pause();
+  };
+  int burst_tiles = 0;
   auto publish_batch = [&](const runtime::LayerTiler::Batch& batch) {
     node_.Publish(channels::kMapstoreManifest, batch.manifest);
     for (const auto& tile : batch.tiles) {
+      if (tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 && params_.batch_bytes > 0) {
+        const int64_t bytes = TilePayloadBytes(tile);
+        if (!pending.tiles.empty() && pending_bytes + bytes > params_.batch_bytes) flush();
+        pending.tiles.push_back(tile);
+        pending_bytes += bytes;
+        continue;
+      }
+      flush();
       if (!PublishTile(node_.lcm(), channels::kMapstoreTiles, tile)) {
         node_.Warn("publish_tiles", "could not publish reply tiles");
       }
       node_.Count("tiles_sent");
-      if (++sent % std::max(1, params_.tiles_per_burst) == 0 && params_.burst_pause_ms > 0) {
-        std::this_thread::sleep_for(
-            std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
+      if (++burst_tiles >= params_.tiles_per_burst) {
+        pause();
+        burst_tiles = 0;
       }
     }
+    flush();
   };
   if (request == nullptr && !out.first_send.empty()) {
     // The first send of a reply: the batches made when the payload was tiled.
@@ -1308,50 +1345,53 @@ int64_t StagedCells(const Map& staging) {
 }  // namespace
 
 void MapstoreService::OnPushTile(const cairn::lcmt_grid_tile& pushed) {
-  // A compressed tile is decoded (and checked) before the lock is taken.
-  cairn::lcmt_grid_tile scratch;
-  const cairn::lcmt_grid_tile* decoded = FloatTile(pushed, &scratch);
-  if (decoded == nullptr) {
+  // A compressed tile is decoded (and checked by zstd) before the lock is taken.
+  const bool compressed = pushed.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32;
+  std::vector<float> cells;
+  if (compressed && !DecodeTileCells(pushed, &cells).ok()) {
     node_.CountDropped("bad_push_tiles");
     return;
   }
-  const cairn::lcmt_grid_tile& tile = *decoded;
+  const int64_t num_cells = static_cast<int64_t>(compressed ? cells.size() : pushed.data.size());
   std::lock_guard<std::mutex> lock(mutex_);
-  if (tile.map_name.find('/') == std::string::npos) {
+  if (pushed.map_name.find('/') == std::string::npos) {
     node_.CountDropped("bad_push_tiles");
     return;
   }
-  auto it = staging_.find(tile.map_name);
+  auto it = staging_.find(pushed.map_name);
   if (it == staging_.end()) {
-    if (StagedCells(staging_) + int64_t{tile.num_cells} > params_.max_staged_cells) {
+    if (StagedCells(staging_) + num_cells > params_.max_staged_cells) {
       node_.CountDropped("staging_full");
       node_.Warn("staging_full", "pushed tiles dropped: too much staged data");
       return;
     }
-    it = staging_.emplace(tile.map_name, std::make_unique<Staging>()).first;
+    it = staging_.emplace(pushed.map_name, std::make_unique<Staging>()).first;
   }
   Staging& staging = *it->second;
-  if (!staging.assembler.OnTile(tile)) {
+  // The store compares a kept blob's declared CRC with the cells it saves (SaveMap).
+  const bool held = compressed ? staging.assembler.OnDecodedTile(pushed, std::move(cells))
+                               : staging.assembler.OnTile(pushed);
+  if (!held) {
     node_.CountDropped("bad_push_tiles");
     return;
   }
-  Staging::EncodedLayer& encoded = staging.encoded[tile.layer];
-  const std::pair<int, int> key{tile.tile_ix, tile.tile_iy};
-  if (pushed.encoding == cairn::lcmt_grid_tile::ENCODING_ZSTD_SHUFFLE4 &&
-      (encoded.tiles.empty() || encoded.tile_size == pushed.tile_size)) {
+  Staging::EncodedLayer& encoded = staging.encoded[pushed.layer];
+  const std::pair<int, int> key{pushed.tile_ix, pushed.tile_iy};
+  const std::optional<Codec> codec = CodecOfEncoding(pushed.encoding);
+  if (codec && (encoded.tiles.empty() || encoded.tile_size == pushed.tile_size)) {
     encoded.tile_size = pushed.tile_size;
     encoded.tiles[key] = StoredTile{pushed.tile_ix,
                                     pushed.tile_iy,
                                     pushed.cells_x,
                                     pushed.cells_y,
-                                    static_cast<int>(Codec::kZstdShuffle4),
+                                    static_cast<int>(*codec),
                                     static_cast<uint32_t>(pushed.checksum),
                                     std::string(pushed.bytes.begin(), pushed.bytes.end())};
   } else {
     encoded.tiles.erase(key);  // a newer copy came as floats: it is compressed when stored
   }
-  staging.robot = tile.robot;
-  staging.cells += tile.num_cells;
+  staging.robot = pushed.robot;
+  staging.cells += num_cells;
   staging.last = Clock::now();
 }
 

@@ -32,8 +32,10 @@
 /// Requests arrive on MAPSTORE.REQUEST (lcmt_mapstore_request) and are answered on
 /// MAPSTORE.REPLY with the same request_id. Replaying a request id (same requester) returns
 /// the first reply, and a save replayed after a restart returns the version it made (the audit
-/// log remembers request ids). Layers of a reply go out as lcmt_grid_tile on MAPSTORE.TILES
-/// with map_name "<request_id>/<map>", one manifest per layer on MAPSTORE.MANIFEST, and an
+/// log remembers request ids). Layers of a reply go out as lcmt_grid_tile with map_name
+/// "<request_id>/<map>": compressed tiles several to an lcmt_grid_tile_batch on
+/// MAPSTORE.TILE_BATCHES, float tiles singly on MAPSTORE.TILES; one manifest per layer on
+/// MAPSTORE.MANIFEST, and an
 /// OctoMap as lcmt_octomap chunks on MAPSTORE.OCTOMAP; the reply says how many tiles follow and
 /// receivers ask for what they missed on MAPSTORE.TILE_RESEND.
 ///
@@ -65,10 +67,15 @@ struct MapstoreServiceParams {
   int64_t max_staged_cells{128'000'000};     ///< pushed tiles held at once (cells)
   int reply_tile_size{100};                  ///< cells per side of reply tiles
   int max_reply_obstacles{1500};             ///< obstacles carried in one reply (bus size limit)
-  int tiles_per_burst{2};                    ///< reply tiles sent back to back before a short pause
-  double burst_pause_ms{0.1};                ///< the pause between bursts: UDP drops what a
-                                             ///< receiver's socket buffer (~200 KB) cannot hold
-  int worker_threads{2};                     ///< loads, shares, exports and imports run on these
+  /// Compressed reply tiles go out several to a message (MAPSTORE.TILE_BATCHES) of at most
+  /// batch_bytes of tile bytes (0: one tile per message on MAPSTORE.TILES); float tiles one per
+  /// message, in bursts of tiles_per_burst. A pause follows every batch and every burst: UDP
+  /// drops what a receiver's socket buffer (~200 KB) cannot hold while its process waits for a
+  /// core.
+  int64_t batch_bytes{60000};
+  int tiles_per_burst{2};
+  double burst_pause_ms{0.1};
+  int worker_threads{2};  ///< loads, shares, exports and imports run on these
   /// Reply tiles travel compressed (the store's zstd codec): a third of the bytes of smooth
   /// terrain, a tenth of a cost layer's. Resent tiles travel as floats.
   bool compress_reply_tiles{true};

@@ -1,7 +1,6 @@
 #include "mapstore/sqlite_map_store.h"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -407,10 +406,12 @@ Result<MapInfo> SqliteMapStore::SaveMap(const MapSnapshot& snapshot, const Write
           ExtractTile(snapshot.base.at(layer_names[jobs[i].layer]), spec);
       if (AllUnknown(cells)) return;
       const size_t bytes = cells.size() * sizeof(float);
-      if (const StoredTile* e = encoded[i];
-          e != nullptr && e->codec == static_cast<int>(Codec::kZstdShuffle4) &&
-          e->cells_x == spec.cells_x && e->cells_y == spec.cells_y &&
-          e->raw_crc32 == Crc32(cells.data(), bytes)) {
+      if (const StoredTile* e = encoded[i]; e != nullptr &&
+                                            (e->codec == static_cast<int>(Codec::kZstdShuffle4) ||
+                                             e->codec == static_cast<int>(Codec::kZstdBytes)) &&
+                                            e->cells_x == spec.cells_x &&
+                                            e->cells_y == spec.cells_y &&
+                                            e->raw_crc32 == Crc32(cells.data(), bytes)) {
         auto blob = AdoptEncodedBlob(static_cast<Codec>(e->codec), e->data,
                                      static_cast<int64_t>(bytes), e->raw_crc32);
         if (blob.ok()) {
@@ -419,7 +420,8 @@ Result<MapInfo> SqliteMapStore::SaveMap(const MapSnapshot& snapshot, const Write
           return;
         }
       }
-      blobs[i] = EncodeBlob(cells.data(), bytes, Codec::kZstdShuffle4, options_.zstd_level);
+      blobs[i] = EncodeBlob(cells.data(), bytes, FloatCodec(cells.data(), cells.size()),
+                            options_.zstd_level);
       present[i] = 1;
     });
   } catch (const std::exception& e) {
@@ -1163,8 +1165,8 @@ Status SqliteMapStore::PutDerived(const MapRef& ref, const DerivedProfile& deriv
       const std::vector<float> cells =
           ExtractTile(derived.layers.at(names[i / specs.size()]), specs[i % specs.size()]);
       if (AllUnknown(cells)) return;
-      blobs[i] = EncodeBlob(cells.data(), cells.size() * sizeof(float), Codec::kZstdShuffle4,
-                            options_.zstd_level);
+      blobs[i] = EncodeBlob(cells.data(), cells.size() * sizeof(float),
+                            FloatCodec(cells.data(), cells.size()), options_.zstd_level);
       present[i] = 1;
     });
   } catch (const std::exception& e) {

@@ -95,6 +95,25 @@ bool FastPathMatches() {
 
 }  // namespace
 
+int8_t WireEncoding(Codec codec) {
+  using T = cairn::lcmt_grid_tile;
+  switch (codec) {
+    case Codec::kZstdShuffle4:
+      return T::ENCODING_ZSTD_SHUFFLE4;
+    case Codec::kZstdBytes:
+      return T::ENCODING_ZSTD_BYTES;
+    default:
+      return T::ENCODING_FLOAT32;
+  }
+}
+
+std::optional<Codec> CodecOfEncoding(int8_t encoding) {
+  using T = cairn::lcmt_grid_tile;
+  if (encoding == T::ENCODING_ZSTD_SHUFFLE4) return Codec::kZstdShuffle4;
+  if (encoding == T::ENCODING_ZSTD_BYTES) return Codec::kZstdBytes;
+  return std::nullopt;
+}
+
 void EncodeTile(const cairn::lcmt_grid_tile& tile, std::vector<uint8_t>* out) {
   // A compressed tile has no cells to swap: the generated encoder copies its bytes in one go.
   if (tile.num_cells > 0 && static_cast<size_t>(tile.num_cells) == tile.data.size() &&
@@ -114,8 +133,8 @@ bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level) {
   }
   EncodedBlob blob;
   try {
-    blob = EncodeBlob(tile->data.data(), tile->data.size() * sizeof(float), Codec::kZstdShuffle4,
-                      zstd_level);
+    blob = EncodeBlob(tile->data.data(), tile->data.size() * sizeof(float),
+                      FloatCodec(tile->data.data(), tile->data.size()), zstd_level);
   } catch (const std::exception&) {
     return false;  // zstd failed (out of memory): the floats travel as they are
   }
@@ -124,44 +143,43 @@ bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level) {
   }
   tile->bytes.assign(blob.data.begin(), blob.data.end());
   tile->num_bytes = static_cast<int32_t>(tile->bytes.size());
-  tile->encoding = T::ENCODING_ZSTD_SHUFFLE4;
+  tile->encoding = WireEncoding(blob.codec);
   tile->data.clear();
   tile->data.shrink_to_fit();
   tile->num_cells = 0;
   return true;
 }
 
+common::Status DecodeTileCells(const cairn::lcmt_grid_tile& tile, std::vector<float>* cells,
+                               bool verify_checksum) {
+  const std::optional<Codec> codec = CodecOfEncoding(tile.encoding);
+  if (!codec) {
+    return common::InvalidArgumentError("tile encoding " + std::to_string(tile.encoding) +
+                                        " is not a compressed one");
+  }
+  if (tile.cells_x <= 0 || tile.cells_y <= 0 || tile.cells_x > 4096 || tile.cells_y > 4096 ||
+      static_cast<size_t>(tile.num_bytes) != tile.bytes.size()) {
+    return common::InvalidArgumentError("compressed tile with a bad size");
+  }
+  const size_t n = static_cast<size_t>(tile.cells_x) * tile.cells_y;
+  cells->resize(n);
+  return DecodeBlobTo(*codec, reinterpret_cast<const char*>(tile.bytes.data()), tile.bytes.size(),
+                      static_cast<int64_t>(n * sizeof(float)), static_cast<uint32_t>(tile.checksum),
+                      reinterpret_cast<uint8_t*>(cells->data()), verify_checksum);
+}
+
 common::Status DecompressTile(cairn::lcmt_grid_tile* tile, bool verify_checksum) {
   using T = cairn::lcmt_grid_tile;
   if (tile->encoding == T::ENCODING_FLOAT32) return common::Status::Ok();
-  if (tile->encoding != T::ENCODING_ZSTD_SHUFFLE4) {
-    return common::InvalidArgumentError("tile encoding " + std::to_string(tile->encoding) +
-                                        " is not known");
-  }
-  if (tile->cells_x <= 0 || tile->cells_y <= 0 || tile->cells_x > 4096 || tile->cells_y > 4096 ||
-      static_cast<size_t>(tile->num_bytes) != tile->bytes.size()) {
-    return common::InvalidArgumentError("compressed tile with a bad size");
-  }
-  const size_t cells = static_cast<size_t>(tile->cells_x) * tile->cells_y;
-  std::vector<float> data(cells);
-  const common::Status s = DecodeBlobTo(
-      Codec::kZstdShuffle4, reinterpret_cast<const char*>(tile->bytes.data()), tile->bytes.size(),
-      static_cast<int64_t>(cells * sizeof(float)), static_cast<uint32_t>(tile->checksum),
-      reinterpret_cast<uint8_t*>(data.data()), verify_checksum);
+  std::vector<float> data;
+  const common::Status s = DecodeTileCells(*tile, &data, verify_checksum);
   if (!s.ok()) return s;
+  tile->num_cells = static_cast<int32_t>(data.size());
   tile->data = std::move(data);
-  tile->num_cells = static_cast<int32_t>(cells);
   tile->encoding = T::ENCODING_FLOAT32;
   tile->bytes.clear();
   tile->num_bytes = 0;
   return common::Status::Ok();
-}
-
-const cairn::lcmt_grid_tile* FloatTile(const cairn::lcmt_grid_tile& tile,
-                                       cairn::lcmt_grid_tile* scratch) {
-  if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) return &tile;
-  *scratch = tile;
-  return DecompressTile(scratch, /*verify_checksum=*/false).ok() ? scratch : nullptr;
 }
 
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile) {

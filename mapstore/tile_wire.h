@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,7 @@
 #include "cairn/lcmt_grid_tile.hpp"
 
 #include "common/status.h"
+#include "mapstore/blob_codec.h"
 
 /// @file
 /// Fast publishing of grid tiles. lcmt_grid_tile::encode byte-swaps its cells one call at a time;
@@ -22,21 +24,28 @@ namespace cairn::mapstore {
 /// Encodes a tile exactly as lcmt_grid_tile::encode does.
 void EncodeTile(const cairn::lcmt_grid_tile& tile, std::vector<uint8_t>* out);
 
-/// Compresses a float tile in place (ENCODING_ZSTD_SHUFFLE4, the store's own blob codec); false,
-/// and the tile unchanged, when it is not a float tile or would not get smaller.
+/// The wire encoding of a stored blob codec: ENCODING_ZSTD_SHUFFLE4 and ENCODING_ZSTD_BYTES carry
+/// the blob's bytes as they are; any other codec travels as floats (ENCODING_FLOAT32).
+int8_t WireEncoding(Codec codec);
+/// The blob codec of a compressed wire encoding; nullopt for floats or an unknown encoding.
+std::optional<Codec> CodecOfEncoding(int8_t encoding);
+
+/// Compresses a float tile in place with the store's own blob codec (FloatCodec: bytes for whole
+/// numbers 0..254 and NaN, else shuffled floats); false, and the tile unchanged, when it is not
+/// a float tile or would not get smaller.
 bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level = 1);
+
+/// The cells of a compressed tile, checked by zstd's frame checksum and, with
+/// `verify_checksum` (or a frame without one), against the tile's checksum. kInvalidArgument for
+/// a float tile, an unknown encoding or a bad size, kCorrupt for damaged bytes.
+common::Status DecodeTileCells(const cairn::lcmt_grid_tile& tile, std::vector<float>* cells,
+                               bool verify_checksum = false);
 
 /// Turns a compressed tile back into a float tile in place, checking zstd's frame checksum
 /// and, with `verify_checksum`, the float bytes against the tile's checksum; a float tile is
 /// left as it is. kInvalidArgument for an unknown encoding or a bad size, kCorrupt for damaged
 /// bytes.
 common::Status DecompressTile(cairn::lcmt_grid_tile* tile, bool verify_checksum = true);
-
-/// The float form of a received tile: the tile itself when it is one, else its decoded copy in
-/// `*scratch`; nullptr when it does not decode. The tile's checksum is left to the
-/// LayerAssembler it goes to (one CRC pass over the cells, not two).
-const cairn::lcmt_grid_tile* FloatTile(const cairn::lcmt_grid_tile& tile,
-                                       cairn::lcmt_grid_tile* scratch);
 
 /// Encodes and publishes a tile; false when LCM refuses it.
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile);

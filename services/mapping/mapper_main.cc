@@ -345,12 +345,13 @@ int Main(int argc, char** argv) {
   flags.AddString("output", &output,
                   "with --replay: directory for the maps (raw float32 layers, "
                   "map.yaml, obstacles.yaml, octomap.bt)");
-  flags.AddHelpSection("Channels",
-                       "in:  <robot>.LIDAR .SCAN .POSE .ODOM .IMU .MAP.CONTROL .MAP.TILE_RESEND\n"
-                       "out: <robot>.MAP.TILES .MAP.MANIFEST .MAP.OCCUPANCY .MAP.OBSTACLES "
-                       ".MAP.OCTOMAP .MAP.CONTROL_REPLY, HEALTH\n"
-                       "with --long-term-store: MAPSTORE.REQUEST (load at start, periodic pull "
-                       "saves), MAPSTORE.REPLY, MAPSTORE.TILES, MAPSTORE.MANIFEST");
+  flags.AddHelpSection(
+      "Channels",
+      "in:  <robot>.LIDAR .SCAN .POSE .ODOM .IMU .MAP.CONTROL .MAP.TILE_RESEND\n"
+      "out: <robot>.MAP.TILES .MAP.MANIFEST .MAP.OCCUPANCY .MAP.OBSTACLES "
+      ".MAP.OCTOMAP .MAP.CONTROL_REPLY, HEALTH\n"
+      "with --long-term-store: MAPSTORE.REQUEST (load at start, periodic pull "
+      "saves), MAPSTORE.REPLY, MAPSTORE.TILES, MAPSTORE.TILE_BATCHES, MAPSTORE.MANIFEST");
   flags.AddHelpSection("Control (<robot>.MAP.CONTROL)",
                        "OP_ADD_PROFILE (by name or with profile data), OP_REMOVE_PROFILE, "
                        "OP_PUBLISH_ALL, OP_RESET, OP_SNAPSHOT (writes the maps under "

@@ -509,6 +509,14 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
   const double rough_limit = profile.max_roughness_m, ditch_limit = profile.max_ditch_width_m;
   const float unknown_value = params.unknown_is_lethal ? layers::kCostLethal : kNaN;
   const double ff = params.free_fraction;
+  // Cost of terrain using the share r of its most used limit: free up to free_fraction, then a
+  // whole number in [1, graded_cost_max] (see common/layers.h).
+  const double graded_top = std::min(99.0, std::floor(params.graded_cost_max));
+  auto graded = [&](double r) {
+    if (r <= ff) return layers::kCostFree;
+    const double raw = params.graded_cost_max * (std::min(1.0, r) - ff) / (1.0 - ff);
+    return static_cast<float>(std::clamp(std::round(raw), 1.0, std::max(1.0, graded_top)));
+  };
 
   // Share of a limit used by a measurement (values above the limit are caught as lethal first).
   auto share = [](double value, double limit) {
@@ -570,10 +578,7 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
           cost.data()[i] = layers::kCostLethal;
         } else if (in_ditch) {
           // A ditch the robot can bridge: graded by the width it uses.
-          const double r = std::min(1.0, share(dwidth[i], ditch_limit));
-          cost.data()[i] = r <= ff
-                               ? layers::kCostFree
-                               : static_cast<float>(params.graded_cost_max * (r - ff) / (1 - ff));
+          cost.data()[i] = graded(share(dwidth[i], ditch_limit));
         } else if (blind && std::fabs(x + 0.5 - robot_cells.x()) < blind_cells &&
                    std::fabs(y + 0.5 - robot_cells.y()) < blind_cells) {
           cost.data()[i] = layers::kCostFree;
@@ -589,9 +594,7 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
       }
       if (in_ditch && !ditch_lethal) {
         // The bottom of a ditch the robot bridges: its wheels never touch it.
-        const double r = std::min(1.0, share(dwidth[i], ditch_limit));
-        cost.data()[i] = r <= ff ? layers::kCostFree
-                                 : static_cast<float>(params.graded_cost_max * (r - ff) / (1 - ff));
+        cost.data()[i] = graded(share(dwidth[i], ditch_limit));
         continue;
       }
       if (ditch_lethal) {
@@ -632,11 +635,7 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
           const double down = hc - double(std::min(std::min(a, b), std::min(c, d)));
           if (up <= up_limit + tol && down <= down_limit + tol) {
             ratio = std::max({ratio, up > 0 ? up * inv_up : 0.0, down > 0 ? down * inv_down : 0.0});
-            const double r = std::min(1.0, ratio);
-            cost.data()[i] = ratio <= ff
-                                 ? layers::kCostFree
-                                 : static_cast<float>(std::max(
-                                       1e-3, params.graded_cost_max * (r - ff) / (1.0 - ff)));
+            cost.data()[i] = graded(ratio);
             continue;
           }
           // A limit is exceeded: the per-neighbour rules below decide (edge length).
@@ -694,15 +693,7 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
         }
       }
 
-      if (lethal) {
-        cost.data()[i] = layers::kCostLethal;
-      } else if (ratio <= ff) {
-        cost.data()[i] = layers::kCostFree;
-      } else {
-        const double r = std::min(1.0, ratio);
-        cost.data()[i] =
-            static_cast<float>(std::max(1e-3, params.graded_cost_max * (r - ff) / (1.0 - ff)));
-      }
+      cost.data()[i] = lethal ? layers::kCostLethal : graded(ratio);
     }
   }
 }

@@ -33,7 +33,8 @@
 ///      listing used the centre of its robot-centric map window, on every update), else
 ///      unknown; a known cell with a neighbour outside the map is unknown;
 ///    - everything else gets 0 when it uses at most free_fraction of every limit, else a graded
-///      cost in (0, graded_cost_max] growing with the most used limit.
+///      cost in [1, graded_cost_max] growing with the most used limit, rounded to a whole number
+///      (a ROS occupancy grid's values; the map store packs such a layer into bytes).
 
 namespace cairn::mapping {
 
@@ -107,7 +108,8 @@ void ComputeGeometricLayers(common::GridMap* map, const TraversabilityParams& pa
 /// this much margin around the written rectangle matches the whole-map computation.
 int DependencyRadiusCells(const TraversabilityParams& params, double resolution_m);
 
-/// Adds layers::CostLayer(profile.name): 0 free, (0,100) graded, 100 lethal, NaN unknown.
+/// Adds layers::CostLayer(profile.name): 0 free, [1, 99] graded (whole numbers), 100 lethal,
+/// NaN unknown.
 /// Computes the geometric layers first when they are missing. `robot_xy_m` applies the
 /// blind-zone rule around the robot; `robot_pitch_rad` the IMU compensation when enabled.
 /// Without a heading, the compensation is the seed's worst case (slope + pitch).

@@ -290,9 +290,9 @@ LayerAssembler::LayerState& LayerAssembler::StateFor(const std::string& layer,
 
 template <typename TileMsg>
 bool LayerAssembler::OnTileImpl(const TileMsg& tile, std::vector<float> data, uint32_t crc) {
-  if (static_cast<uint32_t>(tile.checksum) != crc ||
-      tile.num_cells != tile.cells_x * tile.cells_y || tile.tile_size <= 0 ||
-      tile.cells_x > tile.tile_size || tile.cells_y > tile.tile_size) {
+  if (static_cast<uint32_t>(tile.checksum) != crc || tile.cells_x < 0 ||
+      data.size() != static_cast<size_t>(tile.cells_x) * static_cast<size_t>(tile.cells_y) ||
+      tile.tile_size <= 0 || tile.cells_x > tile.tile_size || tile.cells_y > tile.tile_size) {
     ++checksum_errors_;
     return false;
   }
@@ -323,6 +323,10 @@ bool LayerAssembler::OnTile(const cairn::lcmt_grid_tile& tile) {
   }
   const uint32_t crc = Crc32(tile.data.data(), tile.data.size() * sizeof(float));
   return OnTileImpl(tile, tile.data, crc);
+}
+
+bool LayerAssembler::OnDecodedTile(const cairn::lcmt_grid_tile& tile, std::vector<float> cells) {
+  return OnTileImpl(tile, std::move(cells), static_cast<uint32_t>(tile.checksum));
 }
 
 bool LayerAssembler::OnTile(const cairn::lcmt_occupancy_tile& tile) {
@@ -417,7 +421,17 @@ std::optional<common::GridMap> LayerAssembler::Layer(const std::string& layer) c
   if (it == layers_.end()) return std::nullopt;
   const LayerState& state = it->second;
   common::GridMap map(state.geometry);
-  common::Layer& values = map.AddLayer(layer);
+  // Cells no tile covers are unknown; when the tiles cover every cell, none is filled first.
+  int64_t covered = 0;
+  for (const auto& [key, held] : state.tiles) {
+    const int x0 = key.first * state.tile_size, y0 = key.second * state.tile_size;
+    if (x0 < 0 || y0 < 0 || x0 >= map.size_x() || y0 >= map.size_y()) continue;
+    covered += int64_t{std::min(held.cells_x, map.size_x() - x0)} *
+               std::min(held.cells_y, map.size_y() - y0);
+  }
+  common::Layer cells(map.size_x(), map.size_y());
+  if (covered != cells.size()) cells.setConstant(common::kUnknown);
+  common::Layer& values = map.AddLayer(layer, std::move(cells));
   // Rows are contiguous (x fastest): one copy per tile row, clipped to the layer.
   for (const auto& [key, held] : state.tiles) {
     const int x0 = key.first * state.tile_size, y0 = key.second * state.tile_size;

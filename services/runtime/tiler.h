@@ -124,6 +124,11 @@ class LayerAssembler {
   /// when the tile is compressed (its receiver decodes it first: mapstore::DecompressTile).
   bool OnTile(const cairn::lcmt_grid_tile& tile);
   bool OnTile(const cairn::lcmt_occupancy_tile& tile);
+  /// A compressed tile its receiver decoded into `cells` with a codec that verified the bytes
+  /// against the sender's own checksum (mapstore::DecodeTileCells: zstd's content checksum, of
+  /// bytes whose CRC the sender declared): the tile's declared checksum stands for the cells,
+  /// without a second CRC pass. False (a checksum error counted) when the cells do not fit.
+  bool OnDecodedTile(const cairn::lcmt_grid_tile& tile, std::vector<float> cells);
   void OnManifest(const cairn::lcmt_grid_manifest& manifest);
 
   /// Layers seen so far (from tiles or manifests).

@@ -42,6 +42,19 @@ TEST(GridGeometryTest, CenterRoundTripsWithYaw) {
   EXPECT_NEAR(c0.y(), 2.0 + 0.1 * std::sin(0.7) + 0.1 * std::cos(0.7), 1e-12);
 }
 
+TEST(GridMapTest, ALayerOfCellsIsMovedInWhenItFits) {
+  GridMap map(Geometry(0.5, 4, 3, {0.0, 0.0, 0.0}));
+  Layer cells(4, 3);
+  cells.setConstant(2.f);
+  cells(3, 2) = 5.f;
+  const float* data = cells.data();
+  Layer& added = map.AddLayer("cost/test", std::move(cells));
+  EXPECT_EQ(added.data(), data);  // moved, not copied
+  EXPECT_EQ(map.at("cost/test")(3, 2), 5.f);
+  EXPECT_THROW(map.AddLayer("wrong", Layer(3, 4)), std::invalid_argument);
+  EXPECT_FALSE(map.HasLayer("wrong"));
+}
+
 TEST(GridMapTest, AsymmetricPatternStorageIsXFastest) {
   // An L-shaped pattern catches transposition and flips: cells (0..3, 0) and (0, 1).
   GridMap map(Geometry(0.5, 4, 3, {10.0, 20.0, 0.0}));

@@ -133,6 +133,25 @@ TEST(TraversabilityTest, SlopeThresholdAgainstPioneer) {
   EXPECT_LT(Cost(five, "pioneer3at", 6, 6), Cost(seven, "pioneer3at", 6, 6));
 }
 
+// Graded costs are whole numbers from 1 up (a ROS occupancy grid's values), so a cost layer
+// packs into one byte per cell; a cost of the share just above free_fraction rounds up to 1.
+TEST(TraversabilityTest, GradedCostsAreWholeNumbers) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  for (double deg : {2.5, 2.6, 3.0, 5.0, 6.1, 7.5, 7.9}) {
+    GridMap map = MakeTerrain(12, 12, kRes, Plane(deg * kDeg, 0.2));
+    ComputeCostLayer(&map, pioneer, {});
+    ForInterior(map, [&](int ix, int iy) {
+      const float c = Cost(map, "pioneer3at", ix, iy);
+      EXPECT_EQ(c, std::round(c)) << deg << " deg";
+      EXPECT_TRUE(c == layers::kCostFree || (c >= 1.f && c <= 90.f)) << deg << " deg: " << c;
+    });
+  }
+  // 2.41 deg is just over free_fraction (0.3) of 8 deg: graded, the smallest graded cost.
+  GridMap barely = MakeTerrain(12, 12, kRes, Plane(2.41 * kDeg));
+  ComputeCostLayer(&barely, pioneer, {});
+  EXPECT_EQ(Cost(barely, "pioneer3at", 6, 6), 1.f);
+}
+
 // The slope rule alone (steps and roughness unlimited) at 8.5 deg, and the boundary value.
 TEST(TraversabilityTest, SlopeRuleAloneIsInclusiveOfTheLimit) {
   common::RobotProfile p = LenientProfile();

@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 
@@ -41,6 +43,64 @@ TEST(BlobCodecTest, ShufflingHelpsSmoothFloats) {
       EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstdShuffle4).data.size();
   EXPECT_LT(shuffled, plain);
   EXPECT_LT(shuffled, cells.size() * 4 * 6 / 10);
+}
+
+// A cost layer's tile: whole numbers 0..100, lethal cells, unknown cells.
+std::vector<float> CostCells(int n) {
+  std::vector<float> v(n);
+  for (int i = 0; i < n; ++i) {
+    v[i] = i % 13 == 0 ? std::numeric_limits<float>::quiet_NaN()
+                       : static_cast<float>(i % 7 == 0 ? 100 : (i * 31) % 60);
+  }
+  return v;
+}
+
+TEST(BlobCodecTest, WholeNumbersTravelAsOneBytePerCellBitForBit) {
+  const std::vector<float> cells = CostCells(10000);
+  ASSERT_EQ(FloatCodec(cells.data(), cells.size()), Codec::kZstdBytes);
+  const EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstdBytes);
+  const EncodedBlob shuffled = EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstdShuffle4);
+  EXPECT_LT(blob.data.size(), shuffled.data.size());
+  EXPECT_EQ(blob.raw_crc32, shuffled.raw_crc32);  // the CRC is the floats', whatever the codec
+  auto back = DecodeBlob(Codec::kZstdBytes, blob.data, blob.raw_size, blob.raw_crc32,
+                         /*verify_crc=*/true);
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  EXPECT_EQ(std::memcmp(back->data(), cells.data(), back->size()), 0);
+  // 0 and 254 are the ends of the range.
+  const std::vector<float> ends = {0.f, 254.f, 1.f};
+  EXPECT_EQ(FloatCodec(ends.data(), ends.size()), Codec::kZstdBytes);
+}
+
+TEST(BlobCodecTest, ValuesWithoutAByteCodeKeepTheFloatCodec) {
+  const float kOther = std::nanf("7");  // a NaN with another payload: its bits would change
+  for (float odd :
+       {0.5f, -0.f, -1.f, 255.f, 1e9f, kOther, std::numeric_limits<float>::infinity()}) {
+    std::vector<float> cells = CostCells(100);
+    cells[42] = odd;
+    EXPECT_EQ(FloatCodec(cells.data(), cells.size()), Codec::kZstdShuffle4) << odd;
+    EXPECT_THROW(EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstdBytes),
+                 std::invalid_argument)
+        << odd;
+  }
+  const std::vector<float> terrain = SmoothTerrain(100);
+  EXPECT_EQ(FloatCodec(terrain.data(), terrain.size()), Codec::kZstdShuffle4);
+}
+
+TEST(BlobCodecTest, ADamagedByteBlobIsRefused) {
+  const std::vector<float> cells = CostCells(10000);
+  const EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstdBytes);
+  std::string damaged = blob.data;
+  damaged[damaged.size() / 2] ^= 0x01;
+  EXPECT_EQ(DecodeBlob(Codec::kZstdBytes, damaged, blob.raw_size, blob.raw_crc32).status().code(),
+            StatusCode::kCorrupt);
+  // A frame of another size is no tile of these cells.
+  EXPECT_EQ(
+      DecodeBlob(Codec::kZstdBytes, blob.data, blob.raw_size * 2, blob.raw_crc32).status().code(),
+      StatusCode::kCorrupt);
+  StoredTile tile{0, 0, 100, 100, static_cast<int>(Codec::kZstdBytes), blob.raw_crc32, blob.data};
+  EXPECT_TRUE(CheckStoredTile(tile).ok());
+  tile.data = damaged;
+  EXPECT_EQ(CheckStoredTile(tile).code(), StatusCode::kCorrupt);
 }
 
 TEST(BlobCodecTest, DamageIsDetected) {

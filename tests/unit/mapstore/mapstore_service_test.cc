@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "cairn/lcmt_grid_tile_batch.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 
 #include "common/channels.h"
@@ -59,6 +60,8 @@ class MapstoreServiceUnitTest : public ::testing::Test {
     dut_ = std::make_unique<MapstoreService>(node_, store_, testing::FakeDeriver(), params);
     node_.lcm().subscribe(channels::kMapstoreReply, &MapstoreServiceUnitTest::OnReply, this);
     node_.lcm().subscribe(channels::kMapstoreTiles, &MapstoreServiceUnitTest::OnTile, this);
+    node_.lcm().subscribe(channels::kMapstoreTileBatches, &MapstoreServiceUnitTest::OnTileBatch,
+                          this);
     node_.lcm().subscribe(channels::kMapstoreManifest, &MapstoreServiceUnitTest::OnManifest, this);
     node_.lcm().subscribe(channels::kMapstorePushTileResend, &MapstoreServiceUnitTest::OnPushResend,
                           this);
@@ -67,8 +70,19 @@ class MapstoreServiceUnitTest : public ::testing::Test {
   void OnReply(const lcm::ReceiveBuffer*, const std::string&, const Reply* m) {
     replies_[m->request_id].push_back(*m);
   }
+  void OnTileBatch(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                   const cairn::lcmt_grid_tile_batch* m) {
+    ++batches_;
+    EXPECT_EQ(m->num_tiles, static_cast<int32_t>(m->tiles.size()));
+    for (const auto& tile : m->tiles) {
+      EXPECT_NE(tile.encoding, +cairn::lcmt_grid_tile::ENCODING_FLOAT32);  // floats go singly
+      EXPECT_EQ(tile.map_name, m->map_name);
+      OnTile(rbuf, channel, &tile);
+    }
+  }
   void OnTile(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_grid_tile* m) {
     cairn::lcmt_grid_tile tile = *m;
+    if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_ZSTD_BYTES) ++byte_tiles_;
     if (tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
       ++compressed_tiles_;
       compressed_bytes_ += tile.num_bytes;
@@ -165,6 +179,8 @@ class MapstoreServiceUnitTest : public ::testing::Test {
   runtime::LayerTiler* pusher_{nullptr};
   int tiles_{0};
   int compressed_tiles_{0};
+  int batches_{0};
+  int byte_tiles_{0};
   int64_t compressed_bytes_{0};
   int resends_answered_{0};
   int64_t next_id_{100};
@@ -229,6 +245,34 @@ TEST_F(MapstoreServiceUnitTest, LoadSendsTilesAndAManifestPerLayer) {
   }
   EXPECT_EQ(compressed_tiles_, 6);
   EXPECT_LT(compressed_bytes_, 237 * 123 * 4);
+}
+
+TEST_F(MapstoreServiceUnitTest, AWholeNumberLayerTravelsAsBytesSeveralTilesToAMessage) {
+  // A cost-like layer: whole numbers 0..100 and unknown cells.
+  MapSnapshot snapshot = testing::SampleSnapshot("corridor", 237, 123);
+  common::Layer& cost = snapshot.base.AddLayer("cost/test");
+  for (int iy = 0; iy < 123; ++iy) {
+    for (int ix = 0; ix < 237; ++ix) {
+      cost(ix, iy) = (ix + iy) % 17 == 0 ? common::kUnknown : static_cast<float>((ix * iy) % 101);
+    }
+  }
+  ASSERT_TRUE(store_.SaveMap(snapshot, {"unit", 0, 0}).ok());
+  Request load = MakeRequest(Request::OP_LOAD, "corridor");
+  load.layers = {"cost/test"};
+  const Reply reply = Call(load);
+  ASSERT_EQ(reply.status, kOk) << reply.message;
+  for (int i = 0; i < 20 && !assembler_.Complete("cost/test"); ++i) node_.SpinOnce(5);
+  ASSERT_TRUE(assembler_.Complete("cost/test"));
+  // One byte per cell: the six tiles fit one message.
+  EXPECT_EQ(byte_tiles_, 6);
+  EXPECT_EQ(batches_, 1);
+  EXPECT_LT(compressed_bytes_, 237 * 123);
+  const common::Layer& got = assembler_.Layer("cost/test")->at("cost/test");
+  for (Eigen::Index i = 0; i < got.size(); ++i) {
+    ASSERT_TRUE((std::isnan(got.data()[i]) && std::isnan(cost.data()[i])) ||
+                got.data()[i] == cost.data()[i])
+        << "cell " << i;
+  }
 }
 
 TEST_F(MapstoreServiceUnitTest, ACompressedTileWithADamagedByteIsRefused) {

@@ -110,6 +110,37 @@ TEST(LayerAssemblerTest, RebuildsExactlyAndDetectsMissingTiles) {
   EXPECT_TRUE(*rebuilt == map);
 }
 
+// A receiver that decoded a compressed tile hands its cells over; its declared checksum stands
+// for them. Cells that do not fit the tile are refused. A layer some tiles never reached has
+// unknown cells there, one all tiles reached has none.
+TEST(LayerAssemblerTest, DecodedTilesRebuildTheLayerAndGapsStayUnknown) {
+  common::GridMap map = MakeMap(250, 130);
+  LayerTiler tiler("r1", "live");
+  auto batch = tiler.Update(map, "elevation", TileEncoding::kFloat, 1);
+  LayerAssembler assembler;
+  assembler.OnManifest(batch.manifest);
+  cairn::lcmt_grid_tile header = batch.tiles[0];
+  header.data.clear();
+  header.num_cells = 0;
+  EXPECT_FALSE(assembler.OnDecodedTile(header, std::vector<float>(7, 1.f)));
+  EXPECT_EQ(assembler.checksum_errors(), 1);
+  for (size_t i = 1; i < batch.tiles.size(); ++i) {
+    cairn::lcmt_grid_tile h = batch.tiles[i];
+    std::vector<float> cells = std::move(h.data);
+    h.data.clear();
+    h.num_cells = 0;
+    EXPECT_TRUE(assembler.OnDecodedTile(h, std::move(cells)));
+  }
+  EXPECT_FALSE(assembler.Complete("elevation"));
+  auto partial = assembler.Layer("elevation");
+  ASSERT_TRUE(partial.has_value());
+  EXPECT_TRUE(std::isnan(partial->at("elevation")(0, 0)));  // tile (0, 0) never arrived
+  EXPECT_EQ(partial->at("elevation")(249, 129), map.at("elevation")(249, 129));
+  EXPECT_TRUE(assembler.OnDecodedTile(header, batch.tiles[0].data));
+  EXPECT_TRUE(assembler.Complete("elevation"));
+  EXPECT_TRUE(*assembler.Layer("elevation") == map);
+}
+
 // A map store sends its stored tiles as they are: adopted tiles go out and come back on a
 // resend byte for byte, with the manifest of what Update would have listed.
 TEST(LayerTilerTest, AdoptedTilesAreSentAndResentAsTheyAre) {
