@@ -231,6 +231,31 @@ std::vector<uint8_t>& ThreadScratch() {
 
 }  // namespace
 
+namespace {
+
+// Bytes in the zstd frame of a float blob: one per float for the byte codec, else the raw size.
+size_t FrameSize(Codec codec, int64_t raw_size) {
+  return static_cast<size_t>(codec == Codec::kZstdBytes ? raw_size / 4 : raw_size);
+}
+
+// Decompresses a zstd frame of frame_size bytes into target; kCorrupt saying what did not match.
+// zstd verifies the frame's content checksum, when it has one, on the way.
+common::Status DecompressFrame(const char* data, size_t size, size_t frame_size, uint8_t* target) {
+  const unsigned long long frame = ZSTD_getFrameContentSize(data, size);
+  if (frame == ZSTD_CONTENTSIZE_ERROR || frame != static_cast<unsigned long long>(frame_size)) {
+    return common::CorruptError("blob is not a zstd frame of " + std::to_string(frame_size) +
+                                " bytes");
+  }
+  const size_t n = ZSTD_decompressDCtx(ThreadDecompressor(), target, frame_size, data, size);
+  if (ZSTD_isError(n) || n != frame_size) {
+    return common::CorruptError(std::string("blob does not decompress: ") +
+                                (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short output"));
+  }
+  return common::Status::Ok();
+}
+
+}  // namespace
+
 Codec FloatCodec(const float* cells, size_t n) {
   return ToByteCodes(reinterpret_cast<const uint8_t*>(cells), n, nullptr) ? Codec::kZstdBytes
                                                                           : Codec::kZstdShuffle4;
@@ -331,25 +356,15 @@ common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t 
       if (codec != Codec::kZstd && raw_size % 4 != 0) {
         return common::CorruptError("float blob size not a multiple of 4");
       }
-      // The byte codec's frame holds one byte per float.
-      const size_t frame_size =
-          static_cast<size_t>(codec == Codec::kZstdBytes ? raw_size / 4 : raw_size);
-      const unsigned long long frame = ZSTD_getFrameContentSize(data, size);
-      if (frame == ZSTD_CONTENTSIZE_ERROR || frame != static_cast<unsigned long long>(frame_size)) {
-        return common::CorruptError("blob is not a zstd frame of " + std::to_string(frame_size) +
-                                    " bytes");
-      }
+      const size_t n = FrameSize(codec, raw_size);
       uint8_t* target = out;
       if (codec != Codec::kZstd) {
         std::vector<uint8_t>& scratch = ThreadScratch();
-        scratch.resize(frame_size);
+        scratch.resize(n);
         target = scratch.data();
       }
-      const size_t n = ZSTD_decompressDCtx(ThreadDecompressor(), target, frame_size, data, size);
-      if (ZSTD_isError(n) || n != frame_size) {
-        return common::CorruptError(std::string("blob does not decompress: ") +
-                                    (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short output"));
-      }
+      const common::Status s = DecompressFrame(data, size, n, target);
+      if (!s.ok()) return s;
       if (codec == Codec::kZstdShuffle4) Unshuffle4(target, n / 4, out);
       if (codec == Codec::kZstdBytes) FromByteCodes(target, n, out);
       // zstd verified its content checksum (XXH64) while decompressing: that covers damage to
@@ -562,22 +577,9 @@ common::Status CheckStoredTile(const StoredTile& tile) {
   if (zstd && HasContentChecksum(tile.data.data(), tile.data.size())) {
     // zstd checks its frame against its content checksum while decompressing: the frame alone
     // is decoded, not turned back into floats.
-    const size_t frame_size =
-        static_cast<size_t>(codec == Codec::kZstdBytes ? raw_size / 4 : raw_size);
-    const unsigned long long frame = ZSTD_getFrameContentSize(tile.data.data(), tile.data.size());
-    if (frame != static_cast<unsigned long long>(frame_size)) {
-      return common::CorruptError("blob is not a zstd frame of " + std::to_string(frame_size) +
-                                  " bytes");
-    }
     std::vector<uint8_t>& scratch = ThreadScratch();
-    scratch.resize(frame_size);
-    const size_t n = ZSTD_decompressDCtx(ThreadDecompressor(), scratch.data(), frame_size,
-                                         tile.data.data(), tile.data.size());
-    if (ZSTD_isError(n) || n != frame_size) {
-      return common::CorruptError(std::string("blob does not decompress: ") +
-                                  (ZSTD_isError(n) ? ZSTD_getErrorName(n) : "short output"));
-    }
-    return common::Status::Ok();
+    scratch.resize(FrameSize(codec, raw_size));
+    return DecompressFrame(tile.data.data(), tile.data.size(), scratch.size(), scratch.data());
   }
   thread_local std::vector<uint8_t> out;
   out.resize(static_cast<size_t>(raw_size));
