@@ -22,7 +22,8 @@ inline constexpr char kMapstoreManifest[] = "MAPSTORE.MANIFEST";  // manifests o
 inline constexpr char kMapstoreOctomap[] = "MAPSTORE.OCTOMAP";    // OctoMap chunks of replies
 // A push save: the client sends its layers, obstacles and OctoMap here before OP_SAVE, and
 // answers the store's resend requests for tiles it missed.
-inline constexpr char kMapstorePushTiles[] = "MAPSTORE.PUSH.TILES";
+inline constexpr char kMapstorePushTiles[] = "MAPSTORE.PUSH.TILES";  // float tiles (resends)
+inline constexpr char kMapstorePushTileBatches[] = "MAPSTORE.PUSH.TILE_BATCHES";  // compressed
 inline constexpr char kMapstorePushManifest[] = "MAPSTORE.PUSH.MANIFEST";
 inline constexpr char kMapstorePushObstacles[] = "MAPSTORE.PUSH.OBSTACLES";
 inline constexpr char kMapstorePushOctomap[] = "MAPSTORE.PUSH.OCTOMAP";

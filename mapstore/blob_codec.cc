@@ -200,6 +200,19 @@ uint32_t Crc32(const void* data, size_t size) {
   return static_cast<uint32_t>(crc);
 }
 
+uint32_t StoredBlobCrc32(int codec, int64_t raw_size, uint32_t raw_crc32, const void* data,
+                         size_t size) {
+  uint8_t header[16];
+  const int32_t codec32 = codec;
+  std::memcpy(header, &codec32, 4);
+  std::memcpy(header + 4, &raw_size, 8);
+  std::memcpy(header + 12, &raw_crc32, 4);
+  static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the header is written little-endian");
+  uLong crc = Crc32(data, size);
+  crc = crc32(crc, header, sizeof(header));
+  return static_cast<uint32_t>(crc);
+}
+
 namespace {
 
 // One zstd context per thread: creating one per blob costs more than compressing a tile.
@@ -261,11 +274,12 @@ Codec FloatCodec(const float* cells, size_t n) {
                                                                           : Codec::kZstdShuffle4;
 }
 
-EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level) {
+EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level,
+                       std::optional<uint32_t> raw_crc32) {
   EncodedBlob blob;
   blob.codec = codec;
   blob.raw_size = static_cast<int64_t>(size);
-  blob.raw_crc32 = Crc32(raw, size);
+  blob.raw_crc32 = raw_crc32 ? *raw_crc32 : Crc32(raw, size);
   switch (codec) {
     case Codec::kRaw:
       blob.data.assign(static_cast<const char*>(raw), size);
@@ -273,6 +287,8 @@ EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level
       blob.key = Hex32(blob.raw_crc32) + "-" +
                  Hex32(static_cast<uint32_t>(common::Fnv1a64(raw, size))) + "-" +
                  std::to_string(size) + "r";
+      blob.stored_crc32 = StoredBlobCrc32(static_cast<int>(codec), blob.raw_size, blob.raw_crc32,
+                                          blob.data.data(), blob.data.size());
       return blob;
     case Codec::kZstd:
     case Codec::kZstdShuffle4:
@@ -312,6 +328,8 @@ EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level
       std::memcpy(&frame_checksum, blob.data.data() + n - 4, 4);
       blob.key =
           Hex32(blob.raw_crc32) + "-" + Hex32(frame_checksum) + "-" + std::to_string(size) + "z";
+      blob.stored_crc32 = StoredBlobCrc32(static_cast<int>(codec), blob.raw_size, blob.raw_crc32,
+                                          blob.data.data(), blob.data.size());
       return blob;
     }
     default:
@@ -336,6 +354,8 @@ common::Result<EncodedBlob> AdoptEncodedBlob(Codec codec, std::string data, int6
   std::memcpy(&frame_checksum, data.data() + data.size() - 4, 4);
   blob.key = Hex32(raw_crc32) + "-" + Hex32(frame_checksum) + "-" + std::to_string(raw_size) + "z";
   blob.data = std::move(data);
+  blob.stored_crc32 = StoredBlobCrc32(static_cast<int>(codec), raw_size, raw_crc32,
+                                      blob.data.data(), blob.data.size());
   return blob;
 }
 
@@ -571,6 +591,16 @@ common::Status CheckStoredTile(const StoredTile& tile) {
   }
   const int64_t raw_size =
       int64_t{tile.cells_x} * tile.cells_y * static_cast<int64_t>(sizeof(float));
+  if (tile.stored_crc32) {
+    // The row's own checksum covers its bytes and header: nothing needs decompressing.
+    const uint32_t crc =
+        StoredBlobCrc32(tile.codec, raw_size, tile.raw_crc32, tile.data.data(), tile.data.size());
+    if (crc != *tile.stored_crc32) {
+      return common::CorruptError("stored blob checksum mismatch (crc32 " + Hex32(crc) +
+                                  ", recorded " + Hex32(*tile.stored_crc32) + ")");
+    }
+    return common::Status::Ok();
+  }
   const Codec codec = static_cast<Codec>(tile.codec);
   const bool zstd =
       codec == Codec::kZstd || codec == Codec::kZstdShuffle4 || codec == Codec::kZstdBytes;
@@ -605,7 +635,8 @@ common::Result<std::vector<StoredLayer>> TileLayers(const common::GridMap& map, 
         EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * sizeof(float),
                                       FloatCodec(cells.data(), cells.size()));
         layer.tiles.push_back({spec.tile_ix, spec.tile_iy, spec.cells_x, spec.cells_y,
-                               static_cast<int>(blob.codec), blob.raw_crc32, std::move(blob.data)});
+                               static_cast<int>(blob.codec), blob.raw_crc32, std::move(blob.data),
+                               blob.stored_crc32});
       }
       out.push_back(std::move(layer));
     }
@@ -616,6 +647,12 @@ common::Result<std::vector<StoredLayer>> TileLayers(const common::GridMap& map, 
 }
 
 }  // namespace
+
+common::Result<std::string> MapStore::GetProfileHash(const std::string& name) const {
+  auto profile = GetProfile(name);
+  if (!profile.ok()) return profile.status();
+  return profile->content_hash;
+}
 
 common::Result<std::vector<StoredLayer>> MapStore::LoadStoredTiles(
     const MapRef& ref, const std::vector<std::string>& layers, int tile_size) const {

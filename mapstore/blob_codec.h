@@ -34,6 +34,8 @@ struct EncodedBlob {
   int64_t raw_size{0};
   uint32_t raw_crc32{0};
   std::string data;  ///< stored bytes
+  /// StoredBlobCrc32 of the blob as stored: lets a reader check it without decoding it.
+  uint32_t stored_crc32{0};
   /// Content address: the CRC-32 of the raw bytes, a second independent checksum (zstd's
   /// frame checksum, XXH64-based, for compressed blobs) and the raw size.
   std::string key;
@@ -46,14 +48,23 @@ void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
 /// CRC-32 (zlib polynomial) of a buffer.
 uint32_t Crc32(const void* data, size_t size);
 
+/// CRC-32 of a blob row as stored: its bytes, then its codec (int32), raw size (int64) and raw
+/// CRC-32 (uint32), little-endian. A damaged byte or header field changes it, so a reader can
+/// check a stored blob without decompressing it.
+uint32_t StoredBlobCrc32(int codec, int64_t raw_size, uint32_t raw_crc32, const void* data,
+                         size_t size);
+
 /// The codec for float cells: kZstdBytes when every cell is a whole number in 0..254 or the
 /// product's NaN (bit for bit), else kZstdShuffle4.
 Codec FloatCodec(const float* cells, size_t n);
 
 /// Encodes raw bytes. kZstdShuffle4 needs a size that is a multiple of 4; kZstdBytes floats
 /// FloatCodec accepts.
+/// `raw_crc32`, when given, is the caller's CRC-32 of `raw` (a tile's declared checksum): it
+/// saves a pass over the bytes.
 /// @throws std::invalid_argument for a bad codec or size, std::runtime_error if zstd fails.
-EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level = 1);
+EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level = 1,
+                       std::optional<uint32_t> raw_crc32 = std::nullopt);
 /// A zstd blob made by EncodeBlob elsewhere (a pushed tile's bytes), as EncodeBlob would have
 /// returned it, without compressing again: its content address comes from the CRC-32 the sender
 /// declared and the frame's own checksum. The caller vouches that the bytes decode to raw_size

@@ -79,6 +79,9 @@ struct StoredTile {
   int codec{0};           ///< how `data` is encoded (mapstore::Codec)
   uint32_t raw_crc32{0};  ///< CRC-32 of the float cells (x fastest, host byte order)
   std::string data;       ///< the stored bytes
+  /// StoredBlobCrc32 of the row, when the store recorded one (SqliteMapStore from schema 3):
+  /// CheckStoredTile then compares it instead of decompressing the bytes.
+  std::optional<uint32_t> stored_crc32;
 };
 
 /// A base layer as stored tiles. Tiles the store does not hold are all unknown.
@@ -101,6 +104,10 @@ struct MapSnapshot {
   /// tile is one of its own (same tile size, place and cells) and the blob's CRC is that of the
   /// base's cells there; `base` stays what is saved.
   std::vector<StoredLayer> encoded_layers;
+  /// The caller checked that every encoded tile's CRC is that of the base's cells it stands
+  /// for (a pushed save: each tile was decoded on receipt and checked against its CRC): the
+  /// store then adopts matching tiles without reading those cells again.
+  bool encoded_layers_checked{false};
 };
 
 /// A stored map version as listed.
@@ -270,6 +277,9 @@ class MapStore {
                                     const WriteContext& ctx) = 0;
   /// The newest content stored under a name.
   virtual common::Result<StoredProfile> GetProfile(const std::string& name) const = 0;
+  /// The content hash of the newest content stored under a name, as GetProfile has it (same
+  /// errors); SqliteMapStore answers without parsing the profile.
+  virtual common::Result<std::string> GetProfileHash(const std::string& name) const;
   /// The newest content of every profile, sorted by name.
   virtual common::Result<std::vector<StoredProfile>> ListProfiles() const = 0;
 

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
+#include <mutex>
 #include <thread>
 
+#include <sys/prctl.h>
 #include <unistd.h>
 
 #include "cairn/lcmt_obstacle_registry.hpp"
@@ -68,7 +71,7 @@ struct MapstoreClient::Incoming {
 struct MapstoreClient::Push {
   std::string map_name;
   std::string robot;
-  std::unique_ptr<runtime::LayerTiler> tiler;
+  std::map<std::string, std::unique_ptr<runtime::LayerTiler>> tilers;  // one per layer
   std::optional<cairn::lcmt_obstacle_registry> obstacles;
   std::vector<cairn::lcmt_octomap> octomap;
 };
@@ -109,20 +112,42 @@ void MapstoreClient::OnTile(const lcm::ReceiveBuffer*, const std::string&,
 void MapstoreClient::OnTileBatch(const lcm::ReceiveBuffer*, const std::string&,
                                  const cairn::lcmt_grid_tile_batch* m) {
   if (!incoming_ || m->map_name != incoming_->map_name) return;
-  for (const cairn::lcmt_grid_tile& tile : m->tiles) HoldTile(tile);
+  // The compressed tiles of a batch decode on decode_threads threads (when there are enough to
+  // be worth a thread) into buffers kept between batches; the assembler then pastes them into
+  // its layers in order.
+  const size_t n = m->tiles.size();
+  if (decoded_.size() < n) decoded_.resize(n);
+  std::vector<char> ok(n, 0);
+  constexpr size_t kTilesPerThread = 4;
+  const int threads = static_cast<int>(std::min<size_t>(
+      static_cast<size_t>(std::max(1, options_.decode_threads)), n / kTilesPerThread + 1));
+  ParallelFor(n, threads, [&](size_t i) {
+    const cairn::lcmt_grid_tile& tile = m->tiles[i];
+    ok[i] = tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
+            tile.map_name == incoming_->map_name && DecodeTileCells(tile, &decoded_[i]).ok();
+  });
+  for (size_t i = 0; i < n; ++i) {
+    const cairn::lcmt_grid_tile& tile = m->tiles[i];
+    if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
+      HoldTile(tile);
+    } else if (ok[i] && incoming_->assembler.OnDecodedTile(tile, decoded_[i])) {
+      incoming_->last_progress = Clock::now();
+    }
+  }
 }
 
 void MapstoreClient::HoldTile(const cairn::lcmt_grid_tile& tile) {
   if (!incoming_ || tile.map_name != incoming_->map_name) return;
   // A compressed tile that does not decode is dropped: the resend asks for it again. One that
   // does was checked by zstd against the bytes the store compressed, whose CRC it declares.
+  // It decodes into a buffer kept between tiles, and the assembler pastes it into its layer.
   bool held = false;
   if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
     held = incoming_->assembler.OnTile(tile);
   } else {
-    std::vector<float> cells;
-    held = DecodeTileCells(tile, &cells).ok() &&
-           incoming_->assembler.OnDecodedTile(tile, std::move(cells));
+    if (decoded_.empty()) decoded_.resize(1);
+    held = DecodeTileCells(tile, &decoded_[0]).ok() &&
+           incoming_->assembler.OnDecodedTile(tile, decoded_[0]);
   }
   if (held) incoming_->last_progress = Clock::now();
 }
@@ -156,16 +181,54 @@ void MapstoreClient::OnPushResend(const lcm::ReceiveBuffer*, const std::string&,
     for (const auto& c : push_->octomap) lcm_.publish(channels::kMapstorePushOctomap, &c);
     return;
   }
-  const auto batch = push_->tiler->Resend(*m);
+  auto tiler = push_->tilers.find(m->layer);
+  if (tiler == push_->tilers.end()) return;
+  const auto batch = tiler->second->Resend(*m);
   lcm_.publish(channels::kMapstorePushManifest, &batch.manifest);
-  for (const auto& t : batch.tiles) PublishPaced(t);
+  PublishPushed(push_->map_name, batch.tiles);
+}
+
+void MapstoreClient::Pause() const {
+  // The pauses are a tenth of a millisecond: the kernel's default 50 us timer slack would make
+  // each half as long again.
+  thread_local const bool tight_timer = prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0) == 0;
+  (void)tight_timer;
+  if (options_.burst_pause_ms > 0) {
+    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options_.burst_pause_ms));
+  }
 }
 
 void MapstoreClient::PublishPaced(const cairn::lcmt_grid_tile& tile) {
   PublishTile(lcm_, channels::kMapstorePushTiles, tile);
-  if (++paced_ % std::max(1, options_.tiles_per_burst) == 0 && options_.burst_pause_ms > 0) {
-    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options_.burst_pause_ms));
+  if (++paced_ % std::max(1, options_.tiles_per_burst) == 0) Pause();
+}
+
+void MapstoreClient::PublishPushed(const std::string& map_name,
+                                   const std::vector<cairn::lcmt_grid_tile>& tiles) {
+  cairn::lcmt_grid_tile_batch pending{};
+  int64_t pending_bytes = 0;
+  auto flush = [&] {
+    if (pending.tiles.empty()) return;
+    pending.utime = WallUtimeNow();
+    pending.map_name = map_name;
+    pending.num_tiles = static_cast<int32_t>(pending.tiles.size());
+    lcm_.publish(channels::kMapstorePushTileBatches, &pending);
+    pending.tiles.clear();
+    pending_bytes = 0;
+    Pause();
+  };
+  for (const auto& tile : tiles) {
+    if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32 || options_.batch_bytes <= 0) {
+      flush();
+      PublishPaced(tile);
+      continue;
+    }
+    const int64_t bytes = TilePayloadBytes(tile);
+    if (!pending.tiles.empty() && pending_bytes + bytes > options_.batch_bytes) flush();
+    pending.tiles.push_back(tile);
+    pending_bytes += bytes;
   }
+  flush();
 }
 
 Result<cairn::lcmt_mapstore_reply> MapstoreClient::Call(cairn::lcmt_mapstore_request request) {
@@ -215,17 +278,55 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snaps
   push_ = std::make_unique<Push>();
   push_->map_name = std::to_string(request.request_id) + "/" + snapshot.name;
   push_->robot = snapshot.provenance.source_robot;
-  push_->tiler =
-      std::make_unique<runtime::LayerTiler>(push_->robot, push_->map_name, options_.tile_size);
   for (const std::string& layer : request.layers) {
-    auto batch =
-        push_->tiler->Update(snapshot.base, layer, runtime::TileEncoding::kFloat, utime, true);
-    lcm_.publish(channels::kMapstorePushManifest, &batch.manifest);
-    if (options_.compress_tiles) {
-      ParallelFor(batch.tiles.size(), std::max(1, options_.compression_threads),
-                  [&](size_t i) { CompressTile(&batch.tiles[i]); });
+    push_->tilers[layer] =
+        std::make_unique<runtime::LayerTiler>(push_->robot, push_->map_name, options_.tile_size);
+  }
+  // Layers are tiled and compressed on compression_threads threads, in order, while this
+  // thread publishes each one as soon as it is ready (its pauses leave the cores to them).
+  const size_t num_layers = request.layers.size();
+  std::vector<runtime::LayerTiler::Batch> batches(num_layers);
+  std::vector<char> ready(num_layers, 0);
+  bool failed = false;
+  std::string failure;
+  std::mutex ready_mutex;
+  std::condition_variable ready_cv;
+  std::thread producer([&] {
+    try {
+      ParallelFor(num_layers, std::max(1, options_.compression_threads), [&](size_t l) {
+        const std::string& layer = request.layers[l];
+        runtime::LayerTiler::Batch batch = push_->tilers.at(layer)->Update(
+            snapshot.base, layer, runtime::TileEncoding::kFloat, utime, true);
+        if (options_.compress_tiles) {
+          for (auto& tile : batch.tiles) CompressTile(&tile);
+        }
+        std::lock_guard<std::mutex> lock(ready_mutex);
+        batches[l] = std::move(batch);
+        ready[l] = 1;
+        ready_cv.notify_all();
+      });
+    } catch (const std::exception& e) {
+      std::lock_guard<std::mutex> lock(ready_mutex);
+      failed = true;
+      failure = e.what();
+      ready_cv.notify_all();
     }
-    for (const auto& t : batch.tiles) PublishPaced(t);
+  });
+  for (size_t l = 0; l < num_layers; ++l) {
+    runtime::LayerTiler::Batch batch;
+    {
+      std::unique_lock<std::mutex> lock(ready_mutex);
+      ready_cv.wait(lock, [&] { return ready[l] != 0 || failed; });
+      if (!ready[l]) break;
+      batch = std::move(batches[l]);
+    }
+    lcm_.publish(channels::kMapstorePushManifest, &batch.manifest);
+    PublishPushed(push_->map_name, batch.tiles);
+  }
+  producer.join();
+  if (failed) {
+    push_.reset();
+    return common::InternalError("tiling the map to push it: " + failure);
   }
   if (request.expect_obstacles) {
     push_->obstacles = runtime::ToLcm(snapshot.obstacles, utime, push_->robot, push_->map_name);
@@ -348,7 +449,7 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site, con
   }
   bool first = true;
   for (const std::string& layer : reply->layers) {
-    auto grid = incoming_->assembler.Layer(layer);
+    auto grid = incoming_->assembler.TakeLayer(layer);
     if (!grid) continue;
     if (first) {
       loaded.layers = common::GridMap(grid->geometry());

@@ -34,10 +34,14 @@ struct MapstoreClientOptions {
   double total_timeout_s{60.0};    ///< give up after this
   double resend_interval_s{0.02};  ///< ask for missing tiles after this long without progress
   int tile_size{100};              ///< cells per side of pushed tiles
-  int tiles_per_burst{2};          ///< pushed tiles sent back to back before a short pause
+  int tiles_per_burst{2};          ///< pushed float tiles sent back to back before a short pause
   double burst_pause_ms{0.1};      ///< lets the store's receive buffer drain (UDP drops the rest)
   bool compress_tiles{true};       ///< pushed tiles travel compressed (resent ones as floats)
-  int compression_threads{2};      ///< threads compressing a push
+  /// Compressed pushed tiles travel several to an lcmt_grid_tile_batch of about this many tile
+  /// bytes, with burst_pause_ms after each (0: one tile per message, in bursts).
+  int64_t batch_bytes{60000};
+  int compression_threads{2};  ///< threads compressing a push
+  int decode_threads{2};       ///< threads decoding a batch of compressed reply tiles
 };
 
 class MapstoreClient {
@@ -85,8 +89,12 @@ class MapstoreClient {
   void OnOctomap(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_octomap* m);
   void OnPushResend(const lcm::ReceiveBuffer*, const std::string&,
                     const cairn::lcmt_tile_resend_request* m);
-  /// Publishes a pushed tile, pausing after every burst.
+  /// Publishes a pushed float tile, pausing after every burst.
   void PublishPaced(const cairn::lcmt_grid_tile& tile);
+  /// Publishes pushed tiles: compressed ones in batches of batch_bytes, floats one by one.
+  void PublishPushed(const std::string& map_name, const std::vector<cairn::lcmt_grid_tile>& tiles);
+  /// Sleeps burst_pause_ms.
+  void Pause() const;
   int paced_{0};
 
   lcm::LCM& lcm_;
@@ -98,6 +106,7 @@ class MapstoreClient {
   int64_t active_id_{0};
   std::optional<cairn::lcmt_mapstore_reply> reply_;
   std::unique_ptr<Incoming> incoming_;
+  std::vector<std::vector<float>> decoded_;  // compressed tiles' cells, decoded, to be pasted
   // A push in progress: what to send again when asked.
   struct Push;
   std::unique_ptr<Push> push_;

@@ -40,6 +40,7 @@ void LoadParams(const std::string& path, cairn::mapstore::MapstoreServiceParams*
     s.Get("batch_bytes", &service->batch_bytes);
     s.Get("burst_pause_ms", &service->burst_pause_ms);
     s.Get("worker_threads", &service->worker_threads);
+    s.Get("decode_threads", &service->decode_threads);
     s.Get("compress_reply_tiles", &service->compress_reply_tiles);
     s.Finish();
   }
@@ -61,6 +62,9 @@ void LoadParams(const std::string& path, cairn::mapstore::MapstoreServiceParams*
     root.Fail(root.Raw("service"),
               "service.batch_bytes must be in 0..200000 (bus messages stay "
               "under 256 KB)");
+  }
+  if (service->decode_threads < 1) {
+    root.Fail(root.Raw("service"), "service.decode_threads must be >= 1");
   }
   if (service->tiles_per_burst < 1) {
     root.Fail(root.Raw("service"), "service.tiles_per_burst must be >= 1");

@@ -120,13 +120,14 @@ std::vector<cairn::lcmt_octomap> OctomapChunksOf(const OctomapData& octomap,
   return out;
 }
 
-// Layers of an assembler as one map; every layer must share one geometry.
-Result<common::GridMap> CollectLayers(const runtime::LayerAssembler& assembler,
-                                      const std::vector<std::string>& names) {
+// Layers of an assembler as one map; every layer must share one geometry. `take` moves the
+// layers out of the assembler (which forgets them) instead of copying them.
+Result<common::GridMap> CollectLayers(runtime::LayerAssembler* assembler,
+                                      const std::vector<std::string>& names, bool take) {
   common::GridMap map;
   bool first = true;
   for (const std::string& name : names) {
-    auto layer = assembler.Layer(name);
+    auto layer = take ? assembler->TakeLayer(name) : assembler->Layer(name);
     if (!layer) return common::NotFoundError("no layer '" + name + "' arrived");
     if (first) {
       map = common::GridMap(layer->geometry());
@@ -135,7 +136,7 @@ Result<common::GridMap> CollectLayers(const runtime::LayerAssembler& assembler,
       return common::InvalidArgumentError("layer '" + name +
                                           "' has another geometry than the other layers");
     }
-    map.AddLayer(name) = layer->at(name);
+    map.AddLayer(name, std::move(layer->at(name)));
   }
   return map;
 }
@@ -219,6 +220,9 @@ MapstoreService::MapstoreService(runtime::Node& node, MapStore& store, ProfileDe
   node_.Subscribe<Request>(channels::kMapstoreRequest, [this](const Request& r) { OnRequest(r); });
   node_.Subscribe<cairn::lcmt_grid_tile>(channels::kMapstorePushTiles,
                                          [this](const cairn::lcmt_grid_tile& t) { OnPushTile(t); });
+  node_.Subscribe<cairn::lcmt_grid_tile_batch>(
+      channels::kMapstorePushTileBatches,
+      [this](const cairn::lcmt_grid_tile_batch& b) { OnPushTileBatch(b); });
   node_.Subscribe<cairn::lcmt_grid_manifest>(
       channels::kMapstorePushManifest,
       [this](const cairn::lcmt_grid_manifest& m) { OnPushManifest(m); });
@@ -553,14 +557,14 @@ void MapstoreService::JobLoad(const Request& request, JobResult* out) const {
     const std::set<std::string> base(info->layers.begin(), info->layers.end());
     if (std::none_of(wanted.begin(), wanted.end(),
                      [&](const std::string& l) { return base.count(l) > 0; })) {
-      auto profile = store_.GetProfile(request.profile);
-      if (!profile.ok()) {
-        out->status = profile.status();
+      auto profile_hash = store_.GetProfileHash(request.profile);
+      if (!profile_hash.ok()) {
+        out->status = profile_hash.status();
         return;
       }
       const MapRef exact{info->site, info->name, info->version};
-      auto cached = store_.FindDerivedTiles(exact, profile->content_hash, deriver_.code_version,
-                                            wanted, params_.reply_tile_size);
+      auto cached = store_.FindDerivedTiles(exact, *profile_hash, deriver_.code_version, wanted,
+                                            params_.reply_tile_size);
       if (!cached.ok()) {
         out->status = cached.status();
         return;
@@ -1199,13 +1203,13 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
     std::vector<std::vector<std::string>> groups;
     std::vector<common::GridGeometry> group_geometry;
     for (const std::string& layer : wanted) {
-      auto grid = assembler->Layer(layer);
-      if (!grid) continue;
+      const std::optional<common::GridGeometry> geometry = assembler->Geometry(layer);
+      if (!geometry) continue;
       size_t g = 0;
-      while (g < groups.size() && group_geometry[g] != grid->geometry()) ++g;
+      while (g < groups.size() && group_geometry[g] != *geometry) ++g;
       if (g == groups.size()) {
         groups.emplace_back();
-        group_geometry.push_back(grid->geometry());
+        group_geometry.push_back(*geometry);
       }
       groups[g].push_back(layer);
     }
@@ -1220,7 +1224,27 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
     std::string companions;
     Status failed;
     for (size_t g = 0; g < groups.size() && failed.ok(); ++g) {
-      auto base = CollectLayers(*assembler, groups[g]);
+      // A pushed save's compressed tiles are kept as they came when they are the tiles the
+      // assembler holds (same CRC, checked when each was decoded on receipt).
+      std::vector<StoredLayer> encoded_layers;
+      if (push_staging != nullptr) {
+        for (const std::string& layer : groups[g]) {
+          auto e = push_staging->encoded.find(layer);
+          if (e == push_staging->encoded.end() || e->second.tiles.empty()) continue;
+          StoredLayer stored;
+          stored.name = layer;
+          stored.tile_size = e->second.tile_size;
+          for (auto& [key, t] : e->second.tiles) {
+            if (assembler->HeldChecksum(layer, key.first, key.second) == t.raw_crc32) {
+              stored.tiles.push_back(std::move(t));
+            }
+          }
+          e->second.tiles.clear();
+          encoded_layers.push_back(std::move(stored));
+        }
+      }
+      // A push's staging goes once this save ends: its layers move out of it.
+      auto base = CollectLayers(assembler, groups[g], /*take=*/push_staging != nullptr);
       if (!base.ok()) {
         failed = base.status();
         break;
@@ -1234,6 +1258,8 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
         snapshot.name = request.map_name + "-" + suffix;
       }
       snapshot.base = std::move(base).value();
+      snapshot.encoded_layers = std::move(encoded_layers);
+      snapshot.encoded_layers_checked = push_staging != nullptr;
       snapshot.provenance.source_robot =
           save.pull ? request.robot : (push_robot.empty() ? request.requester : push_robot);
       snapshot.provenance.source_profile = request.profile;
@@ -1246,18 +1272,6 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
       if (ValidateName("robot", snapshot.provenance.source_robot).code() !=
           common::StatusCode::kOk) {
         snapshot.provenance.source_robot.clear();
-      }
-      if (push_staging != nullptr) {
-        for (const std::string& layer : groups[g]) {
-          auto e = push_staging->encoded.find(layer);
-          if (e == push_staging->encoded.end() || e->second.tiles.empty()) continue;
-          StoredLayer stored;
-          stored.name = layer;
-          stored.tile_size = e->second.tile_size;
-          for (auto& [key, t] : e->second.tiles) stored.tiles.push_back(std::move(t));
-          e->second.tiles.clear();
-          snapshot.encoded_layers.push_back(std::move(stored));
-        }
       }
       if (g == 0 && obstacles) snapshot.obstacles = *obstacles;
       if (g == 0 && octomap) snapshot.octomap = *octomap;
@@ -1346,12 +1360,38 @@ int64_t StagedCells(const Map& staging) {
 
 void MapstoreService::OnPushTile(const cairn::lcmt_grid_tile& pushed) {
   // A compressed tile is decoded (and checked by zstd) before the lock is taken.
-  const bool compressed = pushed.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32;
   std::vector<float> cells;
-  if (compressed && !DecodeTileCells(pushed, &cells).ok()) {
+  if (pushed.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
+      !DecodeTileCells(pushed, &cells).ok()) {
     node_.CountDropped("bad_push_tiles");
     return;
   }
+  StagePushTile(pushed, std::move(cells));
+}
+
+void MapstoreService::OnPushTileBatch(const cairn::lcmt_grid_tile_batch& batch) {
+  if (batch.num_tiles < 0 || static_cast<size_t>(batch.num_tiles) != batch.tiles.size()) {
+    node_.CountDropped("bad_push_tiles");
+    return;
+  }
+  std::vector<std::vector<float>> cells(batch.tiles.size());
+  std::vector<char> ok(batch.tiles.size(), 0);
+  ParallelFor(batch.tiles.size(), params_.decode_threads, [&](size_t i) {
+    const cairn::lcmt_grid_tile& t = batch.tiles[i];
+    ok[i] = t.map_name == batch.map_name && t.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
+            DecodeTileCells(t, &cells[i]).ok();
+  });
+  for (size_t i = 0; i < batch.tiles.size(); ++i) {
+    if (ok[i]) {
+      StagePushTile(batch.tiles[i], std::move(cells[i]));
+    } else {
+      node_.CountDropped("bad_push_tiles");
+    }
+  }
+}
+
+void MapstoreService::StagePushTile(const cairn::lcmt_grid_tile& pushed, std::vector<float> cells) {
+  const bool compressed = pushed.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32;
   const int64_t num_cells = static_cast<int64_t>(compressed ? cells.size() : pushed.data.size());
   std::lock_guard<std::mutex> lock(mutex_);
   if (pushed.map_name.find('/') == std::string::npos) {
@@ -1386,7 +1426,8 @@ void MapstoreService::OnPushTile(const cairn::lcmt_grid_tile& pushed) {
                                     pushed.cells_y,
                                     static_cast<int>(*codec),
                                     static_cast<uint32_t>(pushed.checksum),
-                                    std::string(pushed.bytes.begin(), pushed.bytes.end())};
+                                    std::string(pushed.bytes.begin(), pushed.bytes.end()),
+                                    /*stored_crc32=*/std::nullopt};
   } else {
     encoded.tiles.erase(key);  // a newer copy came as floats: it is compressed when stored
   }

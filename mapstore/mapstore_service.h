@@ -15,6 +15,7 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_grid_tile_batch.hpp"
 #include "cairn/lcmt_mapstore_reply.hpp"
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
@@ -41,7 +42,8 @@
 ///
 /// Saves come two ways:
 /// - push: the client first publishes, with map_name "<request_id>/<map>", a manifest and the
-///   tiles of every layer (MAPSTORE.PUSH.MANIFEST / .TILES), the obstacles
+///   tiles of every layer (MAPSTORE.PUSH.MANIFEST; compressed tiles several to a batch on
+///   MAPSTORE.PUSH.TILE_BATCHES, float tiles on MAPSTORE.PUSH.TILES), the obstacles
 ///   (MAPSTORE.PUSH.OBSTACLES) and the OctoMap (MAPSTORE.PUSH.OCTOMAP), then OP_SAVE naming the
 ///   layers. The store asks for missing tiles on MAPSTORE.PUSH.TILE_RESEND;
 /// - pull: OP_SAVE with `robot` set. The store listens to <robot>.MAP.* (the mapper's "live"
@@ -76,6 +78,7 @@ struct MapstoreServiceParams {
   int tiles_per_burst{2};
   double burst_pause_ms{0.1};
   int worker_threads{2};  ///< loads, shares, exports and imports run on these
+  int decode_threads{2};  ///< threads decoding a batch of pushed tiles as it arrives
   /// Reply tiles travel compressed (the store's zstd codec): a third of the bytes of smooth
   /// terrain, a tenth of a cost layer's. Resent tiles travel as floats.
   bool compress_reply_tiles{true};
@@ -126,6 +129,10 @@ class MapstoreService {
 
   void OnRequest(const cairn::lcmt_mapstore_request& request);
   void OnPushTile(const cairn::lcmt_grid_tile& tile);
+  /// Compressed pushed tiles, decoded on worker threads before the lock is taken.
+  void OnPushTileBatch(const cairn::lcmt_grid_tile_batch& batch);
+  /// Stages a pushed tile; `cells` are a compressed tile's decoded cells (empty for floats).
+  void StagePushTile(const cairn::lcmt_grid_tile& tile, std::vector<float> cells);
   void OnPushManifest(const cairn::lcmt_grid_manifest& manifest);
   void OnPushObstacles(const cairn::lcmt_obstacle_registry& registry);
   void OnPushOctomap(const cairn::lcmt_octomap& chunk);

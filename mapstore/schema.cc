@@ -2,6 +2,8 @@
 
 #include <string>
 
+#include <sqlite3.h>
+
 #include "common/robot_profile.h"
 #include "mapstore/blob_codec.h"
 
@@ -164,6 +166,16 @@ CREATE TRIGGER map_versions_immutable BEFORE UPDATE OF
   BEGIN SELECT RAISE(ABORT, 'map versions are immutable'); END;
 )SQL";
 
+// Version 2 -> 3, the schema part: every blob row records StoredBlobCrc32 of itself, so a read
+// can check a blob without decompressing it. NULL means not recorded (a reader then decodes).
+constexpr char kSchemaV2ToV3[] = R"SQL(
+ALTER TABLE blobs ADD COLUMN stored_crc32 INTEGER;
+)SQL";
+
+// The version 2 tables, for the version 1 migration (later steps then apply as for any version 2
+// file).
+common::Status CreateV2(sqlite::Database* db) { return db->Exec(kSchemaV2); }
+
 // Version 1 -> 2: versions get their own table with full provenance, tile data move into the
 // content-addressed blob table, and the new tables start empty.
 common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
@@ -175,7 +187,7 @@ common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
     ALTER TABLE sites RENAME TO v1_sites;
   )SQL");
   if (!s.ok()) return s;
-  s = Create(db);
+  s = CreateV2(db);
   if (!s.ok()) return s;
   s = db->Exec(R"SQL(
     INSERT INTO sites(id, name, created_utime) SELECT id, name, created_utime FROM v1_sites;
@@ -269,10 +281,53 @@ common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
   return audit.Run();
 }
 
+// SQL function cairn_stored_crc32(codec, raw_size, raw_crc32, data): StoredBlobCrc32 of a row.
+void StoredCrcFunction(sqlite3_context* context, int argc, sqlite3_value** argv) {
+  if (argc != 4 || sqlite3_value_type(argv[3]) != SQLITE_BLOB) {
+    sqlite3_result_error(context, "cairn_stored_crc32 takes (codec, raw_size, raw_crc32, data)",
+                         -1);
+    return;
+  }
+  const void* data = sqlite3_value_blob(argv[3]);
+  const int size = sqlite3_value_bytes(argv[3]);
+  const uint32_t crc = StoredBlobCrc32(sqlite3_value_int(argv[0]), sqlite3_value_int64(argv[1]),
+                                       static_cast<uint32_t>(sqlite3_value_int64(argv[2])), data,
+                                       static_cast<size_t>(size));
+  sqlite3_result_int64(context, crc);
+}
+
+// Version 2 -> 3: the stored_crc32 column, filled in for every blob (the immutability trigger is
+// lifted for that one statement, inside the migration's transaction).
+common::Status MigrateV2ToV3(sqlite::Database* db, int64_t utime) {
+  common::Status s = db->Exec(kSchemaV2ToV3);
+  if (!s.ok()) return s;
+  const int rc = sqlite3_create_function(db->raw(), "cairn_stored_crc32", 4,
+                                         SQLITE_UTF8 | SQLITE_DETERMINISTIC, nullptr,
+                                         &StoredCrcFunction, nullptr, nullptr);
+  if (rc != SQLITE_OK)
+    return sqlite::StatusFromCode(rc, "registering cairn_stored_crc32", db->raw());
+  s = db->Exec(R"SQL(
+    DROP TRIGGER blobs_immutable;
+    UPDATE blobs SET stored_crc32 = cairn_stored_crc32(codec, raw_size, raw_crc32, data);
+    CREATE TRIGGER blobs_immutable BEFORE UPDATE ON blobs
+      BEGIN SELECT RAISE(ABORT, 'stored blobs are immutable'); END;
+  )SQL");
+  sqlite3_create_function(db->raw(), "cairn_stored_crc32", 4, SQLITE_UTF8, nullptr, nullptr,
+                          nullptr, nullptr);
+  if (!s.ok()) return s;
+  sqlite::Statement audit = db->Prepare(
+      "INSERT INTO audit_log(utime, actor, op, site, map, version, request_id, detail) "
+      "VALUES(?, 'cairn-mapstore', 'migrate', '', '', 0, 0, 'schema 2 -> 3')");
+  audit.Bind(1, utime);
+  return audit.Run();
+}
+
 }  // namespace
 
 common::Status Create(sqlite::Database* db) {
   common::Status s = db->Exec(kSchemaV2);
+  if (!s.ok()) return s;
+  s = db->Exec(kSchemaV2ToV3);
   if (!s.ok()) return s;
   return db->Exec("PRAGMA application_id = " + std::to_string(kApplicationId) +
                   "; PRAGMA user_version = " + std::to_string(kCurrentVersion) + ";");
@@ -284,6 +339,9 @@ common::Status Migrate(sqlite::Database* db, int from_version, int64_t utime) {
     switch (v) {
       case 1:
         s = MigrateV1ToV2(db, utime);
+        break;
+      case 2:
+        s = MigrateV2ToV3(db, utime);
         break;
       default:
         return common::InternalError("no migration from schema version " + std::to_string(v));

@@ -13,7 +13,11 @@
 /// an older version is migrated step by step (1 -> 2 -> ...) in one transaction; a newer
 /// version is refused.
 ///
-/// Version 2 (current):
+/// Version 3 (current): version 2 with blobs.stored_crc32, StoredBlobCrc32 of each row (bytes and
+/// header), so that a read checks a blob without decompressing it. Migrating from 2 fills it in.
+/// See tests/unit/mapstore/fixtures/v2.db.
+///
+/// Version 2:
 ///   sites(id, name)                          one row per site
 ///   maps(id, site_id, name)                  one row per map name in a site
 ///   map_versions(id, map_id, version, provenance..., geometry..., tile_size, deleted_utime)
@@ -41,7 +45,7 @@
 namespace cairn::mapstore::schema {
 
 inline constexpr int64_t kApplicationId = 0x4341524E;  // "CARN"
-inline constexpr int kCurrentVersion = 2;
+inline constexpr int kCurrentVersion = 3;
 
 /// Creates the current schema in an empty database (inside the caller's transaction).
 common::Status Create(sqlite::Database* db);

@@ -44,7 +44,12 @@ common::Status StatusFromCode(int rc, const std::string& what, sqlite3* db) {
 }
 
 Statement::~Statement() {
-  if (stmt_ != nullptr) sqlite3_finalize(stmt_);
+  if (stmt_ == nullptr) return;
+  if (owner_ != nullptr) {
+    owner_->Recycle(std::move(sql_), stmt_);
+  } else {
+    sqlite3_finalize(stmt_);
+  }
 }
 
 Statement& Statement::Bind(int index, int64_t value) {
@@ -133,7 +138,26 @@ common::Result<std::unique_ptr<Database>> Database::Open(const std::string& path
   return std::unique_ptr<Database>(new Database(db, path));
 }
 
-Database::~Database() { sqlite3_close_v2(db_); }
+Database::~Database() {
+  for (auto& [sql, stmts] : cache_) {
+    for (sqlite3_stmt* stmt : stmts) sqlite3_finalize(stmt);
+  }
+  sqlite3_close_v2(db_);
+}
+
+void Database::Recycle(std::string sql, sqlite3_stmt* stmt) {
+  // A bounded cache: statements beyond it (SQL built per call) are finalized.
+  constexpr size_t kMaxCached = 256;
+  sqlite3_reset(stmt);
+  sqlite3_clear_bindings(stmt);
+  std::lock_guard<std::mutex> lock(cache_mutex_);
+  if (cached_ >= kMaxCached) {
+    sqlite3_finalize(stmt);
+    return;
+  }
+  cache_[std::move(sql)].push_back(stmt);
+  ++cached_;
+}
 
 common::Status Database::Exec(const std::string& sql) {
   char* error = nullptr;
@@ -145,6 +169,16 @@ common::Status Database::Exec(const std::string& sql) {
 }
 
 Statement Database::Prepare(const std::string& sql) {
+  {
+    std::lock_guard<std::mutex> lock(cache_mutex_);
+    auto it = cache_.find(sql);
+    if (it != cache_.end() && !it->second.empty()) {
+      sqlite3_stmt* stmt = it->second.back();
+      it->second.pop_back();
+      --cached_;
+      return Statement(db_, stmt, this, sql);
+    }
+  }
   sqlite3_stmt* stmt = nullptr;
   const int rc = sqlite3_prepare_v2(db_, sql.c_str(), static_cast<int>(sql.size()), &stmt, nullptr);
   if (rc != SQLITE_OK) {
@@ -155,7 +189,7 @@ Statement Database::Prepare(const std::string& sql) {
     }
     throw std::runtime_error(StatusFromCode(rc, "prepare", db_).ToString());
   }
-  return Statement(db_, stmt);
+  return Statement(db_, stmt, this, sql);
 }
 
 common::Result<int64_t> Database::QueryInt(const std::string& sql) {

@@ -1,9 +1,12 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "common/status.h"
 
@@ -21,14 +24,22 @@ namespace cairn::mapstore::sqlite {
 /// kInvalidArgument, CANTOPEN -> kNotFound, others -> kInternal.
 common::Status StatusFromCode(int rc, const std::string& what, sqlite3* db = nullptr);
 
-/// One prepared statement. Bind indices start at 1, column indices at 0.
+class Database;
+
+/// One prepared statement. Bind indices start at 1, column indices at 0. One made by
+/// Database::Prepare goes back to its database's cache when destroyed (reset, bindings
+/// cleared), so the same SQL is compiled once per connection.
 class Statement {
  public:
-  Statement(sqlite3* db, sqlite3_stmt* stmt) : db_(db), stmt_(stmt) {}
+  Statement(sqlite3* db, sqlite3_stmt* stmt, Database* owner = nullptr, std::string sql = {})
+      : db_(db), stmt_(stmt), owner_(owner), sql_(std::move(sql)) {}
   ~Statement();
   Statement(const Statement&) = delete;
   Statement& operator=(const Statement&) = delete;
-  Statement(Statement&& o) noexcept : db_(o.db_), stmt_(o.stmt_) { o.stmt_ = nullptr; }
+  Statement(Statement&& o) noexcept
+      : db_(o.db_), stmt_(o.stmt_), owner_(o.owner_), sql_(std::move(o.sql_)) {
+    o.stmt_ = nullptr;
+  }
 
   Statement& Bind(int index, int64_t value);
   Statement& Bind(int index, int value) { return Bind(index, static_cast<int64_t>(value)); }
@@ -54,6 +65,8 @@ class Statement {
  private:
   sqlite3* db_;
   sqlite3_stmt* stmt_;
+  Database* owner_;
+  std::string sql_;
   common::Status status_;
 };
 
@@ -71,7 +84,8 @@ class Database {
   const std::string& path() const { return path_; }
   /// Runs SQL without parameters (schema, pragmas, transactions).
   common::Status Exec(const std::string& sql);
-  /// Prepares one statement. @throws std::logic_error on an SQL syntax error (a bug).
+  /// Prepares one statement, or takes a compiled one of the same SQL from the cache.
+  /// @throws std::logic_error on an SQL syntax error (a bug).
   Statement Prepare(const std::string& sql);
   /// Single integer result of a query without parameters (pragmas), or an error.
   common::Result<int64_t> QueryInt(const std::string& sql);
@@ -79,9 +93,15 @@ class Database {
   int Changes();
 
  private:
+  friend class Statement;
   Database(sqlite3* db, std::string path) : db_(db), path_(std::move(path)) {}
+  /// Takes back a statement Prepare made (reset, so it holds no read transaction open).
+  void Recycle(std::string sql, sqlite3_stmt* stmt);
   sqlite3* db_;
   std::string path_;
+  std::mutex cache_mutex_;
+  std::map<std::string, std::vector<sqlite3_stmt*>> cache_;  // idle compiled statements by SQL
+  size_t cached_{0};
 };
 
 /// BEGIN IMMEDIATE ... COMMIT, rolled back in the destructor unless committed.

@@ -29,7 +29,8 @@ constexpr char kVersionSelect[] =
     "v.tile_size, v.deleted_utime IS NOT NULL "
     "FROM map_versions v JOIN maps m ON m.id = v.map_id JOIN sites s ON s.id = m.site_id ";
 
-constexpr char kTileColumns[] = "t.tile_ix, t.tile_iy, b.codec, b.raw_size, b.raw_crc32, b.data";
+constexpr char kTileColumns[] =
+    "t.tile_ix, t.tile_iy, b.codec, b.raw_size, b.raw_crc32, b.data, b.stored_crc32";
 
 // Adds context to a failed write; a full disk also says that nothing was lost.
 Status WriteError(const Status& s, const std::string& what) {
@@ -323,7 +324,8 @@ Status SqliteMapStore::WriteBlobs(const std::vector<EncodedBlob>& blobs,
                                   std::vector<int64_t>* ids) {
   sqlite::Statement find = db_->Prepare("SELECT id FROM blobs WHERE key = ?");
   sqlite::Statement insert = db_->Prepare(
-      "INSERT INTO blobs(key, codec, raw_size, raw_crc32, data) VALUES(?, ?, ?, ?, ?)");
+      "INSERT INTO blobs(key, codec, raw_size, raw_crc32, data, stored_crc32) "
+      "VALUES(?, ?, ?, ?, ?, ?)");
   ids->clear();
   ids->reserve(blobs.size());
   for (const EncodedBlob& b : blobs) {
@@ -337,6 +339,7 @@ Status SqliteMapStore::WriteBlobs(const std::vector<EncodedBlob>& blobs,
     insert.Reset();
     insert.Bind(1, b.key).Bind(2, static_cast<int64_t>(b.codec)).Bind(3, b.raw_size);
     insert.Bind(4, static_cast<int64_t>(b.raw_crc32)).BindBlob(5, b.data.data(), b.data.size());
+    insert.Bind(6, static_cast<int64_t>(b.stored_crc32));
     Status s = insert.Run();
     if (!s.ok()) return s;
     ids->push_back(db_->LastInsertRowId());
@@ -402,23 +405,27 @@ Result<MapInfo> SqliteMapStore::SaveMap(const MapSnapshot& snapshot, const Write
   try {
     ParallelFor(jobs.size(), options_.compression_threads, [&](size_t i) {
       const TileSpec& spec = specs[jobs[i].spec];
+      const size_t bytes = static_cast<size_t>(spec.cells_x) * spec.cells_y * sizeof(float);
+      const StoredTile* e = encoded[i];
+      const bool adoptable = e != nullptr &&
+                             (e->codec == static_cast<int>(Codec::kZstdShuffle4) ||
+                              e->codec == static_cast<int>(Codec::kZstdBytes)) &&
+                             e->cells_x == spec.cells_x && e->cells_y == spec.cells_y;
+      auto adopt = [&] {
+        auto blob = AdoptEncodedBlob(static_cast<Codec>(e->codec), e->data,
+                                     static_cast<int64_t>(bytes), e->raw_crc32);
+        if (!blob.ok()) return false;
+        blobs[i] = std::move(blob).value();
+        present[i] = 1;
+        return true;
+      };
+      // A checked caller's tile stands for the cells (an all-unknown tile is stored too).
+      if (adoptable && snapshot.encoded_layers_checked && adopt()) return;
       const std::vector<float> cells =
           ExtractTile(snapshot.base.at(layer_names[jobs[i].layer]), spec);
       if (AllUnknown(cells)) return;
-      const size_t bytes = cells.size() * sizeof(float);
-      if (const StoredTile* e = encoded[i]; e != nullptr &&
-                                            (e->codec == static_cast<int>(Codec::kZstdShuffle4) ||
-                                             e->codec == static_cast<int>(Codec::kZstdBytes)) &&
-                                            e->cells_x == spec.cells_x &&
-                                            e->cells_y == spec.cells_y &&
-                                            e->raw_crc32 == Crc32(cells.data(), bytes)) {
-        auto blob = AdoptEncodedBlob(static_cast<Codec>(e->codec), e->data,
-                                     static_cast<int64_t>(bytes), e->raw_crc32);
-        if (blob.ok()) {
-          blobs[i] = std::move(blob).value();
-          present[i] = 1;
-          return;
-        }
+      if (adoptable && e->raw_crc32 == Crc32(cells.data(), bytes) && adopt()) {
+        return;
       }
       blobs[i] = EncodeBlob(cells.data(), bytes, FloatCodec(cells.data(), cells.size()),
                             options_.zstd_level);
@@ -723,6 +730,7 @@ Status SqliteMapStore::ReadStoredTiles(sqlite::Statement* stmt, const std::strin
     const int64_t raw_size = stmt->Int(3);
     t.raw_crc32 = static_cast<uint32_t>(stmt->Int(4));
     t.data = stmt->Blob(5);
+    if (!stmt->IsNull(6)) t.stored_crc32 = static_cast<uint32_t>(stmt->Int(6));
     const std::string where =
         label + " tile (" + std::to_string(t.tile_ix) + ", " + std::to_string(t.tile_iy) + ")";
     if (t.tile_ix < 0 || t.tile_iy < 0 || t.tile_ix >= tiles_x || t.tile_iy >= tiles_y) {
@@ -918,6 +926,20 @@ Status SqliteMapStore::PutProfile(const common::RobotProfile& profile, const Wri
   });
   if (!s.ok()) return WriteError(s, "storing profile '" + profile.name + "'");
   return Status::Ok();
+}
+
+Result<std::string> SqliteMapStore::GetProfileHash(const std::string& name) const {
+  Status s = ValidateName("profile name", name);
+  if (!s.ok()) return s;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    sqlite::Statement st =
+        db_->Prepare("SELECT content_hash FROM profiles WHERE name = ? ORDER BY id DESC LIMIT 1");
+    st.Bind(1, name);
+    if (st.Step()) return st.Text(0);
+    if (!st.status().ok()) return st.status();
+  }
+  return GetProfile(name).status();  // the not-found message names the known profiles
 }
 
 Result<StoredProfile> SqliteMapStore::GetProfile(const std::string& name) const {
@@ -1402,12 +1424,21 @@ Result<CheckReport> SqliteMapStore::Check(const ProgressFn& progress) const {
   // Every blob decodes to its size and checksum.
   auto total = db_->QueryInt("SELECT count(*) FROM blobs");
   const int64_t n = total.ok() ? *total : 0;
-  sqlite::Statement st = db_->Prepare("SELECT id, codec, raw_size, raw_crc32, data FROM blobs");
+  sqlite::Statement st =
+      db_->Prepare("SELECT id, codec, raw_size, raw_crc32, data, stored_crc32 FROM blobs");
   while (st.Step()) {
-    auto decoded = DecodeBlob(static_cast<Codec>(st.Int(1)), st.Blob(4), st.Int(2),
-                              static_cast<uint32_t>(st.Int(3)), /*verify_crc=*/true);
-    if (!decoded.ok())
+    const std::string data = st.Blob(4);
+    const uint32_t raw_crc32 = static_cast<uint32_t>(st.Int(3));
+    auto decoded = DecodeBlob(static_cast<Codec>(st.Int(1)), data, st.Int(2), raw_crc32,
+                              /*verify_crc=*/true);
+    if (!decoded.ok()) {
       problem("blob " + std::to_string(st.Int(0)) + ": " + decoded.status().message());
+    } else if (!st.IsNull(5) &&
+               StoredBlobCrc32(static_cast<int>(st.Int(1)), st.Int(2), raw_crc32, data.data(),
+                               data.size()) != static_cast<uint32_t>(st.Int(5))) {
+      problem("blob " + std::to_string(st.Int(0)) +
+              ": decodes, but its bytes or header differ from what was stored (stored_crc32)");
+    }
     ++report.blobs_checked;
     if (progress && (report.blobs_checked % 64 == 0)) {
       progress(n > 0 ? static_cast<double>(report.blobs_checked) / n : 1.0, "blobs");

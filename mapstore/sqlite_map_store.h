@@ -69,6 +69,7 @@ class SqliteMapStore final : public MapStore {
   common::Status DeleteMap(const MapRef& ref, const WriteContext& ctx) override;
   common::Status PutProfile(const common::RobotProfile& profile, const WriteContext& ctx) override;
   common::Result<StoredProfile> GetProfile(const std::string& name) const override;
+  common::Result<std::string> GetProfileHash(const std::string& name) const override;
   common::Result<std::vector<StoredProfile>> ListProfiles() const override;
   common::Result<std::optional<DerivedProfile>> FindDerived(const MapRef& ref,
                                                             const std::string& profile_hash,

@@ -134,7 +134,8 @@ bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level) {
   EncodedBlob blob;
   try {
     blob = EncodeBlob(tile->data.data(), tile->data.size() * sizeof(float),
-                      FloatCodec(tile->data.data(), tile->data.size()), zstd_level);
+                      FloatCodec(tile->data.data(), tile->data.size()), zstd_level,
+                      static_cast<uint32_t>(tile->checksum));
   } catch (const std::exception&) {
     return false;  // zstd failed (out of memory): the floats travel as they are
   }

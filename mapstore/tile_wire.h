@@ -32,7 +32,8 @@ std::optional<Codec> CodecOfEncoding(int8_t encoding);
 
 /// Compresses a float tile in place with the store's own blob codec (FloatCodec: bytes for whole
 /// numbers 0..254 and NaN, else shuffled floats); false, and the tile unchanged, when it is not
-/// a float tile or would not get smaller.
+/// a float tile or would not get smaller. The tile's checksum stands for its cells (it is not
+/// computed again).
 bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level = 1);
 
 /// The cells of a compressed tile, checked by zstd's frame checksum and, with

@@ -288,29 +288,54 @@ LayerAssembler::LayerState& LayerAssembler::StateFor(const std::string& layer,
   return state;
 }
 
+void LayerAssembler::Paste(LayerState* state, std::pair<int, int> key, int cells_x, int cells_y,
+                           const float* data) {
+  common::Layer& cells = state->cells;
+  const int64_t x0 = int64_t{key.first} * state->tile_size;
+  const int64_t y0 = int64_t{key.second} * state->tile_size;
+  if (x0 < 0 || y0 < 0 || x0 >= cells.rows() || y0 >= cells.cols()) return;
+  const int nx = static_cast<int>(std::min<int64_t>(cells_x, cells.rows() - x0));
+  const int ny = static_cast<int>(std::min<int64_t>(cells_y, cells.cols() - y0));
+  // Rows are contiguous (x fastest): one copy per tile row.
+  for (int y = 0; y < ny; ++y) {
+    float* dst = &cells(x0, y0 + y);
+    if (data != nullptr) {
+      std::copy(data + static_cast<size_t>(y) * cells_x,
+                data + static_cast<size_t>(y) * cells_x + nx, dst);
+    } else {
+      std::fill(dst, dst + nx, common::kUnknown);
+    }
+  }
+}
+
 template <typename TileMsg>
-bool LayerAssembler::OnTileImpl(const TileMsg& tile, std::vector<float> data, uint32_t crc) {
+bool LayerAssembler::OnTileImpl(const TileMsg& tile, const float* data, size_t size, uint32_t crc) {
   if (static_cast<uint32_t>(tile.checksum) != crc || tile.cells_x < 0 ||
-      data.size() != static_cast<size_t>(tile.cells_x) * static_cast<size_t>(tile.cells_y) ||
+      size != static_cast<size_t>(tile.cells_x) * static_cast<size_t>(tile.cells_y) ||
       tile.tile_size <= 0 || tile.cells_x > tile.tile_size || tile.cells_y > tile.tile_size) {
     ++checksum_errors_;
     return false;
   }
   const common::GridGeometry geometry = GeometryOf(tile);
-  if (!(geometry.resolution_m > 0) || geometry.size_x < 0 || geometry.size_y < 0) {
+  if (!(geometry.resolution_m > 0) || geometry.size_x < 0 || geometry.size_y < 0 ||
+      int64_t{geometry.size_x} * geometry.size_y > kMaxLayerCells) {
     ++checksum_errors_;
     return false;
   }
   LayerState& state = StateFor(tile.layer, geometry, tile.tile_size);
   state.robot = tile.robot;
   state.map_name = tile.map_name;
-  Held& held = state.tiles[{tile.tile_ix, tile.tile_iy}];
+  const std::pair<int, int> key{tile.tile_ix, tile.tile_iy};
+  Held& held = state.tiles[key];
   if (tile.tile_version < held.tile_version) return true;  // older than what we hold
   held.tile_version = tile.tile_version;
   held.checksum = crc;
   held.cells_x = tile.cells_x;
   held.cells_y = tile.cells_y;
-  held.data = std::move(data);
+  if (state.cells.size() == 0 && geometry.size_x > 0 && geometry.size_y > 0) {
+    state.cells = common::Layer::Constant(geometry.size_x, geometry.size_y, common::kUnknown);
+  }
+  Paste(&state, key, tile.cells_x, tile.cells_y, data);
   return true;
 }
 
@@ -322,11 +347,12 @@ bool LayerAssembler::OnTile(const cairn::lcmt_grid_tile& tile) {
     return false;
   }
   const uint32_t crc = Crc32(tile.data.data(), tile.data.size() * sizeof(float));
-  return OnTileImpl(tile, tile.data, crc);
+  return OnTileImpl(tile, tile.data.data(), tile.data.size(), crc);
 }
 
-bool LayerAssembler::OnDecodedTile(const cairn::lcmt_grid_tile& tile, std::vector<float> cells) {
-  return OnTileImpl(tile, std::move(cells), static_cast<uint32_t>(tile.checksum));
+bool LayerAssembler::OnDecodedTile(const cairn::lcmt_grid_tile& tile,
+                                   const std::vector<float>& cells) {
+  return OnTileImpl(tile, cells.data(), cells.size(), static_cast<uint32_t>(tile.checksum));
 }
 
 bool LayerAssembler::OnTile(const cairn::lcmt_occupancy_tile& tile) {
@@ -339,7 +365,7 @@ bool LayerAssembler::OnTile(const cairn::lcmt_occupancy_tile& tile) {
   for (size_t i = 0; i < data.size(); ++i) {
     data[i] = tile.data[i] < 0 ? common::kUnknown : static_cast<float>(tile.data[i]);
   }
-  return OnTileImpl(tile, std::move(data), crc);
+  return OnTileImpl(tile, data.data(), data.size(), crc);
 }
 
 void LayerAssembler::OnManifest(const cairn::lcmt_grid_manifest& m) {
@@ -361,6 +387,7 @@ void LayerAssembler::OnManifest(const cairn::lcmt_grid_manifest& m) {
   // Tiles no longer in the manifest became all unknown.
   for (auto it = state.tiles.begin(); it != state.tiles.end();) {
     if (state.expected.count(it->first) == 0 && it->second.tile_version <= m.layer_version) {
+      Paste(&state, it->first, it->second.cells_x, it->second.cells_y, nullptr);
       it = state.tiles.erase(it);
     } else {
       ++it;
@@ -416,33 +443,45 @@ std::optional<cairn::lcmt_tile_resend_request> LayerAssembler::MakeResendRequest
   return r;
 }
 
+std::optional<uint32_t> LayerAssembler::HeldChecksum(const std::string& layer, int tile_ix,
+                                                     int tile_iy) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  auto held = it->second.tiles.find({tile_ix, tile_iy});
+  if (held == it->second.tiles.end()) return std::nullopt;
+  return held->second.checksum;
+}
+
+std::optional<common::GridGeometry> LayerAssembler::Geometry(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  return it->second.geometry;
+}
+
 std::optional<common::GridMap> LayerAssembler::Layer(const std::string& layer) const {
   auto it = layers_.find(layer);
   if (it == layers_.end()) return std::nullopt;
   const LayerState& state = it->second;
   common::GridMap map(state.geometry);
-  // Cells no tile covers are unknown; when the tiles cover every cell, none is filled first.
-  int64_t covered = 0;
-  for (const auto& [key, held] : state.tiles) {
-    const int x0 = key.first * state.tile_size, y0 = key.second * state.tile_size;
-    if (x0 < 0 || y0 < 0 || x0 >= map.size_x() || y0 >= map.size_y()) continue;
-    covered += int64_t{std::min(held.cells_x, map.size_x() - x0)} *
-               std::min(held.cells_y, map.size_y() - y0);
+  if (state.cells.size() == 0) {
+    map.AddLayer(layer, common::kUnknown);  // no tile arrived: all unknown
+  } else {
+    map.AddLayer(layer, common::Layer(state.cells));
   }
-  common::Layer cells(map.size_x(), map.size_y());
-  if (covered != cells.size()) cells.setConstant(common::kUnknown);
-  common::Layer& values = map.AddLayer(layer, std::move(cells));
-  // Rows are contiguous (x fastest): one copy per tile row, clipped to the layer.
-  for (const auto& [key, held] : state.tiles) {
-    const int x0 = key.first * state.tile_size, y0 = key.second * state.tile_size;
-    if (x0 < 0 || y0 < 0 || x0 >= map.size_x() || y0 >= map.size_y()) continue;
-    const int nx = std::min(held.cells_x, map.size_x() - x0);
-    const int ny = std::min(held.cells_y, map.size_y() - y0);
-    for (int y = 0; y < ny; ++y) {
-      const float* src = held.data.data() + static_cast<size_t>(y) * held.cells_x;
-      std::copy(src, src + nx, &values(x0, y0 + y));
-    }
+  return map;
+}
+
+std::optional<common::GridMap> LayerAssembler::TakeLayer(const std::string& layer) {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  LayerState& state = it->second;
+  common::GridMap map(state.geometry);
+  if (state.cells.size() == 0) {
+    map.AddLayer(layer, common::kUnknown);
+  } else {
+    map.AddLayer(layer, std::move(state.cells));
   }
+  layers_.erase(it);
   return map;
 }
 

@@ -128,7 +128,7 @@ class LayerAssembler {
   /// against the sender's own checksum (mapstore::DecodeTileCells: zstd's content checksum, of
   /// bytes whose CRC the sender declared): the tile's declared checksum stands for the cells,
   /// without a second CRC pass. False (a checksum error counted) when the cells do not fit.
-  bool OnDecodedTile(const cairn::lcmt_grid_tile& tile, std::vector<float> cells);
+  bool OnDecodedTile(const cairn::lcmt_grid_tile& tile, const std::vector<float>& cells);
   void OnManifest(const cairn::lcmt_grid_manifest& manifest);
 
   /// Layers seen so far (from tiles or manifests).
@@ -146,18 +146,27 @@ class LayerAssembler {
   /// The layer as a one-layer GridMap (cells of absent tiles are NaN); nullopt if the layer was
   /// never seen. Occupancy -1 becomes NaN.
   std::optional<common::GridMap> Layer(const std::string& layer) const;
+  /// Layer without a copy: the cells move out and the layer is forgotten.
+  std::optional<common::GridMap> TakeLayer(const std::string& layer);
+  /// The checksum of the tile held at (tile_ix, tile_iy) of a layer (its cells are that tile's
+  /// in Layer); nullopt when none is held.
+  std::optional<uint32_t> HeldChecksum(const std::string& layer, int tile_ix, int tile_iy) const;
+  /// The grid of a layer as Layer would return it, without assembling it.
+  std::optional<common::GridGeometry> Geometry(const std::string& layer) const;
+  /// Layers larger than this are refused (a tile declaring such a grid counts as an error).
+  static constexpr int64_t kMaxLayerCells = 64'000'000;
 
   int64_t checksum_errors() const { return checksum_errors_; }
   /// Forget a layer.
   void Drop(const std::string& layer) { layers_.erase(layer); }
 
  private:
+  // Tiles are pasted into their layer's cells as they arrive; a Held records one.
   struct Held {
     int64_t tile_version{0};
     uint32_t checksum{0};
     int cells_x{0};
     int cells_y{0};
-    std::vector<float> data;
   };
   struct LayerState {
     common::GridGeometry geometry;
@@ -168,11 +177,15 @@ class LayerAssembler {
     std::string map_name;
     std::map<std::pair<int, int>, uint32_t> expected;  // from the newest manifest
     std::map<std::pair<int, int>, Held> tiles;
+    common::Layer cells;  // geometry-sized, NaN where no tile is held; allocated with a tile
   };
   LayerState& StateFor(const std::string& layer, const common::GridGeometry& geometry,
                        int tile_size);
   template <typename TileMsg>
-  bool OnTileImpl(const TileMsg& tile, std::vector<float> data, uint32_t computed_crc);
+  bool OnTileImpl(const TileMsg& tile, const float* data, size_t size, uint32_t computed_crc);
+  /// Fills the cells of tile `key` (clipped to the layer) with `data` (x fastest), or with NaN.
+  static void Paste(LayerState* state, std::pair<int, int> key, int cells_x, int cells_y,
+                    const float* data);
 
   std::map<std::string, LayerState> layers_;
   int64_t checksum_errors_{0};

@@ -97,9 +97,22 @@ TEST(BlobCodecTest, ADamagedByteBlobIsRefused) {
   EXPECT_EQ(
       DecodeBlob(Codec::kZstdBytes, blob.data, blob.raw_size * 2, blob.raw_crc32).status().code(),
       StatusCode::kCorrupt);
-  StoredTile tile{0, 0, 100, 100, static_cast<int>(Codec::kZstdBytes), blob.raw_crc32, blob.data};
+  // Without a stored checksum the frame is decompressed and its cells compared...
+  StoredTile tile{
+      0, 0, 100, 100, static_cast<int>(Codec::kZstdBytes), blob.raw_crc32, blob.data, std::nullopt};
   EXPECT_TRUE(CheckStoredTile(tile).ok());
   tile.data = damaged;
+  EXPECT_EQ(CheckStoredTile(tile).code(), StatusCode::kCorrupt);
+  // ...with one, the stored bytes and header are compared to it without decompressing.
+  tile.data = blob.data;
+  tile.stored_crc32 = blob.stored_crc32;
+  EXPECT_EQ(blob.stored_crc32, StoredBlobCrc32(static_cast<int>(blob.codec), blob.raw_size,
+                                               blob.raw_crc32, blob.data.data(), blob.data.size()));
+  EXPECT_TRUE(CheckStoredTile(tile).ok());
+  tile.data = damaged;
+  EXPECT_EQ(CheckStoredTile(tile).code(), StatusCode::kCorrupt);
+  tile.data = blob.data;
+  tile.raw_crc32 ^= 1u;  // the header is covered too
   EXPECT_EQ(CheckStoredTile(tile).code(), StatusCode::kCorrupt);
 }
 

@@ -155,6 +155,9 @@ TYPED_TEST(MapStoreTest, UnknownThingsAreNotFoundWithAMessage) {
   auto profile = this->dut_->GetProfile("hovercraft");
   EXPECT_EQ(profile.status().code(), StatusCode::kNotFound);
   EXPECT_NE(profile.status().message().find("hovercraft"), std::string::npos);
+  auto hash = this->dut_->GetProfileHash("hovercraft");
+  EXPECT_EQ(hash.status().code(), StatusCode::kNotFound);
+  EXPECT_NE(hash.status().message().find("hovercraft"), std::string::npos);
   auto octomap = this->dut_->LoadOctomap({"lab", "corridor", 0});
   EXPECT_EQ(octomap.status().code(), StatusCode::kNotFound);
   auto places = this->dut_->ListPlaces("moon");
@@ -286,8 +289,10 @@ TYPED_TEST(MapStoreTest, ProfilesKeepTheirNewestContent) {
   changed.max_step_up_m = 0.05;
   ASSERT_TRUE(this->dut_->PutProfile(changed, this->ctx_).ok());
   EXPECT_EQ(this->dut_->GetProfile("pioneer3at")->content_hash, changed.ContentHash());
+  EXPECT_EQ(this->dut_->GetProfileHash("pioneer3at").value(), changed.ContentHash());
   ASSERT_TRUE(this->dut_->PutProfile(p, this->ctx_).ok());  // back to the first content
   EXPECT_EQ(this->dut_->GetProfile("pioneer3at")->content_hash, p.ContentHash());
+  EXPECT_EQ(this->dut_->GetProfileHash("pioneer3at").value(), p.ContentHash());
 
   ASSERT_TRUE(this->dut_->PutProfile(Profile("rover", 12.0, 0.08), this->ctx_).ok());
   auto list = this->dut_->ListProfiles();

@@ -3,6 +3,7 @@
 
 #include "mapstore/sqlite_map_store.h"
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -236,9 +237,14 @@ TEST(SqliteMapStoreTest, SaveKeepsTheCallersCompressedTilesThatMatchTheCells) {
     // Another compression level than the store's: the bytes show whose they are.
     EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * sizeof(float), Codec::kZstdShuffle4,
                                   /*zstd_level=*/9);
-    return StoredTile{
-        ix,       iy, spec.cells_x, spec.cells_y, static_cast<int>(blob.codec), blob.raw_crc32,
-        blob.data};
+    return StoredTile{ix,
+                      iy,
+                      spec.cells_x,
+                      spec.cells_y,
+                      static_cast<int>(blob.codec),
+                      blob.raw_crc32,
+                      blob.data,
+                      blob.stored_crc32};
   };
   common::Layer other = elevation;
   other.array() += 1.f;
@@ -269,6 +275,24 @@ TEST(SqliteMapStoreTest, SaveKeepsTheCallersCompressedTilesThatMatchTheCells) {
   EXPECT_NE(again->at("elevation/1/0"), pushed.tiles[0].data);
   EXPECT_TRUE(
       SameLayer(fresh->LoadLayers({"lab", "corridor", 1}, {})->at(layers::kElevation), elevation));
+
+  // A caller that checked its tiles (the service, which decoded each on receipt) has them
+  // adopted without the store reading the cells: even the tile of other cells is kept, and
+  // the map loads as those tiles say.
+  auto checked = OpenOrDie(TempDir() + "/checked.db", small_tiles);
+  pushed.tile_size = 16;
+  s.encoded_layers = {pushed};
+  s.encoded_layers_checked = true;
+  ASSERT_TRUE(checked->SaveMap(s, kCtx).ok());
+  auto kept = checked->BaseBlobBytes({"lab", "corridor", 1});
+  ASSERT_TRUE(kept.ok());
+  EXPECT_EQ(kept->at("elevation/1/0"), pushed.tiles[0].data);
+  EXPECT_EQ(kept->at("elevation/2/1"), pushed.tiles[1].data);
+  auto as_pushed = checked->LoadLayers({"lab", "corridor", 1}, {});
+  ASSERT_TRUE(as_pushed.ok());
+  EXPECT_FLOAT_EQ(as_pushed->at(layers::kElevation)(36, 22), other(36, 22));
+  EXPECT_FLOAT_EQ(as_pushed->at(layers::kElevation)(20, 5), elevation(20, 5));
+  EXPECT_TRUE(checked->Check().value().ok);
 }
 
 TEST(SqliteMapStoreTest, StoredBlobsAndVersionsCannotBeRewritten) {
@@ -575,6 +599,147 @@ TEST(SqliteMapStoreTest, OpeningTheVersion1FixtureMigratesIt) {
   dut.reset();
   auto again = OpenOrDie(path);
   EXPECT_EQ(again->ListAudit(10).value()[0].op, "save");
+}
+
+// Every blob row's (codec, raw_size, raw_crc32, data, stored_crc32), read through a raw
+// connection.
+struct BlobRow {
+  int codec;
+  int64_t raw_size;
+  uint32_t raw_crc32;
+  std::string data;
+  std::optional<uint32_t> stored_crc32;
+};
+std::vector<BlobRow> RawBlobs(const std::string& path) {
+  std::vector<BlobRow> rows;
+  sqlite3* db = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* st = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(db,
+                               "SELECT codec, raw_size, raw_crc32, data, stored_crc32 FROM blobs "
+                               "ORDER BY id",
+                               -1, &st, nullptr),
+            SQLITE_OK);
+  while (st != nullptr && sqlite3_step(st) == SQLITE_ROW) {
+    BlobRow r;
+    r.codec = sqlite3_column_int(st, 0);
+    r.raw_size = sqlite3_column_int64(st, 1);
+    r.raw_crc32 = static_cast<uint32_t>(sqlite3_column_int64(st, 2));
+    r.data.assign(static_cast<const char*>(sqlite3_column_blob(st, 3)),
+                  static_cast<size_t>(sqlite3_column_bytes(st, 3)));
+    if (sqlite3_column_type(st, 4) != SQLITE_NULL)
+      r.stored_crc32 = static_cast<uint32_t>(sqlite3_column_int64(st, 4));
+    rows.push_back(std::move(r));
+  }
+  sqlite3_finalize(st);
+  sqlite3_close(db);
+  return rows;
+}
+
+// v2.db was written by SqliteMapStore at schema version 2 (see fixtures/README.md): corridor
+// version 1 is SampleSnapshot("corridor", 25, 12) plus a layer "static" (100 in column 12, 0
+// elsewhere), version 2 is deleted, profile "rover" has a cached derivation (hash "h1", code
+// "c1") whose cost/rover cell i (x fastest) is i % 97, and the site has a place "kitchen".
+TEST(SqliteMapStoreTest, OpeningTheVersion2FixtureMigratesIt) {
+  const std::string path = TempDir() + "/v2.db";
+  fs::copy_file(std::string(CAIRN_SOURCE_DIR) + "/tests/unit/mapstore/fixtures/v2.db", path);
+  {  // schema 2 has no stored_crc32 column
+    sqlite3* db = nullptr;
+    ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+    sqlite3_stmt* st = nullptr;
+    EXPECT_NE(sqlite3_prepare_v2(db, "SELECT stored_crc32 FROM blobs", -1, &st, nullptr),
+              SQLITE_OK);
+    sqlite3_finalize(st);
+    sqlite3_close(db);
+  }
+
+  auto ro = SqliteMapStore::Open(path, ReadOnly());
+  EXPECT_EQ(ro.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(ro.status().message().find("schema version 2"), std::string::npos);
+  EXPECT_NE(ro.status().message().find("migrate"), std::string::npos);
+
+  auto dut = OpenOrDie(path);
+  ASSERT_TRUE(dut);
+  EXPECT_EQ(dut->schema_version(), schema::kCurrentVersion);
+  // Every blob now records the checksum of its stored bytes and header.
+  const std::vector<BlobRow> blobs = RawBlobs(path);
+  EXPECT_EQ(blobs.size(), 31u);
+  for (const BlobRow& b : blobs) {
+    ASSERT_TRUE(b.stored_crc32.has_value());
+    EXPECT_EQ(*b.stored_crc32,
+              StoredBlobCrc32(b.codec, b.raw_size, b.raw_crc32, b.data.data(), b.data.size()));
+  }
+
+  const MapSnapshot expected = SampleSnapshot("corridor", 25, 12);
+  auto info = dut->GetMapInfo({"lab", "corridor", 0});
+  ASSERT_TRUE(info.ok()) << info.status().ToString();
+  EXPECT_EQ(info->version, 1);
+  EXPECT_EQ(info->provenance.source_robot, "rover1");
+  EXPECT_EQ(info->tile_size, 10);
+  EXPECT_EQ(info->num_obstacles, 2);
+  EXPECT_EQ(dut->GetMapInfo({"lab", "corridor", 2}).status().code(), StatusCode::kNotFound);
+  auto map = dut->LoadLayers({"lab", "corridor", 1}, {});
+  ASSERT_TRUE(map.ok()) << map.status().ToString();
+  EXPECT_TRUE(SameLayer(map->at(layers::kElevation), expected.base.at(layers::kElevation)));
+  EXPECT_TRUE(
+      SameLayer(map->at(layers::kObservationCount), expected.base.at(layers::kObservationCount)));
+  for (int iy = 0; iy < 12; ++iy) {
+    for (int ix = 0; ix < 25; ++ix) EXPECT_EQ(map->at("static")(ix, iy), ix == 12 ? 100.f : 0.f);
+  }
+  auto obstacles = dut->LoadObstacles({"lab", "corridor", 1});
+  ASSERT_TRUE(obstacles.ok());
+  ASSERT_EQ(obstacles->obstacles.size(), 2u);
+  for (const common::Obstacle& want : expected.obstacles.obstacles) {
+    auto it = std::find_if(obstacles->obstacles.begin(), obstacles->obstacles.end(),
+                           [&](const common::Obstacle& o) { return o.id == want.id; });
+    ASSERT_NE(it, obstacles->obstacles.end()) << want.id;
+    const common::Obstacle& got = *it;
+    EXPECT_EQ(got.id, want.id);
+    EXPECT_EQ(got.kind, want.kind);
+    EXPECT_EQ(got.outline_m, want.outline_m);
+    EXPECT_DOUBLE_EQ(got.slope_rad, want.slope_rad);
+    EXPECT_DOUBLE_EQ(got.height_m, want.height_m);
+    EXPECT_EQ(got.verdicts.size(), want.verdicts.size());
+  }
+
+  const common::RobotProfile rover = Profile("rover", 12.0, 0.08);
+  auto profile = dut->GetProfile("rover");
+  ASSERT_TRUE(profile.ok()) << profile.status().ToString();
+  EXPECT_EQ(profile->profile, rover);
+  EXPECT_EQ(profile->content_hash, rover.ContentHash());
+  auto places = dut->ListPlaces("lab");
+  ASSERT_TRUE(places.ok());
+  EXPECT_EQ(*places, (std::vector<Place>{{"kitchen", {{0, 0}, {2, 0}, {2, 1}}}}));
+
+  auto derived = dut->FindDerived({"lab", "corridor", 1}, "h1", "c1", {});
+  ASSERT_TRUE(derived.ok() && derived->has_value()) << derived.status().ToString();
+  const common::Layer& cost = (*derived)->layers.at("cost/rover");
+  for (int i = 0; i < 25 * 12; ++i) EXPECT_EQ(cost(i % 25, i / 25), static_cast<float>(i % 97));
+  auto tiles = dut->FindDerivedTiles({"lab", "corridor", 1}, "h1", "c1", {});
+  ASSERT_TRUE(tiles.ok() && tiles->has_value()) << tiles.status().ToString();
+  ASSERT_EQ((*tiles)->layers.size(), 1u);
+  EXPECT_EQ((*tiles)->layers[0].tiles.size(), 6u);
+  for (const StoredTile& t : (*tiles)->layers[0].tiles) EXPECT_TRUE(t.stored_crc32.has_value());
+
+  EXPECT_TRUE(dut->Check().value().ok);
+  auto audit = dut->ListAudit(1);
+  ASSERT_TRUE(audit.ok() && !audit->empty());
+  EXPECT_EQ((*audit)[0].op, "migrate");
+  EXPECT_EQ((*audit)[0].detail, "schema 2 -> 3");
+  dut.reset();
+
+  // A blob whose bytes change after the migration is refused where it is read, without
+  // decompressing (the recorded stored_crc32 no longer matches), and by check.
+  RawExec(path,
+          "DROP TRIGGER blobs_immutable; UPDATE blobs SET data = data || x'00' WHERE id = "
+          "(SELECT blob_id FROM derived_tiles LIMIT 1);");
+  auto reopened = OpenOrDie(path);
+  ASSERT_TRUE(reopened);
+  auto refused = reopened->FindDerivedTiles({"lab", "corridor", 1}, "h1", "c1", {});
+  EXPECT_EQ(refused.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(refused.status().message().find("checksum"), std::string::npos)
+      << refused.status().message();
+  EXPECT_FALSE(reopened->Check().value().ok);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "services/runtime/tiler.h"
 
 #include <cmath>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -139,6 +140,54 @@ TEST(LayerAssemblerTest, DecodedTilesRebuildTheLayerAndGapsStayUnknown) {
   EXPECT_TRUE(assembler.OnDecodedTile(header, batch.tiles[0].data));
   EXPECT_TRUE(assembler.Complete("elevation"));
   EXPECT_TRUE(*assembler.Layer("elevation") == map);
+}
+
+// Tiles are pasted into the layer as they arrive: a tile a newer manifest no longer lists
+// becomes unknown again, HeldChecksum names what is held, and TakeLayer hands the layer over
+// without a copy and forgets it.
+TEST(LayerAssemblerTest, HeldTilesAreTheLayerUntilTakenAndDroppedOnesBecomeUnknown) {
+  common::GridMap map = MakeMap(250, 130);
+  LayerTiler tiler("r1", "live");
+  auto batch = tiler.Update(map, "elevation", TileEncoding::kFloat, 1);
+  LayerAssembler assembler;
+  assembler.OnManifest(batch.manifest);
+  for (const auto& t : batch.tiles) ASSERT_TRUE(assembler.OnTile(t));
+  EXPECT_EQ(assembler.HeldChecksum("elevation", 1, 0),
+            std::optional<uint32_t>(static_cast<uint32_t>(batch.tiles[1].checksum)));
+  EXPECT_FALSE(assembler.HeldChecksum("elevation", 9, 9).has_value());
+  EXPECT_FALSE(assembler.HeldChecksum("variance", 0, 0).has_value());
+  EXPECT_EQ(assembler.Geometry("elevation"), map.geometry());
+
+  // The next version of the layer has tile (1, 0) all unknown: its manifest leaves it out.
+  common::GridMap next = map;
+  for (int x = 100; x < 200; ++x) {
+    for (int y = 0; y < 100; ++y) next.at("elevation")(x, y) = common::kUnknown;
+  }
+  auto update = tiler.Update(next, "elevation", TileEncoding::kFloat, 2);
+  assembler.OnManifest(update.manifest);
+  EXPECT_FALSE(assembler.HeldChecksum("elevation", 1, 0).has_value());
+  EXPECT_TRUE(assembler.Complete("elevation"));
+  EXPECT_TRUE(*assembler.Layer("elevation") == next);
+
+  auto taken = assembler.TakeLayer("elevation");
+  ASSERT_TRUE(taken.has_value());
+  EXPECT_TRUE(*taken == next);
+  EXPECT_FALSE(assembler.Layer("elevation").has_value());
+  EXPECT_FALSE(assembler.TakeLayer("elevation").has_value());
+}
+
+// A tile declaring a layer too large to hold is refused.
+TEST(LayerAssemblerTest, ATileOfAnImpossiblyLargeLayerIsRefused) {
+  common::GridMap map = MakeMap(250, 130);
+  LayerTiler tiler("r1", "live");
+  auto batch = tiler.Update(map, "elevation", TileEncoding::kFloat, 1);
+  cairn::lcmt_grid_tile tile = batch.tiles[0];
+  tile.layer_size_x = 100000;
+  tile.layer_size_y = 100000;
+  LayerAssembler assembler;
+  EXPECT_FALSE(assembler.OnTile(tile));
+  EXPECT_EQ(assembler.checksum_errors(), 1);
+  EXPECT_FALSE(assembler.Layer("elevation").has_value());
 }
 
 // A map store sends its stored tiles as they are: adopted tiles go out and come back on a
