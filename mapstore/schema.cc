@@ -176,6 +176,15 @@ ALTER TABLE blobs ADD COLUMN stored_crc32 INTEGER;
 // file).
 common::Status CreateV2(sqlite::Database* db) { return db->Exec(kSchemaV2); }
 
+// The audit line of one migration step.
+common::Status AuditMigration(sqlite::Database* db, int64_t utime, const std::string& detail) {
+  sqlite::Statement audit = db->Prepare(
+      "INSERT INTO audit_log(utime, actor, op, site, map, version, request_id, detail) "
+      "VALUES(?, 'cairn-mapstore', 'migrate', '', '', 0, 0, ?)");
+  audit.Bind(1, utime).Bind(2, detail);
+  return audit.Run();
+}
+
 // Version 1 -> 2: versions get their own table with full provenance, tile data move into the
 // content-addressed blob table, and the new tables start empty.
 common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
@@ -274,11 +283,7 @@ common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
     DROP TABLE v1_sites;
   )SQL");
   if (!s.ok()) return s;
-  sqlite::Statement audit = db->Prepare(
-      "INSERT INTO audit_log(utime, actor, op, site, map, version, request_id, detail) "
-      "VALUES(?, 'cairn-mapstore', 'migrate', '', '', 0, 0, 'schema 1 -> 2')");
-  audit.Bind(1, utime);
-  return audit.Run();
+  return AuditMigration(db, utime, "schema 1 -> 2");
 }
 
 // SQL function cairn_stored_crc32(codec, raw_size, raw_crc32, data): StoredBlobCrc32 of a row.
@@ -315,11 +320,7 @@ common::Status MigrateV2ToV3(sqlite::Database* db, int64_t utime) {
   sqlite3_create_function(db->raw(), "cairn_stored_crc32", 4, SQLITE_UTF8, nullptr, nullptr,
                           nullptr, nullptr);
   if (!s.ok()) return s;
-  sqlite::Statement audit = db->Prepare(
-      "INSERT INTO audit_log(utime, actor, op, site, map, version, request_id, detail) "
-      "VALUES(?, 'cairn-mapstore', 'migrate', '', '', 0, 0, 'schema 2 -> 3')");
-  audit.Bind(1, utime);
-  return audit.Run();
+  return AuditMigration(db, utime, "schema 2 -> 3");
 }
 
 }  // namespace
