@@ -6,7 +6,6 @@
 #include <mutex>
 #include <thread>
 
-#include <sys/prctl.h>
 #include <unistd.h>
 
 #include "cairn/lcmt_obstacle_registry.hpp"
@@ -112,20 +111,11 @@ void MapstoreClient::OnTile(const lcm::ReceiveBuffer*, const std::string&,
 void MapstoreClient::OnTileBatch(const lcm::ReceiveBuffer*, const std::string&,
                                  const cairn::lcmt_grid_tile_batch* m) {
   if (!incoming_ || m->map_name != incoming_->map_name) return;
-  // The compressed tiles of a batch decode on decode_threads threads (when there are enough to
-  // be worth a thread) into buffers kept between batches; the assembler then pastes them into
-  // its layers in order.
+  // The compressed tiles of a batch decode on decode_threads threads into buffers kept between
+  // batches; the assembler then pastes them into its layers in order.
+  std::vector<char> ok;
+  DecodeTiles(m->tiles, incoming_->map_name, options_.decode_threads, &decoded_, &ok);
   const size_t n = m->tiles.size();
-  if (decoded_.size() < n) decoded_.resize(n);
-  std::vector<char> ok(n, 0);
-  constexpr size_t kTilesPerThread = 4;
-  const int threads = static_cast<int>(std::min<size_t>(
-      static_cast<size_t>(std::max(1, options_.decode_threads)), n / kTilesPerThread + 1));
-  ParallelFor(n, threads, [&](size_t i) {
-    const cairn::lcmt_grid_tile& tile = m->tiles[i];
-    ok[i] = tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
-            tile.map_name == incoming_->map_name && DecodeTileCells(tile, &decoded_[i]).ok();
-  });
   for (size_t i = 0; i < n; ++i) {
     const cairn::lcmt_grid_tile& tile = m->tiles[i];
     if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
@@ -188,19 +178,9 @@ void MapstoreClient::OnPushResend(const lcm::ReceiveBuffer*, const std::string&,
   PublishPushed(push_->map_name, batch.tiles);
 }
 
-void MapstoreClient::Pause() const {
-  // The pauses are a tenth of a millisecond: the kernel's default 50 us timer slack would make
-  // each half as long again.
-  thread_local const bool tight_timer = prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0) == 0;
-  (void)tight_timer;
-  if (options_.burst_pause_ms > 0) {
-    std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options_.burst_pause_ms));
-  }
-}
-
 void MapstoreClient::PublishPaced(const cairn::lcmt_grid_tile& tile) {
   PublishTile(lcm_, channels::kMapstorePushTiles, tile);
-  if (++paced_ % std::max(1, options_.tiles_per_burst) == 0) Pause();
+  if (++paced_ % std::max(1, options_.tiles_per_burst) == 0) PacingPause(options_.burst_pause_ms);
 }
 
 void MapstoreClient::PublishPushed(const std::string& map_name,
@@ -215,7 +195,7 @@ void MapstoreClient::PublishPushed(const std::string& map_name,
     lcm_.publish(channels::kMapstorePushTileBatches, &pending);
     pending.tiles.clear();
     pending_bytes = 0;
-    Pause();
+    PacingPause(options_.burst_pause_ms);
   };
   for (const auto& tile : tiles) {
     if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32 || options_.batch_bytes <= 0) {

@@ -93,8 +93,6 @@ class MapstoreClient {
   void PublishPaced(const cairn::lcmt_grid_tile& tile);
   /// Publishes pushed tiles: compressed ones in batches of batch_bytes, floats one by one.
   void PublishPushed(const std::string& map_name, const std::vector<cairn::lcmt_grid_tile>& tiles);
-  /// Sleeps burst_pause_ms.
-  void Pause() const;
   int paced_{0};
 
   lcm::LCM& lcm_;

@@ -7,8 +7,6 @@
 #include <stdexcept>
 #include <thread>
 
-#include <sys/prctl.h>
-
 #include "cairn/lcmt_grid_tile_batch.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 
@@ -924,18 +922,9 @@ void MapstoreService::KeepOutgoing(std::shared_ptr<Outgoing> out) {
 void MapstoreService::Resend(Outgoing& out, const cairn::lcmt_tile_resend_request* request) {
   // A null request sends the whole payload: every layer's manifest and tiles, then the OctoMap.
   std::lock_guard<std::mutex> sending(out.sending);
-  // The pauses are a tenth of a millisecond: the kernel's default 50 us timer slack would make
-  // each half as long again.
-  thread_local const bool tight_timer = prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0) == 0;
-  (void)tight_timer;
   // Compressed tiles travel several to a message, up to batch_bytes, with a pause after each
   // message; float tiles (resends) travel singly, in bursts of tiles_per_burst.
-  auto pause = [&] {
-    if (params_.burst_pause_ms > 0) {
-      std::this_thread::sleep_for(
-          std::chrono::duration<double, std::milli>(params_.burst_pause_ms));
-    }
-  };
+  auto pause = [&] { PacingPause(params_.burst_pause_ms); };
   cairn::lcmt_grid_tile_batch pending{};
   int64_t pending_bytes = 0;
   auto flush = [&] {
@@ -1374,13 +1363,9 @@ void MapstoreService::OnPushTileBatch(const cairn::lcmt_grid_tile_batch& batch) 
     node_.CountDropped("bad_push_tiles");
     return;
   }
-  std::vector<std::vector<float>> cells(batch.tiles.size());
-  std::vector<char> ok(batch.tiles.size(), 0);
-  ParallelFor(batch.tiles.size(), params_.decode_threads, [&](size_t i) {
-    const cairn::lcmt_grid_tile& t = batch.tiles[i];
-    ok[i] = t.map_name == batch.map_name && t.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
-            DecodeTileCells(t, &cells[i]).ok();
-  });
+  std::vector<std::vector<float>> cells;
+  std::vector<char> ok;
+  DecodeTiles(batch.tiles, batch.map_name, params_.decode_threads, &cells, &ok);
   for (size_t i = 0; i < batch.tiles.size(); ++i) {
     if (ok[i]) {
       StagePushTile(batch.tiles[i], std::move(cells[i]));

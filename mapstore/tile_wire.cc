@@ -1,7 +1,12 @@
 #include "mapstore/tile_wire.h"
 
+#include <algorithm>
+#include <chrono>
 #include <cstring>
 #include <exception>
+#include <thread>
+
+#include <sys/prctl.h>
 
 #include "mapstore/blob_codec.h"
 
@@ -193,6 +198,27 @@ int64_t TilePayloadBytes(const cairn::lcmt_grid_tile& tile) {
   return tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32
              ? static_cast<int64_t>(tile.data.size() * sizeof(float))
              : static_cast<int64_t>(tile.bytes.size());
+}
+
+void DecodeTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::string& map_name,
+                 int threads, std::vector<std::vector<float>>* cells, std::vector<char>* ok) {
+  constexpr size_t kTilesPerThread = 4;
+  const size_t n = tiles.size();
+  if (cells->size() < n) cells->resize(n);
+  ok->assign(n, 0);
+  const int workers = static_cast<int>(
+      std::min<size_t>(static_cast<size_t>(std::max(1, threads)), n / kTilesPerThread + 1));
+  ParallelFor(n, workers, [&](size_t i) {
+    const cairn::lcmt_grid_tile& tile = tiles[i];
+    (*ok)[i] = tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
+               tile.map_name == map_name && DecodeTileCells(tile, &(*cells)[i]).ok();
+  });
+}
+
+void PacingPause(double ms) {
+  thread_local const bool tight_timer = prctl(PR_SET_TIMERSLACK, 1UL, 0, 0, 0) == 0;
+  (void)tight_timer;
+  if (ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(ms));
 }
 
 }  // namespace cairn::mapstore

@@ -48,6 +48,17 @@ common::Status DecodeTileCells(const cairn::lcmt_grid_tile& tile, std::vector<fl
 /// bytes.
 common::Status DecompressTile(cairn::lcmt_grid_tile* tile, bool verify_checksum = true);
 
+/// Decodes the compressed tiles of `tiles` that carry `map_name`, on up to `threads` threads
+/// (one per 4 tiles at the most), into (*cells)[i], buffers kept between calls; (*ok)[i] says
+/// tile i decoded. Float tiles and tiles of another map are left alone (ok false).
+void DecodeTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::string& map_name,
+                 int threads, std::vector<std::vector<float>>* cells, std::vector<char>* ok);
+
+/// Sleeps `ms` between two bursts of a paced send. The pauses are about a tenth of a
+/// millisecond, so the calling thread's timer slack is set to 1 us first (the kernel's default
+/// 50 us would make each half as long again).
+void PacingPause(double ms);
+
 /// Encodes and publishes a tile; false when LCM refuses it.
 bool PublishTile(lcm::LCM& lcm, const std::string& channel, const cairn::lcmt_grid_tile& tile);
 
