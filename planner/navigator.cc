@@ -292,8 +292,12 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
     phase_ = Phase::kFollow;
     no_valid_since_s_ = -1.0;
     failure_reason_ = NavReason::kNone;
-    if (pose_) progress_anchor_ = pose_->position();
-    RestartProgressTimer(now_s);
+    // A replan while driving keeps the no-progress timer running: a robot that is stuck while
+    // the map keeps changing under its path would otherwise replan for ever and never recover.
+    if (status_.state != NavState::kDriving) {
+      if (pose_) progress_anchor_ = pose_->position();
+      RestartProgressTimer(now_s);
+    }
     UpdatePathProgress();
     if (stopped) {
       resume_state_ = NavState::kDriving;

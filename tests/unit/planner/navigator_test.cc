@@ -454,6 +454,35 @@ TEST(NavigatorTest, NoProgressTriggersRecoveriesAndThenFails) {
   EXPECT_EQ(sim.nav_.status().recoveries, 4);
 }
 
+TEST(NavigatorTest, ReplansEverySecondDoNotHoldOffTheNoProgressRecovery) {
+  // The robot is stuck and, every second, something shows up on its path 1.5 m ahead: every
+  // replan succeeds, yet the robot goes nowhere. The no-progress timer must keep running across
+  // those replans.
+  NavigatorParams p;
+  p.progress_timeout_s = 3.0;
+  TestLayer open(200, 100, 0.1);
+  NavSim sim(open.Build(PioneerFootprint()), p);
+  sim.pose_ = {2.0, 5.0, 0.0};
+  sim.stuck_ = true;
+  sim.nav_.SetGoal(PoseGoal(18.0, 5.0), 0.0);
+  sim.Run(0.5);
+  ASSERT_EQ(sim.nav_.status().state, NavState::kDriving);
+  double stuck_s = 0.5;
+  while (sim.nav_.status().recoveries == 0 && stuck_s < 12.0) {
+    if (sim.nav_.status().state == NavState::kDriving && !sim.nav_.path().empty()) {
+      const Pose2 ahead = sim.nav_.path().PoseAt(1.5);
+      TestLayer flicker = open;
+      flicker.Rect(ahead.x_m - 0.2, ahead.y_m - 0.2, ahead.x_m + 0.2, ahead.y_m + 0.2, 100.0f);
+      sim.map_ = flicker.Build(PioneerFootprint());
+    }
+    sim.Run(1.0);
+    stuck_s += 1.0;
+  }
+  EXPECT_GE(sim.nav_.status().replans, 2) << "the map changes did not cause replans";
+  EXPECT_GE(sim.nav_.status().recoveries, 1) << "no recovery after " << stuck_s << " s stuck";
+  EXPECT_LE(stuck_s, p.progress_timeout_s + 1.5);
+}
+
 TEST(NavigatorTest, NewGoalReplacesTheOldOne) {
   NavSim sim(WallWithGap().Build(PioneerFootprint()));
   sim.nav_.SetGoal(PoseGoal(18.0, 2.0, 1), 0.0);
