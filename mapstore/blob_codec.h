@@ -42,7 +42,9 @@ struct EncodedBlob {
 };
 
 /// Runs fn(i) for every i in [0, n) on up to `threads` threads (the caller's among them).
-/// The first exception thrown by fn is rethrown in the caller after all threads finished.
+/// The first exception thrown by fn is rethrown in the caller after all threads finished. The
+/// helper threads are kept for the next call (one caller at a time; a concurrent caller starts
+/// its own).
 void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
 
 /// CRC-32 (zlib polynomial) of a buffer.
@@ -77,6 +79,21 @@ common::Result<EncodedBlob> AdoptEncodedBlob(Codec codec, std::string data, int6
 /// kCorrupt says what did not match. Thread-safe.
 common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t raw_size,
                             uint32_t raw_crc32, uint8_t* out, bool verify_crc = false);
+/// Where DecodeFloatBlobRows writes: `rows` rows of `cells_per_row` floats, the first at
+/// `first`, each `row_stride` floats after the previous (a tile's place in its layer).
+struct FloatRows {
+  float* first{nullptr};
+  int64_t row_stride{0};
+  int cells_per_row{0};
+  int rows{0};
+};
+/// As DecodeBlobTo for a blob of `source_cells_x` × `source_cells_y` floats (x fastest), but
+/// writes the top-left `out.cells_per_row` × `out.rows` of them into `out` (no more than the
+/// source holds): a tile decodes straight into its layer, without a second copy. Verification
+/// is that of DecodeBlobTo; on an error the cells of `out` are undefined. Thread-safe.
+common::Status DecodeFloatBlobRows(Codec codec, const char* data, size_t size, int source_cells_x,
+                                   int source_cells_y, uint32_t raw_crc32, const FloatRows& out,
+                                   bool verify_crc = false);
 /// As DecodeBlobTo, into a new string.
 common::Result<std::string> DecodeBlob(Codec codec, const std::string& data, int64_t raw_size,
                                        uint32_t raw_crc32, bool verify_crc = false);

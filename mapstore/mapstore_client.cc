@@ -111,18 +111,10 @@ void MapstoreClient::OnTile(const lcm::ReceiveBuffer*, const std::string&,
 void MapstoreClient::OnTileBatch(const lcm::ReceiveBuffer*, const std::string&,
                                  const cairn::lcmt_grid_tile_batch* m) {
   if (!incoming_ || m->map_name != incoming_->map_name) return;
-  // The compressed tiles of a batch decode on decode_threads threads into buffers kept between
-  // batches; the assembler then pastes them into its layers in order.
-  std::vector<char> ok;
-  DecodeTiles(m->tiles, incoming_->map_name, options_.decode_threads, &decoded_, &ok);
-  const size_t n = m->tiles.size();
-  for (size_t i = 0; i < n; ++i) {
-    const cairn::lcmt_grid_tile& tile = m->tiles[i];
-    if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
-      HoldTile(tile);
-    } else if (ok[i] && incoming_->assembler.OnDecodedTile(tile, decoded_[i])) {
-      incoming_->last_progress = Clock::now();
-    }
+  // The compressed tiles of a batch decode on decode_threads threads straight into the layers.
+  if (AssembleTiles(m->tiles, incoming_->map_name, options_.decode_threads, &incoming_->assembler) >
+      0) {
+    incoming_->last_progress = Clock::now();
   }
 }
 
@@ -130,16 +122,10 @@ void MapstoreClient::HoldTile(const cairn::lcmt_grid_tile& tile) {
   if (!incoming_ || tile.map_name != incoming_->map_name) return;
   // A compressed tile that does not decode is dropped: the resend asks for it again. One that
   // does was checked by zstd against the bytes the store compressed, whose CRC it declares.
-  // It decodes into a buffer kept between tiles, and the assembler pastes it into its layer.
-  bool held = false;
-  if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) {
-    held = incoming_->assembler.OnTile(tile);
-  } else {
-    if (decoded_.empty()) decoded_.resize(1);
-    held = DecodeTileCells(tile, &decoded_[0]).ok() &&
-           incoming_->assembler.OnDecodedTile(tile, decoded_[0]);
+  // It decodes straight into its place in the layer.
+  if (AssembleTile(tile, incoming_->map_name, &incoming_->assembler)) {
+    incoming_->last_progress = Clock::now();
   }
-  if (held) incoming_->last_progress = Clock::now();
 }
 
 void MapstoreClient::OnManifest(const lcm::ReceiveBuffer*, const std::string&,

@@ -104,7 +104,6 @@ class MapstoreClient {
   int64_t active_id_{0};
   std::optional<cairn::lcmt_mapstore_reply> reply_;
   std::unique_ptr<Incoming> incoming_;
-  std::vector<std::vector<float>> decoded_;  // compressed tiles' cells, decoded, to be pasted
   // A push in progress: what to send again when asked.
   struct Push;
   std::unique_ptr<Push> push_;

@@ -4,7 +4,10 @@
 #include <chrono>
 #include <cstring>
 #include <exception>
+#include <map>
+#include <set>
 #include <thread>
+#include <tuple>
 
 #include <sys/prctl.h>
 
@@ -213,6 +216,93 @@ void DecodeTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::str
     (*ok)[i] = tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
                tile.map_name == map_name && DecodeTileCells(tile, &(*cells)[i]).ok();
   });
+}
+
+namespace {
+
+// Decodes a compressed tile into its reserved place.
+bool DecodeIntoSlot(const cairn::lcmt_grid_tile& tile,
+                    const runtime::LayerAssembler::TileSlot& slot) {
+  const std::optional<Codec> codec = CodecOfEncoding(tile.encoding);
+  if (!codec || tile.cells_x <= 0 || tile.cells_y <= 0 || tile.cells_x > 4096 ||
+      tile.cells_y > 4096 || static_cast<size_t>(tile.num_bytes) != tile.bytes.size()) {
+    return false;
+  }
+  FloatRows rows;
+  rows.first = slot.first;
+  rows.row_stride = slot.row_stride;
+  rows.cells_per_row = slot.cells_x;
+  rows.rows = slot.cells_y;
+  return DecodeFloatBlobRows(*codec, reinterpret_cast<const char*>(tile.bytes.data()),
+                             tile.bytes.size(), tile.cells_x, tile.cells_y,
+                             static_cast<uint32_t>(tile.checksum), rows)
+      .ok();
+}
+
+}  // namespace
+
+bool AssembleTile(const cairn::lcmt_grid_tile& tile, const std::string& map_name,
+                  runtime::LayerAssembler* assembler) {
+  if (tile.map_name != map_name) return false;
+  if (tile.encoding == cairn::lcmt_grid_tile::ENCODING_FLOAT32) return assembler->OnTile(tile);
+  const auto slot = assembler->BeginTile(tile);
+  if (!slot) return false;
+  if (slot->first == nullptr) return true;  // older than the tile held there
+  const bool ok = DecodeIntoSlot(tile, *slot);
+  assembler->EndTile(tile, ok);
+  return ok;
+}
+
+int AssembleTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::string& map_name,
+                  int threads, runtime::LayerAssembler* assembler) {
+  using Tile = cairn::lcmt_grid_tile;
+  struct Job {
+    const Tile* tile;
+    runtime::LayerAssembler::TileSlot slot;
+    bool ok{false};
+  };
+  int held = 0;
+  std::vector<Job> jobs;
+  jobs.reserve(tiles.size());
+  // A tile whose place another tile of the batch already took, or whose layer changed grid
+  // within the batch (which moves the layer), waits for the parallel pass to end.
+  std::vector<const Tile*> later;
+  std::set<std::tuple<std::string, int, int>> places;
+  std::map<std::string, std::tuple<double, double, double, double, int, int, int>> grids;
+  for (const Tile& tile : tiles) {
+    if (tile.map_name != map_name) continue;
+    if (tile.encoding == Tile::ENCODING_FLOAT32) {
+      held += assembler->OnTile(tile) ? 1 : 0;
+      continue;
+    }
+    const auto grid =
+        std::make_tuple(tile.resolution_m, tile.origin_x_m, tile.origin_y_m, tile.origin_yaw_rad,
+                        tile.layer_size_x, tile.layer_size_y, tile.tile_size);
+    const auto [g, new_layer] = grids.emplace(tile.layer, grid);
+    if ((!new_layer && g->second != grid) ||
+        !places.emplace(tile.layer, tile.tile_ix, tile.tile_iy).second) {
+      later.push_back(&tile);
+      continue;
+    }
+    const auto slot = assembler->BeginTile(tile);
+    if (!slot) continue;
+    if (slot->first == nullptr) {
+      ++held;  // older than the tile held there
+      continue;
+    }
+    jobs.push_back(Job{&tile, *slot});
+  }
+  constexpr size_t kTilesPerThread = 4;
+  const int workers = static_cast<int>(std::min<size_t>(static_cast<size_t>(std::max(1, threads)),
+                                                        jobs.size() / kTilesPerThread + 1));
+  ParallelFor(jobs.size(), workers,
+              [&](size_t i) { jobs[i].ok = DecodeIntoSlot(*jobs[i].tile, jobs[i].slot); });
+  for (const Job& job : jobs) {
+    assembler->EndTile(*job.tile, job.ok);
+    held += job.ok ? 1 : 0;
+  }
+  for (const Tile* tile : later) held += AssembleTile(*tile, map_name, assembler) ? 1 : 0;
+  return held;
 }
 
 void PacingPause(double ms) {

@@ -11,6 +11,7 @@
 
 #include "common/status.h"
 #include "mapstore/blob_codec.h"
+#include "services/runtime/tiler.h"
 
 /// @file
 /// Fast publishing of grid tiles. lcmt_grid_tile::encode byte-swaps its cells one call at a time;
@@ -53,6 +54,16 @@ common::Status DecompressTile(cairn::lcmt_grid_tile* tile, bool verify_checksum 
 /// tile i decoded. Float tiles and tiles of another map are left alone (ok false).
 void DecodeTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::string& map_name,
                  int threads, std::vector<std::vector<float>>* cells, std::vector<char>* ok);
+
+/// Decodes the compressed tiles of `tiles` that carry `map_name` straight into their places in
+/// `assembler`'s layers (LayerAssembler::BeginTile: no buffer, no second copy), on up to
+/// `threads` threads (one per 4 tiles at the most); float tiles go through OnTile. A tile that
+/// does not decode is not held (a resend asks for it). Returns how many tiles are held.
+int AssembleTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::string& map_name,
+                  int threads, runtime::LayerAssembler* assembler);
+/// AssembleTiles for one tile, on the calling thread; whether it is held.
+bool AssembleTile(const cairn::lcmt_grid_tile& tile, const std::string& map_name,
+                  runtime::LayerAssembler* assembler);
 
 /// Sleeps `ms` between two bursts of a paced send. The pauses are about a tenth of a
 /// millisecond, so the calling thread's timer slack is set to 1 us first (the kernel's default

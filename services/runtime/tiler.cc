@@ -298,45 +298,110 @@ void LayerAssembler::Paste(LayerState* state, std::pair<int, int> key, int cells
   const int ny = static_cast<int>(std::min<int64_t>(cells_y, cells.cols() - y0));
   // Rows are contiguous (x fastest): one copy per tile row.
   for (int y = 0; y < ny; ++y) {
-    float* dst = &cells(x0, y0 + y);
-    if (data != nullptr) {
-      std::copy(data + static_cast<size_t>(y) * cells_x,
-                data + static_cast<size_t>(y) * cells_x + nx, dst);
-    } else {
-      std::fill(dst, dst + nx, common::kUnknown);
-    }
+    std::copy(data + static_cast<size_t>(y) * cells_x, data + static_cast<size_t>(y) * cells_x + nx,
+              &cells(x0, y0 + y));
   }
 }
 
 template <typename TileMsg>
-bool LayerAssembler::OnTileImpl(const TileMsg& tile, const float* data, size_t size, uint32_t crc) {
+LayerAssembler::LayerState* LayerAssembler::Admit(const TileMsg& tile, size_t size, uint32_t crc,
+                                                  bool* older) {
+  *older = false;
   if (static_cast<uint32_t>(tile.checksum) != crc || tile.cells_x < 0 ||
       size != static_cast<size_t>(tile.cells_x) * static_cast<size_t>(tile.cells_y) ||
       tile.tile_size <= 0 || tile.cells_x > tile.tile_size || tile.cells_y > tile.tile_size) {
     ++checksum_errors_;
-    return false;
+    return nullptr;
   }
   const common::GridGeometry geometry = GeometryOf(tile);
   if (!(geometry.resolution_m > 0) || geometry.size_x < 0 || geometry.size_y < 0 ||
       int64_t{geometry.size_x} * geometry.size_y > kMaxLayerCells) {
     ++checksum_errors_;
-    return false;
+    return nullptr;
   }
   LayerState& state = StateFor(tile.layer, geometry, tile.tile_size);
   state.robot = tile.robot;
   state.map_name = tile.map_name;
+  auto held = state.tiles.find({tile.tile_ix, tile.tile_iy});
+  *older = held != state.tiles.end() && tile.tile_version < held->second.tile_version;
+  if (state.cells.size() == 0 && geometry.size_x > 0 && geometry.size_y > 0) {
+    // Not filled: every cell is written by its tile, or made unknown by Layer / TakeLayer.
+    state.cells.resize(geometry.size_x, geometry.size_y);
+  }
+  return &state;
+}
+
+template <typename TileMsg>
+bool LayerAssembler::OnTileImpl(const TileMsg& tile, const float* data, size_t size, uint32_t crc) {
+  bool older = false;
+  LayerState* state = Admit(tile, size, crc, &older);
+  if (state == nullptr) return false;
+  if (older) return true;  // older than what we hold
   const std::pair<int, int> key{tile.tile_ix, tile.tile_iy};
-  Held& held = state.tiles[key];
-  if (tile.tile_version < held.tile_version) return true;  // older than what we hold
+  Held& held = state->tiles[key];
   held.tile_version = tile.tile_version;
   held.checksum = crc;
   held.cells_x = tile.cells_x;
   held.cells_y = tile.cells_y;
-  if (state.cells.size() == 0 && geometry.size_x > 0 && geometry.size_y > 0) {
-    state.cells = common::Layer::Constant(geometry.size_x, geometry.size_y, common::kUnknown);
-  }
-  Paste(&state, key, tile.cells_x, tile.cells_y, data);
+  Paste(state, key, tile.cells_x, tile.cells_y, data);
   return true;
+}
+
+std::optional<LayerAssembler::TileSlot> LayerAssembler::BeginTile(
+    const cairn::lcmt_grid_tile& tile) {
+  bool older = false;
+  LayerState* state =
+      Admit(tile, static_cast<size_t>(std::max(0, tile.cells_x)) * std::max(0, tile.cells_y),
+            static_cast<uint32_t>(tile.checksum), &older);
+  if (state == nullptr) return std::nullopt;
+  TileSlot slot;
+  if (older) return slot;
+  common::Layer& cells = state->cells;
+  const int64_t x0 = int64_t{tile.tile_ix} * state->tile_size;
+  const int64_t y0 = int64_t{tile.tile_iy} * state->tile_size;
+  if (x0 < 0 || y0 < 0 || x0 >= cells.rows() || y0 >= cells.cols()) return slot;  // outside
+  slot.first = &cells(x0, y0);
+  slot.row_stride = cells.rows();
+  slot.cells_x = static_cast<int>(std::min<int64_t>(tile.cells_x, cells.rows() - x0));
+  slot.cells_y = static_cast<int>(std::min<int64_t>(tile.cells_y, cells.cols() - y0));
+  // The place is being rewritten: no tile is held there until EndTile.
+  state->tiles.erase({tile.tile_ix, tile.tile_iy});
+  return slot;
+}
+
+void LayerAssembler::EndTile(const cairn::lcmt_grid_tile& tile, bool decoded) {
+  if (!decoded) return;  // BeginTile released the place: its cells read as unknown
+  auto it = layers_.find(tile.layer);
+  if (it == layers_.end()) return;
+  Held& held = it->second.tiles[{tile.tile_ix, tile.tile_iy}];
+  held.tile_version = tile.tile_version;
+  held.checksum = static_cast<uint32_t>(tile.checksum);
+  held.cells_x = tile.cells_x;
+  held.cells_y = tile.cells_y;
+}
+
+void LayerAssembler::FillUnheld(const LayerState& state, common::Layer* cells) {
+  if (cells->size() == 0 || state.tile_size <= 0) return;
+  const int nx = static_cast<int>((cells->rows() + state.tile_size - 1) / state.tile_size);
+  const int ny = static_cast<int>((cells->cols() + state.tile_size - 1) / state.tile_size);
+  for (int ty = 0; ty < ny; ++ty) {
+    for (int tx = 0; tx < nx; ++tx) {
+      const int64_t x0 = int64_t{tx} * state.tile_size;
+      const int64_t y0 = int64_t{ty} * state.tile_size;
+      const int64_t w = std::min<int64_t>(state.tile_size, cells->rows() - x0);
+      const int64_t h = std::min<int64_t>(state.tile_size, cells->cols() - y0);
+      auto held = state.tiles.find({tx, ty});
+      if (held == state.tiles.end()) {
+        cells->block(x0, y0, w, h).setConstant(common::kUnknown);
+        continue;
+      }
+      // A held tile smaller than its place leaves the rest of it unknown.
+      const int64_t hx = std::min<int64_t>(held->second.cells_x, w);
+      const int64_t hy = std::min<int64_t>(held->second.cells_y, h);
+      if (hx < w) cells->block(x0 + hx, y0, w - hx, h).setConstant(common::kUnknown);
+      if (hy < h) cells->block(x0, y0 + hy, hx, h - hy).setConstant(common::kUnknown);
+    }
+  }
 }
 
 bool LayerAssembler::OnTile(const cairn::lcmt_grid_tile& tile) {
@@ -387,7 +452,6 @@ void LayerAssembler::OnManifest(const cairn::lcmt_grid_manifest& m) {
   // Tiles no longer in the manifest became all unknown.
   for (auto it = state.tiles.begin(); it != state.tiles.end();) {
     if (state.expected.count(it->first) == 0 && it->second.tile_version <= m.layer_version) {
-      Paste(&state, it->first, it->second.cells_x, it->second.cells_y, nullptr);
       it = state.tiles.erase(it);
     } else {
       ++it;
@@ -466,7 +530,9 @@ std::optional<common::GridMap> LayerAssembler::Layer(const std::string& layer) c
   if (state.cells.size() == 0) {
     map.AddLayer(layer, common::kUnknown);  // no tile arrived: all unknown
   } else {
-    map.AddLayer(layer, common::Layer(state.cells));
+    common::Layer cells = state.cells;
+    FillUnheld(state, &cells);
+    map.AddLayer(layer, std::move(cells));
   }
   return map;
 }
@@ -479,6 +545,7 @@ std::optional<common::GridMap> LayerAssembler::TakeLayer(const std::string& laye
   if (state.cells.size() == 0) {
     map.AddLayer(layer, common::kUnknown);
   } else {
+    FillUnheld(state, &state.cells);
     map.AddLayer(layer, std::move(state.cells));
   }
   layers_.erase(it);

@@ -129,6 +129,25 @@ class LayerAssembler {
   /// bytes whose CRC the sender declared): the tile's declared checksum stands for the cells,
   /// without a second CRC pass. False (a checksum error counted) when the cells do not fit.
   bool OnDecodedTile(const cairn::lcmt_grid_tile& tile, const std::vector<float>& cells);
+  /// Where a compressed tile's cells go in its layer, for a receiver that decodes the tile
+  /// straight into place: the tile's cell (0, 0) at `first`, rows `row_stride` floats apart,
+  /// `cells_x` × `cells_y` cells (the tile clipped to its layer). No `first`: nothing to write.
+  struct TileSlot {
+    float* first{nullptr};
+    int64_t row_stride{0};
+    int cells_x{0};
+    int cells_y{0};
+  };
+  /// Reserves the place of a compressed tile (allocating its layer at the layer's first tile).
+  /// nullopt (a checksum error counted) when the tile does not fit a layer; a slot without
+  /// cells when it is older than the tile held there (it counts as held, as in OnTile). Until
+  /// EndTile, the cells of a reserved place are undefined. A slot stays valid until the next
+  /// call for a tile of another geometry of the same layer.
+  std::optional<TileSlot> BeginTile(const cairn::lcmt_grid_tile& tile);
+  /// Ends BeginTile. `decoded`: the receiver wrote every cell of the slot with a codec that
+  /// verified them against the sender's checksum (as for OnDecodedTile), and the tile is held.
+  /// Otherwise its place becomes unknown and no tile is held there.
+  void EndTile(const cairn::lcmt_grid_tile& tile, bool decoded);
   void OnManifest(const cairn::lcmt_grid_manifest& manifest);
 
   /// Layers seen so far (from tiles or manifests).
@@ -177,15 +196,23 @@ class LayerAssembler {
     std::string map_name;
     std::map<std::pair<int, int>, uint32_t> expected;  // from the newest manifest
     std::map<std::pair<int, int>, Held> tiles;
-    common::Layer cells;  // geometry-sized, NaN where no tile is held; allocated with a tile
+    // Geometry-sized, allocated with the first tile. Cells of held tiles are theirs; the others
+    // are undefined until Layer or TakeLayer makes them unknown.
+    common::Layer cells;
   };
   LayerState& StateFor(const std::string& layer, const common::GridGeometry& geometry,
                        int tile_size);
+  /// The layer state a tile goes to, its canvas allocated; null (an error counted) when the
+  /// tile does not fit. `*older`: the tile is older than the one held there.
+  template <typename TileMsg>
+  LayerState* Admit(const TileMsg& tile, size_t size, uint32_t computed_crc, bool* older);
   template <typename TileMsg>
   bool OnTileImpl(const TileMsg& tile, const float* data, size_t size, uint32_t computed_crc);
-  /// Fills the cells of tile `key` (clipped to the layer) with `data` (x fastest), or with NaN.
+  /// Fills the cells of tile `key` (clipped to the layer) with `data` (x fastest).
   static void Paste(LayerState* state, std::pair<int, int> key, int cells_x, int cells_y,
                     const float* data);
+  /// Makes the cells of every place without a held tile unknown.
+  static void FillUnheld(const LayerState& state, common::Layer* cells);
 
   std::map<std::string, LayerState> layers_;
   int64_t checksum_errors_{0};

@@ -71,6 +71,72 @@ TEST(BlobCodecTest, WholeNumbersTravelAsOneBytePerCellBitForBit) {
   EXPECT_EQ(FloatCodec(ends.data(), ends.size()), Codec::kZstdBytes);
 }
 
+// Every byte code (0..254 and the product's NaN) decodes to its float bit for bit, whatever the
+// length (whole 16-code steps and the rest).
+TEST(BlobCodecTest, EveryByteCodeDecodesToItsFloatAtAnyLength) {
+  for (const int n : {1, 15, 16, 17, 256, 771}) {
+    std::vector<float> cells(n);
+    for (int i = 0; i < n; ++i) {
+      const int code = (i * 7) % 256;
+      cells[i] = code == 255 ? std::numeric_limits<float>::quiet_NaN() : static_cast<float>(code);
+    }
+    ASSERT_EQ(FloatCodec(cells.data(), cells.size()), Codec::kZstdBytes) << n;
+    const EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * 4, Codec::kZstdBytes);
+    auto back = DecodeBlob(Codec::kZstdBytes, blob.data, blob.raw_size, blob.raw_crc32,
+                           /*verify_crc=*/true);
+    ASSERT_TRUE(back.ok()) << n << ": " << back.status().ToString();
+    EXPECT_EQ(std::memcmp(back->data(), cells.data(), back->size()), 0) << n;
+  }
+}
+
+// A tile's blob decodes straight into its place in a wider layer, clipped to the layer's edge;
+// the cells around it are left alone, and a damaged blob or rows beyond the blob are refused.
+TEST(BlobCodecTest, FloatRowsDecodeATileIntoItsPlaceInALayer) {
+  constexpr int kTileX = 21, kTileY = 9, kStride = 50;
+  std::vector<float> terrain = SmoothTerrain(kTileX * kTileY);
+  const std::vector<float> cost = CostCells(kTileX * kTileY);
+  for (const auto& [codec, cells] :
+       {std::make_pair(Codec::kZstdBytes, cost), std::make_pair(Codec::kZstdShuffle4, terrain),
+        std::make_pair(Codec::kZstd, terrain)}) {
+    const EncodedBlob blob = EncodeBlob(cells.data(), cells.size() * 4, codec);
+    for (const bool verify : {false, true}) {
+      std::vector<float> layer(kStride * 12, -7.f);
+      FloatRows rows;
+      rows.first = &layer[2 * kStride + 3];
+      rows.row_stride = kStride;
+      rows.cells_per_row = 17;  // clipped at the layer's edge
+      rows.rows = 8;
+      ASSERT_TRUE(DecodeFloatBlobRows(codec, blob.data.data(), blob.data.size(), kTileX, kTileY,
+                                      blob.raw_crc32, rows, verify)
+                      .ok());
+      for (int y = 0; y < 12; ++y) {
+        for (int x = 0; x < kStride; ++x) {
+          const float got = layer[y * kStride + x];
+          const bool inside = y >= 2 && y < 10 && x >= 3 && x < 20;
+          if (!inside) {
+            ASSERT_EQ(got, -7.f) << "outside the tile at " << x << ", " << y;
+            continue;
+          }
+          const float want = cells[(y - 2) * kTileX + (x - 3)];
+          ASSERT_EQ(std::memcmp(&got, &want, 4), 0) << static_cast<int>(codec) << " at " << x;
+        }
+      }
+      std::string damaged = blob.data;
+      damaged[damaged.size() / 2] ^= 0x10;
+      EXPECT_EQ(DecodeFloatBlobRows(codec, damaged.data(), damaged.size(), kTileX, kTileY,
+                                    blob.raw_crc32, rows, verify)
+                    .code(),
+                common::StatusCode::kCorrupt);
+      FloatRows too_wide = rows;
+      too_wide.cells_per_row = kTileX + 1;
+      EXPECT_EQ(DecodeFloatBlobRows(codec, blob.data.data(), blob.data.size(), kTileX, kTileY,
+                                    blob.raw_crc32, too_wide, verify)
+                    .code(),
+                common::StatusCode::kInvalidArgument);
+    }
+  }
+}
+
 TEST(BlobCodecTest, ValuesWithoutAByteCodeKeepTheFloatCodec) {
   const float kOther = std::nanf("7");  // a NaN with another payload: its bits would change
   for (float odd :

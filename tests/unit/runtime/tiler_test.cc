@@ -176,6 +176,64 @@ TEST(LayerAssemblerTest, HeldTilesAreTheLayerUntilTakenAndDroppedOnesBecomeUnkno
   EXPECT_FALSE(assembler.TakeLayer("elevation").has_value());
 }
 
+// A receiver decoding tiles straight into the layer: BeginTile names the tile's place (edge
+// tiles clipped), EndTile holds the tile or, when it did not decode, leaves its place unknown;
+// a tile older than the one held has nothing to write.
+TEST(LayerAssemblerTest, TilesWrittenInPlaceAreHeldAndFailedOnesStayUnknown) {
+  common::GridMap map = MakeMap(250, 130);
+  LayerTiler tiler("r1", "live");
+  auto batch = tiler.Update(map, "elevation", TileEncoding::kFloat, 1);
+  LayerAssembler assembler;
+  assembler.OnManifest(batch.manifest);
+  auto write = [&](const cairn::lcmt_grid_tile& tile, const LayerAssembler::TileSlot& slot) {
+    for (int y = 0; y < slot.cells_y; ++y) {
+      for (int x = 0; x < slot.cells_x; ++x) {
+        slot.first[y * slot.row_stride + x] = tile.data[y * tile.cells_x + x];
+      }
+    }
+  };
+  for (const auto& t : batch.tiles) {
+    const auto slot = assembler.BeginTile(t);
+    ASSERT_TRUE(slot.has_value());
+    ASSERT_NE(slot->first, nullptr);
+    EXPECT_EQ(slot->row_stride, 250);
+    EXPECT_EQ(slot->cells_x, t.cells_x);
+    EXPECT_EQ(slot->cells_y, t.cells_y);
+    const bool fail = t.tile_ix == 1 && t.tile_iy == 1;
+    if (!fail) write(t, *slot);
+    assembler.EndTile(t, !fail);
+  }
+  EXPECT_FALSE(assembler.Complete("elevation"));
+  EXPECT_EQ(assembler.Missing("elevation"), (std::vector<std::pair<int, int>>{{1, 1}}));
+  auto partial = assembler.Layer("elevation");
+  ASSERT_TRUE(partial.has_value());
+  EXPECT_TRUE(std::isnan(partial->at("elevation")(150, 110)));  // in tile (1, 1)
+  EXPECT_EQ(partial->at("elevation")(249, 129), map.at("elevation")(249, 129));
+  EXPECT_EQ(partial->at("elevation")(0, 0), map.at("elevation")(0, 0));
+
+  // The resent tile arrives; a copy of an older version of it has nothing to write.
+  const auto& resent = batch.tiles[4];
+  ASSERT_EQ(std::make_pair(resent.tile_ix, resent.tile_iy), std::make_pair(1, 1));
+  const auto slot = assembler.BeginTile(resent);
+  ASSERT_TRUE(slot.has_value() && slot->first != nullptr);
+  write(resent, *slot);
+  assembler.EndTile(resent, true);
+  cairn::lcmt_grid_tile older = resent;
+  older.tile_version = 0;
+  const auto none = assembler.BeginTile(older);
+  ASSERT_TRUE(none.has_value());
+  EXPECT_EQ(none->first, nullptr);
+  EXPECT_TRUE(assembler.Complete("elevation"));
+  EXPECT_TRUE(*assembler.TakeLayer("elevation") == map);
+
+  // A tile that does not fit a layer gets no place.
+  cairn::lcmt_grid_tile huge = batch.tiles[0];
+  huge.layer_size_x = 100000;
+  huge.layer_size_y = 100000;
+  EXPECT_FALSE(assembler.BeginTile(huge).has_value());
+  EXPECT_EQ(assembler.checksum_errors(), 1);
+}
+
 // A tile declaring a layer too large to hold is refused.
 TEST(LayerAssemblerTest, ATileOfAnImpossiblyLargeLayerIsRefused) {
   common::GridMap map = MakeMap(250, 130);
