@@ -216,23 +216,36 @@ MapstoreService::MapstoreService(runtime::Node& node, MapStore& store, ProfileDe
                                  MapstoreServiceParams params)
     : node_(node), store_(store), deriver_(std::move(deriver)), params_(std::move(params)) {
   node_.Subscribe<Request>(channels::kMapstoreRequest, [this](const Request& r) { OnRequest(r); });
+  // A save waiting for pushed data finishes as soon as its last piece arrives (OnPushed).
   node_.Subscribe<cairn::lcmt_grid_tile>(channels::kMapstorePushTiles,
-                                         [this](const cairn::lcmt_grid_tile& t) { OnPushTile(t); });
-  node_.Subscribe<cairn::lcmt_grid_tile_batch>(
-      channels::kMapstorePushTileBatches,
-      [this](const cairn::lcmt_grid_tile_batch& b) { OnPushTileBatch(b); });
-  node_.Subscribe<cairn::lcmt_grid_manifest>(
-      channels::kMapstorePushManifest,
-      [this](const cairn::lcmt_grid_manifest& m) { OnPushManifest(m); });
-  node_.Subscribe<cairn::lcmt_obstacle_registry>(
-      channels::kMapstorePushObstacles,
-      [this](const cairn::lcmt_obstacle_registry& r) { OnPushObstacles(r); });
+                                         [this](const cairn::lcmt_grid_tile& t) {
+                                           OnPushTile(t);
+                                           OnPushed(t.map_name);
+                                         });
+  node_.Subscribe<cairn::lcmt_grid_tile_batch>(channels::kMapstorePushTileBatches,
+                                               [this](const cairn::lcmt_grid_tile_batch& b) {
+                                                 OnPushTileBatch(b);
+                                                 OnPushed(b.map_name);
+                                               });
+  node_.Subscribe<cairn::lcmt_grid_manifest>(channels::kMapstorePushManifest,
+                                             [this](const cairn::lcmt_grid_manifest& m) {
+                                               OnPushManifest(m);
+                                               OnPushed(m.map_name);
+                                             });
+  node_.Subscribe<cairn::lcmt_obstacle_registry>(channels::kMapstorePushObstacles,
+                                                 [this](const cairn::lcmt_obstacle_registry& r) {
+                                                   OnPushObstacles(r);
+                                                   OnPushed(r.map_name);
+                                                 });
   node_.Subscribe<cairn::lcmt_octomap>(channels::kMapstorePushOctomap,
-                                       [this](const cairn::lcmt_octomap& c) { OnPushOctomap(c); });
+                                       [this](const cairn::lcmt_octomap& c) {
+                                         OnPushOctomap(c);
+                                         OnPushed(c.map_name);
+                                       });
   node_.Subscribe<cairn::lcmt_tile_resend_request>(
       channels::kMapstoreTileResend,
       [this](const cairn::lcmt_tile_resend_request& r) { OnResend(r); });
-  node_.AddTimer(0.05, [this] { Poll(); });
+  node_.AddTimer(params_.poll_period_s, [this] { Poll(); });
   for (int i = 0; i < std::max(1, params_.worker_threads); ++i) {
     workers_.emplace_back([this] { WorkerLoop(); });
   }
@@ -1304,6 +1317,21 @@ bool MapstoreService::TryFinishSave(PendingSave& save, bool timed_out) {
   pending_.erase(save.key);  // `save` is gone from here on
   Finish(done_request, std::move(reply), started);
   return true;
+}
+
+void MapstoreService::OnPushed(const std::string& map_name) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (auto& [key, save] : pending_) {
+    if (save->pull || save->map_name != map_name) continue;
+    const std::string pending_key = key;  // TryFinishSave may erase the entry
+    try {
+      TryFinishSave(*save, false);
+    } catch (const std::exception& e) {
+      node_.Warn("save", std::string("save failed: ") + e.what());
+      pending_.erase(pending_key);
+    }
+    return;
+  }
 }
 
 void MapstoreService::Poll() {

@@ -79,6 +79,9 @@ struct MapstoreServiceParams {
   double burst_pause_ms{0.1};
   int worker_threads{2};  ///< loads, shares, exports and imports run on these
   int decode_threads{2};  ///< threads decoding a batch of pushed tiles as it arrives
+  /// Pending saves are checked this often (timeouts, resend rounds, pulled data); a push save
+  /// also finishes the moment its last piece arrives.
+  double poll_period_s{0.05};
   /// Reply tiles travel compressed (the store's zstd codec): a third of the bytes of smooth
   /// terrain, a tenth of a cost layer's. Resent tiles travel as floats.
   bool compress_reply_tiles{true};
@@ -136,6 +139,9 @@ class MapstoreService {
   void OnPushManifest(const cairn::lcmt_grid_manifest& manifest);
   void OnPushObstacles(const cairn::lcmt_obstacle_registry& registry);
   void OnPushOctomap(const cairn::lcmt_octomap& chunk);
+  /// Pushed data for `map_name` arrived: the push save waiting for it, if any, finishes now when
+  /// nothing is missing any more (not at the next Poll).
+  void OnPushed(const std::string& map_name);
   void OnResend(const cairn::lcmt_tile_resend_request& request);
 
   /// Handles one request; fills the reply, may queue outgoing payload. Returns false when the

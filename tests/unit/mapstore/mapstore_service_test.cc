@@ -51,8 +51,9 @@ Request MakeRequest(int8_t op, const std::string& map = "") {
 
 class MapstoreServiceUnitTest : public ::testing::Test {
  protected:
-  MapstoreServiceUnitTest() : node_(MemqOptions()) {
+  explicit MapstoreServiceUnitTest(double poll_period_s = 0.05) : node_(MemqOptions()) {
     MapstoreServiceParams params;
+    params.poll_period_s = poll_period_s;
     params.save_timeout_s = 1.0;
     params.resend_interval_s = 0.05;
     params.pull_settle_s = 0.1;
@@ -185,6 +186,26 @@ class MapstoreServiceUnitTest : public ::testing::Test {
   int resends_answered_{0};
   int64_t next_id_{100};
 };
+
+// A service whose periodic check of pending saves never comes in a test's time.
+class MapstoreServiceWithoutPollTest : public MapstoreServiceUnitTest {
+ protected:
+  MapstoreServiceWithoutPollTest() : MapstoreServiceUnitTest(3600.0) {}
+};
+
+// The resent tile completes the save the moment it arrives: the save does not wait for the
+// periodic check (which never comes here).
+TEST_F(MapstoreServiceWithoutPollTest, APushSaveFinishesWhenItsLastTileArrives) {
+  const MapSnapshot s = testing::SampleSnapshot("corridor", 37, 23);
+  const Reply reply = Push(s, {{1, 1}}, /*compress=*/true);
+  ASSERT_EQ(reply.status, kOk) << reply.message;
+  EXPECT_EQ(reply.version, 1);
+  EXPECT_GE(resends_answered_, 1);
+  // Nothing lost: the same push saves without waiting, too.
+  const Reply again = Push(testing::SampleSnapshot("corridor", 37, 23, 2.0f));
+  ASSERT_EQ(again.status, kOk) << again.message;
+  EXPECT_EQ(again.version, 2);
+}
 
 TEST_F(MapstoreServiceUnitTest, PushedSaveWithALostTileIsCompletedByResend) {
   const MapSnapshot s = testing::SampleSnapshot("corridor", 37, 23);
