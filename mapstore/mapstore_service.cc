@@ -217,31 +217,11 @@ MapstoreService::MapstoreService(runtime::Node& node, MapStore& store, ProfileDe
     : node_(node), store_(store), deriver_(std::move(deriver)), params_(std::move(params)) {
   node_.Subscribe<Request>(channels::kMapstoreRequest, [this](const Request& r) { OnRequest(r); });
   // A save waiting for pushed data finishes as soon as its last piece arrives (OnPushed).
-  node_.Subscribe<cairn::lcmt_grid_tile>(channels::kMapstorePushTiles,
-                                         [this](const cairn::lcmt_grid_tile& t) {
-                                           OnPushTile(t);
-                                           OnPushed(t.map_name);
-                                         });
-  node_.Subscribe<cairn::lcmt_grid_tile_batch>(channels::kMapstorePushTileBatches,
-                                               [this](const cairn::lcmt_grid_tile_batch& b) {
-                                                 OnPushTileBatch(b);
-                                                 OnPushed(b.map_name);
-                                               });
-  node_.Subscribe<cairn::lcmt_grid_manifest>(channels::kMapstorePushManifest,
-                                             [this](const cairn::lcmt_grid_manifest& m) {
-                                               OnPushManifest(m);
-                                               OnPushed(m.map_name);
-                                             });
-  node_.Subscribe<cairn::lcmt_obstacle_registry>(channels::kMapstorePushObstacles,
-                                                 [this](const cairn::lcmt_obstacle_registry& r) {
-                                                   OnPushObstacles(r);
-                                                   OnPushed(r.map_name);
-                                                 });
-  node_.Subscribe<cairn::lcmt_octomap>(channels::kMapstorePushOctomap,
-                                       [this](const cairn::lcmt_octomap& c) {
-                                         OnPushOctomap(c);
-                                         OnPushed(c.map_name);
-                                       });
+  SubscribePush(channels::kMapstorePushTiles, &MapstoreService::OnPushTile);
+  SubscribePush(channels::kMapstorePushTileBatches, &MapstoreService::OnPushTileBatch);
+  SubscribePush(channels::kMapstorePushManifest, &MapstoreService::OnPushManifest);
+  SubscribePush(channels::kMapstorePushObstacles, &MapstoreService::OnPushObstacles);
+  SubscribePush(channels::kMapstorePushOctomap, &MapstoreService::OnPushOctomap);
   node_.Subscribe<cairn::lcmt_tile_resend_request>(
       channels::kMapstoreTileResend,
       [this](const cairn::lcmt_tile_resend_request& r) { OnResend(r); });

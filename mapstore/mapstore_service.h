@@ -142,6 +142,14 @@ class MapstoreService {
   /// Pushed data for `map_name` arrived: the push save waiting for it, if any, finishes now when
   /// nothing is missing any more (not at the next Poll).
   void OnPushed(const std::string& map_name);
+  /// Subscribes `handler` to a push channel, then OnPushed.
+  template <typename Msg>
+  void SubscribePush(const std::string& channel, void (MapstoreService::*handler)(const Msg&)) {
+    node_.Subscribe<Msg>(channel, [this, handler](const Msg& m) {
+      (this->*handler)(m);
+      OnPushed(m.map_name);
+    });
+  }
   void OnResend(const cairn::lcmt_tile_resend_request& request);
 
   /// Handles one request; fills the reply, may queue outgoing payload. Returns false when the
