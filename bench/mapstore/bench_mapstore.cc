@@ -133,6 +133,9 @@ int main(int argc, char** argv) {
   flags.AddInt("size", &size, "cells per side of the map");
   flags.AddInt("runs", &runs, "repetitions per figure (the median is reported)");
   flags.AddBool("keep", &keep, "keep the benchmark database");
+  int client_decode_threads = 0;
+  flags.AddInt("client-decode-threads", &client_decode_threads,
+               "threads the client decodes a batch of reply tiles on (0: its default)");
   int service_recv_buf_bytes = 0;
   flags.AddInt("service-recv-buf-bytes", &service_recv_buf_bytes,
                "the service's socket receive buffer (0: its own default, 4 MB capped by "
@@ -177,7 +180,9 @@ int main(int argc, char** argv) {
   };
 
   lcm::LCM lcm(url);
-  mapstore::MapstoreClient client(lcm, "bench_mapstore");
+  mapstore::MapstoreClientOptions client_options;
+  if (client_decode_threads > 0) client_options.decode_threads = client_decode_threads;
+  mapstore::MapstoreClient client(lcm, "bench_mapstore", client_options);
   // Wait until the service answers.
   {
     cairn::lcmt_mapstore_request ping{};
