@@ -156,6 +156,7 @@ int Main(int argc, char** argv) {
   flags.AddDouble("speed", &speed, "robot speed, m/s");
   const int parsed = flags.Parse(argc, argv);
   if (parsed >= 0) return parsed;
+  const StealNote steal_note;
 
   // --- 1. pipeline per revolution -----------------------------------------------------------
   std::printf("recording %d revolutions in the tunnel...\n", revolutions);

@@ -175,6 +175,7 @@ int main(int argc, char** argv) {
                 "also run the stock insertion and the comparison (profiling: off)");
   const int exit_code = flags.Parse(argc, argv);
   if (exit_code >= 0) return exit_code;
+  const cairn::bench::StealNote steal_note;
 
   const std::vector<bench::Scan> scans = bench::MakeScans(scans_count, static_cast<uint32_t>(seed));
   int64_t points = 0;

@@ -142,6 +142,7 @@ int main(int argc, char** argv) {
                "net.core.rmem_max; 212992 is Debian's default cap)");
   const int rc = flags.Parse(argc, argv);
   if (rc >= 0) return rc;
+  const bench::StealNote steal_note;
 
   const fs::path dir = fs::path(CAIRN_BINARY_DIR) / "bench-tmp" / "mapstore";
   fs::remove_all(dir);

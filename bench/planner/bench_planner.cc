@@ -227,6 +227,7 @@ void BenchOmpl(const cairn::common::RobotProfile& profile) {
 }  // namespace
 
 int main() {
+  const cairn::bench::StealNote steal_note;
   const auto profile = Pioneer();
   BenchDwa(profile);
   BenchOmpl(profile);

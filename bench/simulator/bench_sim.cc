@@ -140,6 +140,7 @@ RunResult Run(int ray_threads, bool use_mj_ray, bool encode, double sim_seconds)
 }  // namespace
 
 int main() {
+  const cairn::bench::StealNote steal_note;
   std::printf(
       "bench_sim: tunnel + Pioneer 3-AT + HDL-32E (57600 rays/rev, 10 Hz) + planar laser\n");
   // Warm up (page in the model, the tables, the caches).

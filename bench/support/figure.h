@@ -2,7 +2,11 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <string>
+
+#include <unistd.h>
 
 /// @file
 /// One benchmark figure: printed as a readable line and as a machine line
@@ -14,13 +18,13 @@
 namespace cairn::bench {
 
 struct Figure {
-  std::string name;             ///< "transport.sliced_10hz.p99_latency"
+  std::string name;  ///< "transport.sliced_10hz.p99_latency"
   double value{0.0};
-  std::string unit;             ///< "ms", "points/s", "%", "x"
-  std::string baseline;         ///< what it is compared with, measured in the same run if possible
-  double baseline_value{NAN};   ///< NaN when the baseline is a published figure with no value
+  std::string unit;            ///< "ms", "points/s", "%", "x"
+  std::string baseline;        ///< what it is compared with, measured in the same run if possible
+  double baseline_value{NAN};  ///< NaN when the baseline is a published figure with no value
   bool higher_is_better{false};
-  std::string target;           ///< "<= 1 ms"
+  std::string target;  ///< "<= 1 ms"
   bool pass{true};
 };
 
@@ -67,5 +71,41 @@ inline void Report(const Figure& f) {
       f.higher_is_better ? "true" : "false");
   std::fflush(stdout);
 }
+
+/// CPU time the host took from this machine's processors so far (the `steal` column of
+/// /proc/stat's `cpu` line), in milliseconds summed over processors; NaN where unknown. A
+/// virtual machine whose host is busy loses it, and every timed figure suffers with it.
+inline double HostStealMs() {
+  std::ifstream stat("/proc/stat");
+  std::string line;
+  if (!std::getline(stat, line) || line.rfind("cpu ", 0) != 0) return NAN;
+  std::istringstream fields(line.substr(4));
+  long long value = 0;
+  for (int i = 0; i < 8 && fields >> value; ++i) {
+  }
+  const long ticks_per_s = sysconf(_SC_CLK_TCK);
+  if (!fields || ticks_per_s <= 0) return NAN;
+  return 1000.0 * static_cast<double>(value) / static_cast<double>(ticks_per_s);
+}
+
+/// Prints, when it goes out of scope, how much CPU time the host stole while it lived: a
+/// benchmark declares one first, so that its figures can be read against it.
+class StealNote {
+ public:
+  StealNote() : start_ms_(HostStealMs()) {}
+  ~StealNote() {
+    const double stolen = HostStealMs() - start_ms_;
+    if (std::isfinite(stolen)) {
+      std::printf("(host CPU steal during this benchmark: %.0f ms summed over processors)\n",
+                  stolen);
+      std::fflush(stdout);
+    }
+  }
+  StealNote(const StealNote&) = delete;
+  StealNote& operator=(const StealNote&) = delete;
+
+ private:
+  double start_ms_;
+};
 
 }  // namespace cairn::bench

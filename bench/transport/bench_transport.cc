@@ -208,6 +208,7 @@ int ReadRmemDefault() {
 
 int main(int argc, char** argv) {
   if (argc == 4 && std::string(argv[1]) == "--receiver") return RunReceiver(argv[2], argv[3]);
+  const cairn::bench::StealNote steal_note;
   double seconds = 5.0;
   if (argc == 3 && std::string(argv[1]) == "--seconds") seconds = std::atof(argv[2]);
   const int port = 20000 + (getpid() % 20000);
