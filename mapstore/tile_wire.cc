@@ -264,15 +264,15 @@ int AssembleTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::st
   int held = 0;
   std::vector<Job> jobs;
   jobs.reserve(tiles.size());
-  // A tile whose place another tile of the batch already took, or whose layer changed grid
-  // within the batch (which moves the layer), waits for the parallel pass to end.
+  // A tile whose place another tile of the batch already took, a tile whose layer changed grid
+  // within the batch (which moves the layer) and a float tile wait for the parallel pass.
   std::vector<const Tile*> later;
   std::set<std::tuple<std::string, int, int>> places;
   std::map<std::string, std::tuple<double, double, double, double, int, int, int>> grids;
   for (const Tile& tile : tiles) {
     if (tile.map_name != map_name) continue;
     if (tile.encoding == Tile::ENCODING_FLOAT32) {
-      held += assembler->OnTile(tile) ? 1 : 0;
+      later.push_back(&tile);  // it could move its layer under the slots taken
       continue;
     }
     const auto grid =

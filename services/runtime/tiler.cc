@@ -359,7 +359,10 @@ std::optional<LayerAssembler::TileSlot> LayerAssembler::BeginTile(
   common::Layer& cells = state->cells;
   const int64_t x0 = int64_t{tile.tile_ix} * state->tile_size;
   const int64_t y0 = int64_t{tile.tile_iy} * state->tile_size;
-  if (x0 < 0 || y0 < 0 || x0 >= cells.rows() || y0 >= cells.cols()) return slot;  // outside
+  if (x0 < 0 || y0 < 0 || x0 >= cells.rows() || y0 >= cells.cols()) {
+    EndTile(tile, true);  // outside the layer: held, with nothing to write (as in OnTile)
+    return slot;
+  }
   slot.first = &cells(x0, y0);
   slot.row_stride = cells.rows();
   slot.cells_x = static_cast<int>(std::min<int64_t>(tile.cells_x, cells.rows() - x0));

@@ -140,9 +140,10 @@ class LayerAssembler {
   };
   /// Reserves the place of a compressed tile (allocating its layer at the layer's first tile).
   /// nullopt (a checksum error counted) when the tile does not fit a layer; a slot without
-  /// cells when it is older than the tile held there (it counts as held, as in OnTile). Until
-  /// EndTile, the cells of a reserved place are undefined. A slot stays valid until the next
-  /// call for a tile of another geometry of the same layer.
+  /// cells, and no EndTile to call, when the tile is older than the one held there or lies
+  /// outside its layer (it counts as held, as in OnTile). Until EndTile, the cells of a
+  /// reserved place are undefined. A slot stays valid until a tile or manifest of another grid
+  /// arrives for the same layer.
   std::optional<TileSlot> BeginTile(const cairn::lcmt_grid_tile& tile);
   /// Ends BeginTile. `decoded`: the receiver wrote every cell of the slot with a codec that
   /// verified them against the sender's checksum (as for OnDecodedTile), and the tile is held.

@@ -224,6 +224,14 @@ TEST(LayerAssemblerTest, TilesWrittenInPlaceAreHeldAndFailedOnesStayUnknown) {
   ASSERT_TRUE(none.has_value());
   EXPECT_EQ(none->first, nullptr);
   EXPECT_TRUE(assembler.Complete("elevation"));
+  // A tile beyond the layer's edge has nothing to write and counts as held.
+  cairn::lcmt_grid_tile beyond = resent;
+  beyond.tile_ix = 7;
+  const auto outside = assembler.BeginTile(beyond);
+  ASSERT_TRUE(outside.has_value());
+  EXPECT_EQ(outside->first, nullptr);
+  EXPECT_EQ(assembler.HeldChecksum("elevation", 7, 1),
+            std::optional<uint32_t>(static_cast<uint32_t>(beyond.checksum)));
   EXPECT_TRUE(*assembler.TakeLayer("elevation") == map);
 
   // A tile that does not fit a layer gets no place.
