@@ -518,16 +518,7 @@ common::Status DecodeFloatBlobRows(Codec codec, const char* data, size_t size, i
   }
   const size_t cells = static_cast<size_t>(source_cells_x) * static_cast<size_t>(source_cells_y);
   const int64_t raw_size = static_cast<int64_t>(cells * sizeof(float));
-  auto copy_rows = [&](const float* source) {
-    for (int y = 0; y < out.rows; ++y) {
-      std::memcpy(out.first + y * out.row_stride, source + static_cast<size_t>(y) * source_cells_x,
-                  sizeof(float) * static_cast<size_t>(out.cells_per_row));
-    }
-  };
-  const bool zstd_checked =
-      (codec == Codec::kZstd || codec == Codec::kZstdShuffle4 || codec == Codec::kZstdBytes) &&
-      HasContentChecksum(data, size);
-  if (codec == Codec::kZstdBytes && zstd_checked && !verify_crc) {
+  if (codec == Codec::kZstdBytes && !verify_crc && HasContentChecksum(data, size)) {
     // The common case (cost and class layers): one byte code per cell, expanded row by row.
     std::vector<uint8_t>& codes = ThreadScratch();
     codes.resize(cells);
@@ -546,7 +537,11 @@ common::Status DecodeFloatBlobRows(Codec codec, const char* data, size_t size, i
   const common::Status s = DecodeBlobTo(codec, data, size, raw_size, raw_crc32,
                                         reinterpret_cast<uint8_t*>(whole.data()), verify_crc);
   if (!s.ok()) return s;
-  copy_rows(whole.data());
+  for (int y = 0; y < out.rows; ++y) {
+    std::memcpy(out.first + y * out.row_stride,
+                whole.data() + static_cast<size_t>(y) * source_cells_x,
+                sizeof(float) * static_cast<size_t>(out.cells_per_row));
+  }
   return common::Status::Ok();
 }
 

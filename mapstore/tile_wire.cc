@@ -159,8 +159,10 @@ bool CompressTile(cairn::lcmt_grid_tile* tile, int zstd_level) {
   return true;
 }
 
-common::Status DecodeTileCells(const cairn::lcmt_grid_tile& tile, std::vector<float>* cells,
-                               bool verify_checksum) {
+namespace {
+
+// The codec of a compressed tile whose sizes are sane; kInvalidArgument otherwise.
+common::Result<Codec> CompressedTileCodec(const cairn::lcmt_grid_tile& tile) {
   const std::optional<Codec> codec = CodecOfEncoding(tile.encoding);
   if (!codec) {
     return common::InvalidArgumentError("tile encoding " + std::to_string(tile.encoding) +
@@ -170,6 +172,38 @@ common::Status DecodeTileCells(const cairn::lcmt_grid_tile& tile, std::vector<fl
       static_cast<size_t>(tile.num_bytes) != tile.bytes.size()) {
     return common::InvalidArgumentError("compressed tile with a bad size");
   }
+  return *codec;
+}
+
+// Threads for decoding n tiles: at most `threads`, and one per 4 tiles.
+int DecodeWorkers(size_t n, int threads) {
+  constexpr size_t kTilesPerThread = 4;
+  return static_cast<int>(
+      std::min<size_t>(static_cast<size_t>(std::max(1, threads)), n / kTilesPerThread + 1));
+}
+
+// Decodes a compressed tile into its reserved place.
+bool DecodeIntoSlot(const cairn::lcmt_grid_tile& tile,
+                    const runtime::LayerAssembler::TileSlot& slot) {
+  const common::Result<Codec> codec = CompressedTileCodec(tile);
+  if (!codec.ok()) return false;
+  FloatRows rows;
+  rows.first = slot.first;
+  rows.row_stride = slot.row_stride;
+  rows.cells_per_row = slot.cells_x;
+  rows.rows = slot.cells_y;
+  return DecodeFloatBlobRows(*codec, reinterpret_cast<const char*>(tile.bytes.data()),
+                             tile.bytes.size(), tile.cells_x, tile.cells_y,
+                             static_cast<uint32_t>(tile.checksum), rows)
+      .ok();
+}
+
+}  // namespace
+
+common::Status DecodeTileCells(const cairn::lcmt_grid_tile& tile, std::vector<float>* cells,
+                               bool verify_checksum) {
+  const common::Result<Codec> codec = CompressedTileCodec(tile);
+  if (!codec.ok()) return codec.status();
   const size_t n = static_cast<size_t>(tile.cells_x) * tile.cells_y;
   cells->resize(n);
   return DecodeBlobTo(*codec, reinterpret_cast<const char*>(tile.bytes.data()), tile.bytes.size(),
@@ -205,41 +239,15 @@ int64_t TilePayloadBytes(const cairn::lcmt_grid_tile& tile) {
 
 void DecodeTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::string& map_name,
                  int threads, std::vector<std::vector<float>>* cells, std::vector<char>* ok) {
-  constexpr size_t kTilesPerThread = 4;
   const size_t n = tiles.size();
   if (cells->size() < n) cells->resize(n);
   ok->assign(n, 0);
-  const int workers = static_cast<int>(
-      std::min<size_t>(static_cast<size_t>(std::max(1, threads)), n / kTilesPerThread + 1));
-  ParallelFor(n, workers, [&](size_t i) {
+  ParallelFor(n, DecodeWorkers(n, threads), [&](size_t i) {
     const cairn::lcmt_grid_tile& tile = tiles[i];
     (*ok)[i] = tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
                tile.map_name == map_name && DecodeTileCells(tile, &(*cells)[i]).ok();
   });
 }
-
-namespace {
-
-// Decodes a compressed tile into its reserved place.
-bool DecodeIntoSlot(const cairn::lcmt_grid_tile& tile,
-                    const runtime::LayerAssembler::TileSlot& slot) {
-  const std::optional<Codec> codec = CodecOfEncoding(tile.encoding);
-  if (!codec || tile.cells_x <= 0 || tile.cells_y <= 0 || tile.cells_x > 4096 ||
-      tile.cells_y > 4096 || static_cast<size_t>(tile.num_bytes) != tile.bytes.size()) {
-    return false;
-  }
-  FloatRows rows;
-  rows.first = slot.first;
-  rows.row_stride = slot.row_stride;
-  rows.cells_per_row = slot.cells_x;
-  rows.rows = slot.cells_y;
-  return DecodeFloatBlobRows(*codec, reinterpret_cast<const char*>(tile.bytes.data()),
-                             tile.bytes.size(), tile.cells_x, tile.cells_y,
-                             static_cast<uint32_t>(tile.checksum), rows)
-      .ok();
-}
-
-}  // namespace
 
 bool AssembleTile(const cairn::lcmt_grid_tile& tile, const std::string& map_name,
                   runtime::LayerAssembler* assembler) {
@@ -292,10 +300,7 @@ int AssembleTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::st
     }
     jobs.push_back(Job{&tile, *slot});
   }
-  constexpr size_t kTilesPerThread = 4;
-  const int workers = static_cast<int>(std::min<size_t>(static_cast<size_t>(std::max(1, threads)),
-                                                        jobs.size() / kTilesPerThread + 1));
-  ParallelFor(jobs.size(), workers,
+  ParallelFor(jobs.size(), DecodeWorkers(jobs.size(), threads),
               [&](size_t i) { jobs[i].ok = DecodeIntoSlot(*jobs[i].tile, jobs[i].slot); });
   for (const Job& job : jobs) {
     assembler->EndTile(*job.tile, job.ok);
