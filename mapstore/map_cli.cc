@@ -22,9 +22,7 @@
 #include "mapstore/map_operations.h"
 #include "mapstore/map_transfer.h"
 #include "mapstore/sqlite_map_store.h"
-#ifdef CAIRN_HAVE_MAPPING
 #include "mapstore/mapping_deriver.h"
-#endif
 
 namespace cairn::mapstore {
 namespace {
@@ -110,11 +108,7 @@ ProgressFn TerminalProgress() {
 }
 
 ProfileDeriver Deriver() {
-#ifdef CAIRN_HAVE_MAPPING
   return MappingDeriver();
-#else
-  return ProfileDeriver();
-#endif
 }
 
 // Common flags of every command.

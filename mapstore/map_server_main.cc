@@ -8,12 +8,10 @@
 #include "common/flags.h"
 #include "common/log.h"
 #include "mapstore/map_server.h"
-#include "mapstore/map_server_service.h"
+#include "mapstore/lcm/map_server_service.h"
 #include "mapstore/sqlite_map_store.h"
 #include "services/runtime/node.h"
-#ifdef CAIRN_HAVE_MAPPING
 #include "mapstore/mapping_deriver.h"
-#endif
 
 int main(int argc, char** argv) {
   namespace ms = cairn::mapstore;
@@ -89,11 +87,7 @@ int main(int argc, char** argv) {
     node_options.robot = params.robot;
     node_options.lcm_url = lcm_url;
     cairn::runtime::Node node(node_options);
-#ifdef CAIRN_HAVE_MAPPING
     const ms::ProfileDeriver deriver = ms::MappingDeriver();
-#else
-    const ms::ProfileDeriver deriver;  // refused by the service: nothing could be served
-#endif
     node.Event("map %s/%s%s for robot %s (profile %s) from %s, bus %s", params.ref.site.c_str(),
                params.ref.name.c_str(),
                version > 0 ? (" v" + std::to_string(version)).c_str() : "", params.robot.c_str(),

@@ -9,12 +9,10 @@
 #include "common/flags.h"
 #include "common/log.h"
 #include "common/yaml_reader.h"
-#include "mapstore/mapstore_service.h"
+#include "mapstore/lcm/mapstore_service.h"
 #include "mapstore/sqlite_map_store.h"
 #include "services/runtime/node.h"
-#ifdef CAIRN_HAVE_MAPPING
 #include "mapstore/mapping_deriver.h"
-#endif
 
 namespace {
 
@@ -139,12 +137,7 @@ int main(int argc, char** argv) {
                               std::string("recv_buf_size=") + std::to_string(recv_buffer_bytes);
     }
     cairn::runtime::Node node(node_options);
-#ifdef CAIRN_HAVE_MAPPING
     cairn::mapstore::ProfileDeriver deriver = cairn::mapstore::MappingDeriver();
-#else
-    cairn::mapstore::ProfileDeriver deriver;
-    CAIRN_LOG_WARN("built without the mapping core: profile layers cannot be derived");
-#endif
     cairn::mapstore::MapstoreService service(node, **store, deriver, params);
     // Saves do not pay for checkpoints: the WAL is copied into the file when the store is idle.
     cairn::mapstore::SqliteMapStore* sqlite = store->get();

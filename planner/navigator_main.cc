@@ -12,7 +12,7 @@
 #include "common/robot_profile.h"
 #include "common/yaml_reader.h"
 #include "planner/navigator_config.h"
-#include "planner/navigator_service.h"
+#include "planner/lcm/navigator_service.h"
 #include "planner/places.h"
 #include "services/runtime/node.h"
 

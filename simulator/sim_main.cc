@@ -13,7 +13,7 @@
 #include "simulator/mujoco_model.h"
 #include "simulator/mujoco_sim.h"
 #include "simulator/scenario.h"
-#include "simulator/sim_service.h"
+#include "simulator/lcm/sim_service.h"
 
 namespace {
 

@@ -34,12 +34,10 @@
 #include "common/layers.h"
 #include "common/robot_profile.h"
 #include "mapstore/map_operations.h"
-#include "mapstore/mapstore_client.h"
+#include "mapstore/lcm/mapstore_client.h"
 #include "mapstore/sqlite_map_store.h"
 #include "services/runtime/conversions.h"
-#ifdef CAIRN_HAVE_MAPPING
 #include "mapstore/mapping_deriver.h"
-#endif
 
 extern char** environ;
 
@@ -299,11 +297,7 @@ int main(int argc, char** argv) {
         const auto t0 = Clock::now();
         auto hit = (*service_db)
                        ->FindDerived({"bench", "terrain", last_version}, rover->content_hash,
-#ifdef CAIRN_HAVE_MAPPING
                                      mapstore::MappingDeriver().code_version,
-#else
-                                     "",
-#endif
                                      {{"cost/rover"}, std::nullopt});
         if (hit.ok() && hit->has_value()) core_cached_ms.push_back(Ms(t0));
       }

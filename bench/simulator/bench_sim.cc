@@ -21,7 +21,7 @@
 #include "services/runtime/conversions.h"
 #include "simulator/mujoco_sim.h"
 #include "simulator/scenario.h"
-#include "simulator/sim_conversions.h"
+#include "simulator/lcm/sim_conversions.h"
 
 namespace {
 

@@ -14,7 +14,7 @@
 #include "common/flags.h"
 #include "common/log.h"
 #include "services/launch/graph.h"
-#include "services/launch/launch_service.h"
+#include "services/launch/lcm/launch_service.h"
 #include "services/launch/posix_runner.h"
 #include "services/launch/status.h"
 #include "services/launch/supervisor.h"

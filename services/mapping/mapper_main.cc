@@ -16,8 +16,8 @@
 #include "common/log.h"
 #include "common/robot_profile.h"
 #include "common/yaml_reader.h"
-#include "mapstore/mapstore_client.h"
-#include "services/mapping/mapper_service.h"
+#include "mapstore/lcm/mapstore_client.h"
+#include "services/mapping/lcm/mapper_service.h"
 #include "services/runtime/node.h"
 
 namespace cairn::mapping {

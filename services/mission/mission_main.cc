@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "common/flags.h"
-#include "services/mission/demo_mission.h"
+#include "services/mission/lcm/demo_mission.h"
 #include "services/runtime/node.h"
 
 using namespace cairn;

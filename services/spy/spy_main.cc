@@ -8,7 +8,7 @@
 #include "common/flags.h"
 #include "services/launch/graph.h"
 #include "services/runtime/node.h"
-#include "services/spy/spy.h"
+#include "services/spy/lcm/spy.h"
 
 using namespace cairn;
 

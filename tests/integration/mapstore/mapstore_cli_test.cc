@@ -179,7 +179,6 @@ TEST(MapstoreCliTest, EveryCommandPrintsHelp) {
   EXPECT_NE(service.Log().find("--db"), std::string::npos);
 }
 
-#ifdef CAIRN_HAVE_MAPPING
 TEST(MapstoreCliTest, ShareAndDiffUnderTwoProfiles) {
   ProcessSet procs(cairn::testing::PrivateLcmUrl());
   const std::string db = procs.dir() + "/site.db";
@@ -211,7 +210,6 @@ TEST(MapstoreCliTest, ShareAndDiffUnderTwoProfiles) {
   EXPECT_EQ(show.exit_code, 0) << show.output;
   EXPECT_NE(show.output.find("1 cached derivations"), std::string::npos) << show.output;
 }
-#endif
 
 }  // namespace
 }  // namespace cairn::mapstore::testing

@@ -18,7 +18,7 @@
 #include "common/layers.h"
 #include "common/robot_profile.h"
 #include "mapstore/map_store.h"
-#include "mapstore/mapstore_client.h"
+#include "mapstore/lcm/mapstore_client.h"
 #include "services/runtime/conversions.h"
 #include "tests/support/harness.h"
 #include "tests/support/layers.h"

@@ -265,12 +265,10 @@ TEST_F(MapstoreServiceTest, ReadOnlyUseNeverChangesTheDatabase) {
   Request get = MakeRequest(Request::OP_GET_PROFILE);
   get.profile = "rover";
   ASSERT_EQ(client_.Call(get)->status, kStatusOk);
-#ifdef CAIRN_HAVE_MAPPING
   // A load for a profile that was never shared derives without writing.
   auto derived = client_.Load("lab", "corridor", 0, "rover");
   ASSERT_TRUE(derived.ok()) << derived.status().ToString();
   EXPECT_TRUE(derived->layers.HasLayer("cost/rover"));
-#endif
   store.Signal(SIGTERM);
   auto status = store.WaitExit(15.0);
   ASSERT_TRUE(status.has_value());

@@ -41,7 +41,7 @@
 #include "common/channels.h"
 #include "common/layers.h"
 #include "common/robot_profile.h"
-#include "mapstore/mapstore_client.h"
+#include "mapstore/lcm/mapstore_client.h"
 #include "services/launch/status.h"
 #include "services/runtime/tiler.h"
 #include "tests/support/geometry.h"

@@ -31,7 +31,7 @@
 #include "common/channels.h"
 #include "common/layers.h"
 #include "common/robot_profile.h"
-#include "mapstore/mapstore_client.h"
+#include "mapstore/lcm/mapstore_client.h"
 #include "mapstore/sqlite_map_store.h"
 #include "services/runtime/conversions.h"
 #include "tests/support/harness.h"

@@ -1,0 +1,423 @@
+#include "services/mission/lcm/demo_mission.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <sstream>
+
+#include "cairn/lcmt_goal.hpp"
+#include "cairn/lcmt_mapstore_reply.hpp"
+#include "cairn/lcmt_mapstore_request.hpp"
+#include "cairn/lcmt_nav_status.hpp"
+#include "cairn/lcmt_pose.hpp"
+
+#include "common/channels.h"
+#include "common/layers.h"
+#include "common/robot_profile.h"
+#include "mapstore/map_io.h"
+#include "mapstore/lcm/mapstore_client.h"
+#include "services/runtime/conversions.h"
+
+namespace cairn::mission {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using NavStatus = cairn::lcmt_nav_status;
+using Request = cairn::lcmt_mapstore_request;
+
+double SecondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+const char* StateName(int8_t state) {
+  switch (state) {
+    case NavStatus::STATE_IDLE:
+      return "idle";
+    case NavStatus::STATE_PLANNING:
+      return "planning";
+    case NavStatus::STATE_DRIVING:
+      return "driving";
+    case NavStatus::STATE_RECOVERING:
+      return "recovering";
+    case NavStatus::STATE_REACHED:
+      return "reached";
+    case NavStatus::STATE_FAILED:
+      return "failed";
+    case NavStatus::STATE_CANCELLED:
+      return "cancelled";
+    case NavStatus::STATE_STOPPED:
+      return "stopped";
+  }
+  return "?";
+}
+
+// The part of a map that holds known cells of `layer`, plus a margin: stored maps grow in
+// large blocks, and a render of mostly unknown space shows nothing.
+common::GridMap CropToKnown(const common::GridMap& map, const std::string& layer,
+                            int margin_cells) {
+  if (!map.HasLayer(layer)) return map;
+  const common::Layer& values = map.at(layer);
+  int min_x = map.size_x(), min_y = map.size_y(), max_x = -1, max_y = -1;
+  for (int iy = 0; iy < map.size_y(); ++iy) {
+    for (int ix = 0; ix < map.size_x(); ++ix) {
+      if (std::isnan(values(ix, iy))) continue;
+      min_x = std::min(min_x, ix);
+      max_x = std::max(max_x, ix);
+      min_y = std::min(min_y, iy);
+      max_y = std::max(max_y, iy);
+    }
+  }
+  if (max_x < 0) return map;
+  min_x = std::max(0, min_x - margin_cells);
+  min_y = std::max(0, min_y - margin_cells);
+  max_x = std::min(map.size_x() - 1, max_x + margin_cells);
+  max_y = std::min(map.size_y() - 1, max_y + margin_cells);
+  common::GridGeometry g = map.geometry();
+  g.origin = map.geometry().origin.Compose({min_x * g.resolution_m, min_y * g.resolution_m, 0.0});
+  g.size_x = max_x - min_x + 1;
+  g.size_y = max_y - min_y + 1;
+  common::GridMap out(g);
+  for (const auto& name : map.layer_names()) {
+    out.AddLayer(name) = map.at(name).block(min_x, min_y, g.size_x, g.size_y);
+  }
+  return out;
+}
+
+}  // namespace
+
+DemoMission::DemoMission(runtime::Node* node, MissionParams params)
+    : node_(node), params_(std::move(params)) {}
+
+MissionReport DemoMission::Run() {
+  MissionReport report;
+  try {
+    if (!WaitForGraph(&report)) return report;
+    const bool arrived = Drive(&report);
+    // The map is stored and rendered even when the drive failed: it shows why.
+    const std::string drive_error = report.error;
+    report.error.clear();
+    StoreAndShare(&report);
+    if (!arrived) report.error = drive_error + (report.error.empty() ? "" : "; " + report.error);
+  } catch (const std::exception& e) {
+    report.error = std::string("internal error: ") + e.what();
+  }
+  return report;
+}
+
+bool DemoMission::WaitForGraph(MissionReport* report) {
+  // The robot's pose and a ready navigator heartbeat mean the graph is working.
+  bool have_pose = false, navigator_ready = false, mapstore_ready = false;
+  auto pose_sub = node_->lcm().subscribeFunction<bool*>(
+      channels::ForRobot(params_.robot, channels::kPose),
+      [](const lcm::ReceiveBuffer*, const std::string&, bool* flag) { *flag = true; }, &have_pose);
+  struct Flags {
+    std::string robot;
+    bool* navigator;
+    bool* mapstore;
+  } flags{params_.robot, &navigator_ready, &mapstore_ready};
+  auto health_sub = node_->lcm().subscribeFunction<Flags*>(
+      channels::kHealth,
+      [](const lcm::ReceiveBuffer* rbuf, const std::string&, Flags* f) {
+        cairn::lcmt_health h{};
+        if (h.decode(rbuf->data, 0, rbuf->data_size) < 0) return;
+        const bool ready = h.state == cairn::lcmt_health::STATE_READY;
+        if (h.process == "cairn-navigator" && h.robot == f->robot && ready) *f->navigator = true;
+        if (h.process == "cairn-mapstore" && ready) *f->mapstore = true;
+      },
+      &flags);
+  const auto start = Clock::now();
+  while (!(have_pose && navigator_ready && mapstore_ready) &&
+         SecondsSince(start) < params_.ready_timeout_s && !node_->stopping()) {
+    node_->SpinOnce(50);
+  }
+  node_->lcm().unsubscribe(pose_sub);
+  node_->lcm().unsubscribe(health_sub);
+  if (!(have_pose && navigator_ready && mapstore_ready)) {
+    report->error = std::string("the graph is not working after ") +
+                    std::to_string(static_cast<int>(params_.ready_timeout_s)) +
+                    " s: " + (!have_pose ? "no pose from " + params_.robot + "; " : "") +
+                    (!navigator_ready ? "no ready cairn-navigator; " : "") +
+                    (!mapstore_ready ? "no ready cairn-mapstore" : "");
+    return false;
+  }
+  node_->Event("graph ready: %s has a pose, the navigator and the map store are ready",
+               params_.robot.c_str());
+  return true;
+}
+
+bool DemoMission::Drive(MissionReport* report) {
+  struct State {
+    bool have_pose{false};
+    common::Vector2 last{common::Vector2::Zero()};
+    int64_t first_utime{0};
+    int64_t last_utime{0};
+    double distance_m{0.0};
+    std::vector<common::Vector2>* path;
+    std::optional<NavStatus> status;
+    Clock::time_point status_time;
+    int64_t goal_id{0};
+  } state;
+  state.path = &driven_m_;
+  state.goal_id = runtime::Node::WallUtime();
+  auto pose_sub = node_->lcm().subscribeFunction<State*>(
+      channels::ForRobot(params_.robot, channels::kPose),
+      [](const lcm::ReceiveBuffer* rbuf, const std::string&, State* s) {
+        cairn::lcmt_pose m{};
+        if (m.decode(rbuf->data, 0, rbuf->data_size) < 0) return;
+        const common::Vector2 p(m.position_m[0], m.position_m[1]);
+        if (!p.allFinite()) return;
+        if (!s->have_pose) {
+          s->have_pose = true;
+          s->first_utime = m.utime;
+          s->last = p;
+          s->path->push_back(p);
+        }
+        const double step = (p - s->last).norm();
+        if (step > 0.05) {
+          s->distance_m += step;
+          s->last = p;
+          s->path->push_back(p);
+        }
+        s->last_utime = m.utime;
+      },
+      &state);
+  auto status_sub = node_->lcm().subscribeFunction<State*>(
+      channels::ForRobot(params_.robot, channels::kNavStatus),
+      [](const lcm::ReceiveBuffer* rbuf, const std::string&, State* s) {
+        NavStatus m;
+        if (m.decode(rbuf->data, 0, rbuf->data_size) < 0 || m.goal_id != s->goal_id) return;
+        s->status = m;
+        s->status_time = Clock::now();
+      },
+      &state);
+
+  cairn::lcmt_goal goal{};
+  goal.robot = params_.robot;
+  goal.goal_id = state.goal_id;
+  goal.kind = cairn::lcmt_goal::KIND_POSE;
+  goal.x_m = params_.goal.x_m;
+  goal.y_m = params_.goal.y_m;
+  goal.yaw_rad = params_.goal.yaw_rad;
+  goal.use_yaw = params_.goal_has_yaw;
+  node_->Event("goal %lld: %s to (%.2f, %.2f)", static_cast<long long>(goal.goal_id),
+               params_.robot.c_str(), goal.x_m, goal.y_m);
+  const auto start = Clock::now();
+  auto last_goal = Clock::now() - std::chrono::seconds(10);
+  int8_t last_state = -1;
+  bool done = false;
+  while (!done && SecondsSince(start) < params_.timeout_s && !node_->stopping()) {
+    // Publish the goal until the navigator answers for it, and again whenever its status for
+    // the goal stops (a restarted navigator starts idle; re-sends of a goal id are idempotent).
+    const bool unanswered = !state.status || SecondsSince(state.status_time) > 3.0;
+    if (unanswered && SecondsSince(last_goal) > 1.0) {
+      if (state.status)
+        node_->Event("goal %lld: no status for 3 s, sending it again",
+                     static_cast<long long>(goal.goal_id));
+      goal.utime = node_->NowUtime();
+      node_->Publish(channels::ForRobot(params_.robot, channels::kGoal), goal);
+      last_goal = Clock::now();
+    }
+    node_->SpinOnce(50);
+    if (!state.status) continue;
+    const NavStatus& s = *state.status;
+    if (s.state != last_state) {
+      last_state = s.state;
+      node_->Event("navigation %s%s%s (%.0f %% of the path, %.1f m to go)", StateName(s.state),
+                   s.message.empty() ? "" : ": ", s.message.c_str(), 100.0 * s.progress,
+                   s.distance_remaining_m);
+    }
+    report->replans = s.replans;
+    report->recoveries = s.recoveries;
+    if (s.state == NavStatus::STATE_REACHED) {
+      report->reached = true;
+      report->nav_outcome = "reached";
+      done = true;
+    } else if (s.state == NavStatus::STATE_FAILED || s.state == NavStatus::STATE_CANCELLED) {
+      report->nav_outcome = std::string(StateName(s.state)) + ": " + s.message;
+      done = true;
+    }
+  }
+  node_->lcm().unsubscribe(pose_sub);
+  node_->lcm().unsubscribe(status_sub);
+  report->wall_time_s = SecondsSince(start);
+  report->distance_m = state.distance_m;
+  report->sim_time_s = (state.last_utime - state.first_utime) * 1e-6;
+  report->real_time_factor = report->wall_time_s > 0 ? report->sim_time_s / report->wall_time_s : 0;
+  if (!done) {
+    report->nav_outcome = node_->stopping() ? "interrupted" : "timed out";
+    report->error = "the robot did not reach the goal within " +
+                    std::to_string(static_cast<int>(params_.timeout_s)) + " s (" +
+                    (state.status ? StateName(state.status->state) : "no navigation status") + ")";
+    // Stop the robot: cancel the goal.
+    goal.kind = cairn::lcmt_goal::KIND_CANCEL;
+    node_->Publish(channels::ForRobot(params_.robot, channels::kGoal), goal);
+    return false;
+  }
+  if (!report->reached) {
+    report->error = "navigation " + report->nav_outcome;
+    return false;
+  }
+  return true;
+}
+
+bool DemoMission::StoreAndShare(MissionReport* report) {
+  mapstore::MapstoreClientOptions options;
+  options.total_timeout_s = 120.0;
+  mapstore::MapstoreClient client(node_->lcm(), "cairn-mission", options);
+
+  // Profiles the store needs to label the map for each robot.
+  std::vector<std::string> profiles = {params_.source_profile};
+  profiles.insert(profiles.end(), params_.share_profiles.begin(), params_.share_profiles.end());
+  std::map<std::string, common::RobotProfile> loaded_profiles;
+  for (const auto& name : profiles) {
+    const common::RobotProfile profile =
+        common::LoadRobotProfileFile(params_.profiles_dir + "/" + name + ".yaml");
+    loaded_profiles[name] = profile;
+    Request put{};
+    put.op = Request::OP_PUT_PROFILE;
+    put.has_profile = true;
+    put.profile_data = runtime::ToLcm(profile);
+    auto reply = client.Call(put);
+    if (!reply.ok() || reply->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
+      report->error = "storing profile " + name +
+                      " failed: " + (reply.ok() ? reply->message : reply.status().ToString());
+      return false;
+    }
+  }
+
+  // Save: the store pulls the mapper's live layers.
+  Request save{};
+  save.op = Request::OP_SAVE;
+  save.site = params_.site;
+  save.map_name = params_.map_name;
+  save.robot = params_.robot;
+  save.profile = params_.source_profile;
+  auto saved = client.Call(save);
+  if (!saved.ok() || saved->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
+    report->error =
+        "saving the map failed: " + (saved.ok() ? saved->message : saved.status().ToString());
+    return false;
+  }
+  report->map_version = saved->version;
+  node_->Event("map saved as %s/%s version %lld (%s)", params_.site.c_str(),
+               params_.map_name.c_str(), static_cast<long long>(saved->version),
+               saved->message.c_str());
+
+  // Share with every other profile: the store derives their layers and verdicts.
+  for (const auto& target : params_.share_profiles) {
+    Request share{};
+    share.op = Request::OP_SHARE;
+    share.site = params_.site;
+    share.map_name = params_.map_name;
+    share.version = saved->version;
+    share.profile = target;
+    auto shared = client.Call(share);
+    if (!shared.ok() || shared->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
+      report->error = "sharing with " + target +
+                      " failed: " + (shared.ok() ? shared->message : shared.status().ToString());
+      return false;
+    }
+    node_->Event("shared with %s: %d obstacle verdicts differ from %s", target.c_str(),
+                 shared->num_obstacles, params_.source_profile.c_str());
+  }
+
+  // Load the map under each profile and render it.
+  std::error_code ec;
+  std::filesystem::create_directories(params_.out_dir, ec);
+  std::map<int, std::map<std::string, std::string>> verdicts;  // obstacle id -> profile -> text
+  std::map<int, common::Obstacle> obstacles;
+  bool elevation_done = false;
+  for (const auto& name : profiles) {
+    auto loaded = client.Load(params_.site, params_.map_name, saved->version, name,
+                              {layers::kElevation, layers::CostLayer(name)});
+    if (!loaded.ok()) {
+      report->error = "loading the map for " + name + " failed: " + loaded.status().ToString();
+      return false;
+    }
+    for (const auto& o : loaded->obstacles.obstacles) {
+      obstacles[o.id] = o;
+      const auto* v = o.VerdictFor(name);
+      verdicts[o.id][name] =
+          v == nullptr ? "?" : (v->crossable ? "crossable" : "blocked (" + v->reason + ")");
+    }
+    if (!elevation_done && loaded->layers.HasLayer(layers::kElevation)) {
+      mapstore::io::PngOverlay overlay;
+      overlay.obstacles = loaded->obstacles.obstacles;
+      overlay.caption = "ELEVATION OF " + params_.site + "/" + params_.map_name + " V" +
+                        std::to_string(saved->version) + " MAPPED BY " + params_.robot;
+      auto png = mapstore::io::WritePng(params_.out_dir, "elevation",
+                                        CropToKnown(loaded->layers, layers::kElevation, 5),
+                                        layers::kElevation, overlay);
+      if (!png.ok()) {
+        report->error = "rendering the elevation failed: " + png.status().ToString();
+        return false;
+      }
+      report->renders.push_back(*png);
+      elevation_done = true;
+    }
+    mapstore::io::PngOverlay overlay;
+    overlay.path_m = driven_m_;
+    overlay.obstacles = loaded->obstacles.obstacles;
+    overlay.verdict_profile = name;
+    overlay.caption = "COST FOR " + name + " WITH THE PATH " + params_.robot + " DROVE";
+    auto png = mapstore::io::WritePng(params_.out_dir, "cost_" + name,
+                                      CropToKnown(loaded->layers, layers::kElevation, 5),
+                                      layers::CostLayer(name), overlay);
+    if (!png.ok()) {
+      report->error = "rendering the cost layer of " + name + " failed: " + png.status().ToString();
+      return false;
+    }
+    report->renders.push_back(*png);
+  }
+  for (const auto& [id, o] : obstacles) {
+    std::ostringstream line;
+    char head[160];
+    std::snprintf(head, sizeof(head),
+                  "#%-3d %-14s at (%5.1f, %5.1f)  slope %4.1f deg  height %5.2f m  width %4.2f m",
+                  id, common::ObstacleKindName(o.kind), o.centroid_m.x(), o.centroid_m.y(),
+                  o.slope_rad * 180.0 / M_PI, o.height_m, o.width_m);
+    line << head;
+    for (const auto& name : profiles) line << "  " << name << ": " << verdicts[id][name];
+    report->obstacle_lines.push_back(line.str());
+  }
+  return true;
+}
+
+std::string FormatReport(const MissionParams& params, const MissionReport& r) {
+  std::ostringstream out;
+  char line[256];
+  out << "\n=== cairn demo mission ===\n";
+  std::snprintf(line, sizeof(line), "robot          %s (profile %s), goal (%.2f, %.2f)\n",
+                params.robot.c_str(), params.source_profile.c_str(), params.goal.x_m,
+                params.goal.y_m);
+  out << line;
+  out << "outcome        " << (r.ok() ? "SUCCESS" : "FAILED") << " (navigation " << r.nav_outcome
+      << ")\n";
+  if (!r.error.empty()) out << "error          " << r.error << "\n";
+  std::snprintf(line, sizeof(line),
+                "distance       %.1f m\nsim time       %.1f s\nwall time      %.1f s\n"
+                "real-time      %.2fx\nreplans        %d\nrecoveries     %d\n",
+                r.distance_m, r.sim_time_s, r.wall_time_s, r.real_time_factor, r.replans,
+                r.recoveries);
+  out << line;
+  if (r.map_version > 0) {
+    out << "stored map     " << params.site << "/" << params.map_name << " version "
+        << r.map_version << ", shared with";
+    for (const auto& p : params.share_profiles) out << " " << p;
+    out << "\n";
+  }
+  if (!r.obstacle_lines.empty()) {
+    out << "obstacles (" << r.obstacle_lines.size() << "):\n";
+    for (const auto& l : r.obstacle_lines) out << "  " << l << "\n";
+  }
+  if (!r.renders.empty()) {
+    out << "renders:\n";
+    for (const auto& p : r.renders) out << "  " << p << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace cairn::mission

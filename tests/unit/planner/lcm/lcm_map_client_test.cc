@@ -1,0 +1,166 @@
+// LcmMapClient on occupancy tiles (the dynamic map server's final layer) over memq://, driven
+// through its handlers and a real LayerTiler.
+
+#include "planner/lcm/lcm_map_client.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "cairn/lcmt_tile_resend_request.hpp"
+
+#include "common/channels.h"
+#include "common/layers.h"
+#include "services/runtime/tiler.h"
+#include "tests/unit/planner/test_maps.h"
+
+namespace cairn::planner {
+namespace {
+
+runtime::NodeOptions Options() {
+  runtime::NodeOptions o;
+  o.process_name = "cairn-navigator";
+  o.robot = "r1";
+  o.lcm_url = "memq://";
+  o.install_signal_handlers = false;
+  o.follow_sim_clock = false;
+  return o;
+}
+
+LcmMapClientParams OccupancyParams() {
+  LcmMapClientParams p;
+  p.robot = "r1";
+  p.layer = layers::kFinal;
+  p.encoding = MapEncoding::kOccupancy;
+  p.occupancy.occupied_threshold_og = 20.f;
+  p.occupancy.free_threshold_og = 5.f;
+  p.incomplete_timeout_s = 0.0;
+  return p;
+}
+
+// A 60 x 40 final layer at 0.05 m (tiles of 20 cells): free, a wall (100), an object seen a
+// few times (OG 12: graded), one seen long enough (OG 40: lethal), and unknown cells.
+common::GridMap FinalLayer() {
+  common::GridGeometry g;
+  g.resolution_m = 0.05;
+  g.size_x = 60;
+  g.size_y = 40;
+  g.origin = {-1.0, -1.0, 0.0};
+  common::GridMap map(g);
+  common::Layer& og = map.AddLayer(layers::kFinal, 0.f);
+  for (int iy = 0; iy < 40; ++iy) og(0, iy) = 100.f;
+  og(30, 20) = 12.f;
+  og(31, 20) = 40.f;
+  og(45, 5) = NAN;
+  for (int iy = 0; iy < 20; ++iy) {
+    for (int ix = 40; ix < 60; ++ix) og(ix, iy + 20) = NAN;  // a whole unknown tile
+  }
+  return map;
+}
+
+class LcmMapClientTest : public ::testing::Test {
+ protected:
+  LcmMapClientTest() : node_(Options()), tiler_("r1", "live", 20) {}
+
+  std::unique_ptr<LcmMapClient> Client(LcmMapClientParams params) {
+    return std::make_unique<LcmMapClient>(node_, std::move(params),
+                                          testing::PioneerProfile().footprint_m, CostMapParams{});
+  }
+  runtime::LayerTiler::Batch Tiles(const common::GridMap& map) {
+    return tiler_.Update(map, layers::kFinal, runtime::TileEncoding::kOccupancy, ++utime_);
+  }
+
+  runtime::Node node_;
+  runtime::LayerTiler tiler_;
+  int64_t utime_{1'000'000};
+};
+
+TEST_F(LcmMapClientTest, BuildsACostMapFromOccupancyTiles) {
+  auto dut = Client(OccupancyParams());
+  const auto batch = Tiles(FinalLayer());
+  ASSERT_FALSE(batch.occupancy_tiles.empty());
+  for (const auto& t : batch.occupancy_tiles) dut->OnTile(t);
+  EXPECT_EQ(dut->Latest(), nullptr);  // no manifest yet: completeness unknown
+  dut->OnManifest(batch.manifest);
+  const auto map = dut->Latest();
+  ASSERT_NE(map, nullptr);
+  EXPECT_EQ(map->version(), batch.manifest.layer_version);
+  const common::Layer& cost = map->cost();
+  EXPECT_FLOAT_EQ(cost(0, 3), 100.f);    // wall
+  EXPECT_FLOAT_EQ(cost(10, 10), 0.f);    // free
+  EXPECT_FLOAT_EQ(cost(31, 20), 100.f);  // at or above the occupied threshold
+  EXPECT_FLOAT_EQ(cost(30, 20), 100.f * (12.f - 5.f) / (20.f - 5.f));  // graded
+  EXPECT_TRUE(std::isnan(cost(45, 5)));                                // -1 stays unknown
+  EXPECT_TRUE(std::isnan(cost(50, 30)));  // an absent (all unknown) tile too
+  EXPECT_TRUE(map->IsBlockedCell({31, 20}));
+  EXPECT_FALSE(map->IsBlockedCell({30, 20}));
+  EXPECT_GT(node_.NowUtime(), 0);
+  EXPECT_GT(dut->last_heard_utime(), 0);
+}
+
+TEST_F(LcmMapClientTest, IgnoresOtherLayersAndTheOtherEncoding) {
+  auto dut = Client(OccupancyParams());
+  common::GridMap map = FinalLayer();
+  // The same layer name as float tiles (a cost-layer client's input) is not read.
+  auto floats = tiler_.Update(map, layers::kFinal, runtime::TileEncoding::kFloat, ++utime_);
+  for (const auto& t : floats.tiles) dut->OnTile(t);
+  // Another occupancy layer (short_term) with its manifest is not read either.
+  common::GridMap other = map;
+  other.AddLayer(layers::kShortTerm, 100.f);
+  auto short_term =
+      tiler_.Update(other, layers::kShortTerm, runtime::TileEncoding::kOccupancy, ++utime_);
+  for (const auto& t : short_term.occupancy_tiles) dut->OnTile(t);
+  dut->OnManifest(short_term.manifest);
+  EXPECT_EQ(dut->Latest(), nullptr);
+  EXPECT_EQ(dut->last_heard_utime(), 0);
+}
+
+TEST_F(LcmMapClientTest, MissingTilesAreLethalAndAskedFor) {
+  auto dut = Client(OccupancyParams());
+  std::vector<cairn::lcmt_tile_resend_request> resends;
+  node_.Subscribe<cairn::lcmt_tile_resend_request>(
+      channels::ForRobot("r1", channels::kMapTileResend),
+      [&](const cairn::lcmt_tile_resend_request& r) { resends.push_back(r); });
+  const auto batch = Tiles(FinalLayer());
+  ASSERT_GT(batch.occupancy_tiles.size(), 2u);
+  // Tile (1, 0) (cells 20..39 x 0..19) never arrives.
+  for (const auto& t : batch.occupancy_tiles) {
+    if (!(t.tile_ix == 1 && t.tile_iy == 0)) dut->OnTile(t);
+  }
+  dut->OnManifest(batch.manifest);
+  EXPECT_EQ(dut->Latest(), nullptr);
+  dut->Poll();  // asks again, and (timeout 0) builds with the missing tile blocked
+  while (node_.lcm().handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(resends.size(), 1u);
+  EXPECT_EQ(resends[0].layer, layers::kFinal);
+  ASSERT_EQ(resends[0].num_tiles, 1);
+  EXPECT_EQ(resends[0].tile_ix[0], 1);
+  const auto map = dut->Latest();
+  ASSERT_NE(map, nullptr);
+  EXPECT_FLOAT_EQ(map->cost()(25, 5), 100.f);
+  EXPECT_FLOAT_EQ(map->cost()(10, 5), 0.f);
+  EXPECT_EQ(map->missing_tiles(), 1);
+  // Polling again neither rebuilds the same holes nor forgets to ask for them.
+  dut->Poll();
+  EXPECT_EQ(dut->Latest(), map);
+  // The resent tile of the same version completes it: rebuilt without holes.
+  for (const auto& t : batch.occupancy_tiles) {
+    if (t.tile_ix == 1 && t.tile_iy == 0) dut->OnTile(t);
+  }
+  const auto complete = dut->Latest();
+  ASSERT_NE(complete, nullptr);
+  EXPECT_NE(complete, map);
+  EXPECT_EQ(complete->version(), map->version());
+  EXPECT_EQ(complete->missing_tiles(), 0);
+  EXPECT_FLOAT_EQ(complete->cost()(25, 5), 0.f);
+}
+
+TEST_F(LcmMapClientTest, RefusesBadThresholds) {
+  LcmMapClientParams p = OccupancyParams();
+  p.occupancy.free_threshold_og = 50.f;
+  EXPECT_THROW(Client(p), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace cairn::planner

@@ -1,0 +1,316 @@
+#include "services/mapping/obstacles.h"
+
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "common/layers.h"
+#include "services/mapping/derive.h"
+#include "services/mapping/traversability.h"
+#include "tests/unit/services/mapping/terrain_fixtures.h"
+
+namespace cairn::mapping {
+namespace {
+
+using common::GridMap;
+using common::Obstacle;
+using common::ObstacleKind;
+using testing::kDeg;
+using testing::MakeTerrain;
+using testing::ShippedProfile;
+
+constexpr double kRes = 0.2;
+
+common::ObstacleRegistry Extract(GridMap map) {
+  ComputeGeometricLayers(&map, {});
+  common::ObstacleRegistry r = ExtractObstacles(map, {});
+  LabelObstacles(&r, {ShippedProfile("pioneer3at"), ShippedProfile("rover")});
+  return r;
+}
+
+std::vector<const Obstacle*> OfKind(const common::ObstacleRegistry& r, ObstacleKind kind) {
+  std::vector<const Obstacle*> out;
+  for (const auto& o : r.obstacles) {
+    if (o.kind == kind) out.push_back(&o);
+  }
+  return out;
+}
+
+bool Crossable(const Obstacle& o, const std::string& profile) {
+  const common::ObstacleVerdict* v = o.VerdictFor(profile);
+  EXPECT_NE(v, nullptr) << profile;
+  return v != nullptr && v->crossable;
+}
+
+// Point-in-polygon (even-odd) for the outline checks.
+bool Inside(const std::vector<common::Vector2>& poly, const common::Vector2& p) {
+  bool in = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    if ((poly[i].y() > p.y()) != (poly[j].y() > p.y()) &&
+        p.x() < (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) +
+                    poly[i].x()) {
+      in = !in;
+    }
+  }
+  return in;
+}
+
+// A corridor 4 m wide (y in [0, 4)) along x; `feature` gives the floor height at x.
+GridMap Corridor(const std::function<double(double)>& feature, int nx = 80) {
+  return MakeTerrain(nx, 20, kRes, [feature](double x, double) { return feature(x); });
+}
+
+// Seed 000 scenario 13: a 10 deg ramp (3 m long, then a platform) is a ramp; not crossable for
+// the P3-AT (8 deg), crossable for the rover (12 deg).
+TEST(ObstaclesTest, TenDegreeRampSplitsThePioneerAndTheRover) {
+  const double t = std::tan(10 * kDeg);
+  const common::ObstacleRegistry r = Extract(
+      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); }));
+  const auto ramps = OfKind(r, ObstacleKind::kRamp);
+  ASSERT_EQ(ramps.size(), 1u);
+  const Obstacle& ramp = *ramps[0];
+  EXPECT_NEAR(ramp.slope_rad / kDeg, 10.0, 0.3);
+  EXPECT_NEAR(ramp.height_m, 3.0 * t, 0.1);
+  EXPECT_NEAR(ramp.centroid_m.x(), 5.5, 0.3);
+  EXPECT_NEAR(ramp.centroid_m.y(), 2.0, 0.2);
+  EXPECT_NEAR(ramp.width_m, 3.0, 0.45);   // along the slope, the shorter extent here
+  EXPECT_NEAR(ramp.length_m, 4.0, 0.45);  // across the corridor
+  EXPECT_FALSE(Crossable(ramp, "pioneer3at"));
+  EXPECT_TRUE(Crossable(ramp, "rover"));
+  EXPECT_NE(ramp.VerdictFor("pioneer3at")->reason.find("slope"), std::string::npos);
+  EXPECT_TRUE(Inside(ramp.outline_m, ramp.centroid_m));
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kStepUp).empty());
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kWallOrObject).empty());
+}
+
+TEST(ObstaclesTest, FiveDegreeRampIsCrossableForBoth) {
+  const double t = std::tan(5 * kDeg);
+  const common::ObstacleRegistry r = Extract(
+      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); }));
+  const auto ramps = OfKind(r, ObstacleKind::kRamp);
+  ASSERT_EQ(ramps.size(), 1u);
+  EXPECT_NEAR(ramps[0]->slope_rad / kDeg, 5.0, 0.3);
+  EXPECT_TRUE(Crossable(*ramps[0], "pioneer3at"));
+  EXPECT_TRUE(Crossable(*ramps[0], "rover"));
+}
+
+// A block across the corridor, `height` high and 1 m deep: both its edges are steps up (the
+// ground around it is at the low level).
+TEST(ObstaclesTest, TwentyCentimetreStepIsAStepUpForNeither) {
+  const common::ObstacleRegistry r =
+      Extract(Corridor([](double x) { return (x > 6.0 && x < 7.0) ? 0.2 : 0.0; }));
+  const auto steps = OfKind(r, ObstacleKind::kStepUp);
+  ASSERT_EQ(steps.size(), 2u);
+  for (const Obstacle* s : steps) {
+    EXPECT_NEAR(s->height_m, 0.2, 1e-4);
+    EXPECT_NEAR(s->length_m, 4.0, 0.05);
+    EXPECT_FALSE(Crossable(*s, "pioneer3at"));
+    EXPECT_FALSE(Crossable(*s, "rover"));
+  }
+  EXPECT_NEAR(steps[0]->centroid_m.x(), 6.0, 0.25);
+  EXPECT_NEAR(steps[1]->centroid_m.x(), 7.0, 0.25);
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kRamp).empty());
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kWallOrObject).empty());
+}
+
+TEST(ObstaclesTest, OneCentimetreStepIsCrossable) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.0015);
+  const common::ObstacleRegistry r =
+      Extract(Corridor([&](double x) { return ((x > 6.0 && x < 7.0) ? 0.01 : 0.0) + noise(rng); }));
+  const auto steps = OfKind(r, ObstacleKind::kStepUp);
+  ASSERT_GE(steps.size(), 1u);
+  const Obstacle* longest = steps[0];
+  for (const Obstacle* s : steps) {
+    if (s->num_cells > longest->num_cells) longest = s;
+  }
+  EXPECT_NEAR(longest->height_m, 0.01, 0.003);
+  EXPECT_GT(longest->length_m, 3.0);
+  for (const Obstacle* s : steps) {
+    EXPECT_TRUE(Crossable(*s, "pioneer3at"));
+    EXPECT_TRUE(Crossable(*s, "rover"));
+  }
+}
+
+// A platform reached by ground on one side, seen falling away on the other: the far edge is a
+// step down (the ground around it is at the high level).
+TEST(ObstaclesTest, StepDownOfALowerArea) {
+  const common::ObstacleRegistry r =
+      Extract(Corridor([](double x) { return (x > 12.0) ? -0.2 : 0.0; }, 70));
+  const auto downs = OfKind(r, ObstacleKind::kStepDown);
+  ASSERT_EQ(downs.size(), 1u);
+  EXPECT_NEAR(downs[0]->height_m, 0.2, 1e-4);
+  EXPECT_FALSE(Crossable(*downs[0], "pioneer3at"));  // 0.20 > 0.10
+  EXPECT_FALSE(Crossable(*downs[0], "rover"));       // 0.20 > 0.15
+}
+
+TEST(ObstaclesTest, UnseenTrenchIsADitchForBoth) {
+  GridMap map = Corridor([](double x) { return (x > 6.0 && x < 6.6) ? std::nan("") : 0.0; });
+  common::Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int ix = 30; ix < 33; ++ix) {
+    for (int iy = 0; iy < 20; ++iy) b(ix, iy) = -0.12f;
+  }
+  const common::ObstacleRegistry r = Extract(map);
+  const auto ditches = OfKind(r, ObstacleKind::kDitch);
+  ASSERT_EQ(ditches.size(), 1u);
+  const Obstacle& d = *ditches[0];
+  EXPECT_NEAR(d.width_m, 0.6, 1e-4);
+  EXPECT_TRUE(std::isnan(d.depth_m));  // never saw the bottom
+  EXPECT_NEAR(d.centroid_m.x(), 6.3, 0.15);
+  EXPECT_FALSE(Crossable(d, "pioneer3at"));
+  EXPECT_FALSE(Crossable(d, "rover"));
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kStepUp).empty());
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kStepDown).empty());
+}
+
+TEST(ObstaclesTest, CubeIsAWallOrObject) {
+  const common::ObstacleRegistry r = Extract(MakeTerrain(40, 40, kRes, [](double x, double y) {
+    return (x > 3.0 && x < 4.0 && y > 4.0 && y < 5.0) ? 1.0 : 0.0;
+  }));
+  const auto walls = OfKind(r, ObstacleKind::kWallOrObject);
+  ASSERT_EQ(walls.size(), 1u);
+  EXPECT_NEAR(walls[0]->height_m, 1.0, 1e-4);
+  EXPECT_NEAR(walls[0]->centroid_m.x(), 3.5, 0.05);
+  EXPECT_NEAR(walls[0]->centroid_m.y(), 4.5, 0.05);
+  EXPECT_TRUE(Inside(walls[0]->outline_m, {3.5, 4.5}));
+  EXPECT_FALSE(Inside(walls[0]->outline_m, {6.0, 6.0}));
+  EXPECT_FALSE(Crossable(*walls[0], "rover"));
+  EXPECT_EQ(r.obstacles.size(), 1u);
+}
+
+TEST(ObstaclesTest, FlatNoisyGroundHoldsNoFeatures) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.001);
+  const common::ObstacleRegistry r =
+      Extract(MakeTerrain(50, 50, kRes, [&](double, double) { return noise(rng); }));
+  EXPECT_TRUE(r.obstacles.empty());
+}
+
+common::Obstacle Make(ObstacleKind kind) {
+  common::Obstacle o;
+  o.kind = kind;
+  return o;
+}
+
+TEST(JudgeObstacleTest, BoundariesPerKind) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  Obstacle ramp = Make(ObstacleKind::kRamp);
+  ramp.slope_rad = 7.9 * kDeg;
+  EXPECT_TRUE(JudgeObstacle(ramp, pioneer).crossable);
+  ramp.slope_rad = 8.0 * kDeg;
+  EXPECT_FALSE(JudgeObstacle(ramp, pioneer).crossable);
+  Obstacle up = Make(ObstacleKind::kStepUp);
+  up.height_m = 0.03;
+  EXPECT_TRUE(JudgeObstacle(up, pioneer).crossable);
+  up.height_m = 0.031;
+  const common::ObstacleVerdict v = JudgeObstacle(up, pioneer);
+  EXPECT_FALSE(v.crossable);
+  EXPECT_EQ(v.reason, "step up 0.031 m > 0.030 m");
+  EXPECT_EQ(v.profile, "pioneer3at");
+  EXPECT_EQ(v.profile_hash, pioneer.ContentHash());
+  Obstacle down = Make(ObstacleKind::kStepDown);
+  down.height_m = 0.10;
+  EXPECT_TRUE(JudgeObstacle(down, pioneer).crossable);
+  down.height_m = 0.101;
+  EXPECT_FALSE(JudgeObstacle(down, pioneer).crossable);
+  Obstacle ditch = Make(ObstacleKind::kDitch);
+  ditch.width_m = 0.1;
+  ditch.depth_m = NAN;
+  EXPECT_TRUE(JudgeObstacle(ditch, pioneer).crossable);  // bridged
+  ditch.width_m = 0.6;
+  EXPECT_FALSE(JudgeObstacle(ditch, pioneer).crossable);
+  ditch.depth_m = 0.02;  // a shallow groove the robot drives through
+  EXPECT_TRUE(JudgeObstacle(ditch, pioneer).crossable);
+  Obstacle wall = Make(ObstacleKind::kWallOrObject);
+  wall.height_m = 1.0;
+  EXPECT_FALSE(JudgeObstacle(wall, pioneer).crossable);
+  EXPECT_TRUE(JudgeObstacle(ramp, ShippedProfile("rover")).crossable);
+}
+
+TEST(JudgeObstacleTest, LabelReplacesOnlyTheGivenProfiles) {
+  common::ObstacleRegistry r;
+  Obstacle up = Make(ObstacleKind::kStepUp);
+  up.height_m = 0.05;
+  common::ObstacleVerdict stale;
+  stale.profile = "pioneer3at";
+  stale.crossable = true;
+  common::ObstacleVerdict other;
+  other.profile = "kobuki";
+  other.crossable = false;
+  up.verdicts = {stale, other};
+  r.obstacles.push_back(up);
+  LabelObstacles(&r, {ShippedProfile("pioneer3at"), ShippedProfile("rover")});
+  ASSERT_EQ(r.obstacles[0].verdicts.size(), 3u);
+  EXPECT_FALSE(r.obstacles[0].VerdictFor("pioneer3at")->crossable);
+  EXPECT_TRUE(r.obstacles[0].VerdictFor("rover")->crossable);
+  EXPECT_FALSE(r.obstacles[0].VerdictFor("kobuki")->crossable);  // kept as it was
+}
+
+// Seed 000 scenario 17: deriving never touches the stored base layers, and two profiles differ
+// only where the terrain matters to them.
+TEST(DeriveTest, BaseMapUntouchedAndProfilesDifferOnlyOnTheRamp) {
+  const double t = std::tan(10 * kDeg);
+  const GridMap base =
+      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); });
+  const GridMap before = base;
+  const DerivedLayers a = DeriveProfileLayers(base, ShippedProfile("pioneer3at"));
+  const DerivedLayers b = DeriveProfileLayers(base, ShippedProfile("rover"));
+  EXPECT_TRUE(base == before);
+  EXPECT_EQ(base.layer_names(), before.layer_names());
+  ASSERT_TRUE(a.layers.HasLayer(layers::CostLayer("pioneer3at")));
+  ASSERT_TRUE(b.layers.HasLayer(layers::CostLayer("rover")));
+  for (const char* name : {layers::kSlope, layers::kStepMax, layers::kRoughness}) {
+    EXPECT_TRUE(a.layers.HasLayer(name)) << name;
+  }
+  EXPECT_EQ(a.layers.geometry(), base.geometry());
+  const common::Layer& ca = a.layers.at(layers::CostLayer("pioneer3at"));
+  const common::Layer& cb = b.layers.at(layers::CostLayer("rover"));
+  int differ = 0;
+  for (int iy = 1; iy < base.size_y() - 1; ++iy) {
+    for (int ix = 1; ix < base.size_x() - 1; ++ix) {
+      const bool a_lethal = ca(ix, iy) == layers::kCostLethal;
+      const bool b_lethal = cb(ix, iy) == layers::kCostLethal;
+      if (a_lethal != b_lethal) {
+        ++differ;
+        const double x = base.CenterOf({ix, iy}).x();
+        EXPECT_GT(x, 3.7) << ix;  // on the ramp (with its foot and top)
+        EXPECT_LT(x, 7.3) << ix;
+      }
+    }
+  }
+  EXPECT_GT(differ, 100);
+  ASSERT_EQ(a.registry.obstacles.size(), 1u);
+  EXPECT_FALSE(a.registry.obstacles[0].VerdictFor("pioneer3at")->crossable);
+  EXPECT_TRUE(b.registry.obstacles[0].VerdictFor("rover")->crossable);
+  EXPECT_EQ(a.registry.obstacles[0].VerdictFor("rover"), nullptr);
+  // The same input gives the same output, bit for bit.
+  const DerivedLayers again = DeriveProfileLayers(base, ShippedProfile("pioneer3at"));
+  EXPECT_TRUE(again.layers == a.layers);
+  EXPECT_STRNE(kMappingCodeVersion, "");
+}
+
+TEST(DeriveTest, ProfileChangeChangesTheVerdict) {
+  // Seed 000 scenario 18: the rover edited to 9 deg no longer crosses the 10 deg ramp.
+  const double t = std::tan(10 * kDeg);
+  const GridMap base =
+      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); });
+  common::RobotProfile rover = ShippedProfile("rover");
+  const std::string hash_before = rover.ContentHash();
+  rover.max_slope_up_rad = 9 * kDeg;
+  EXPECT_NE(rover.ContentHash(), hash_before);
+  const DerivedLayers d = DeriveProfileLayers(base, rover);
+  ASSERT_EQ(d.registry.obstacles.size(), 1u);
+  EXPECT_FALSE(d.registry.obstacles[0].VerdictFor("rover")->crossable);
+  EXPECT_EQ(d.registry.obstacles[0].VerdictFor("rover")->profile_hash, rover.ContentHash());
+}
+
+TEST(DeriveTest, MissingElevationThrows) {
+  common::GridGeometry g;
+  g.size_x = 3;
+  g.size_y = 3;
+  EXPECT_THROW(DeriveProfileLayers(GridMap(g), ShippedProfile("rover")), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace cairn::mapping

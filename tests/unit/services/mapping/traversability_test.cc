@@ -1,0 +1,651 @@
+#include "services/mapping/traversability.h"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "common/layers.h"
+#include "tests/unit/services/mapping/terrain_fixtures.h"
+
+namespace cairn::mapping {
+namespace {
+
+using common::GridMap;
+using common::Layer;
+using testing::kDeg;
+using testing::LenientProfile;
+using testing::MakeTerrain;
+using testing::Plane;
+using testing::ShippedProfile;
+
+constexpr double kRes = 0.2;
+
+// Interior cells: at least 0.4 m (two cells) from every edge.
+template <typename Fn>
+void ForInterior(const GridMap& map, Fn fn) {
+  for (int iy = 2; iy < map.size_y() - 2; ++iy) {
+    for (int ix = 2; ix < map.size_x() - 2; ++ix) fn(ix, iy);
+  }
+}
+
+float Cost(const GridMap& map, const std::string& profile, int ix, int iy) {
+  return map.at(layers::CostLayer(profile))(ix, iy);
+}
+
+// Seed 000 test 1: slope = acos(n_z) of the PCA normal over 0.3 m, within 0.05 deg.
+TEST(TraversabilityTest, SlopeOfTiltedPlanes) {
+  for (double deg : {0.0, 5.0, 8.0, 10.0, 11.0}) {
+    for (double azimuth : {0.0, 0.7, 2.5}) {
+      GridMap map = MakeTerrain(20, 16, kRes, Plane(deg * kDeg, azimuth));
+      ComputeGeometricLayers(&map, {});
+      ForInterior(map, [&](int ix, int iy) {
+        EXPECT_NEAR(map.at(layers::kSlope)(ix, iy) / kDeg, deg, 0.05)
+            << deg << " deg at azimuth " << azimuth << " cell " << ix << "," << iy;
+        EXPECT_NEAR(map.at(layers::kRoughness)(ix, iy), 0.0, 1e-4);
+      });
+    }
+  }
+}
+
+// Seed 000 test 2: at r = 0.15 m the window is one cell, so the normal falls back to vertical.
+TEST(TraversabilityTest, NormalWindowSmallerThanACellGivesVerticalNormal) {
+  GridMap map = MakeTerrain(12, 12, kRes, Plane(10 * kDeg));
+  TraversabilityParams p;
+  p.normal_radius_m = 0.15;
+  ComputeGeometricLayers(&map, p);
+  ForInterior(map, [&](int ix, int iy) { EXPECT_EQ(map.at(layers::kSlope)(ix, iy), 0.f); });
+  // At 0.3 m the window holds the 3 x 3 block: a single raised neighbour tilts the normal.
+  GridMap bump = MakeTerrain(12, 12, kRes, [](double x, double y) {
+    return (std::floor(x / kRes) == 6 && std::floor(y / kRes) == 7) ? 0.05 : 0.0;
+  });
+  ComputeGeometricLayers(&bump, {});
+  EXPECT_GT(bump.at(layers::kSlope)(6, 6), 0.01);  // (6, 7) is inside (6, 6)'s window
+  EXPECT_GT(bump.at(layers::kSlope)(7, 6), 0.01);  // diagonal, 0.283 m < 0.3 m
+  EXPECT_EQ(bump.at(layers::kSlope)(6, 5), 0.f);   // 0.4 m away: outside the window
+}
+
+TEST(TraversabilityTest, FewerThanThreePointsGiveVerticalNormal) {
+  GridMap map = MakeTerrain(8, 8, kRes, [](double x, double y) {
+    const int ix = static_cast<int>(std::floor(x / kRes)),
+              iy = static_cast<int>(std::floor(y / kRes));
+    if (iy == 4 && (ix == 4 || ix == 5)) return 0.1 * ix;  // two lonely cells, 10 cm apart
+    return std::nan("");
+  });
+  ComputeGeometricLayers(&map, {});
+  EXPECT_EQ(map.at(layers::kSlope)(4, 4), 0.f);
+  EXPECT_EQ(map.at(layers::kSlope)(5, 4), 0.f);
+  EXPECT_NEAR(map.at(layers::kStepMax)(4, 4), 0.1, 1e-6);
+  EXPECT_TRUE(std::isnan(map.at(layers::kSlope)(0, 0)));
+}
+
+// A lidar ring seen from afar crosses a ramp as a strip one cell wide between unknown cells: the
+// cells fix the slope along the strip only. On a 5 deg ramp rising in x, a strip along y (heights
+// with a millimetre of noise) is level along its length; a strip along x rises at 5 deg; a
+// diagonal strip at 5 deg x cos 45. None of them is a wall.
+TEST(TraversabilityTest, CellsOnOneLineGiveTheSlopeAlongTheLine) {
+  const double t = std::tan(5 * kDeg);
+  auto cell = [](double v) { return static_cast<int>(std::floor(v / kRes)); };
+  auto noise = [](int i) { return (i % 3 - 1) * 0.001; };
+  GridMap across = MakeTerrain(12, 12, kRes, [&](double x, double y) {
+    return cell(x) == 6 ? t * x + noise(cell(y)) : std::nan("");
+  });
+  GridMap along = MakeTerrain(
+      12, 12, kRes, [&](double x, double y) { return cell(y) == 6 ? t * x : std::nan(""); });
+  GridMap diagonal = MakeTerrain(
+      12, 12, kRes, [&](double x, double y) { return cell(x) == cell(y) ? t * x : std::nan(""); });
+  for (GridMap* map : {&across, &along, &diagonal}) ComputeGeometricLayers(map, {});
+  for (int i = 3; i <= 8; ++i) {
+    EXPECT_LT(across.at(layers::kSlope)(6, i) / kDeg, 1.0) << "cell 6," << i;
+    EXPECT_NEAR(along.at(layers::kSlope)(i, 6) / kDeg, 5.0, 0.05) << "cell " << i << ",6";
+    // Along the diagonal the height rises t per metre of x, over sqrt(2) m.
+    EXPECT_NEAR(diagonal.at(layers::kSlope)(i, i), std::atan(t / std::sqrt(2.0)), 0.05 * kDeg)
+        << "cell " << i;
+  }
+  // The cost layer: a 5 deg ramp is free for the pioneer3at; a strip is no wall.
+  ComputeCostLayer(&across, ShippedProfile("pioneer3at"), {});
+  for (int i = 3; i <= 8; ++i) EXPECT_LT(Cost(across, "pioneer3at", 6, i), 100.f) << i;
+}
+// Seed 000 test 3: 5 and 7.5 deg planes are crossable for an 8 deg profile, 8.5 and 10 deg not.
+TEST(TraversabilityTest, SlopeThresholdAgainstPioneer) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  ASSERT_NEAR(pioneer.max_slope_up_rad / kDeg, 8.0, 1e-9);
+  for (double deg : {5.0, 7.5, 8.5, 10.0}) {
+    GridMap map = MakeTerrain(20, 20, kRes, Plane(deg * kDeg, 0.3));
+    ComputeCostLayer(&map, pioneer, {});
+    ForInterior(map, [&](int ix, int iy) {
+      const float c = Cost(map, "pioneer3at", ix, iy);
+      if (deg < 8.0) {
+        EXPECT_LT(c, layers::kCostLethal) << deg << " deg";
+        EXPECT_GT(c, layers::kCostFree) << deg << " deg uses most of the limit: graded";
+      } else {
+        EXPECT_EQ(c, layers::kCostLethal) << deg << " deg";
+      }
+    });
+  }
+  // The graded cost grows with the slope; flat ground is free.
+  GridMap flat = MakeTerrain(12, 12, kRes, Plane(0.0));
+  GridMap five = MakeTerrain(12, 12, kRes, Plane(5 * kDeg));
+  GridMap seven = MakeTerrain(12, 12, kRes, Plane(7.5 * kDeg));
+  for (GridMap* m : {&flat, &five, &seven}) ComputeCostLayer(m, pioneer, {});
+  EXPECT_EQ(Cost(flat, "pioneer3at", 6, 6), layers::kCostFree);
+  EXPECT_LT(Cost(five, "pioneer3at", 6, 6), Cost(seven, "pioneer3at", 6, 6));
+}
+
+// Graded costs are whole numbers from 1 up (a ROS occupancy grid's values), so a cost layer
+// packs into one byte per cell; a cost of the share just above free_fraction rounds up to 1.
+TEST(TraversabilityTest, GradedCostsAreWholeNumbers) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  for (double deg : {2.5, 2.6, 3.0, 5.0, 6.1, 7.5, 7.9}) {
+    GridMap map = MakeTerrain(12, 12, kRes, Plane(deg * kDeg, 0.2));
+    ComputeCostLayer(&map, pioneer, {});
+    ForInterior(map, [&](int ix, int iy) {
+      const float c = Cost(map, "pioneer3at", ix, iy);
+      EXPECT_EQ(c, std::round(c)) << deg << " deg";
+      EXPECT_TRUE(c == layers::kCostFree || (c >= 1.f && c <= 90.f)) << deg << " deg: " << c;
+    });
+  }
+  // 2.41 deg is just over free_fraction (0.3) of 8 deg: graded, the smallest graded cost.
+  GridMap barely = MakeTerrain(12, 12, kRes, Plane(2.41 * kDeg));
+  ComputeCostLayer(&barely, pioneer, {});
+  EXPECT_EQ(Cost(barely, "pioneer3at", 6, 6), 1.f);
+}
+
+// The slope rule alone (steps and roughness unlimited) at 8.5 deg, and the boundary value.
+TEST(TraversabilityTest, SlopeRuleAloneIsInclusiveOfTheLimit) {
+  common::RobotProfile p = LenientProfile();
+  p.max_slope_up_rad = 8.0 * kDeg;
+  GridMap steep = MakeTerrain(12, 12, kRes, Plane(8.5 * kDeg));
+  GridMap gentle = MakeTerrain(12, 12, kRes, Plane(7.5 * kDeg));
+  ComputeCostLayer(&steep, p, {});
+  ComputeCostLayer(&gentle, p, {});
+  EXPECT_EQ(Cost(steep, "test", 6, 6), layers::kCostLethal);
+  EXPECT_LT(Cost(gentle, "test", 6, 6), layers::kCostLethal);
+  // The down limit counts too: the slope is unsigned on a non-directional grid.
+  p.max_slope_up_rad = 20 * kDeg;
+  p.max_slope_down_rad = 8.0 * kDeg;
+  ComputeCostLayer(&steep, p, {});
+  EXPECT_EQ(Cost(steep, "test", 6, 6), layers::kCostLethal);
+}
+
+// A map with a straight step along x = 1.0 m: h = 0 for x < 1, `rise` beyond.
+GridMap StepMap(double rise) {
+  return MakeTerrain(10, 8, kRes, [rise](double x, double) { return x < 1.0 ? 0.0 : rise; });
+}
+
+// Seed 000 test 4: step up of exactly 3 cm is free, 3.1 cm lethal (on the low side).
+TEST(TraversabilityTest, StepUpBoundaryIsInclusive) {
+  common::RobotProfile p = LenientProfile();
+  p.max_step_up_m = 0.03;
+  GridMap at_limit = StepMap(0.030), over = StepMap(0.031);
+  ComputeCostLayer(&at_limit, p, {});
+  ComputeCostLayer(&over, p, {});
+  for (int iy = 1; iy < 7; ++iy) {
+    EXPECT_LT(Cost(at_limit, "test", 4, iy), layers::kCostLethal);  // low side, next to the edge
+    EXPECT_LT(Cost(at_limit, "test", 5, iy), layers::kCostLethal);
+    EXPECT_EQ(Cost(over, "test", 4, iy), layers::kCostLethal);
+    EXPECT_LT(Cost(over, "test", 5, iy), layers::kCostLethal);  // going down 3.1 cm is fine
+    EXPECT_LT(Cost(over, "test", 3, iy), layers::kCostLethal);  // one cell further is flat
+  }
+}
+
+// The same boundary on a high base (float elevations far from zero) still holds.
+TEST(TraversabilityTest, StepBoundaryHoldsAtHighElevation) {
+  common::RobotProfile p = LenientProfile();
+  p.max_step_up_m = 0.03;
+  GridMap map = MakeTerrain(10, 8, kRes, [](double x, double) { return x < 1.0 ? 123.5 : 123.53; });
+  ComputeCostLayer(&map, p, {});
+  EXPECT_LT(Cost(map, "test", 4, 4), layers::kCostLethal);
+}
+
+// A lethal step edge is at least two cells long (min_step_edge_cells = 2): one cell 4 cm above
+// its neighbours on a flat floor is elevation noise, a straight 4 cm edge is a step. With 1 (the
+// seed's per-pair rule) the lone cell makes its neighbours lethal.
+TEST(TraversabilityTest, LoneHighCellIsNoStepButAnEdgeIs) {
+  common::RobotProfile p = LenientProfile();
+  p.max_step_up_m = 0.03;
+  GridMap lone = MakeTerrain(10, 10, kRes, [](double x, double y) {
+    return (x >= 1.0 && x < 1.2 && y >= 1.0 && y < 1.2) ? 0.04 : 0.0;
+  });
+  TraversabilityParams params;
+  ComputeCostLayer(&lone, p, params);
+  EXPECT_LT(Cost(lone, "test", 4, 5), layers::kCostLethal);  // beside the lone cell
+  EXPECT_LT(Cost(lone, "test", 5, 4), layers::kCostLethal);
+  EXPECT_GT(Cost(lone, "test", 4, 5), layers::kCostFree);  // at the limit: graded, not free
+  GridMap edge = StepMap(0.04);
+  ComputeCostLayer(&edge, p, params);
+  for (int iy = 1; iy < 7; ++iy) EXPECT_EQ(Cost(edge, "test", 4, iy), layers::kCostLethal);
+  params.min_step_edge_cells = 1;
+  ComputeCostLayer(&lone, p, params);
+  EXPECT_EQ(Cost(lone, "test", 4, 5), layers::kCostLethal);
+  EXPECT_EQ(Cost(lone, "test", 5, 4), layers::kCostLethal);
+}
+
+// Seed 000 test 5: from the high cell, a drop of exactly 10 cm is free, 10.1 cm lethal.
+TEST(TraversabilityTest, StepDownBoundaryIsInclusive) {
+  common::RobotProfile p = LenientProfile();
+  p.max_step_down_m = 0.10;
+  GridMap at_limit = StepMap(0.100), over = StepMap(0.101);
+  ComputeCostLayer(&at_limit, p, {});
+  ComputeCostLayer(&over, p, {});
+  for (int iy = 1; iy < 7; ++iy) {
+    EXPECT_LT(Cost(at_limit, "test", 5, iy), layers::kCostLethal);  // high side
+    EXPECT_EQ(Cost(over, "test", 5, iy), layers::kCostLethal);
+    EXPECT_LT(Cost(over, "test", 4, iy), layers::kCostLethal);  // climbing is unlimited here
+  }
+}
+
+// Seed 000 test 6: a 5 cm step for the P3-AT: low side lethal (step up), high side crossable.
+TEST(TraversabilityTest, StepDirectionAsymmetryForPioneer) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  GridMap map = StepMap(0.05);
+  ComputeCostLayer(&map, pioneer, {});
+  for (int iy = 1; iy < 7; ++iy) {
+    EXPECT_EQ(Cost(map, "pioneer3at", 4, iy), layers::kCostLethal);
+    EXPECT_LT(Cost(map, "pioneer3at", 5, iy), layers::kCostLethal);
+    EXPECT_LT(Cost(map, "pioneer3at", 2, iy), layers::kCostLethal);
+    EXPECT_LT(Cost(map, "pioneer3at", 7, iy), layers::kCostLethal);
+  }
+}
+
+// Seed 000 test 7: at 0.2 m, a 9 deg plane rises 3.17 cm per cell: lethal by the step rule
+// alone; an 8.3 deg plane (2.92 cm) passes the step rule but fails the slope rule.
+TEST(TraversabilityTest, ResolutionCouplesStepAndSlope) {
+  common::RobotProfile steps_only = LenientProfile("steps");
+  steps_only.max_step_up_m = 0.03;
+  GridMap nine = MakeTerrain(12, 12, kRes, Plane(9 * kDeg));
+  ComputeCostLayer(&nine, steps_only, {});
+  ForInterior(nine,
+              [&](int ix, int iy) { EXPECT_EQ(Cost(nine, "steps", ix, iy), layers::kCostLethal); });
+
+  GridMap eight3 = MakeTerrain(12, 12, kRes, Plane(8.3 * kDeg));
+  ComputeCostLayer(&eight3, steps_only, {});
+  ComputeCostLayer(&eight3, ShippedProfile("pioneer3at"), {});
+  ForInterior(eight3, [&](int ix, int iy) {
+    EXPECT_LT(Cost(eight3, "steps", ix, iy), layers::kCostLethal);
+    EXPECT_EQ(Cost(eight3, "pioneer3at", ix, iy), layers::kCostLethal);
+  });
+}
+
+// Seed 000 test 8: unknown elevation gives unknown cost; border cells are unknown.
+TEST(TraversabilityTest, UnknownAndBorderCells) {
+  GridMap map = MakeTerrain(10, 10, kRes, [](double x, double y) {
+    return (x > 1.0 && x < 1.4 && y > 1.0 && y < 1.4) ? std::nan("") : 0.0;
+  });
+  const common::RobotProfile p = LenientProfile();
+  ComputeCostLayer(&map, p, {});
+  EXPECT_TRUE(std::isnan(Cost(map, "test", 5, 5)));
+  EXPECT_TRUE(std::isnan(Cost(map, "test", 6, 6)));
+  EXPECT_EQ(Cost(map, "test", 4, 5), layers::kCostFree);  // next to unknown: judged on the rest
+  for (int i = 0; i < 10; ++i) {
+    EXPECT_TRUE(std::isnan(Cost(map, "test", 0, i)));
+    EXPECT_TRUE(std::isnan(Cost(map, "test", 9, i)));
+    EXPECT_TRUE(std::isnan(Cost(map, "test", i, 0)));
+    EXPECT_TRUE(std::isnan(Cost(map, "test", i, 9)));
+  }
+  TraversabilityParams lethal_unknown;
+  lethal_unknown.unknown_is_lethal = true;
+  ComputeCostLayer(&map, p, lethal_unknown);
+  EXPECT_EQ(Cost(map, "test", 5, 5), layers::kCostLethal);
+  EXPECT_EQ(Cost(map, "test", 0, 3), layers::kCostLethal);
+}
+
+// Seed 000 test 9: with a 1.6 m unknown square around the robot, the 16 cells whose centres lie
+// strictly within +-0.5 m are free, the other unknown cells stay unknown. The zone follows the
+// robot, not the map centre.
+TEST(TraversabilityTest, BlindZoneAroundTheRobot) {
+  GridMap map = MakeTerrain(60, 60, kRes, [](double x, double y) {
+    return (std::fabs(x - 6.0) < 0.8 && std::fabs(y - 6.0) < 0.8) ? std::nan("") : 0.0;
+  });
+  const common::RobotProfile p = LenientProfile();
+  ComputeCostLayer(&map, p, {}, common::Vector2(6.0, 6.0));
+  int free_cells = 0, unknown_cells = 0;
+  for (int iy = 26; iy < 34; ++iy) {
+    for (int ix = 26; ix < 34; ++ix) {
+      const float c = Cost(map, "test", ix, iy);
+      const bool inside = ix >= 28 && ix < 32 && iy >= 28 && iy < 32;
+      if (inside) {
+        EXPECT_EQ(c, layers::kCostFree) << ix << "," << iy;
+        ++free_cells;
+      } else {
+        EXPECT_TRUE(std::isnan(c)) << ix << "," << iy;
+        ++unknown_cells;
+      }
+    }
+  }
+  EXPECT_EQ(free_cells, 16);
+  EXPECT_EQ(unknown_cells, 48);
+  // Without a robot position nothing is forced free.
+  ComputeCostLayer(&map, p, {});
+  EXPECT_TRUE(std::isnan(Cost(map, "test", 29, 29)));
+  // Elsewhere on the map, around a robot standing at (2, 9): the zone moves with it.
+  GridMap other = MakeTerrain(60, 60, kRes, [](double x, double y) {
+    return (std::fabs(x - 2.0) < 0.8 && std::fabs(y - 9.0) < 0.8) ? std::nan("") : 0.0;
+  });
+  ComputeCostLayer(&other, p, {}, common::Vector2(2.0, 9.0));
+  EXPECT_EQ(Cost(other, "test", 10, 45), layers::kCostFree);
+  EXPECT_TRUE(std::isnan(Cost(other, "test", 7, 42)));
+}
+
+// Seed 000 test 10: a 6 deg plane (relative to a pitched robot) with pitch +5 deg reads 11 deg:
+// lethal for 8 deg; pitch 0 or compensation off: crossable.
+TEST(TraversabilityTest, ImuPitchCompensation) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  GridMap map = MakeTerrain(12, 12, kRes, Plane(6 * kDeg));
+  TraversabilityParams on;
+  on.imu_pitch_compensation = true;
+  ComputeCostLayer(&map, pioneer, on, std::nullopt, 5 * kDeg);
+  EXPECT_EQ(Cost(map, "pioneer3at", 6, 6), layers::kCostLethal);
+  ComputeCostLayer(&map, pioneer, on, std::nullopt, 0.0);
+  EXPECT_LT(Cost(map, "pioneer3at", 6, 6), layers::kCostLethal);
+  ComputeCostLayer(&map, pioneer, TraversabilityParams{}, std::nullopt, 5 * kDeg);  // world frame
+  EXPECT_LT(Cost(map, "pioneer3at", 6, 6), layers::kCostLethal);
+
+  // With the heading known the normals are tilted exactly: the rising plane still reads 11 deg,
+  // and level ground ahead of a robot pitched up on a 5 deg ramp (seen as -5 deg) reads 0 deg
+  // instead of the seed's 10 deg.
+  RobotContext robot;
+  robot.yaw_rad = 0.0;
+  robot.pitch_rad = 5 * kDeg;
+  ComputeCostLayer(&map, pioneer, on, robot, CellRect::All(map));
+  EXPECT_EQ(Cost(map, "pioneer3at", 6, 6), layers::kCostLethal);
+  GridMap level_ahead = MakeTerrain(12, 12, kRes, Plane(-5 * kDeg));
+  ComputeGeometricLayers(&level_ahead, on);
+  ComputeCostLayer(&level_ahead, pioneer, on, robot, CellRect::All(level_ahead));
+  EXPECT_EQ(Cost(level_ahead, "pioneer3at", 6, 6), layers::kCostFree);
+  ComputeCostLayer(&level_ahead, pioneer, on, std::nullopt, 5 * kDeg);
+  EXPECT_EQ(Cost(level_ahead, "pioneer3at", 6, 6), layers::kCostLethal);
+}
+
+// Seed 000 test 11: geometry on an asymmetric pattern. A 20 cm block at one off-centre cell of a
+// non-square grid with an offset origin: the cells around it, found by world position and by
+// storage order, are the ones that turn lethal.
+TEST(TraversabilityTest, GridIndexGeometryOnAnAsymmetricPattern) {
+  const common::Pose2 origin{-1.3, 2.1, 0.0};
+  const int nx = 17, ny = 11;
+  const int bx = 12, by = 3;  // the block
+  GridMap map = MakeTerrain(
+      nx, ny, kRes,
+      [&](double x, double y) {
+        const int ix = static_cast<int>(std::floor((x + 1.3) / kRes));
+        const int iy = static_cast<int>(std::floor((y - 2.1) / kRes));
+        return (ix == bx && iy == by) ? 0.2 : 0.0;
+      },
+      origin);
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  ComputeCostLayer(&map, pioneer, {});
+  const Layer& cost = map.at(layers::CostLayer("pioneer3at"));
+  // Storage order: x fastest from the minimum corner.
+  EXPECT_EQ(cost.data()[(bx - 1) + by * nx], layers::kCostLethal);
+  EXPECT_EQ(cost.data()[bx + (by + 1) * nx], layers::kCostLethal);
+  // The world position of the block's west neighbour maps to that cell.
+  const common::Vector2 west(-1.3 + (bx - 1 + 0.5) * kRes, 2.1 + (by + 0.5) * kRes);
+  EXPECT_EQ(map.ValueAt(layers::CostLayer("pioneer3at"), west), layers::kCostLethal);
+  // Transposed and mirrored positions are far from the block and stay free.
+  EXPECT_EQ(cost(by, bx - 4), layers::kCostFree);  // transposed (x <-> y), inside the grid
+  EXPECT_EQ(cost(nx - 1 - bx, by), layers::kCostFree);
+  EXPECT_EQ(cost(bx, ny - 1 - by), layers::kCostFree);
+  // Every lethal cell is within one cell of the block.
+  for (int iy = 0; iy < ny; ++iy) {
+    for (int ix = 0; ix < nx; ++ix) {
+      if (cost(ix, iy) == layers::kCostLethal) {
+        EXPECT_LE(std::abs(ix - bx) + std::abs(iy - by), 2) << ix << "," << iy;
+      }
+    }
+  }
+}
+
+// A trench 0.6 m wide across the map whose bottom the sensor looked into (ground bound 0.2 m
+// below the rims) but never saw: a ditch, lethal for both shipped ground profiles.
+GridMap TrenchMap(double width_m, double bound_m, bool with_bound = true) {
+  GridMap map = MakeTerrain(30, 12, kRes, [width_m](double x, double) {
+    return (x > 2.0 && x < 2.0 + width_m) ? std::nan("") : 0.0;
+  });
+  if (with_bound) {
+    Layer& b = map.AddLayer(layers::kGroundBound);
+    const Layer& h = map.at(layers::kElevation);
+    for (int iy = 0; iy < map.size_y(); ++iy) {
+      for (int ix = 0; ix < map.size_x(); ++ix) {
+        if (std::isnan(h(ix, iy))) b(ix, iy) = static_cast<float>(bound_m);
+      }
+    }
+  }
+  return map;
+}
+
+TEST(TraversabilityTest, UnseenTrenchIsADitch) {
+  GridMap map = TrenchMap(0.6, -0.2);
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  const common::RobotProfile rover = ShippedProfile("rover");
+  ComputeCostLayer(&map, pioneer, {});
+  ComputeCostLayer(&map, rover, {});
+  for (int ix = 10; ix < 13; ++ix) {
+    EXPECT_NEAR(map.at(layers::kDitchDepth)(ix, 6), 0.2, 1e-5);
+    EXPECT_NEAR(map.at(layers::kDitchWidth)(ix, 6), 0.6, 1e-5);
+    EXPECT_EQ(Cost(map, "pioneer3at", ix, 6), layers::kCostLethal);
+    EXPECT_EQ(Cost(map, "rover", ix, 6), layers::kCostLethal);
+  }
+  // The rims themselves are ground.
+  EXPECT_TRUE(std::isnan(map.at(layers::kDitchDepth)(9, 6)));
+  EXPECT_LT(Cost(map, "rover", 8, 6), layers::kCostLethal);
+}
+
+TEST(TraversabilityTest, NarrowDitchIsBridgedByAWideEnoughRobot) {
+  GridMap map = TrenchMap(0.2, -0.2);                                 // one cell
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");  // 0.10 m
+  const common::RobotProfile rover = ShippedProfile("rover");         // 0.30 m
+  ComputeCostLayer(&map, pioneer, {});
+  ComputeCostLayer(&map, rover, {});
+  EXPECT_NEAR(map.at(layers::kDitchWidth)(10, 6), 0.2, 1e-5);
+  EXPECT_EQ(Cost(map, "pioneer3at", 10, 6), layers::kCostLethal);
+  EXPECT_LT(Cost(map, "rover", 10, 6), layers::kCostLethal);
+  EXPECT_LT(Cost(map, "rover", 9, 6), layers::kCostLethal);       // no drop rule into a bridged gap
+  EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);  // drop of 0.2 m > 0.1 m
+}
+
+TEST(TraversabilityTest, GapsNobodyLookedIntoStayUnknown) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  // No bound at all, and a bound above the rims (the gap between two lidar rings).
+  GridMap never = TrenchMap(0.6, 0.0, /*with_bound=*/false);
+  GridMap between_rings = TrenchMap(0.6, 0.04);
+  for (GridMap* m : {&never, &between_rings}) {
+    ComputeCostLayer(m, pioneer, {});
+    EXPECT_TRUE(std::isnan(m->at(layers::kDitchDepth)(11, 6)));
+    EXPECT_TRUE(std::isnan(Cost(*m, "pioneer3at", 11, 6)));
+    EXPECT_LT(Cost(*m, "pioneer3at", 9, 6), layers::kCostLethal);
+  }
+}
+
+TEST(TraversabilityTest, SeenBottomJoinsTheDitchButGroundAtRimLevelDoesNot) {
+  // Trench 1.0 m wide with its last cell seen 0.3 m down.
+  GridMap map = MakeTerrain(30, 12, kRes, [](double x, double) {
+    if (x > 2.8 && x < 3.0) return -0.3;
+    return (x > 2.0 && x < 3.0) ? std::nan("") : 0.0;
+  });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int ix = 10; ix < 14; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) b(ix, iy) = -0.15f;
+  }
+  ComputeGeometricLayers(&map, {});
+  EXPECT_NEAR(map.at(layers::kDitchDepth)(14, 6), 0.3, 1e-5);  // seen bottom, true depth
+  EXPECT_NEAR(map.at(layers::kDitchWidth)(14, 6), 1.0, 1e-5);
+  EXPECT_NEAR(map.at(layers::kDitchDepth)(11, 6), 0.15, 1e-5);  // unseen: a lower bound
+  EXPECT_TRUE(std::isnan(map.at(layers::kDitchDepth)(9, 6)));
+  EXPECT_TRUE(std::isnan(map.at(layers::kDitchDepth)(15, 6)));
+}
+
+TEST(TraversabilityTest, AnUnhitCellAmongAStepsFaceCellsIsNoDitch) {
+  // A 20 cm block from x = 3.0 (a cell border). Returns from its face raise the floor cells in
+  // front of it (x in [2.8, 3.0)) to about 18 cm, except one that no return fell in; rays
+  // crossed all of them at floor level on their way to the face (values seen by the mapper in
+  // the tunnel). That cell lies between two 18 cm "rims" along the face, but they are no rims:
+  // neither it nor the floor in front of it is a ditch, and the block's edge stays a step.
+  GridMap map = MakeTerrain(30, 12, kRes, [](double x, double) {
+    if (x > 2.8 && x < 3.0) return 0.18;
+    return x > 3.0 ? 0.2 : 0.0;
+  });
+  Layer& h = map.at(layers::kElevation);
+  h(14, 6) = std::nanf("");
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int iy = 0; iy < 12; ++iy) {
+    for (int ix = 0; ix <= 14; ++ix) b(ix, iy) = 0.002f;
+  }
+  ComputeGeometricLayers(&map, {});
+  for (int ix = 8; ix <= 16; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) {
+      EXPECT_TRUE(std::isnan(map.at(layers::kDitchDepth)(ix, iy))) << ix << "," << iy;
+    }
+  }
+  // The same cell between two rims that rays crossed well above the gap: a narrow ditch.
+  for (int ix = 0; ix <= 14; ++ix) b(ix, 5) = b(ix, 7) = 0.25f;
+  b(14, 6) = -0.1f;
+  ComputeGeometricLayers(&map, {});
+  EXPECT_FALSE(std::isnan(map.at(layers::kDitchDepth)(14, 6)));
+}
+
+TEST(TraversabilityTest, DropIntoAnUnseenGapIsAStepDown) {
+  // A platform 0.3 m high ends at x = 2; beyond it nothing was seen, but rays went down to 0.
+  GridMap map =
+      MakeTerrain(30, 12, kRes, [](double x, double) { return x < 2.0 ? 0.3 : std::nan(""); });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int ix = 10; ix < 30; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.0f;
+  }
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  ComputeCostLayer(&map, LenientProfile(), {});
+  EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  EXPECT_LT(Cost(map, "pioneer3at", 8, 6), layers::kCostLethal);
+  // 10 m steps allowed, but nobody saw how deep it goes: lethal too. Judged by its lower bound
+  // alone (unseen_drop_m 0), 0.3 m is within that profile's limit.
+  EXPECT_EQ(Cost(map, "test", 9, 6), layers::kCostLethal);
+  TraversabilityParams by_bound;
+  by_bound.unseen_drop_m = 0.0;
+  ComputeCostLayer(&map, LenientProfile(), by_bound);
+  EXPECT_LT(Cost(map, "test", 9, 6), layers::kCostLethal);
+}
+
+// Seen from afar, a 20 cm drop's far side is hidden and the grazing rays prove only a few
+// centimetres of it: the edge is lethal already, not once the robot is close enough for the
+// rays to prove more than its step-down limit (10 cm for the pioneer3at).
+TEST(TraversabilityTest, AShallowBoundOfAnUnseenDropIsLethalAlready) {
+  GridMap map =
+      MakeTerrain(30, 12, kRes, [](double x, double) { return x < 2.0 ? 0.2 : std::nan(""); });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int ix = 10; ix < 30; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.2f - 0.06f;  // rays 6 cm below the platform
+  }
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  EXPECT_LT(Cost(map, "pioneer3at", 8, 6), layers::kCostLethal);
+  // Rays only 3 cm below (a gentle crest, or a plate's edge) prove no drop.
+  for (int ix = 10; ix < 30; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.2f - 0.03f;
+  }
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_LT(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  // Upstream rule (the profile's limit alone): 6 cm is crossable.
+  for (int ix = 10; ix < 30; ++ix) {
+    for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.2f - 0.06f;
+  }
+  TraversabilityParams by_limit;
+  by_limit.unseen_drop_m = 0.0;
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), by_limit);
+  EXPECT_LT(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+}
+
+// The cell on the edge itself is often mixed (part rim, part gap) and unknown, its bound barely
+// below the rim; the rays show the drop a cell further. The rim looks through the unknown cells
+// beyond it (0.4 m) for the lowest bound.
+TEST(TraversabilityTest, TheRimSeesTheDropBeyondAMixedEdgeCell) {
+  GridMap map =
+      MakeTerrain(30, 12, kRes, [](double x, double) { return x < 2.0 ? 0.2 : std::nan(""); });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int iy = 0; iy < 12; ++iy) {
+    b(10, iy) = 0.18f;                                   // the mixed edge cell
+    b(11, iy) = 0.12f;                                   // the drop, a cell on
+    for (int ix = 12; ix < 30; ++ix) b(ix, iy) = 0.05f;  // beyond the reach
+  }
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  // Without the drop a cell on, only the far bound (0.6 m away) shows it: not the rim's.
+  for (int iy = 0; iy < 12; ++iy) b(11, iy) = 0.18f;
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_LT(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+}
+
+// The live mapper recomputes windows of a larger map: with DependencyRadiusCells of margin the
+// window's values equal the whole-map computation.
+TEST(TraversabilityTest, WindowWithMarginMatchesWholeMap) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  GridMap map = MakeTerrain(80, 70, kRes, [&](double x, double y) {
+    if (x > 6 && x < 6.6) return std::nan("");  // a trench
+    double h = 0.1 * std::sin(x) + noise(rng);
+    if (y > 8 && y < 9) h += 0.2;  // a block
+    return h;
+  });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  const Layer& h = map.at(layers::kElevation);
+  for (int iy = 0; iy < 70; ++iy) {
+    for (int ix = 0; ix < 80; ++ix) {
+      if (std::isnan(h(ix, iy))) b(ix, iy) = -0.3f;
+    }
+  }
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  const TraversabilityParams params;
+  GridMap whole = map;
+  ComputeGeometricLayers(&whole, params);
+  ComputeCostLayer(&whole, pioneer, params, RobotContext{}, CellRect::All(whole));
+
+  const CellRect rect{25, 30, 45, 50};
+  const int margin = DependencyRadiusCells(params, kRes);
+  common::GridGeometry wg = map.geometry();
+  wg.size_x = (rect.x1 - rect.x0) + 2 * margin;
+  wg.size_y = (rect.y1 - rect.y0) + 2 * margin;
+  wg.origin.x_m += (rect.x0 - margin) * kRes;
+  wg.origin.y_m += (rect.y0 - margin) * kRes;
+  GridMap window(wg);
+  for (const char* name : {layers::kElevation, layers::kGroundBound}) {
+    window.AddLayer(name) =
+        map.at(name).block(rect.x0 - margin, rect.y0 - margin, wg.size_x, wg.size_y);
+  }
+  const CellRect inner{margin, margin, margin + rect.x1 - rect.x0, margin + rect.y1 - rect.y0};
+  ComputeGeometricLayers(&window, params,
+                         CellRect{inner.x0 - 1, inner.y0 - 1, inner.x1 + 1, inner.y1 + 1});
+  ComputeCostLayer(&window, pioneer, params, RobotContext{}, inner);
+  int lethal = 0, ditch = 0;
+  for (int y = rect.y0; y < rect.y1; ++y) {
+    for (int x = rect.x0; x < rect.x1; ++x) {
+      for (const std::string& name : {std::string(layers::kSlope), std::string(layers::kDitchDepth),
+                                      layers::CostLayer("pioneer3at")}) {
+        const float a = whole.at(name)(x, y);
+        const float w = window.at(name)(x - rect.x0 + margin, y - rect.y0 + margin);
+        EXPECT_TRUE((std::isnan(a) && std::isnan(w)) || a == w) << name << " " << x << "," << y;
+      }
+      lethal += whole.at(layers::CostLayer("pioneer3at"))(x, y) == layers::kCostLethal;
+      ditch += !std::isnan(whole.at(layers::kDitchDepth)(x, y));
+    }
+  }
+  EXPECT_GT(lethal, 0);  // the window holds something worth comparing
+  EXPECT_GT(ditch, 0);
+}
+
+TEST(TraversabilityTest, BadInputThrows) {
+  common::GridGeometry g;
+  g.size_x = 4;
+  g.size_y = 4;
+  GridMap no_elevation(g);
+  EXPECT_THROW(ComputeGeometricLayers(&no_elevation, {}), std::invalid_argument);
+  EXPECT_THROW(ComputeCostLayer(&no_elevation, LenientProfile(), {}), std::invalid_argument);
+  GridMap map = MakeTerrain(4, 4, kRes, Plane(0.0));
+  TraversabilityParams bad;
+  bad.graded_cost_max = 100;
+  EXPECT_THROW(ComputeGeometricLayers(&map, bad), std::invalid_argument);
+  common::RobotProfile nameless = LenientProfile();
+  nameless.name = "";
+  EXPECT_THROW(ComputeCostLayer(&map, nameless, {}), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace cairn::mapping
