@@ -3,6 +3,7 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include "common/crc32.h"
 #include "common/robot_profile.h"
 #if defined(__SSE2__)
 #include <emmintrin.h>
@@ -291,18 +292,6 @@ void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn) {
   if (error) std::rethrow_exception(error);
 }
 
-uint32_t Crc32(const void* data, size_t size) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  const auto* bytes = static_cast<const Bytef*>(data);
-  while (size > 0) {
-    const uInt chunk = static_cast<uInt>(std::min<size_t>(size, 1u << 30));
-    crc = crc32(crc, bytes, chunk);
-    bytes += chunk;
-    size -= chunk;
-  }
-  return static_cast<uint32_t>(crc);
-}
-
 uint32_t StoredBlobCrc32(int codec, int64_t raw_size, uint32_t raw_crc32, const void* data,
                          size_t size) {
   uint8_t header[16];
@@ -311,7 +300,7 @@ uint32_t StoredBlobCrc32(int codec, int64_t raw_size, uint32_t raw_crc32, const 
   std::memcpy(header + 4, &raw_size, 8);
   std::memcpy(header + 12, &raw_crc32, 4);
   static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the header is written little-endian");
-  uLong crc = Crc32(data, size);
+  uLong crc = common::Crc32(data, size);
   crc = crc32(crc, header, sizeof(header));
   return static_cast<uint32_t>(crc);
 }
@@ -382,7 +371,7 @@ EncodedBlob EncodeBlob(const void* raw, size_t size, Codec codec, int zstd_level
   EncodedBlob blob;
   blob.codec = codec;
   blob.raw_size = static_cast<int64_t>(size);
-  blob.raw_crc32 = raw_crc32 ? *raw_crc32 : Crc32(raw, size);
+  blob.raw_crc32 = raw_crc32 ? *raw_crc32 : common::Crc32(raw, size);
   switch (codec) {
     case Codec::kRaw:
       blob.data.assign(static_cast<const char*>(raw), size);
@@ -499,7 +488,7 @@ common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t 
       return common::CorruptError("blob has unknown codec " +
                                   std::to_string(static_cast<int>(codec)));
   }
-  const uint32_t crc = Crc32(out, static_cast<size_t>(raw_size));
+  const uint32_t crc = common::Crc32(out, static_cast<size_t>(raw_size));
   if (crc != raw_crc32) {
     return common::CorruptError("blob checksum mismatch (crc32 " + Hex32(crc) + ", stored " +
                                 Hex32(raw_crc32) + ")");

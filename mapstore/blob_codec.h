@@ -47,9 +47,6 @@ struct EncodedBlob {
 /// its own).
 void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
 
-/// CRC-32 (zlib polynomial) of a buffer.
-uint32_t Crc32(const void* data, size_t size);
-
 /// CRC-32 of a blob row as stored: its bytes, then its codec (int32), raw size (int64) and raw
 /// CRC-32 (uint32), little-endian. A damaged byte or header field changes it, so a reader can
 /// check a stored blob without decompressing it.

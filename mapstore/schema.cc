@@ -4,6 +4,7 @@
 
 #include <sqlite3.h>
 
+#include "common/crc32.h"
 #include "common/robot_profile.h"
 #include "mapstore/blob_codec.h"
 
@@ -233,7 +234,7 @@ common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
       const uint32_t raw_crc = static_cast<uint32_t>(read.Int(6));
       const std::string key = [&] {
         char buf[64];
-        std::snprintf(buf, sizeof(buf), "%08x-%08x-%lld", raw_crc, Crc32(data.data(), data.size()),
+        std::snprintf(buf, sizeof(buf), "%08x-%08x-%lld", raw_crc, common::Crc32(data.data(), data.size()),
                       static_cast<long long>(read.Int(5)));
         return std::string(buf);
       }();

@@ -10,6 +10,7 @@
 
 #include <sqlite3.h>
 
+#include "common/crc32.h"
 #include "mapstore/names.h"
 #include "mapstore/schema.h"
 #include "mapstore/store_util.h"
@@ -424,7 +425,7 @@ Result<MapInfo> SqliteMapStore::SaveMap(const MapSnapshot& snapshot, const Write
       const std::vector<float> cells =
           ExtractTile(snapshot.base.at(layer_names[jobs[i].layer]), spec);
       if (AllUnknown(cells)) return;
-      if (adoptable && e->raw_crc32 == Crc32(cells.data(), bytes) && adopt()) {
+      if (adoptable && e->raw_crc32 == common::Crc32(cells.data(), bytes) && adopt()) {
         return;
       }
       blobs[i] = EncodeBlob(cells.data(), bytes, FloatCodec(cells.data(), cells.size()),

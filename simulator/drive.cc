@@ -15,17 +15,7 @@ double Approach(double current, double target, double max_step) {
 
 }  // namespace
 
-DriveLimits DriveLimits::FromProfile(const common::RobotProfile& profile) {
-  DriveLimits l;
-  l.max_vel_x_mps = profile.max_vel_x_mps;
-  l.min_vel_x_mps = profile.min_vel_x_mps;
-  l.max_vel_theta_radps = profile.max_vel_theta_radps;
-  l.acc_lim_x_mps2 = profile.acc_lim_x_mps2;
-  l.acc_lim_theta_radps2 = profile.acc_lim_theta_radps2;
-  return l;
-}
-
-DriveController::DriveController(const DriveLimits& limits, double wheel_radius_m, double track_m,
+DriveController::DriveController(const common::VelocityLimits& limits, double wheel_radius_m, double track_m,
                                  double watchdog_s)
     : limits_(limits), wheel_radius_m_(wheel_radius_m), track_m_(track_m), watchdog_s_(watchdog_s) {
   CAIRN_THROW_UNLESS(wheel_radius_m > 0.0 && track_m > 0.0 && watchdog_s > 0.0,

@@ -1,6 +1,6 @@
 #pragma once
 
-#include "common/robot_profile.h"
+#include "common/velocity_limits.h"
 
 /// @file
 /// DriveController: turns velocity commands (v, w) into wheel speed targets, the way a robot's
@@ -9,17 +9,6 @@
 /// limits, and a watchdog stops the wheels when no command arrived for a while (sim time).
 
 namespace cairn::sim {
-
-/// Velocity and acceleration limits of a base (from its RobotProfile).
-struct DriveLimits {
-  double max_vel_x_mps{0.5};
-  double min_vel_x_mps{-0.1};
-  double max_vel_theta_radps{1.0};
-  double acc_lim_x_mps2{0.8};
-  double acc_lim_theta_radps2{1.5};
-
-  static DriveLimits FromProfile(const common::RobotProfile& profile);
-};
 
 enum class CommandVerdict {
   kAccepted,  ///< taken as given
@@ -33,7 +22,7 @@ class DriveController {
   ///        lines that makes (v, w) mixing match the real turning rate (larger than the
   ///        geometric track for skid steer).
   /// @throws std::invalid_argument for a non-positive radius, track or watchdog period.
-  DriveController(const DriveLimits& limits, double wheel_radius_m, double track_m,
+  DriveController(const common::VelocityLimits& limits, double wheel_radius_m, double track_m,
                   double watchdog_s = 0.5);
 
   /// A velocity command at sim time now_s.
@@ -56,7 +45,7 @@ class DriveController {
   bool watchdog_active() const { return watchdog_active_; }
 
  private:
-  DriveLimits limits_;
+  common::VelocityLimits limits_;
   double wheel_radius_m_;
   double track_m_;
   double watchdog_s_;

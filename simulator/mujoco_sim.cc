@@ -270,7 +270,7 @@ void MujocoSim::SetupRobot(Robot& robot, int index) {
   wheels(spec.model.right_wheels, &robot.right_actuators, &robot.right_qpos, &robot.right_dof);
   robot.left_integral.assign(robot.left_dof.size(), 0.0);
   robot.right_integral.assign(robot.right_dof.size(), 0.0);
-  robot.drive = std::make_unique<DriveController>(DriveLimits::FromProfile(spec.profile),
+  robot.drive = std::make_unique<DriveController>(common::VelocityLimits::FromProfile(spec.profile),
                                                   spec.model.wheel_radius_m, spec.model.track_m);
 
   const uint64_t seed = scenario_.seed;

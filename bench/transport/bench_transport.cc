@@ -26,6 +26,7 @@
 
 #include "bench/support/figure.h"
 #include "services/runtime/conversions.h"
+#include "services/runtime/revolution_assembler.h"
 #include "services/runtime/tiler.h"
 
 namespace {

@@ -10,6 +10,7 @@
 
 #include "cairn/lcmt_obstacle_registry.hpp"
 
+#include "common/crc32.h"
 #include "common/channels.h"
 #include "mapstore/blob_codec.h"
 #include "mapstore/lcm/tile_wire.h"
@@ -302,7 +303,7 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snaps
     const std::string& bytes = snapshot.octomap->bytes;
     const int32_t count = static_cast<int32_t>(
         std::max<size_t>(1, (bytes.size() + kOctomapChunkBytes - 1) / kOctomapChunkBytes));
-    const int64_t crc = runtime::Crc32(bytes.data(), bytes.size());
+    const int64_t crc = common::Crc32(bytes.data(), bytes.size());
     for (int32_t i = 0; i < count; ++i) {
       cairn::lcmt_octomap c{};
       c.utime = utime;
@@ -435,7 +436,7 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site, con
     octomap.binary = incoming_->octomap_head.binary;
     octomap.resolution_m = incoming_->octomap_head.resolution_m;
     for (const auto& [i, bytes] : incoming_->octomap_chunks) octomap.bytes += bytes;
-    if (runtime::Crc32(octomap.bytes.data(), octomap.bytes.size()) !=
+    if (common::Crc32(octomap.bytes.data(), octomap.bytes.size()) !=
         static_cast<uint32_t>(incoming_->octomap_head.checksum)) {
       incoming_.reset();
       return common::CorruptError("the OctoMap arrived damaged");

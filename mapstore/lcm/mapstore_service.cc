@@ -10,6 +10,7 @@
 #include "cairn/lcmt_grid_tile_batch.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 
+#include "common/crc32.h"
 #include "common/channels.h"
 #include "common/layers.h"
 #include "mapstore/blob_codec.h"
@@ -83,7 +84,7 @@ struct OctomapChunks {
     out.resolution_m = resolution_m;
     for (const auto& [index, bytes] : chunks) out.bytes += bytes;
     if (static_cast<int64_t>(out.bytes.size()) != total_bytes ||
-        runtime::Crc32(out.bytes.data(), out.bytes.size()) != static_cast<uint32_t>(checksum)) {
+        common::Crc32(out.bytes.data(), out.bytes.size()) != static_cast<uint32_t>(checksum)) {
       return std::nullopt;
     }
     return out;
@@ -97,7 +98,7 @@ std::vector<cairn::lcmt_octomap> OctomapChunksOf(const OctomapData& octomap,
   const size_t total = octomap.bytes.size();
   const int32_t count = static_cast<int32_t>(
       std::max<size_t>(1, (total + kOctomapChunkBytes - 1) / kOctomapChunkBytes));
-  const int64_t crc = runtime::Crc32(octomap.bytes.data(), total);
+  const int64_t crc = common::Crc32(octomap.bytes.data(), total);
   for (int32_t i = 0; i < count; ++i) {
     cairn::lcmt_octomap c{};
     c.utime = utime;

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstring>
 
-#include <zlib.h>
+#include "common/crc32.h"
 
 namespace cairn::runtime {
 namespace {
@@ -37,18 +37,6 @@ common::GridGeometry GeometryOf(const Msg& m) {
 }
 
 }  // namespace
-
-uint32_t Crc32(const void* data, size_t size) {
-  uLong crc = crc32(0L, Z_NULL, 0);
-  const auto* bytes = static_cast<const Bytef*>(data);
-  while (size > 0) {
-    const uInt chunk = static_cast<uInt>(std::min<size_t>(size, 1u << 30));
-    crc = crc32(crc, bytes, chunk);
-    bytes += chunk;
-    size -= chunk;
-  }
-  return static_cast<uint32_t>(crc);
-}
 
 LayerTiler::LayerTiler(std::string robot, std::string map_name, int tile_size_cells,
                        int64_t version_base)
@@ -105,7 +93,7 @@ LayerTiler::Batch LayerTiler::Update(const common::GridMap& map, const std::stri
           std::memcpy(&tile.data[y * tile.cells_x], col, sizeof(float) * tile.cells_x);
           for (int x = 0; x < tile.cells_x && !any_known; ++x) any_known = !std::isnan(col[x]);
         }
-        tile.checksum = Crc32(tile.data.data(), tile.data.size() * sizeof(float));
+        tile.checksum = common::Crc32(tile.data.data(), tile.data.size() * sizeof(float));
       } else {
         tile.occupancy.resize(n);
         for (int y = 0; y < tile.cells_y; ++y) {
@@ -115,7 +103,7 @@ LayerTiler::Batch LayerTiler::Update(const common::GridMap& map, const std::stri
             any_known |= v >= 0;
           }
         }
-        tile.checksum = Crc32(tile.occupancy.data(), tile.occupancy.size());
+        tile.checksum = common::Crc32(tile.occupancy.data(), tile.occupancy.size());
       }
       if (!any_known) continue;  // absent from the manifest means all unknown
       const auto key = std::make_pair(tx, ty);
@@ -414,7 +402,7 @@ bool LayerAssembler::OnTile(const cairn::lcmt_grid_tile& tile) {
     ++checksum_errors_;
     return false;
   }
-  const uint32_t crc = Crc32(tile.data.data(), tile.data.size() * sizeof(float));
+  const uint32_t crc = common::Crc32(tile.data.data(), tile.data.size() * sizeof(float));
   return OnTileImpl(tile, tile.data.data(), tile.data.size(), crc);
 }
 
@@ -428,7 +416,7 @@ bool LayerAssembler::OnTile(const cairn::lcmt_occupancy_tile& tile) {
     ++checksum_errors_;
     return false;
   }
-  const uint32_t crc = Crc32(tile.data.data(), tile.data.size());
+  const uint32_t crc = common::Crc32(tile.data.data(), tile.data.size());
   std::vector<float> data(tile.data.size());
   for (size_t i = 0; i < data.size(); ++i) {
     data[i] = tile.data[i] < 0 ? common::kUnknown : static_cast<float>(tile.data[i]);
@@ -553,70 +541,6 @@ std::optional<common::GridMap> LayerAssembler::TakeLayer(const std::string& laye
   }
   layers_.erase(it);
   return map;
-}
-
-std::vector<common::LidarSlice> SplitSlice(const common::LidarSlice& whole, size_t max_bytes) {
-  constexpr size_t kHeaderBytes = 512;
-  const size_t per_slice =
-      max_bytes > kHeaderBytes
-          ? std::max<size_t>(1, (max_bytes - kHeaderBytes) / kBytesPerLidarPoint)
-          : 1;
-  const size_t n = whole.points.size();
-  const size_t count = std::max<size_t>(1, (n + per_slice - 1) / per_slice);
-  std::vector<common::LidarSlice> slices;
-  slices.reserve(count);
-  const double span = whole.azimuth_end_rad - whole.azimuth_start_rad;
-  for (size_t i = 0; i < count; ++i) {
-    common::LidarSlice s;
-    s.utime = whole.utime;
-    s.robot = whole.robot;
-    s.revolution = whole.revolution;
-    s.slice_index = static_cast<int32_t>(i);
-    s.slice_count = static_cast<int32_t>(count);
-    s.azimuth_start_rad = whole.azimuth_start_rad + span * i / count;
-    s.azimuth_end_rad = whole.azimuth_start_rad + span * (i + 1) / count;
-    s.max_range_m = whole.max_range_m;
-    s.sensor_pose = whole.sensor_pose;
-    const size_t begin = i * per_slice, end = std::min(n, begin + per_slice);
-    s.points.assign(whole.points.begin() + begin, whole.points.begin() + end);
-    slices.push_back(std::move(s));
-  }
-  return slices;
-}
-
-std::vector<common::LidarRevolution> RevolutionAssembler::OnSlice(common::LidarSlice slice) {
-  std::vector<common::LidarRevolution> done;
-  const auto key = std::make_pair(slice.robot, slice.revolution);
-  // Older pending revolutions of the same robot are superseded by a newer one.
-  for (auto it = pending_.begin(); it != pending_.end();) {
-    if (it->first.first == slice.robot && it->first.second < slice.revolution) {
-      ++incomplete_;
-      missing_slices_ +=
-          it->second.expected_slices - static_cast<int64_t>(it->second.slices.size());
-      done.push_back(std::move(it->second));
-      it = pending_.erase(it);
-    } else {
-      ++it;
-    }
-  }
-  common::LidarRevolution& rev = pending_[key];
-  rev.revolution = slice.revolution;
-  rev.robot = slice.robot;
-  rev.expected_slices = slice.slice_count;
-  const bool duplicate = std::any_of(rev.slices.begin(), rev.slices.end(), [&](const auto& s) {
-    return s.slice_index == slice.slice_index;
-  });
-  if (!duplicate) {
-    auto pos =
-        std::lower_bound(rev.slices.begin(), rev.slices.end(), slice.slice_index,
-                         [](const common::LidarSlice& s, int idx) { return s.slice_index < idx; });
-    rev.slices.insert(pos, std::move(slice));
-  }
-  if (rev.complete()) {
-    done.push_back(std::move(rev));
-    pending_.erase(key);
-  }
-  return done;
 }
 
 }  // namespace cairn::runtime

@@ -13,7 +13,6 @@
 #include "cairn/lcmt_tile_resend_request.hpp"
 
 #include "common/grid_map.h"
-#include "common/point_cloud.h"
 
 /// @file
 /// Large data in small messages. A lost UDP fragment loses a whole LCM message, so no message
@@ -24,7 +23,8 @@
 ///   version and CRC-32. All-unknown tiles are left out of the manifest (absent = unknown).
 /// - LayerAssembler rebuilds a layer from tiles, checks each tile's checksum, compares its
 ///   holdings with the newest manifest and names the tiles it must ask for again.
-/// - SplitSlice / RevolutionAssembler do the same for lidar revolutions.
+///
+/// Lidar revolutions travel as slices: services/runtime/revolution_assembler.h.
 
 namespace cairn::runtime {
 
@@ -34,9 +34,6 @@ enum class TileEncoding { kFloat, kOccupancy };
 
 inline constexpr int kDefaultTileSize = 100;
 inline constexpr size_t kMaxMessageBytes = 256 * 1024;
-
-/// CRC-32 (zlib) of a byte buffer.
-uint32_t Crc32(const void* data, size_t size);
 
 /// Publisher side: remembers what it sent per layer.
 class LayerTiler {
@@ -217,28 +214,6 @@ class LayerAssembler {
 
   std::map<std::string, LayerState> layers_;
   int64_t checksum_errors_{0};
-};
-
-/// Splits one slice into consecutive slices whose encoded size stays under max_bytes; all keep
-/// the original pose and revolution, and slice_index/slice_count are renumbered within the
-/// given revolution (indices start at first_index, count is total_count or the number made).
-std::vector<common::LidarSlice> SplitSlice(const common::LidarSlice& whole, size_t max_bytes);
-/// Encoded bytes per point in lcmt_point_cloud_slice (x, y, z, intensity, ring).
-inline constexpr size_t kBytesPerLidarPoint = 17;
-
-/// Collects slices into revolutions. A revolution is emitted when its last missing slice
-/// arrives, or, incomplete, when a slice of a newer revolution arrives.
-class RevolutionAssembler {
- public:
-  /// Returns the revolutions this slice completed or superseded (oldest first).
-  std::vector<common::LidarRevolution> OnSlice(common::LidarSlice slice);
-  int64_t incomplete_revolutions() const { return incomplete_; }
-  int64_t missing_slices() const { return missing_slices_; }
-
- private:
-  std::map<std::pair<std::string, int64_t>, common::LidarRevolution> pending_;
-  int64_t incomplete_{0};
-  int64_t missing_slices_{0};
 };
 
 }  // namespace cairn::runtime

@@ -10,6 +10,7 @@
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_octomap.hpp"
 
+#include "common/crc32.h"
 #include "common/channels.h"
 #include "common/check.h"
 #include "common/layers.h"
@@ -757,7 +758,7 @@ void MapperService::PublishOctomap(bool force) {
     blob = octomap->ToBinary();
     resolution = octomap->params().resolution_m;
   }
-  const uint32_t crc = runtime::Crc32(blob.data(), blob.size());
+  const uint32_t crc = common::Crc32(blob.data(), blob.size());
   const int count = static_cast<int>((blob.size() + kOctomapChunkBytes - 1) / kOctomapChunkBytes);
   ++octomap_chunk_version_;
   std::vector<cairn::lcmt_octomap> chunks;

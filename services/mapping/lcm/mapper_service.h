@@ -31,6 +31,7 @@
 #include "services/mapping/pose_buffer.h"
 #include "services/mapping/lcm/terrain_publisher.h"
 #include "services/runtime/node.h"
+#include "services/runtime/revolution_assembler.h"
 #include "services/runtime/tiler.h"
 
 /// @file

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "common/crc32.h"
 #include "common/layers.h"
 #include "services/runtime/tiler.h"
 
@@ -127,7 +128,7 @@ TerrainPublisher::Batch TerrainPublisher::Update(const TerrainMap& map,
       TileState tile;
       tile.source_version = source;
       tile.data.assign(values, values + n);
-      tile.checksum = runtime::Crc32(tile.data.data(), n * sizeof(float));
+      tile.checksum = common::Crc32(tile.data.data(), n * sizeof(float));
       if (force_all || old == state.tiles.end() || old->second.checksum != tile.checksum) {
         tile.tile_version = -1;  // set below, once the layer version is known
         changed = true;

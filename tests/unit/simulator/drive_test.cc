@@ -10,8 +10,8 @@
 namespace cairn::sim {
 namespace {
 
-DriveLimits Limits() {
-  DriveLimits l;
+common::VelocityLimits Limits() {
+  common::VelocityLimits l;
   l.max_vel_x_mps = 0.5;
   l.min_vel_x_mps = -0.2;
   l.max_vel_theta_radps = 1.0;

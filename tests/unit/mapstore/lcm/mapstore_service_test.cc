@@ -10,6 +10,7 @@
 #include "cairn/lcmt_grid_tile_batch.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 
+#include "common/crc32.h"
 #include "common/channels.h"
 #include "mapstore/in_memory_map_store.h"
 #include "mapstore/lcm/mapstore_conversions.h"
@@ -303,7 +304,7 @@ TEST_F(MapstoreServiceUnitTest, ACompressedTileWithADamagedByteIsRefused) {
   tile.tile_size = 20;
   tile.num_cells = 200;
   for (int i = 0; i < 200; ++i) tile.data.push_back(0.01f * static_cast<float>(i % 37));
-  tile.checksum = runtime::Crc32(tile.data.data(), tile.data.size() * sizeof(float));
+  tile.checksum = common::Crc32(tile.data.data(), tile.data.size() * sizeof(float));
   const std::vector<float> sent = tile.data;
   ASSERT_TRUE(CompressTile(&tile));
   EXPECT_EQ(tile.num_cells, 0);
