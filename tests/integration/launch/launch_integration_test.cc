@@ -1,10 +1,12 @@
 // cairn-launch against real processes on a private bus.
 
+#include <errno.h>
 #include <signal.h>
 #include <sys/wait.h>
 
 #include <fstream>
 #include <regex>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -83,7 +85,16 @@ TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
   EXPECT_TRUE(std::regex_search(table, std::regex(R"(follower\s+-\s+ready\s+\d+\s+1\s)"))) << table;
   EXPECT_TRUE(std::regex_search(table, std::regex(R"(watcher\s+-\s+ready\s+\d+\s+0\s)"))) << table;
 
-  // `down` stops everything and the launcher exits 0.
+  // `down` stops everything and the launcher exits 0: the processes themselves are gone, not only
+  // the launcher's record of them.
+  status = ReadStatus(run_dir);
+  ASSERT_TRUE(status.has_value());
+  std::vector<int> pids;
+  for (const auto& p : status->processes) {
+    ASSERT_GT(p.pid, 0) << p.name;
+    pids.push_back(p.pid);
+  }
+  ASSERT_EQ(pids.size(), 2u);
   ChildProcess& down = procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
   ASSERT_TRUE(down.WaitExit(30.0).has_value());
   auto launcher_exit = launcher.WaitExit(30.0);
@@ -93,6 +104,10 @@ TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
   ASSERT_TRUE(status.has_value());
   EXPECT_EQ(status->state, "stopped");
   for (const auto& p : status->processes) EXPECT_EQ(p.pid, -1) << p.name;
+  for (int pid : pids) {
+    EXPECT_TRUE(WaitFor([&] { return kill(pid, 0) == -1 && errno == ESRCH; }, 10.0))
+        << "process " << pid << " outlived `cairn-launch down`";
+  }
 }
 
 TEST(LaunchIntegrationTest, RequiredProcessFailingForGoodStopsTheGraph) {
