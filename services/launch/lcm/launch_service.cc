@@ -1,5 +1,7 @@
 #include "services/launch/lcm/launch_service.h"
 
+#include <cstdio>
+
 #include <chrono>
 
 #include <sys/time.h>
@@ -118,6 +120,24 @@ int LaunchService::Run() {
   }
   node_->Event("graph '%s' stopped", supervisor_->graph().name.c_str());
   return 0;
+}
+
+int RunGraph(const GraphSpec& graph, const std::string& lcm_url) {
+  try {
+    runtime::NodeOptions options;
+    options.process_name = "cairn-launch";
+    options.lcm_url = lcm_url;
+    options.follow_sim_clock = false;
+    runtime::Node node(options);
+    PosixRunner runner(graph.run_dir + "/logs", node.url());
+    Supervisor supervisor(graph, &runner,
+                          [&node](const std::string& line) { node.Event("%s", line.c_str()); });
+    LaunchService service(&node, &supervisor, &runner, graph.run_dir + "/status.json");
+    return service.Run();
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "cairn-launch: %s\n", e.what());
+    return 2;
+  }
 }
 
 }  // namespace cairn::launch

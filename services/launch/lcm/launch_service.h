@@ -4,6 +4,7 @@
 #include <string>
 
 #include "cairn/lcmt_health.hpp"
+#include "services/launch/graph.h"
 #include "services/launch/posix_runner.h"
 #include "services/launch/status.h"
 #include "services/launch/supervisor.h"
@@ -40,5 +41,11 @@ class LaunchService {
   std::string message_;
   bool announced_ready_{false};
 };
+
+/// Runs `graph` in the foreground on `lcm_url` until it is down (a signal, or a required process
+/// failed for good): the supervisor, its process runner and the service. Returns the process exit
+/// code (0, 1 when a required process failed for good, 2 when the bus or a process could not
+/// start).
+int RunGraph(const GraphSpec& graph, const std::string& lcm_url);
 
 }  // namespace cairn::launch
