@@ -148,98 +148,62 @@ bool DemoMission::WaitForGraph(MissionReport* report) {
   return true;
 }
 
+// What the drive has seen on the bus: the robot's ground-truth track and the navigator's
+// status for our goal.
+struct DemoMission::DriveState {
+  bool have_pose{false};
+  common::Vector2 last{common::Vector2::Zero()};
+  int64_t first_utime{0};
+  int64_t last_utime{0};
+  double distance_m{0.0};
+  std::vector<common::Vector2>* path{nullptr};
+  std::optional<NavStatus> status;
+  Clock::time_point status_time;
+  int64_t goal_id{0};
+
+  // A new pose: the track grows by steps of more than 5 cm.
+  void OnPose(const cairn::lcmt_pose& m) {
+    const common::Vector2 p(m.position_m[0], m.position_m[1]);
+    if (!p.allFinite()) return;
+    if (!have_pose) {
+      have_pose = true;
+      first_utime = m.utime;
+      last = p;
+      path->push_back(p);
+    }
+    const double step = (p - last).norm();
+    if (step > 0.05) {
+      distance_m += step;
+      last = p;
+      path->push_back(p);
+    }
+    last_utime = m.utime;
+  }
+};
+
 bool DemoMission::Drive(MissionReport* report) {
-  struct State {
-    bool have_pose{false};
-    common::Vector2 last{common::Vector2::Zero()};
-    int64_t first_utime{0};
-    int64_t last_utime{0};
-    double distance_m{0.0};
-    std::vector<common::Vector2>* path;
-    std::optional<NavStatus> status;
-    Clock::time_point status_time;
-    int64_t goal_id{0};
-  } state;
+  DriveState state;
   state.path = &driven_m_;
   state.goal_id = runtime::Node::WallUtime();
-  auto pose_sub = node_->lcm().subscribeFunction<State*>(
+  auto pose_sub = node_->lcm().subscribeFunction<DriveState*>(
       channels::ForRobot(params_.robot, channels::kPose),
-      [](const lcm::ReceiveBuffer* rbuf, const std::string&, State* s) {
+      [](const lcm::ReceiveBuffer* rbuf, const std::string&, DriveState* s) {
         cairn::lcmt_pose m{};
-        if (m.decode(rbuf->data, 0, rbuf->data_size) < 0) return;
-        const common::Vector2 p(m.position_m[0], m.position_m[1]);
-        if (!p.allFinite()) return;
-        if (!s->have_pose) {
-          s->have_pose = true;
-          s->first_utime = m.utime;
-          s->last = p;
-          s->path->push_back(p);
-        }
-        const double step = (p - s->last).norm();
-        if (step > 0.05) {
-          s->distance_m += step;
-          s->last = p;
-          s->path->push_back(p);
-        }
-        s->last_utime = m.utime;
+        if (m.decode(rbuf->data, 0, rbuf->data_size) >= 0) s->OnPose(m);
       },
       &state);
-  auto status_sub = node_->lcm().subscribeFunction<State*>(
+  auto status_sub = node_->lcm().subscribeFunction<DriveState*>(
       channels::ForRobot(params_.robot, channels::kNavStatus),
-      [](const lcm::ReceiveBuffer* rbuf, const std::string&, State* s) {
+      [](const lcm::ReceiveBuffer* rbuf, const std::string&, DriveState* s) {
         NavStatus m;
         if (m.decode(rbuf->data, 0, rbuf->data_size) < 0 || m.goal_id != s->goal_id) return;
         s->status = m;
         s->status_time = Clock::now();
       },
       &state);
-
-  cairn::lcmt_goal goal{};
-  goal.robot = params_.robot;
-  goal.goal_id = state.goal_id;
-  goal.kind = cairn::lcmt_goal::KIND_POSE;
-  goal.x_m = params_.goal.x_m;
-  goal.y_m = params_.goal.y_m;
-  goal.yaw_rad = params_.goal.yaw_rad;
-  goal.use_yaw = params_.goal_has_yaw;
-  node_->Event("goal %lld: %s to (%.2f, %.2f)", static_cast<long long>(goal.goal_id),
-               params_.robot.c_str(), goal.x_m, goal.y_m);
+  cairn::lcmt_goal goal = MakeGoal(state.goal_id);
   const auto start = Clock::now();
-  auto last_goal = Clock::now() - std::chrono::seconds(10);
-  int8_t last_state = -1;
-  bool done = false;
-  while (!done && SecondsSince(start) < params_.timeout_s && !node_->stopping()) {
-    // Publish the goal until the navigator answers for it, and again whenever its status for
-    // the goal stops (a restarted navigator starts idle; re-sends of a goal id are idempotent).
-    const bool unanswered = !state.status || SecondsSince(state.status_time) > 3.0;
-    if (unanswered && SecondsSince(last_goal) > 1.0) {
-      if (state.status)
-        node_->Event("goal %lld: no status for 3 s, sending it again",
-                     static_cast<long long>(goal.goal_id));
-      goal.utime = node_->NowUtime();
-      node_->Publish(channels::ForRobot(params_.robot, channels::kGoal), goal);
-      last_goal = Clock::now();
-    }
-    node_->SpinOnce(50);
-    if (!state.status) continue;
-    const NavStatus& s = *state.status;
-    if (s.state != last_state) {
-      last_state = s.state;
-      node_->Event("navigation %s%s%s (%.0f %% of the path, %.1f m to go)", StateName(s.state),
-                   s.message.empty() ? "" : ": ", s.message.c_str(), 100.0 * s.progress,
-                   s.distance_remaining_m);
-    }
-    report->replans = s.replans;
-    report->recoveries = s.recoveries;
-    if (s.state == NavStatus::STATE_REACHED) {
-      report->reached = true;
-      report->nav_outcome = "reached";
-      done = true;
-    } else if (s.state == NavStatus::STATE_FAILED || s.state == NavStatus::STATE_CANCELLED) {
-      report->nav_outcome = std::string(StateName(s.state)) + ": " + s.message;
-      done = true;
-    }
-  }
+  const bool done = FollowGoal(&goal, &state, report);
   node_->lcm().unsubscribe(pose_sub);
   node_->lcm().unsubscribe(status_sub);
   report->wall_time_s = SecondsSince(start);
@@ -263,31 +227,100 @@ bool DemoMission::Drive(MissionReport* report) {
   return true;
 }
 
+cairn::lcmt_goal DemoMission::MakeGoal(int64_t goal_id) const {
+  cairn::lcmt_goal goal{};
+  goal.robot = params_.robot;
+  goal.goal_id = goal_id;
+  goal.kind = cairn::lcmt_goal::KIND_POSE;
+  goal.x_m = params_.goal.x_m;
+  goal.y_m = params_.goal.y_m;
+  goal.yaw_rad = params_.goal.yaw_rad;
+  goal.use_yaw = params_.goal_has_yaw;
+  node_->Event("goal %lld: %s to (%.2f, %.2f)", static_cast<long long>(goal.goal_id),
+               params_.robot.c_str(), goal.x_m, goal.y_m);
+  return goal;
+}
+
+bool DemoMission::FollowGoal(cairn::lcmt_goal* goal, DriveState* state, MissionReport* report) {
+  const auto start = Clock::now();
+  auto last_goal = Clock::now() - std::chrono::seconds(10);
+  int8_t last_state = -1;
+  while (SecondsSince(start) < params_.timeout_s && !node_->stopping()) {
+    // Publish the goal until the navigator answers for it, and again whenever its status for
+    // the goal stops (a restarted navigator starts idle; re-sends of a goal id are idempotent).
+    const bool unanswered = !state->status || SecondsSince(state->status_time) > 3.0;
+    if (unanswered && SecondsSince(last_goal) > 1.0) {
+      if (state->status)
+        node_->Event("goal %lld: no status for 3 s, sending it again",
+                     static_cast<long long>(goal->goal_id));
+      goal->utime = node_->NowUtime();
+      node_->Publish(channels::ForRobot(params_.robot, channels::kGoal), *goal);
+      last_goal = Clock::now();
+    }
+    node_->SpinOnce(50);
+    if (!state->status) continue;
+    const NavStatus& s = *state->status;
+    if (s.state != last_state) {
+      last_state = s.state;
+      node_->Event("navigation %s%s%s (%.0f %% of the path, %.1f m to go)", StateName(s.state),
+                   s.message.empty() ? "" : ": ", s.message.c_str(), 100.0 * s.progress,
+                   s.distance_remaining_m);
+    }
+    report->replans = s.replans;
+    report->recoveries = s.recoveries;
+    if (s.state == NavStatus::STATE_REACHED) {
+      report->reached = true;
+      report->nav_outcome = "reached";
+      return true;
+    }
+    if (s.state == NavStatus::STATE_FAILED || s.state == NavStatus::STATE_CANCELLED) {
+      report->nav_outcome = std::string(StateName(s.state)) + ": " + s.message;
+      return true;
+    }
+  }
+  return false;
+}
+
 bool DemoMission::StoreAndShare(MissionReport* report) {
   mapstore::MapstoreClientOptions options;
   options.total_timeout_s = 120.0;
   mapstore::MapstoreClient client(node_->lcm(), "cairn-mission", options);
-
-  // Profiles the store needs to label the map for each robot.
   std::vector<std::string> profiles = {params_.source_profile};
   profiles.insert(profiles.end(), params_.share_profiles.begin(), params_.share_profiles.end());
-  std::map<std::string, common::RobotProfile> loaded_profiles;
+  return PutProfiles(&client, profiles, report) && SaveMap(&client, report) &&
+         ShareMap(&client, report) && RenderAndList(&client, profiles, report);
+}
+
+namespace {
+
+// The reply's failure as text, or the empty string for an OK reply.
+std::string CallError(const common::Result<cairn::lcmt_mapstore_reply>& reply) {
+  if (!reply.ok()) return reply.status().ToString();
+  return reply->status == cairn::lcmt_mapstore_reply::STATUS_OK ? "" : reply->message;
+}
+
+}  // namespace
+
+bool DemoMission::PutProfiles(mapstore::MapstoreClient* client,
+                              const std::vector<std::string>& profiles, MissionReport* report) {
+  // Profiles the store needs to label the map for each robot.
   for (const auto& name : profiles) {
     const common::RobotProfile profile =
         common::LoadRobotProfileFile(params_.profiles_dir + "/" + name + ".yaml");
-    loaded_profiles[name] = profile;
     Request put{};
     put.op = Request::OP_PUT_PROFILE;
     put.has_profile = true;
     put.profile_data = runtime::ToLcm(profile);
-    auto reply = client.Call(put);
-    if (!reply.ok() || reply->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
-      report->error = "storing profile " + name +
-                      " failed: " + (reply.ok() ? reply->message : reply.status().ToString());
+    const std::string error = CallError(client->Call(put));
+    if (!error.empty()) {
+      report->error = "storing profile " + name + " failed: " + error;
       return false;
     }
   }
+  return true;
+}
 
+bool DemoMission::SaveMap(mapstore::MapstoreClient* client, MissionReport* report) {
   // Save: the store pulls the mapper's live layers.
   Request save{};
   save.op = Request::OP_SAVE;
@@ -295,35 +328,55 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
   save.map_name = params_.map_name;
   save.robot = params_.robot;
   save.profile = params_.source_profile;
-  auto saved = client.Call(save);
-  if (!saved.ok() || saved->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
-    report->error =
-        "saving the map failed: " + (saved.ok() ? saved->message : saved.status().ToString());
+  auto saved = client->Call(save);
+  const std::string error = CallError(saved);
+  if (!error.empty()) {
+    report->error = "saving the map failed: " + error;
     return false;
   }
   report->map_version = saved->version;
   node_->Event("map saved as %s/%s version %lld (%s)", params_.site.c_str(),
                params_.map_name.c_str(), static_cast<long long>(saved->version),
                saved->message.c_str());
+  return true;
+}
 
+bool DemoMission::ShareMap(mapstore::MapstoreClient* client, MissionReport* report) {
   // Share with every other profile: the store derives their layers and verdicts.
   for (const auto& target : params_.share_profiles) {
     Request share{};
     share.op = Request::OP_SHARE;
     share.site = params_.site;
     share.map_name = params_.map_name;
-    share.version = saved->version;
+    share.version = report->map_version;
     share.profile = target;
-    auto shared = client.Call(share);
-    if (!shared.ok() || shared->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
-      report->error = "sharing with " + target +
-                      " failed: " + (shared.ok() ? shared->message : shared.status().ToString());
+    auto shared = client->Call(share);
+    const std::string error = CallError(shared);
+    if (!error.empty()) {
+      report->error = "sharing with " + target + " failed: " + error;
       return false;
     }
     node_->Event("shared with %s: %d obstacle verdicts differ from %s", target.c_str(),
                  shared->num_obstacles, params_.source_profile.c_str());
   }
+  return true;
+}
 
+bool DemoMission::Render(const std::string& name, const common::GridMap& map,
+                         const std::string& layer, const mapstore::io::PngOverlay& overlay,
+                         MissionReport* report) {
+  auto png = mapstore::io::WritePng(params_.out_dir, name,
+                                    CropToKnown(map, layers::kElevation, 5), layer, overlay);
+  if (!png.ok()) {
+    report->error = "rendering " + name + " failed: " + png.status().ToString();
+    return false;
+  }
+  report->renders.push_back(*png);
+  return true;
+}
+
+bool DemoMission::RenderAndList(mapstore::MapstoreClient* client,
+                                const std::vector<std::string>& profiles, MissionReport* report) {
   // Load the map under each profile and render it.
   std::error_code ec;
   std::filesystem::create_directories(params_.out_dir, ec);
@@ -331,8 +384,8 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
   std::map<int, common::Obstacle> obstacles;
   bool elevation_done = false;
   for (const auto& name : profiles) {
-    auto loaded = client.Load(params_.site, params_.map_name, saved->version, name,
-                              {layers::kElevation, layers::CostLayer(name)});
+    auto loaded = client->Load(params_.site, params_.map_name, report->map_version, name,
+                               {layers::kElevation, layers::CostLayer(name)});
     if (!loaded.ok()) {
       report->error = "loading the map for " + name + " failed: " + loaded.status().ToString();
       return false;
@@ -347,15 +400,8 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
       mapstore::io::PngOverlay overlay;
       overlay.obstacles = loaded->obstacles.obstacles;
       overlay.caption = "ELEVATION OF " + params_.site + "/" + params_.map_name + " V" +
-                        std::to_string(saved->version) + " MAPPED BY " + params_.robot;
-      auto png = mapstore::io::WritePng(params_.out_dir, "elevation",
-                                        CropToKnown(loaded->layers, layers::kElevation, 5),
-                                        layers::kElevation, overlay);
-      if (!png.ok()) {
-        report->error = "rendering the elevation failed: " + png.status().ToString();
-        return false;
-      }
-      report->renders.push_back(*png);
+                        std::to_string(report->map_version) + " MAPPED BY " + params_.robot;
+      if (!Render("elevation", loaded->layers, layers::kElevation, overlay, report)) return false;
       elevation_done = true;
     }
     mapstore::io::PngOverlay overlay;
@@ -363,14 +409,8 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
     overlay.obstacles = loaded->obstacles.obstacles;
     overlay.verdict_profile = name;
     overlay.caption = "COST FOR " + name + " WITH THE PATH " + params_.robot + " DROVE";
-    auto png = mapstore::io::WritePng(params_.out_dir, "cost_" + name,
-                                      CropToKnown(loaded->layers, layers::kElevation, 5),
-                                      layers::CostLayer(name), overlay);
-    if (!png.ok()) {
-      report->error = "rendering the cost layer of " + name + " failed: " + png.status().ToString();
+    if (!Render("cost_" + name, loaded->layers, layers::CostLayer(name), overlay, report))
       return false;
-    }
-    report->renders.push_back(*png);
   }
   for (const auto& [id, o] : obstacles) {
     std::ostringstream line;

@@ -3,7 +3,12 @@
 #include <string>
 #include <vector>
 
+#include "cairn/lcmt_goal.hpp"
+
+#include "common/grid_map.h"
 #include "common/types.h"
+#include "mapstore/lcm/mapstore_client.h"
+#include "mapstore/map_io.h"
 #include "services/runtime/node.h"
 
 /// @file
@@ -52,8 +57,21 @@ class DemoMission {
 
  private:
   bool WaitForGraph(MissionReport* report);
+  struct DriveState;
   bool Drive(MissionReport* report);
+  cairn::lcmt_goal MakeGoal(int64_t goal_id) const;
+  /// Sends the goal until the navigator answers and follows its status until the goal is
+  /// reached, failed or cancelled (true) or the drive timed out or was interrupted (false).
+  bool FollowGoal(cairn::lcmt_goal* goal, DriveState* state, MissionReport* report);
   bool StoreAndShare(MissionReport* report);
+  bool PutProfiles(mapstore::MapstoreClient* client, const std::vector<std::string>& profiles,
+                   MissionReport* report);
+  bool SaveMap(mapstore::MapstoreClient* client, MissionReport* report);
+  bool ShareMap(mapstore::MapstoreClient* client, MissionReport* report);
+  bool RenderAndList(mapstore::MapstoreClient* client, const std::vector<std::string>& profiles,
+                     MissionReport* report);
+  bool Render(const std::string& name, const common::GridMap& map, const std::string& layer,
+              const mapstore::io::PngOverlay& overlay, MissionReport* report);
 
   runtime::Node* node_;
   MissionParams params_;
