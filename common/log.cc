@@ -22,12 +22,7 @@ std::string& Tag() {
 }
 
 std::atomic<int>& Level() {
-  static std::atomic<int> level = [] {
-    const char* env = std::getenv("CAIRN_LOG_LEVEL");
-    if (env != nullptr && std::strcmp(env, "debug") == 0) return static_cast<int>(LogLevel::kDebug);
-    if (env != nullptr && std::strcmp(env, "warn") == 0) return static_cast<int>(LogLevel::kWarn);
-    return static_cast<int>(LogLevel::kInfo);
-  }();
+  static std::atomic<int> level{static_cast<int>(LogLevel::kInfo)};
   return level;
 }
 
@@ -49,6 +44,14 @@ void SetLogTag(const std::string& tag) {
 }
 
 void SetLogLevel(LogLevel level) { Level() = static_cast<int>(level); }
+
+std::optional<LogLevel> LogLevelFromName(const std::string& name) {
+  if (name == "debug") return LogLevel::kDebug;
+  if (name == "info") return LogLevel::kInfo;
+  if (name == "warn") return LogLevel::kWarn;
+  if (name == "error") return LogLevel::kError;
+  return std::nullopt;
+}
 LogLevel GetLogLevel() { return static_cast<LogLevel>(Level().load()); }
 
 void VLog(LogLevel level, const char* format, va_list args) {

@@ -4,6 +4,7 @@
 #include <cstdarg>
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <string>
 
 /// @file
@@ -17,8 +18,12 @@ enum class LogLevel { kDebug = 0, kInfo, kWarn, kError };
 
 /// Sets the process tag printed on every line (call once in main).
 void SetLogTag(const std::string& tag);
-/// Lines below this level are dropped (default kInfo; CAIRN_LOG_LEVEL=debug lowers it).
+/// Lines below this level are dropped (default kInfo; processes take CAIRN_LOG_LEVEL=debug,
+/// info, warn or error from the environment: runtime::Node, or the main of a process without
+/// one).
 void SetLogLevel(LogLevel level);
+/// "debug", "info", "warn", "error"; nullopt for anything else.
+std::optional<LogLevel> LogLevelFromName(const std::string& name);
 LogLevel GetLogLevel();
 
 /// printf-style; writes one line to stderr under a lock.

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "services/launch/status.h"
@@ -64,11 +65,17 @@ bool DetachParent(const GraphSpec& graph, int* exit_code) {
 
 }  // namespace
 
-std::vector<std::string> ExecutableDirs() {
+std::vector<std::string> SearchDirs(const std::string& path_list) {
+  std::vector<std::string> dirs;
   std::error_code ec;
   const fs::path self = fs::read_symlink("/proc/self/exe", ec);
-  if (ec) return {};
-  return {self.parent_path().string()};
+  if (!ec) dirs.push_back(self.parent_path().string());
+  std::stringstream ss(path_list);
+  std::string dir;
+  while (std::getline(ss, dir, ':')) {
+    if (!dir.empty()) dirs.push_back(dir);
+  }
+  return dirs;
 }
 
 std::string GraphPath(const std::string& graph_arg) {
@@ -78,10 +85,11 @@ std::string GraphPath(const std::string& graph_arg) {
   return graph_arg;
 }
 
-std::string RunDirFor(const std::string& graph_arg, const std::string& run_dir_flag) {
+std::string RunDirFor(const std::string& graph_arg, const std::string& run_dir_flag,
+                      const std::vector<std::string>& search_dirs) {
   if (!run_dir_flag.empty()) return run_dir_flag;
   try {
-    return LoadGraph(GraphPath(graph_arg), ExecutableDirs()).run_dir;
+    return LoadGraph(GraphPath(graph_arg), search_dirs).run_dir;
   } catch (const std::exception&) {
     return "var/run/" + fs::path(graph_arg).stem().string();
   }
@@ -158,9 +166,9 @@ int CmdDown(const std::string& run_dir, double timeout_s) {
   return 0;
 }
 
-int CmdCheck(const std::string& graph_arg) {
+int CmdCheck(const std::string& graph_arg, const std::vector<std::string>& search_dirs) {
   try {
-    const auto graph = LoadGraph(GraphPath(graph_arg), ExecutableDirs());
+    const auto graph = LoadGraph(GraphPath(graph_arg), search_dirs);
     std::printf("graph '%s' is valid; start order:", graph.name.c_str());
     for (const auto& name : graph.StartOrder()) std::printf(" %s", name.c_str());
     std::printf("\n");
@@ -172,11 +180,12 @@ int CmdCheck(const std::string& graph_arg) {
 }
 
 std::optional<UpPlan> PrepareUp(const std::string& graph_arg, const std::string& lcm_url,
-                                const std::string& run_dir_flag, bool detach, int* exit_code) {
+                                const std::string& run_dir_flag, bool detach,
+                                const std::vector<std::string>& search_dirs, int* exit_code) {
   *exit_code = 2;
   UpPlan plan;
   try {
-    plan.graph = LoadGraph(GraphPath(graph_arg), ExecutableDirs());
+    plan.graph = LoadGraph(GraphPath(graph_arg), search_dirs);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cairn-launch: %s\n", e.what());
     return std::nullopt;

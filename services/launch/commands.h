@@ -13,14 +13,17 @@
 
 namespace cairn::launch {
 
-/// The folder of the running executable (where the other cairn executables are found).
-std::vector<std::string> ExecutableDirs();
+/// Where bare command names of a graph are looked up: the folder of the running executable
+/// (where the other cairn executables are), then the folders of `path_list` (PATH's syntax:
+/// folders separated by ':'; main passes the environment's PATH).
+std::vector<std::string> SearchDirs(const std::string& path_list);
 /// A graph argument as a file: the path itself when it exists, else config/graphs/<arg>.yaml
 /// when that exists, else the argument unchanged (LoadGraph then says what is wrong).
 std::string GraphPath(const std::string& graph_arg);
 /// The run directory of a graph: the flag when given, else the graph's own, else
 /// var/run/<stem of the argument>.
-std::string RunDirFor(const std::string& graph_arg, const std::string& run_dir_flag);
+std::string RunDirFor(const std::string& graph_arg, const std::string& run_dir_flag,
+                      const std::vector<std::string>& search_dirs);
 /// True while `pid` runs; a zombie (exited, not yet reaped by its parent) counts as gone.
 bool ProcessAlive(int pid);
 
@@ -33,7 +36,7 @@ int CmdWait(const std::string& run_dir, double timeout_s);
 /// killed after timeout_s.
 int CmdDown(const std::string& run_dir, double timeout_s);
 /// Validates a graph and prints its start order. 0, or 2 for an invalid graph.
-int CmdCheck(const std::string& graph_arg);
+int CmdCheck(const std::string& graph_arg, const std::vector<std::string>& search_dirs);
 
 /// What `up` runs once it is prepared.
 struct UpPlan {
@@ -45,7 +48,8 @@ struct UpPlan {
 /// in a new session with its output in <run_dir>/launch.log). Writes the pid file.
 /// No plan and `*exit_code` 2 on an error.
 std::optional<UpPlan> PrepareUp(const std::string& graph_arg, const std::string& lcm_url,
-                                const std::string& run_dir_flag, bool detach, int* exit_code);
+                                const std::string& run_dir_flag, bool detach,
+                                const std::vector<std::string>& search_dirs, int* exit_code);
 /// Removes the pid file `up` wrote.
 void FinishUp(const UpPlan& plan);
 

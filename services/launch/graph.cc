@@ -66,6 +66,19 @@ std::map<std::string, double> GraphSpec::ExpectedRates() const {
   return rates;
 }
 
+namespace {
+
+// "a, b and 2 more folders" for an error message.
+std::string SearchedText(const std::vector<std::string>& dirs) {
+  if (dirs.empty()) return "no folder: give it as a path";
+  std::string text = dirs[0];
+  if (dirs.size() > 1) text += ", " + dirs[1];
+  if (dirs.size() > 2) text += " and " + std::to_string(dirs.size() - 2) + " more folders";
+  return text;
+}
+
+}  // namespace
+
 std::optional<std::string> ResolveExecutable(const std::string& command,
                                              const std::string& graph_dir,
                                              const std::vector<std::string>& bin_dirs) {
@@ -89,14 +102,6 @@ std::optional<std::string> ResolveExecutable(const std::string& command,
   for (const auto& dir : bin_dirs) {
     const fs::path p = fs::path(dir) / cmd;
     if (executable(p)) return fs::absolute(p).lexically_normal().string();
-  }
-  const char* path = std::getenv("PATH");
-  std::stringstream ss(path ? path : "");
-  std::string dir;
-  while (std::getline(ss, dir, ':')) {
-    if (dir.empty()) continue;
-    const fs::path p = fs::path(dir) / cmd;
-    if (executable(p)) return p.string();
   }
   return std::nullopt;
 }
@@ -174,7 +179,7 @@ ProcessSpec LoadProcess(YamlMap& map, const std::string& name, const std::string
                                        : std::optional<std::string>(p.command);
   if (!exe) {
     map.Fail(where, "process '" + name + "': executable '" + p.command + "' not found (looked in " +
-                        (bin_dirs.empty() ? std::string("PATH") : bin_dirs.front() + " and PATH") + ")");
+                        SearchedText(bin_dirs) + ")");
   }
   p.executable = *exe;
   p.line = where.Mark().line + 1;

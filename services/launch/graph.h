@@ -64,8 +64,9 @@ struct GraphSpec {
 };
 
 /// How a command is resolved to an executable: an absolute path; a path with '/' relative to
-/// the working directory or the graph file's folder; a bare name in `bin_dirs` (cairn-launch's
-/// own folder first), then in PATH. Returns nullopt when nothing executable is found.
+/// the working directory or the graph file's folder; a bare name in `bin_dirs`, in order
+/// (cairn-launch passes its own folder, then the folders of PATH: SearchDirs in commands.h).
+/// Returns nullopt when nothing executable is found.
 std::optional<std::string> ResolveExecutable(const std::string& command,
                                              const std::string& graph_dir,
                                              const std::vector<std::string>& bin_dirs);

@@ -1,7 +1,9 @@
 // cairn-launch: starts a service graph from YAML, watches it, restarts, captures output.
 
 #include <cstdio>
+#include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "common/flags.h"
 #include "common/log.h"
@@ -26,14 +28,14 @@ constexpr char kSummary[] =
     "The run directory (default var/run/<graph>) holds status.json, launch.pid and logs/.";
 
 int Up(const std::string& graph_arg, const std::string& lcm_url, const std::string& run_dir,
-       bool detach) {
+       bool detach, const std::vector<std::string>& search_dirs) {
   namespace launch = cairn::launch;
   if (graph_arg.empty()) {
     std::fprintf(stderr, "cairn-launch: up needs a GRAPH\n");
     return 2;
   }
   int exit_code = 2;
-  const auto plan = launch::PrepareUp(graph_arg, lcm_url, run_dir, detach, &exit_code);
+  const auto plan = launch::PrepareUp(graph_arg, lcm_url, run_dir, detach, search_dirs, &exit_code);
   if (!plan) return exit_code;
   const int code = launch::RunGraph(plan->graph, plan->lcm_url);
   launch::FinishUp(*plan);
@@ -63,13 +65,18 @@ int main(int argc, char** argv) {
   const std::string command = pos[0];
   const std::string graph_arg = pos.size() > 1 ? pos[1] : "";
   cairn::common::SetLogTag("cairn-launch");
-  if (command == "up") return Up(graph_arg, lcm_url, run_dir, detach);
-  if (command == "check") return launch::CmdCheck(graph_arg);
+  if (const char* level = std::getenv("CAIRN_LOG_LEVEL")) {
+    if (auto parsed = cairn::common::LogLevelFromName(level)) cairn::common::SetLogLevel(*parsed);
+  }
+  const char* path_env = std::getenv("PATH");
+  const std::vector<std::string> search_dirs = launch::SearchDirs(path_env ? path_env : "");
+  if (command == "up") return Up(graph_arg, lcm_url, run_dir, detach, search_dirs);
+  if (command == "check") return launch::CmdCheck(graph_arg, search_dirs);
   if (graph_arg.empty() && run_dir.empty()) {
     std::fprintf(stderr, "cairn-launch: %s needs a GRAPH or --run-dir\n", command.c_str());
     return 2;
   }
-  const std::string dir = launch::RunDirFor(graph_arg, run_dir);
+  const std::string dir = launch::RunDirFor(graph_arg, run_dir, search_dirs);
   if (command == "status") return launch::CmdStatus(dir);
   if (command == "wait") return launch::CmdWait(dir, timeout_s);
   if (command == "down") return launch::CmdDown(dir, timeout_s);

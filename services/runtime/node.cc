@@ -68,6 +68,9 @@ Node::Node(NodeOptions options) : options_(std::move(options)) {
                               ? options_.process_name
                               : options_.process_name + "[" + options_.robot + "]";
   common::SetLogTag(tag);
+  if (const char* level = std::getenv("CAIRN_LOG_LEVEL")) {
+    if (auto parsed = common::LogLevelFromName(level)) common::SetLogLevel(*parsed);
+  }
   lcm_ = std::make_unique<lcm::LCM>(options_.lcm_url);
   if (!lcm_->good()) {
     throw std::runtime_error("cannot open the LCM bus at " + options_.lcm_url +

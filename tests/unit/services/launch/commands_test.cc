@@ -76,8 +76,16 @@ TEST(ProcessAliveTest, ARunningProcessIsAliveAZombieAndAReapedOneAreNot) {
 }
 
 TEST(RunDirForTest, TheFlagWinsThenTheArgumentsStem) {
-  EXPECT_EQ(RunDirFor("anything", "/tmp/run_here"), "/tmp/run_here");
-  EXPECT_EQ(RunDirFor("/nonexistent/graphs/mission.yaml", ""), "var/run/mission");
+  EXPECT_EQ(RunDirFor("anything", "/tmp/run_here", {}), "/tmp/run_here");
+  EXPECT_EQ(RunDirFor("/nonexistent/graphs/mission.yaml", "", {}), "var/run/mission");
+}
+
+TEST(SearchDirsTest, TheExecutablesFolderComesFirstThenThePathList) {
+  const auto dirs = SearchDirs("/usr/local/bin::/usr/bin");
+  ASSERT_EQ(dirs.size(), 3u);
+  EXPECT_EQ(dirs[1], "/usr/local/bin");
+  EXPECT_EQ(dirs[2], "/usr/bin");
+  EXPECT_EQ(SearchDirs("").size(), 1u);
 }
 
 TEST(CmdStatusTest, AMissingStatusFileIsAnError) {
@@ -135,10 +143,14 @@ TEST(CmdCheckTest, AnInvalidGraphIsRefused) {
   const std::string path = dir.path() + "/cycle.yaml";
   std::ofstream(path) << "processes:\n  a:\n    command: /bin/true\n    depends_on: [b]\n"
                       << "  b:\n    command: /bin/true\n    depends_on: [a]\n";
-  EXPECT_EQ(CmdCheck(path), 2);
+  EXPECT_EQ(CmdCheck(path, {"/bin"}), 2);
   const std::string good = dir.path() + "/good.yaml";
   std::ofstream(good) << "processes:\n  a:\n    command: /bin/true\n    ready: {heartbeat: false}\n";
-  EXPECT_EQ(CmdCheck(good), 0);
+  EXPECT_EQ(CmdCheck(good, {"/bin"}), 0);
+  std::ofstream(good, std::ios::trunc) << "processes:\n  a:\n    command: true\n"
+                                        << "    ready: {heartbeat: false}\n";
+  EXPECT_EQ(CmdCheck(good, {}), 2) << "a bare name is looked up in the search folders only";
+  EXPECT_EQ(CmdCheck(good, {"/nonexistent", "/bin"}), 0);
 }
 
 TEST(PrepareUpTest, MakesTheRunDirAndPidFileAndRefusesASecondLauncher) {
@@ -148,7 +160,7 @@ TEST(PrepareUpTest, MakesTheRunDirAndPidFileAndRefusesASecondLauncher) {
                        << "    ready: {heartbeat: false}\n";
   const std::string run_dir = dir.path() + "/run";
   int code = -1;
-  auto plan = PrepareUp(graph, "memq://", run_dir, /*detach=*/false, &code);
+  auto plan = PrepareUp(graph, "memq://", run_dir, /*detach=*/false, {}, &code);
   ASSERT_TRUE(plan.has_value());
   EXPECT_EQ(code, 0);
   EXPECT_EQ(plan->lcm_url, "memq://");
@@ -159,7 +171,7 @@ TEST(PrepareUpTest, MakesTheRunDirAndPidFileAndRefusesASecondLauncher) {
   // Another launcher (alive) holds the run directory: refused.
   const pid_t other = StartSleeper();
   std::ofstream(run_dir + "/launch.pid", std::ios::trunc) << other << "\n";
-  EXPECT_FALSE(PrepareUp(graph, "", run_dir, false, &code).has_value());
+  EXPECT_FALSE(PrepareUp(graph, "", run_dir, false, {}, &code).has_value());
   EXPECT_EQ(code, 2);
   kill(other, SIGKILL);
   EXPECT_TRUE(Reaped(other, 10.0));

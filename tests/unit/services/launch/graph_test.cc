@@ -27,7 +27,7 @@ processes:
 )";
 
 TEST(GraphTest, LoadsAndOrders) {
-  const GraphSpec g = LoadGraphString(kGood, "g.yaml", {});
+  const GraphSpec g = LoadGraphString(kGood, "g.yaml", {"/nonexistent", "/bin"});
   ASSERT_EQ(g.processes.size(), 2u);
   EXPECT_EQ(g.name, "two");
   EXPECT_EQ(g.run_dir, "var/run/two");
