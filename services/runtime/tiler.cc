@@ -179,22 +179,41 @@ LayerTiler::Batch LayerTiler::Adopt(const std::string& layer, const common::Grid
   return batch;
 }
 
+namespace {
+
+// The fields every tile message shares: where the tile sits, its versions and checksum.
+template <typename TileMsg>
+void FillTileHeader(const std::string& robot, const std::string& map_name,
+                    const std::string& layer, int64_t utime, int64_t layer_version,
+                    const common::GridGeometry& geometry, int tile_size, int ix, int iy,
+                    int64_t tile_version, int cells_x, int cells_y, uint32_t checksum,
+                    TileMsg* m) {
+  m->utime = utime;
+  m->robot = robot;
+  m->map_name = map_name;
+  m->layer = layer;
+  m->layer_version = layer_version;
+  m->tile_version = tile_version;
+  FillGeometry(geometry, tile_size, m);
+  m->tile_ix = ix;
+  m->tile_iy = iy;
+  m->cells_x = cells_x;
+  m->cells_y = cells_y;
+  m->checksum = checksum;
+}
+
+}  // namespace
+
 void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, int ix, int iy,
                             const TileState& tile, Batch* batch) const {
+  auto header = [&](auto* m) {
+    FillTileHeader(robot_, map_name_, layer, state.utime, state.version, state.geometry,
+                   tile_size_, ix, iy, tile.tile_version, tile.cells_x, tile.cells_y,
+                   tile.checksum, m);
+  };
   if (state.encoding == TileEncoding::kFloat) {
     cairn::lcmt_grid_tile m{};
-    m.utime = state.utime;
-    m.robot = robot_;
-    m.map_name = map_name_;
-    m.layer = layer;
-    m.layer_version = state.version;
-    m.tile_version = tile.tile_version;
-    FillGeometry(state.geometry, tile_size_, &m);
-    m.tile_ix = ix;
-    m.tile_iy = iy;
-    m.cells_x = tile.cells_x;
-    m.cells_y = tile.cells_y;
-    m.checksum = tile.checksum;
+    header(&m);
     m.encoding = tile.encoding;
     m.num_cells = static_cast<int32_t>(tile.data.size());
     m.data = tile.data;
@@ -203,18 +222,7 @@ void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, i
     batch->tiles.push_back(std::move(m));
   } else {
     cairn::lcmt_occupancy_tile m{};
-    m.utime = state.utime;
-    m.robot = robot_;
-    m.map_name = map_name_;
-    m.layer = layer;
-    m.layer_version = state.version;
-    m.tile_version = tile.tile_version;
-    FillGeometry(state.geometry, tile_size_, &m);
-    m.tile_ix = ix;
-    m.tile_iy = iy;
-    m.cells_x = tile.cells_x;
-    m.cells_y = tile.cells_y;
-    m.checksum = tile.checksum;
+    header(&m);
     m.num_cells = static_cast<int32_t>(tile.occupancy.size());
     m.data = tile.occupancy;
     batch->occupancy_tiles.push_back(std::move(m));
