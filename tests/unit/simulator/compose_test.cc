@@ -7,6 +7,9 @@
 #include "simulator/mjcf_compose.h"
 #include "simulator/mujoco_sim.h"
 #include "simulator/scenario.h"
+#include "simulator/sensors/lidar_sensor.h"
+#include "simulator/sensors/odometry_sensor.h"
+#include "simulator/sensors/planar_laser_sensor.h"
 #include "tests/unit/simulator/sim_test_util.h"
 
 namespace cairn::sim {
@@ -69,7 +72,7 @@ TEST_F(ComposedWorldTest, RobotsGoIntoAnyWorldEvenWithHostileDefaults) {
   Scenario s = InlineScenario(world, "a", "pioneer3at");
   SpawnPose b;
   b.x_m = -2.0;
-  s.robots.push_back(MakeRobotSpec("b", "kobuki", "", b, SimPaths::Default()));
+  s.robots.push_back(MakeRobotSpec("b", "kobuki", "", b, testing::TestPaths()));
   MujocoSim sim(s);
   SimOutputs out;
   // Both robots rest on the floor (their geoms collide) and can drive.
@@ -118,7 +121,7 @@ TEST_F(ComposedWorldTest, RelativeAssetsResolveNextToTheWorldFile) {
 }
 
 TEST(ScenarioTest, ShippedScenariosLoad) {
-  const SimPaths paths = SimPaths::Default();
+  const SimPaths paths = testing::TestPaths();
   const std::string dir = std::string(CAIRN_SOURCE_DIR) + "/config/sim";
   int count = 0;
   for (const auto& entry : std::filesystem::directory_iterator(dir)) {
@@ -133,7 +136,7 @@ TEST(ScenarioTest, ShippedScenariosLoad) {
 }
 
 TEST(ScenarioTest, UnknownKeysAndBadValuesNameFileAndLine) {
-  const SimPaths paths = SimPaths::Default();
+  const SimPaths paths = testing::TestPaths();
   auto load = [&](const std::string& text) {
     common::YamlMap map = common::YamlMap::FromString(text, "test.yaml");
     return LoadScenario(map, paths);
@@ -179,25 +182,25 @@ robots:
       - {at_s: 1.0, duration_s: 2.0, linear_mps: 0.2}
 )",
                                                     "inline.yaml");
-  const Scenario s = LoadScenario(map, SimPaths::Default());
+  const Scenario s = LoadScenario(map, testing::TestPaths());
   ASSERT_EQ(s.robots.size(), 1u);
   const RobotSpec& r = s.robots[0];
   EXPECT_EQ(s.seed, 9u);
   EXPECT_EQ(r.profile.name, "p3dx");
   EXPECT_NEAR(r.spawn.yaw_rad, M_PI / 2, 1e-12);
-  ASSERT_TRUE(r.sensors.planar_laser.has_value());
-  EXPECT_EQ(r.sensors.planar_laser->rate_hz, 20.0);
-  EXPECT_EQ(r.sensors.planar_laser->fov_deg, 240.0);  // the model's default survives
-  EXPECT_EQ(r.sensors.planar_laser->max_range_m, 5.6);
-  ASSERT_TRUE(r.sensors.lidar.has_value());  // added though the model has none
-  EXPECT_EQ(r.sensors.lidar->slices_per_revolution, 18);
-  EXPECT_FALSE(r.sensors.odometry.has_value());  // not listed: off
+  ASSERT_TRUE(r.sensors.Has(PlanarLaserSensor::kName));
+  EXPECT_EQ(r.sensors.Find<PlanarLaserSensor>()->rate_hz, 20.0);
+  EXPECT_EQ(r.sensors.Find<PlanarLaserSensor>()->fov_deg, 240.0);  // the model's default survives
+  EXPECT_EQ(r.sensors.Find<PlanarLaserSensor>()->max_range_m, 5.6);
+  ASSERT_TRUE(r.sensors.Has(LidarSensor::kName));  // added though the model has none
+  EXPECT_EQ(r.sensors.Find<LidarSensor>()->slices_per_revolution, 18);
+  EXPECT_FALSE(r.sensors.Has(OdometrySensor::kName));  // not listed: off
   ASSERT_EQ(r.commands.size(), 1u);
   EXPECT_EQ(r.commands[0].linear_mps, 0.2);
 }
 
 TEST(ScenarioTest, RobotFlag) {
-  const SimPaths paths = SimPaths::Default();
+  const SimPaths paths = testing::TestPaths();
   const RobotSpec r = ParseRobotFlag("scout:kobuki::2.5,-1,90", paths);
   EXPECT_EQ(r.id, "scout");
   EXPECT_EQ(r.profile.name, "kobuki");
@@ -210,7 +213,7 @@ TEST(ScenarioTest, RobotFlag) {
 }
 
 TEST(ScenarioTest, ShippedRobotsLoadAndHelpListsWorlds) {
-  const SimPaths paths = SimPaths::Default();
+  const SimPaths paths = testing::TestPaths();
   const auto robots = paths.ShippedRobots();
   EXPECT_EQ(robots, (std::vector<std::string>{"kobuki", "p3dx", "pioneer3at"}));
   for (const std::string& name : robots) {

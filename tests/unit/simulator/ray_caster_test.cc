@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "simulator/mujoco_model.h"
-#include "simulator/sensors.h"
+#include "simulator/sensors/lidar_sensor.h"
 
 namespace cairn::sim {
 namespace {
