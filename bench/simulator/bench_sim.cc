@@ -42,11 +42,13 @@ using Clock = std::chrono::steady_clock;
 
 constexpr double kWindowS = 5.0;  // simulated seconds per window
 
-double ThreadCpuSeconds() {
+double CpuSeconds(clockid_t clock) {
   timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  clock_gettime(clock, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
+double ThreadCpuSeconds() { return CpuSeconds(CLOCK_THREAD_CPUTIME_ID); }
+double ProcessCpuSeconds() { return CpuSeconds(CLOCK_PROCESS_CPUTIME_ID); }
 
 // The 1-minute load average, so a reader can tell a busy machine from a slow simulator.
 std::string LoadAverage() {
@@ -136,7 +138,9 @@ Windows RunService(bool use_mj_ray, double sim_seconds) {
   cairn::sim::SimServiceParams params;
   params.speed = 0.0;  // --speed max
   cairn::sim::SimService service(node, sim, params);
+  const double process_cpu0 = ProcessCpuSeconds();
   Windows w = RunWindows(sim, sim_seconds, [&] { service.RunOnce(0); });
+  const double process_cpu = ProcessCpuSeconds() - process_cpu0;
   double bytes = 0.0, messages = 0.0;
   for (const auto& c : node.MakeHealth().channels) {
     if (!c.outgoing) continue;
@@ -144,12 +148,13 @@ Windows RunService(bool use_mj_ray, double sim_seconds) {
     messages += static_cast<double>(c.messages);
   }
   std::printf(
-      "  run: SimService --speed max on %s, %s: %.0f s simulated in %.2f s wall (%.2f s cpu of "
-      "the simulation thread); 5 s windows %.1f..%.1fx of wall time, median %.1fx; published "
-      "%.0f messages, %.1f MB per simulated second; robot x %.1f m\n",
+      "  run: SimService --speed max on %s, %s: %.0f s simulated in %.2f s wall, %.2f s cpu of "
+      "the simulation thread (%.1fx per CPU second), %.2f s of the process; 5 s windows "
+      "%.1f..%.1fx of wall time, median %.1fx; published %.0f messages, %.1f MB per simulated "
+      "second; robot x %.1f m\n",
       node.url().c_str(), use_mj_ray ? "rays by the mj_ray loop" : "rays by the ray caster",
-      w.sim_s, w.wall_s, w.cpu_s, w.worst(), w.best(), w.median(), messages, bytes / w.sim_s / 1e6,
-      w.robot_x_m);
+      w.sim_s, w.wall_s, w.cpu_s, w.sim_s / w.cpu_s, process_cpu, w.worst(), w.best(), w.median(),
+      messages, bytes / w.sim_s / 1e6, w.robot_x_m);
   return w;
 }
 
