@@ -127,16 +127,6 @@ TEST_F(RayCasterTest, HiddenGeomsAndOwnersAreSkipped) {
   EXPECT_EQ(hit.geom, -1);
 }
 
-TEST(ThreadPoolTest, RunsEveryTaskOnce) {
-  ThreadPool pool(3);
-  EXPECT_EQ(pool.threads(), 3);
-  for (int round = 0; round < 50; ++round) {
-    std::vector<std::atomic<int>> counts(37);
-    pool.ParallelFor(37, [&](int i) { counts[i]++; });
-    for (auto& c : counts) ASSERT_EQ(c.load(), 1);
-  }
-}
-
 }  // namespace
 }  // namespace cairn::sim
 
