@@ -2,6 +2,7 @@
 
 #include <any>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -68,6 +69,12 @@ void FinishSensorParams(common::YamlMap& map, const Params& params) {
 /// Sensor kinds by name, in the order they were added (the catalogue's order).
 class SensorRegistry {
  public:
+  SensorRegistry() = default;
+  SensorRegistry(const SensorRegistry&) = default;
+  SensorRegistry& operator=(const SensorRegistry&) = default;
+  SensorRegistry(SensorRegistry&&) = default;
+  SensorRegistry& operator=(SensorRegistry&&) = default;
+
   /// @throws std::invalid_argument when a kind of that name is already there.
   void Add(const SensorKind& kind);
   /// nullptr for an unknown name.
@@ -88,6 +95,12 @@ const SensorRegistry& BuiltinSensors();
 /// The sensors one robot carries, each with its parameters; a sensor not in the set is off.
 class SensorSet {
  public:
+  SensorSet() = default;
+  SensorSet(const SensorSet&) = default;
+  SensorSet& operator=(const SensorSet&) = default;
+  SensorSet(SensorSet&&) = default;
+  SensorSet& operator=(SensorSet&&) = default;
+
   struct Entry {
     const SensorKind* kind{nullptr};
     std::any params;

@@ -47,6 +47,12 @@ SensorPublisher MakeSensorPublisher(std::string sensor, std::string stream,
 /// Publishers by sensor name.
 class SensorPublishers {
  public:
+  SensorPublishers() = default;
+  SensorPublishers(const SensorPublishers&) = default;
+  SensorPublishers& operator=(const SensorPublishers&) = default;
+  SensorPublishers(SensorPublishers&&) = default;
+  SensorPublishers& operator=(SensorPublishers&&) = default;
+
   /// @throws std::invalid_argument when the sensor already has one.
   void Add(SensorPublisher publisher);
   /// nullptr when the sensor has none.
