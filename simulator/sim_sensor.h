@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -109,6 +110,10 @@ struct SensorSchedule {
     while (Due(now_s)) ++count;
   }
 };
+
+/// For Params::Validate(): finite and > 0, finite and >= 0.
+inline bool FinitePositive(double v) { return std::isfinite(v) && v > 0.0; }
+inline bool FiniteNonNegative(double v) { return std::isfinite(v) && v >= 0.0; }
 
 /// Pose of a site in the world (from the last kinematics pass).
 common::Pose3 SitePose(const mjData* data, int site);

@@ -8,7 +8,7 @@
 namespace cairn::sim {
 
 void GroundTruthParams::Validate() const {
-  CAIRN_THROW_UNLESS(std::isfinite(rate_hz) && rate_hz > 0.0, "ground_truth.rate_hz must be > 0");
+  CAIRN_THROW_UNLESS(FinitePositive(rate_hz), "ground_truth.rate_hz must be > 0");
 }
 
 GroundTruthParams LoadGroundTruthParams(common::YamlMap& map, const GroundTruthParams& defaults) {

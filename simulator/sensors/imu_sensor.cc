@@ -8,16 +8,11 @@
 #include <Eigen/Geometry>
 
 namespace cairn::sim {
-namespace {
-
-bool NonNegative(double v) { return std::isfinite(v) && v >= 0.0; }
-
-}  // namespace
-
 void ImuParams::Validate() const {
-  CAIRN_THROW_UNLESS(std::isfinite(rate_hz) && rate_hz > 0.0, "imu.rate_hz must be > 0");
-  CAIRN_THROW_UNLESS(NonNegative(gyro_noise_sigma_radps) && NonNegative(accel_noise_sigma_mps2) &&
-                         NonNegative(orientation_noise_sigma_rad),
+  CAIRN_THROW_UNLESS(FinitePositive(rate_hz), "imu.rate_hz must be > 0");
+  CAIRN_THROW_UNLESS(FiniteNonNegative(gyro_noise_sigma_radps) &&
+                         FiniteNonNegative(accel_noise_sigma_mps2) &&
+                         FiniteNonNegative(orientation_noise_sigma_rad),
                      "imu noise sigmas must be >= 0");
 }
 

@@ -9,8 +9,6 @@
 namespace cairn::sim {
 namespace {
 
-bool Positive(double v) { return std::isfinite(v) && v > 0.0; }
-bool NonNegative(double v) { return std::isfinite(v) && v >= 0.0; }
 double DegToRad(double deg) { return deg * M_PI / 180.0; }
 
 }  // namespace
@@ -22,13 +20,14 @@ void LidarParams::Validate() const {
                          max_elevation_deg <= 90.0,
                      "hdl32e elevations must satisfy -90 <= min <= max <= 90");
   CAIRN_THROW_UNLESS(azimuth_steps >= 1, "hdl32e.azimuth_steps must be >= 1");
-  CAIRN_THROW_UNLESS(Positive(rate_hz), "hdl32e.rate_hz must be > 0");
+  CAIRN_THROW_UNLESS(FinitePositive(rate_hz), "hdl32e.rate_hz must be > 0");
   CAIRN_THROW_UNLESS(slices_per_revolution >= 1 && slices_per_revolution <= azimuth_steps,
                      "hdl32e.slices_per_revolution must be in [1, azimuth_steps]");
-  CAIRN_THROW_UNLESS(Positive(max_range_m), "hdl32e.max_range_m must be > 0");
-  CAIRN_THROW_UNLESS(NonNegative(min_range_m) && min_range_m < max_range_m,
+  CAIRN_THROW_UNLESS(FinitePositive(max_range_m), "hdl32e.max_range_m must be > 0");
+  CAIRN_THROW_UNLESS(FiniteNonNegative(min_range_m) && min_range_m < max_range_m,
                      "hdl32e.min_range_m must be in [0, max_range_m)");
-  CAIRN_THROW_UNLESS(NonNegative(range_noise_sigma_m), "hdl32e.range_noise_sigma_m must be >= 0");
+  CAIRN_THROW_UNLESS(FiniteNonNegative(range_noise_sigma_m),
+                     "hdl32e.range_noise_sigma_m must be >= 0");
   CAIRN_THROW_UNLESS(azimuths_per_ray_group >= 1, "hdl32e.azimuths_per_ray_group must be >= 1");
   CAIRN_THROW_UNLESS(rings_per_ray_group >= 1, "hdl32e.rings_per_ray_group must be >= 1");
   // One slice must fit a UDP-friendly message (17 bytes per point).

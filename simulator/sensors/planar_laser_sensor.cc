@@ -7,22 +7,15 @@
 #include "simulator/sensor_registry.h"
 
 namespace cairn::sim {
-namespace {
-
-bool Positive(double v) { return std::isfinite(v) && v > 0.0; }
-bool NonNegative(double v) { return std::isfinite(v) && v >= 0.0; }
-
-}  // namespace
-
 void PlanarLaserParams::Validate() const {
-  CAIRN_THROW_UNLESS(Positive(fov_deg) && fov_deg <= 360.0,
+  CAIRN_THROW_UNLESS(FinitePositive(fov_deg) && fov_deg <= 360.0,
                      "planar_laser.fov_deg must be in (0, 360]");
   CAIRN_THROW_UNLESS(beams >= 2 && beams <= 100000, "planar_laser.beams must be in [2, 100000]");
-  CAIRN_THROW_UNLESS(Positive(max_range_m), "planar_laser.max_range_m must be > 0");
-  CAIRN_THROW_UNLESS(NonNegative(min_range_m) && min_range_m < max_range_m,
+  CAIRN_THROW_UNLESS(FinitePositive(max_range_m), "planar_laser.max_range_m must be > 0");
+  CAIRN_THROW_UNLESS(FiniteNonNegative(min_range_m) && min_range_m < max_range_m,
                      "planar_laser.min_range_m must be in [0, max_range_m)");
-  CAIRN_THROW_UNLESS(Positive(rate_hz), "planar_laser.rate_hz must be > 0");
-  CAIRN_THROW_UNLESS(NonNegative(range_noise_sigma_m),
+  CAIRN_THROW_UNLESS(FinitePositive(rate_hz), "planar_laser.rate_hz must be > 0");
+  CAIRN_THROW_UNLESS(FiniteNonNegative(range_noise_sigma_m),
                      "planar_laser.range_noise_sigma_m must be >= 0");
 }
 

@@ -9,26 +9,20 @@
 #include <Eigen/Geometry>
 
 namespace cairn::sim {
-namespace {
-
-bool Positive(double v) { return std::isfinite(v) && v > 0.0; }
-bool NonNegative(double v) { return std::isfinite(v) && v >= 0.0; }
-
-}  // namespace
-
 void TurretParams::Validate() const {
-  CAIRN_THROW_UNLESS(Positive(fan_fov_deg) && fan_fov_deg <= 360.0,
+  CAIRN_THROW_UNLESS(FinitePositive(fan_fov_deg) && fan_fov_deg <= 360.0,
                      "turret.fan_fov_deg must be in (0, 360]");
   CAIRN_THROW_UNLESS(fan_beams >= 2 && fan_beams <= 100000, "turret.fan_beams must be >= 2");
-  CAIRN_THROW_UNLESS(Positive(max_range_m), "turret.max_range_m must be > 0");
-  CAIRN_THROW_UNLESS(NonNegative(min_range_m) && min_range_m < max_range_m,
+  CAIRN_THROW_UNLESS(FinitePositive(max_range_m), "turret.max_range_m must be > 0");
+  CAIRN_THROW_UNLESS(FiniteNonNegative(min_range_m) && min_range_m < max_range_m,
                      "turret.min_range_m must be in [0, max_range_m)");
-  CAIRN_THROW_UNLESS(Positive(line_rate_hz), "turret.line_rate_hz must be > 0");
-  CAIRN_THROW_UNLESS(Positive(pan_step_deg), "turret.pan_step_deg must be > 0");
+  CAIRN_THROW_UNLESS(FinitePositive(line_rate_hz), "turret.line_rate_hz must be > 0");
+  CAIRN_THROW_UNLESS(FinitePositive(pan_step_deg), "turret.pan_step_deg must be > 0");
   CAIRN_THROW_UNLESS(
-      Positive(pan_range_deg) && pan_range_deg <= 360.0 && pan_range_deg >= pan_step_deg,
+      FinitePositive(pan_range_deg) && pan_range_deg <= 360.0 && pan_range_deg >= pan_step_deg,
       "turret.pan_range_deg must be in [pan_step_deg, 360]");
-  CAIRN_THROW_UNLESS(NonNegative(range_noise_sigma_m), "turret.range_noise_sigma_m must be >= 0");
+  CAIRN_THROW_UNLESS(FiniteNonNegative(range_noise_sigma_m),
+                     "turret.range_noise_sigma_m must be >= 0");
 }
 
 TurretParams LoadTurretParams(common::YamlMap& map, const TurretParams& defaults) {
