@@ -8,6 +8,7 @@
 
 #include "common/check.h"
 #include "simulator/mjcf_compose.h"
+#include "simulator/sensor_registry.h"
 
 namespace cairn::sim {
 namespace {
@@ -28,23 +29,9 @@ double Seconds(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-int64_t ToUtime(double t_s) { return static_cast<int64_t>(std::llround(t_s * 1e6)); }
-
-Eigen::Matrix3d RowMajor(const mjtNum* m) {
-  return Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(m);
-}
-
 Quaternion YawQuaternion(double yaw_rad) {
   return Quaternion(Eigen::AngleAxisd(yaw_rad, Vector3::UnitZ()));
 }
-
-// Sensor timing: reading n falls due at n / rate (n = 1, 2, ...), computed from integers so
-// long runs do not drift.
-struct Schedule {
-  double rate_hz{1.0};
-  int64_t count{0};
-  bool Due(double now_s) const { return static_cast<double>(count + 1) / rate_hz <= now_s + 1e-9; }
-};
 
 int RequireId(const mjModel* m, mjtObj type, const std::string& name, const std::string& what) {
   const int id = mj_name2id(m, type, name.c_str());
@@ -52,22 +39,14 @@ int RequireId(const mjModel* m, mjtObj type, const std::string& name, const std:
   return id;
 }
 
+// Mean rotation of a set of wheel joints.
+double MeanAngle(const mjData* d, const std::vector<int>& qpos) {
+  double sum = 0.0;
+  for (int a : qpos) sum += d->qpos[a];
+  return sum / static_cast<double>(qpos.size());
+}
+
 }  // namespace
-
-void SimOutputs::Clear() {
-  lidar.clear();
-  scans.clear();
-  turret_lines.clear();
-  odometry.clear();
-  poses.clear();
-  imu.clear();
-  events.clear();
-}
-
-bool SimOutputs::empty() const {
-  return lidar.empty() && scans.empty() && turret_lines.empty() && odometry.empty() &&
-         poses.empty() && imu.empty() && events.empty();
-}
 
 // ---------------------------------------------------------------------------------------------
 
@@ -85,47 +64,9 @@ struct MujocoSim::Robot {
   std::vector<double> left_integral, right_integral;
   double left_angle{0.0}, right_angle{0.0};
   std::unique_ptr<DriveController> drive;
-  std::unique_ptr<WheelOdometry> odometry;
-  double odom_z_m{0.0};
-
-  struct Lidar {
-    LidarParams params;
-    LidarPattern pattern;
-    int site{-1};
-    int64_t slices_done{0};
-    std::vector<RayHit> hits;
-    NoiseSource noise;
-  };
-  struct Planar {
-    PlanarLaserParams params;
-    RayPattern pattern;
-    int site{-1};
-    Schedule schedule;
-    std::vector<RayHit> hits;
-    NoiseSource noise;
-  };
-  struct Turret {
-    TurretParams params;
-    RayPattern pattern;
-    int site{-1};
-    int pan_steps{1};
-    Schedule schedule;
-    std::vector<RayHit> hits;
-    NoiseSource noise;
-  };
-  struct Imu {
-    ImuParams params;
-    int gyro_adr{-1}, accel_adr{-1}, quat_adr{-1};
-    Schedule schedule;
-    NoiseSource noise;
-  };
-  std::unique_ptr<Lidar> lidar;
-  std::unique_ptr<Planar> planar;
-  std::unique_ptr<Turret> turret;
-  std::unique_ptr<Imu> imu;
-  Schedule odom_schedule;
-  Schedule pose_schedule;
-  bool has_odometry{false}, has_pose{false};
+  /// In the order of the robot's SensorSet.
+  std::vector<std::unique_ptr<SimSensor>> sensors;
+  std::vector<std::string> sensor_names;
 };
 
 struct MujocoSim::Object {
@@ -136,12 +77,24 @@ struct MujocoSim::Object {
 };
 
 // ---------------------------------------------------------------------------------------------
+// Construction
 
 MujocoSim::MujocoSim(const Scenario& scenario) : scenario_(scenario) {
   scenario_.Validate();
   InstallMujocoLogHooks();
+  Compose();
+  rays_ = std::make_unique<SceneRays>(model_.get(), scenario_.ray_threads);
+  SetupSpawnPool();
+  CollectMocapObjects();
+  OpenDoors();
+  mj_forward(model_.get(), data_.get());
+  SetupRobots();
+  rays_->MarkMoved();
+}
 
-  // Compose and compile.
+MujocoSim::~MujocoSim() = default;
+
+void MujocoSim::Compose() {
   std::vector<RobotInsertion> insertions;
   for (const RobotSpec& r : scenario_.robots) {
     insertions.push_back({r.id, r.model.xml, r.model.xml_path});
@@ -163,28 +116,22 @@ MujocoSim::MujocoSim(const Scenario& scenario) : scenario_(scenario) {
                                             : mjINT_EULER;
   data_.reset(mj_makeData(m));
   if (!data_) throw std::runtime_error(scenario_.world_path + ": MuJoCo could not allocate data");
+}
 
-  scene_ = std::make_unique<RayScene>(m);
-  if (scenario_.ray_threads > 1) pool_ = std::make_unique<ThreadPool>(scenario_.ray_threads);
-  caster_ = std::make_unique<RayCaster>(pool_.get());
-
-  // Intensity of a return: brightness of the surface colour, 0..100.
-  intensity_.resize(m->ngeom);
-  for (int g = 0; g < m->ngeom; ++g) {
-    const int mat = m->geom_matid[g];
-    const float* rgba = mat >= 0 ? m->mat_rgba + 4 * mat : m->geom_rgba + 4 * g;
-    intensity_[g] = 100.f * (0.299f * rgba[0] + 0.587f * rgba[1] + 0.114f * rgba[2]);
-  }
-
+void MujocoSim::SetupSpawnPool() {
   // Spawn pool slots start parked and invisible.
   for (int k = 0; k < scenario_.spawn_slots; ++k) {
     const std::string name = std::string(kSpawnGeomPrefix) + std::to_string(k);
-    const int geom = RequireId(m, mjOBJ_GEOM, name, "spawn slot");
-    scene_->SetVisible(geom, false);
+    const int geom = RequireId(model_.get(), mjOBJ_GEOM, name, "spawn slot");
+    rays_->scene().SetVisible(geom, false);
     free_slots_.push_back(geom);
   }
   std::reverse(free_slots_.begin(), free_slots_.end());
+}
+
+void MujocoSim::CollectMocapObjects() {
   // World mocap bodies (movable furniture) are addressable objects.
+  const mjModel* m = model_.get();
   for (int b = 1; b < m->nbody; ++b) {
     if (m->body_mocapid[b] < 0) continue;
     const std::string name = MjName(m, mjOBJ_BODY, b);
@@ -197,32 +144,31 @@ MujocoSim::MujocoSim(const Scenario& scenario) : scenario_(scenario) {
     }
     objects_[name] = std::move(object);
   }
+}
 
+void MujocoSim::OpenDoors() {
   // Doors start open: the position servo's target and the hinge itself.
+  const mjModel* m = model_.get();
   for (const std::string& door : DoorNames()) {
     SetDoor(door, true);
     const int act = mj_name2id(m, mjOBJ_ACTUATOR, (std::string(kDoorPrefix) + door).c_str());
     data_->qpos[m->jnt_qposadr[m->actuator_trnid[2 * act]]] = data_->ctrl[act];
   }
-  mj_forward(m, data_.get());
+}
+
+void MujocoSim::SetupRobots() {
   for (size_t i = 0; i < scenario_.robots.size(); ++i) {
     auto robot = std::make_unique<Robot>();
     robot->spec = scenario_.robots[i];
     robots_.push_back(std::move(robot));
     SetupRobot(*robots_.back(), static_cast<int>(i));
   }
-  mj_forward(m, data_.get());
+  mj_forward(model_.get(), data_.get());
   for (auto& robot : robots_) {
-    robot->left_angle = robot->right_angle = 0.0;
-    for (int a : robot->left_qpos) robot->left_angle += data_->qpos[a];
-    for (int a : robot->right_qpos) robot->right_angle += data_->qpos[a];
-    robot->left_angle /= static_cast<double>(robot->left_qpos.size());
-    robot->right_angle /= static_cast<double>(robot->right_qpos.size());
+    robot->left_angle = MeanAngle(data_.get(), robot->left_qpos);
+    robot->right_angle = MeanAngle(data_.get(), robot->right_qpos);
   }
-  scene_dirty_ = true;
 }
-
-MujocoSim::~MujocoSim() = default;
 
 void MujocoSim::SetupRobot(Robot& robot, int index) {
   const mjModel* m = model_.get();
@@ -249,10 +195,19 @@ void MujocoSim::SetupRobot(Robot& robot, int index) {
 
   // Its geoms are its own: excluded from its sensors, visible to others.
   for (int g = 0; g < m->ngeom; ++g) {
-    if (m->body_rootid[m->geom_bodyid[g]] == root) scene_->SetOwner(g, index);
+    if (m->body_rootid[m->geom_bodyid[g]] == root) rays_->scene().SetOwner(g, index);
   }
+  SetupWheels(robot, where);
+  robot.drive = std::make_unique<DriveController>(common::VelocityLimits::FromProfile(spec.profile),
+                                                  spec.model.wheel_radius_m, spec.model.track_m);
+  CreateSensors(robot);
+  PlaceRobot(robot, spec.spawn.x_m, spec.spawn.y_m, spec.spawn.yaw_rad, spec.spawn.z_m);
+}
 
+void MujocoSim::SetupWheels(Robot& robot, const std::string& where) {
   // Wheels: hinge joints with velocity actuators of the same name.
+  const mjModel* m = model_.get();
+  const std::string prefix = robot.spec.id + "/";
   auto wheels = [&](const std::vector<std::string>& names, std::vector<int>* actuators,
                     std::vector<int>* qpos, std::vector<int>* dof) {
     for (const std::string& wheel : names) {
@@ -266,85 +221,29 @@ void MujocoSim::SetupRobot(Robot& robot, int index) {
       dof->push_back(m->jnt_dofadr[joint]);
     }
   };
-  wheels(spec.model.left_wheels, &robot.left_actuators, &robot.left_qpos, &robot.left_dof);
-  wheels(spec.model.right_wheels, &robot.right_actuators, &robot.right_qpos, &robot.right_dof);
+  const RobotModel& model = robot.spec.model;
+  wheels(model.left_wheels, &robot.left_actuators, &robot.left_qpos, &robot.left_dof);
+  wheels(model.right_wheels, &robot.right_actuators, &robot.right_qpos, &robot.right_dof);
   robot.left_integral.assign(robot.left_dof.size(), 0.0);
   robot.right_integral.assign(robot.right_dof.size(), 0.0);
-  robot.drive = std::make_unique<DriveController>(common::VelocityLimits::FromProfile(spec.profile),
-                                                  spec.model.wheel_radius_m, spec.model.track_m);
+}
 
-  const uint64_t seed = scenario_.seed;
-  const SensorSet& sensors = spec.sensors;
-  auto site_id = [&](const std::string& site, const char* sensor) {
-    const int id = mj_name2id(m, mjOBJ_SITE, (prefix + site).c_str());
-    if (id < 0) {
-      throw std::invalid_argument(where + "sensor '" + sensor + "' needs a site named '" + site +
-                                  "' on the robot");
-    }
-    return id;
-  };
-
-  if (sensors.lidar) {
-    auto lidar = std::make_unique<Robot::Lidar>();
-    lidar->params = *sensors.lidar;
-    lidar->pattern = BuildLidarPattern(lidar->params);
-    lidar->site = site_id(lidar->params.mount_site, kSensorLidar);
-    lidar->hits.resize(lidar->pattern.rays.directions.size());
-    lidar->noise = NoiseSource(seed, NoiseStream(spec.id + "/" + kSensorLidar));
-    robot.lidar = std::move(lidar);
+void MujocoSim::CreateSensors(Robot& robot) {
+  SensorContext context;
+  context.model = model_.get();
+  context.robot = robot.spec.id;
+  context.robot_index = robot.index;
+  context.model_path = robot.spec.model.xml_path;
+  context.qpos_adr = robot.qpos_adr;
+  context.qvel_adr = robot.qvel_adr;
+  context.wheel_radius_m = robot.spec.model.wheel_radius_m;
+  context.track_m = robot.spec.model.track_m;
+  context.seed = scenario_.seed;
+  for (const SensorSet::Entry& entry : robot.spec.sensors.entries()) {
+    context.sensor = entry.kind->name;
+    robot.sensors.push_back(entry.kind->create(entry.params, context));
+    robot.sensor_names.push_back(entry.kind->name);
   }
-  if (sensors.planar_laser) {
-    auto planar = std::make_unique<Robot::Planar>();
-    planar->params = *sensors.planar_laser;
-    planar->pattern = BuildFanPattern(planar->params.fov_deg, planar->params.beams);
-    planar->site = site_id(planar->params.mount_site, kSensorPlanarLaser);
-    planar->schedule.rate_hz = planar->params.rate_hz;
-    planar->hits.resize(planar->pattern.directions.size());
-    planar->noise = NoiseSource(seed, NoiseStream(spec.id + "/" + kSensorPlanarLaser));
-    robot.planar = std::move(planar);
-  }
-  if (sensors.turret) {
-    auto turret = std::make_unique<Robot::Turret>();
-    turret->params = *sensors.turret;
-    turret->pattern = BuildFanPattern(turret->params.fan_fov_deg, turret->params.fan_beams);
-    turret->site = site_id(turret->params.mount_site, kSensorTurret);
-    turret->pan_steps = std::max(1, static_cast<int>(std::lround(turret->params.pan_range_deg /
-                                                                 turret->params.pan_step_deg)));
-    turret->schedule.rate_hz = turret->params.line_rate_hz;
-    turret->hits.resize(turret->pattern.directions.size());
-    turret->noise = NoiseSource(seed, NoiseStream(spec.id + "/" + kSensorTurret));
-    robot.turret = std::move(turret);
-  }
-  if (sensors.imu) {
-    auto imu = std::make_unique<Robot::Imu>();
-    imu->params = *sensors.imu;
-    const int site = site_id(imu->params.site, kSensorImu);
-    for (int s = 0; s < m->nsensor; ++s) {
-      if (m->sensor_objtype[s] != mjOBJ_SITE || m->sensor_objid[s] != site) continue;
-      if (m->sensor_type[s] == mjSENS_GYRO) imu->gyro_adr = m->sensor_adr[s];
-      if (m->sensor_type[s] == mjSENS_ACCELEROMETER) imu->accel_adr = m->sensor_adr[s];
-      if (m->sensor_type[s] == mjSENS_FRAMEQUAT) imu->quat_adr = m->sensor_adr[s];
-    }
-    if (imu->gyro_adr < 0 || imu->accel_adr < 0 || imu->quat_adr < 0) {
-      throw std::invalid_argument(where +
-                                  "sensor 'imu' needs gyro, accelerometer and framequat "
-                                  "sensors on site '" +
-                                  imu->params.site + "'");
-    }
-    imu->schedule.rate_hz = imu->params.rate_hz;
-    imu->noise = NoiseSource(seed, NoiseStream(spec.id + "/" + kSensorImu));
-    robot.imu = std::move(imu);
-  }
-  OdometryParams odom_params = sensors.odometry.value_or(OdometryParams{});
-  robot.has_odometry = sensors.odometry.has_value();
-  robot.odom_schedule.rate_hz = odom_params.rate_hz;
-  robot.odometry = std::make_unique<WheelOdometry>(
-      odom_params, spec.model.wheel_radius_m, spec.model.track_m,
-      NoiseSource(seed, NoiseStream(spec.id + "/" + kSensorOdometry)));
-  robot.has_pose = sensors.ground_truth.has_value();
-  robot.pose_schedule.rate_hz = sensors.ground_truth.value_or(GroundTruthParams{}).rate_hz;
-
-  PlaceRobot(robot, spec.spawn.x_m, spec.spawn.y_m, spec.spawn.yaw_rad, spec.spawn.z_m);
 }
 
 double MujocoSim::GroundHeight(double x_m, double y_m) const {
@@ -374,17 +273,24 @@ void MujocoSim::PlaceRobot(Robot& robot, double x_m, double y_m, double yaw_rad,
   robot.drive->Halt();
   std::fill(robot.left_integral.begin(), robot.left_integral.end(), 0.0);
   std::fill(robot.right_integral.begin(), robot.right_integral.end(), 0.0);
-  robot.odometry->Reset({x_m, y_m, yaw_rad});
-  robot.odom_z_m = z;
+  for (auto& sensor : robot.sensors) sensor->OnPlaced({x_m, y_m, yaw_rad}, z);
   mj_kinematics(model_.get(), d);
-  scene_dirty_ = true;
+  rays_->MarkMoved();
 }
 
 // ---------------------------------------------------------------------------------------------
+// Robots
 
 double MujocoSim::time_s() const { return data_->time; }
 int64_t MujocoSim::utime() const { return ToUtime(data_->time); }
 double MujocoSim::timestep_s() const { return model_->opt.timestep; }
+
+SimStats MujocoSim::stats() const {
+  SimStats stats = stats_;
+  stats.rays_cast = rays_->rays_cast();
+  stats.ray_s = rays_->ray_s();
+  return stats;
+}
 
 std::vector<std::string> MujocoSim::robot_ids() const {
   std::vector<std::string> ids;
@@ -419,8 +325,12 @@ const DriveController& MujocoSim::drive(const std::string& robot) const {
   return *FindRobot(robot).drive;
 }
 
-common::Pose2 MujocoSim::OdometryPose(const std::string& robot) const {
-  return FindRobot(robot).odometry->pose();
+const SimSensor* MujocoSim::sensor(const std::string& robot, const std::string& name) const {
+  const Robot& r = FindRobot(robot);
+  for (size_t i = 0; i < r.sensors.size(); ++i) {
+    if (r.sensor_names[i] == name) return r.sensors[i].get();
+  }
+  return nullptr;
 }
 
 Pose3 MujocoSim::RobotPose(const std::string& id) const {
@@ -458,10 +368,10 @@ void MujocoSim::Step(SimOutputs* out) {
   ApplyDrive(data_->time, dt, out);
   mj_step(model_.get(), data_.get());
   ++stats_.physics_steps;
-  IntegrateOdometry(dt);
+  AfterPhysicsStep(dt);
   const auto t1 = Clock::now();
   stats_.physics_s += Seconds(t0, t1);
-  scene_dirty_ = true;
+  rays_->MarkMoved();
   ProduceReadings(out);
   stats_.sensors_s += Seconds(t1, Clock::now());
 }
@@ -495,277 +405,46 @@ void MujocoSim::ApplyDrive(double now_s, double dt_s, SimOutputs* out) {
   }
 }
 
-void MujocoSim::IntegrateOdometry(double dt_s) {
-  const double* q = data_->qpos;
+void MujocoSim::AfterPhysicsStep(double dt_s) {
+  // The wheels' rotation over the step, for sensors that integrate it (odometry).
   for (auto& r : robots_) {
-    double left = 0.0, right = 0.0;
-    for (int a : r->left_qpos) left += q[a];
-    for (int a : r->right_qpos) right += q[a];
-    left /= static_cast<double>(r->left_qpos.size());
-    right /= static_cast<double>(r->right_qpos.size());
-    r->odometry->Integrate(left - r->left_angle, right - r->right_angle, dt_s);
+    const double left = MeanAngle(data_.get(), r->left_qpos);
+    const double right = MeanAngle(data_.get(), r->right_qpos);
+    const StepMotion motion{dt_s, left - r->left_angle, right - r->right_angle};
+    for (auto& sensor : r->sensors) sensor->OnStep(motion);
     r->left_angle = left;
     r->right_angle = right;
   }
 }
 
-Pose3 MujocoSim::SitePose(int site) const {
-  Pose3 pose;
-  pose.position_m = Vector3(data_->site_xpos[3 * site], data_->site_xpos[3 * site + 1],
-                            data_->site_xpos[3 * site + 2]);
-  pose.orientation = Quaternion(RowMajor(data_->site_xmat + 9 * site)).normalized();
-  return pose;
-}
-
 void MujocoSim::ProduceReadings(SimOutputs* out) {
   const double now = data_->time;
-  const int64_t utime = ToUtime(now);
-
   // Which sensors fall due at this step. Ray sensors need the poses of everything at `now`
   // (mj_step leaves the positions of the step's start in x*); the others read qpos, qvel and
   // sensordata directly.
   bool any_due = false, rays_due = false;
   for (const auto& r : robots_) {
-    if (r->lidar) {
-      const auto& p = r->lidar->params;
-      const double next =
-          static_cast<double>(r->lidar->slices_done + 1) / (p.rate_hz * p.slices_per_revolution);
-      rays_due |= next <= now + 1e-9;
+    for (const auto& sensor : r->sensors) {
+      if (!sensor->Due(now)) continue;
+      any_due = true;
+      rays_due |= sensor->CastsRays();
     }
-    rays_due |=
-        (r->planar && r->planar->schedule.Due(now)) || (r->turret && r->turret->schedule.Due(now));
-    any_due |= (r->imu && r->imu->schedule.Due(now)) ||
-               (r->has_odometry && r->odom_schedule.Due(now)) ||
-               (r->has_pose && r->pose_schedule.Due(now));
   }
-  if (!any_due && !rays_due) return;
+  if (!any_due) return;
   if (rays_due) mj_kinematics(model_.get(), data_.get());
 
+  SensorFrame frame;
+  frame.model = model_.get();
+  frame.data = data_.get();
+  frame.now_s = now;
+  frame.utime = ToUtime(now);
+  frame.rays = rays_.get();
   for (auto& r : robots_) {
-    if (r->lidar) CastLidar(*r, out);
-    if (r->planar && r->planar->schedule.Due(now)) {
-      while (r->planar->schedule.Due(now)) ++r->planar->schedule.count;
-      CastPlanar(*r, out);
-    }
-    if (r->turret && r->turret->schedule.Due(now)) {
-      while (r->turret->schedule.Due(now)) ++r->turret->schedule.count;
-      CastTurret(*r, out);
-    }
-    const double* q = data_->qpos + r->qpos_adr;
-    const double* v = data_->qvel + r->qvel_adr;
-    const Quaternion base_q = Quaternion(q[3], q[4], q[5], q[6]).normalized();
-    if (r->has_pose && r->pose_schedule.Due(now)) {
-      while (r->pose_schedule.Due(now)) ++r->pose_schedule.count;
-      GroundTruthReading g;
-      g.utime = utime;
-      g.robot = r->spec.id;
-      g.pose.position_m = Vector3(q[0], q[1], q[2]);
-      g.pose.orientation = base_q;
-      // Free joint: linear velocity in the world frame, angular in the body frame.
-      g.linear_velocity_mps = Vector3(v[0], v[1], v[2]);
-      g.angular_velocity_radps = base_q * Vector3(v[3], v[4], v[5]);
-      out->poses.push_back(g);
-    }
-    if (r->has_odometry && r->odom_schedule.Due(now)) {
-      while (r->odom_schedule.Due(now)) ++r->odom_schedule.count;
-      OdometryReading o;
-      o.utime = utime;
-      o.robot = r->spec.id;
-      const common::Pose2& p = r->odometry->pose();
-      o.pose.position_m = Vector3(p.x_m, p.y_m, r->odom_z_m);
-      o.pose.orientation = YawQuaternion(p.yaw_rad);
-      o.linear_velocity_mps = Vector3(r->odometry->linear_mps(), 0.0, 0.0);
-      o.angular_velocity_radps = Vector3(0.0, 0.0, r->odometry->angular_radps());
-      out->odometry.push_back(o);
-    }
-    if (r->imu && r->imu->schedule.Due(now)) {
-      auto& imu = *r->imu;
-      const uint64_t n = static_cast<uint64_t>(imu.schedule.count) * 16;
-      while (imu.schedule.Due(now)) ++imu.schedule.count;
-      const auto& p = imu.params;
-      const double* s = data_->sensordata;
-      ImuReading reading;
-      reading.utime = utime;
-      reading.robot = r->spec.id;
-      for (int i = 0; i < 3; ++i) {
-        reading.angular_velocity_radps[i] =
-            s[imu.gyro_adr + i] + p.gyro_noise_sigma_radps * imu.noise.Gaussian(n + i);
-        reading.linear_acceleration_mps2[i] =
-            s[imu.accel_adr + i] + p.accel_noise_sigma_mps2 * imu.noise.Gaussian(n + 3 + i);
-      }
-      const Quaternion truth(s[imu.quat_adr], s[imu.quat_adr + 1], s[imu.quat_adr + 2],
-                             s[imu.quat_adr + 3]);
-      const Vector3 tilt(imu.noise.Gaussian(n + 6), imu.noise.Gaussian(n + 7),
-                         imu.noise.Gaussian(n + 8));
-      const Vector3 error = p.orientation_noise_sigma_rad * tilt;
-      const double angle = error.norm();
-      const Quaternion noise_q = angle > 0.0 ? Quaternion(Eigen::AngleAxisd(angle, error / angle))
-                                             : Quaternion::Identity();
-      reading.orientation = (truth.normalized() * noise_q).normalized();
-      reading.orientation_variance_rad2 =
-          p.orientation_noise_sigma_rad * p.orientation_noise_sigma_rad;
-      reading.angular_velocity_variance = p.gyro_noise_sigma_radps * p.gyro_noise_sigma_radps;
-      reading.linear_acceleration_variance = p.accel_noise_sigma_mps2 * p.accel_noise_sigma_mps2;
-      out->imu.push_back(reading);
+    frame.robot_index = r->index;
+    for (auto& sensor : r->sensors) {
+      if (sensor->Due(now)) sensor->Produce(frame, out);
     }
   }
-}
-
-void MujocoSim::CastPattern(const Robot& robot, const Pose3& sensor, const RayPattern& pattern,
-                            int group_begin, int group_end, double max_range_m,
-                            std::vector<RayHit>* hits) {
-  const auto t0 = Clock::now();
-  if (scene_dirty_) {
-    scene_->Update(data_.get());
-    scene_dirty_ = false;
-  }
-  const Eigen::Matrix3d rotation = sensor.orientation.toRotationMatrix();
-  if (use_mj_ray_) {
-    RayCaster::CastWithMjRay(model_.get(), data_.get(), sensor.position_m, rotation, pattern,
-                             group_begin, group_end, max_range_m, hits->data());
-  } else {
-    caster_->Cast(*scene_, data_.get(), sensor.position_m, rotation, pattern, group_begin,
-                  group_end, max_range_m, robot.index, hits->data());
-  }
-  const int first = pattern.groups[group_begin].begin;
-  const int last = pattern.groups[group_end - 1].end;
-  stats_.rays_cast += last - first;
-  stats_.ray_s += Seconds(t0, Clock::now());
-}
-
-void MujocoSim::CastLidar(Robot& robot, SimOutputs* out) {
-  auto& lidar = *robot.lidar;
-  const LidarParams& p = lidar.params;
-  const double now = data_->time;
-  const int slices = p.slices_per_revolution;
-  const RayPattern& rays = lidar.pattern.rays;
-  const int rays_per_rev = static_cast<int>(rays.directions.size());
-  while (static_cast<double>(lidar.slices_done + 1) / (p.rate_hz * slices) <= now + 1e-9) {
-    const int64_t revolution = lidar.slices_done / slices;
-    const int slice = static_cast<int>(lidar.slices_done % slices);
-    ++lidar.slices_done;
-    const Pose3 sensor = SitePose(lidar.site);
-    const int g0 = lidar.pattern.slice_group_begin[slice];
-    const int g1 = lidar.pattern.slice_group_begin[slice + 1];
-    if (g1 <= g0) continue;
-    CastPattern(robot, sensor, rays, g0, g1, p.max_range_m, &lidar.hits);
-
-    common::LidarSlice s;
-    s.utime = ToUtime(now);
-    s.robot = robot.spec.id;
-    s.revolution = revolution;
-    s.slice_index = slice;
-    s.slice_count = slices;
-    s.azimuth_start_rad = LidarAzimuthRad(p, LidarSliceBegin(p, slice));
-    s.azimuth_end_rad = LidarAzimuthRad(p, LidarSliceBegin(p, slice + 1));
-    s.max_range_m = p.max_range_m;
-    s.sensor_pose = sensor;
-    const int first = lidar.pattern.slice_ray_begin[slice];
-    const int last = lidar.pattern.slice_ray_begin[slice + 1];
-    s.points.reserve(last - first);
-    const uint64_t noise_base = static_cast<uint64_t>(revolution) * rays_per_rev;
-    for (int i = first; i < last; ++i) {
-      const RayHit& h = lidar.hits[i];
-      if (h.geom < 0) continue;
-      double range = h.range_m;
-      if (p.range_noise_sigma_m > 0.0) {
-        range += p.range_noise_sigma_m * lidar.noise.Gaussian(noise_base + i);
-      }
-      if (range < p.min_range_m || range > p.max_range_m) continue;
-      const Eigen::Vector3d& dir = rays.directions[i];
-      common::LidarPoint point;
-      point.x_m = static_cast<float>(dir.x() * range);
-      point.y_m = static_cast<float>(dir.y() * range);
-      point.z_m = static_cast<float>(dir.z() * range);
-      point.intensity = intensity_[h.geom];
-      point.ring = lidar.pattern.ring[i];
-      s.points.push_back(point);
-    }
-    out->lidar.push_back(std::move(s));
-  }
-}
-
-void MujocoSim::CastPlanar(Robot& robot, SimOutputs* out) {
-  auto& planar = *robot.planar;
-  const PlanarLaserParams& p = planar.params;
-  const Pose3 sensor = SitePose(planar.site);
-  CastPattern(robot, sensor, planar.pattern, 0, static_cast<int>(planar.pattern.groups.size()),
-              p.max_range_m, &planar.hits);
-  common::LaserScan scan;
-  scan.utime = utime();
-  scan.robot = robot.spec.id;
-  scan.sensor_pose = sensor;
-  FanAngles(p.fov_deg, p.beams, &scan.angle_min_rad, &scan.angle_increment_rad);
-  scan.range_min_m = p.min_range_m;
-  scan.range_max_m = p.max_range_m;
-  scan.ranges_m.resize(p.beams);
-  scan.intensities.resize(p.beams);
-  const uint64_t base = static_cast<uint64_t>(planar.schedule.count) * p.beams;
-  for (int i = 0; i < p.beams; ++i) {
-    const RayHit& h = planar.hits[i];
-    float range = std::numeric_limits<float>::infinity();
-    float intensity = 0.f;
-    if (h.geom >= 0) {
-      double r = h.range_m + p.range_noise_sigma_m * planar.noise.Gaussian(base + i);
-      if (r > p.max_range_m) {
-        r = std::numeric_limits<double>::infinity();
-      } else if (r < p.min_range_m) {
-        r = std::numeric_limits<double>::quiet_NaN();  // too close to measure
-      } else {
-        intensity = intensity_[h.geom];
-      }
-      range = static_cast<float>(r);
-    }
-    scan.ranges_m[i] = range;
-    scan.intensities[i] = intensity;
-  }
-  out->scans.push_back(std::move(scan));
-}
-
-void MujocoSim::CastTurret(Robot& robot, SimOutputs* out) {
-  auto& turret = *robot.turret;
-  const TurretParams& p = turret.params;
-  const int64_t line = turret.schedule.count - 1;
-  const int step = static_cast<int>(line % turret.pan_steps);
-  const double pan = step * p.pan_step_deg * M_PI / 180.0;
-  const Pose3 mount = SitePose(turret.site);
-  Pose3 sensor;
-  sensor.position_m = mount.position_m;
-  sensor.orientation = (mount.orientation * Quaternion(TurretLineRotation(pan))).normalized();
-  CastPattern(robot, sensor, turret.pattern, 0, static_cast<int>(turret.pattern.groups.size()),
-              p.max_range_m, &turret.hits);
-  TurretLine out_line;
-  out_line.pan_rad = pan;
-  out_line.line = line;
-  common::LaserScan& scan = out_line.scan;
-  scan.utime = utime();
-  scan.robot = robot.spec.id;
-  scan.sensor_pose = sensor;
-  FanAngles(p.fan_fov_deg, p.fan_beams, &scan.angle_min_rad, &scan.angle_increment_rad);
-  scan.range_min_m = p.min_range_m;
-  scan.range_max_m = p.max_range_m;
-  scan.ranges_m.resize(p.fan_beams);
-  scan.intensities.resize(p.fan_beams);
-  const uint64_t base = static_cast<uint64_t>(line) * p.fan_beams;
-  for (int i = 0; i < p.fan_beams; ++i) {
-    const RayHit& h = turret.hits[i];
-    float range = std::numeric_limits<float>::infinity();
-    float intensity = 0.f;
-    if (h.geom >= 0) {
-      double r = h.range_m + p.range_noise_sigma_m * turret.noise.Gaussian(base + i);
-      if (r > p.max_range_m) {
-        r = std::numeric_limits<double>::infinity();
-      } else if (r < p.min_range_m) {
-        r = std::numeric_limits<double>::quiet_NaN();
-      } else {
-        intensity = intensity_[h.geom];
-      }
-      range = static_cast<float>(r);
-    }
-    scan.ranges_m[i] = range;
-    scan.intensities[i] = intensity;
-  }
-  out->turret_lines.push_back(std::move(out_line));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -776,8 +455,8 @@ void MujocoSim::SetGeomEnabled(int geom, bool enabled) {
   m->geom_contype[geom] = enabled ? 1 : 0;
   m->geom_conaffinity[geom] = enabled ? 1 : 0;
   m->geom_group[geom] = enabled ? 0 : kParkedGeomGroup;
-  scene_->SetVisible(geom, enabled);
-  scene_dirty_ = true;
+  rays_->scene().SetVisible(geom, enabled);
+  rays_->MarkMoved();
 }
 
 MujocoSim::Object* MujocoSim::FindObject(const std::string& name) {
@@ -858,7 +537,7 @@ Status MujocoSim::MoveObject(const std::string& name, const Vector3& position_m,
   quat[2] = q.y();
   quat[3] = q.z();
   mj_kinematics(m, d);
-  scene_dirty_ = true;
+  rays_->MarkMoved();
   return Status::Ok();
 }
 
@@ -875,7 +554,7 @@ Status MujocoSim::RemoveObject(const std::string& name) {
   }
   objects_.erase(name);
   mj_kinematics(model_.get(), d);
-  scene_dirty_ = true;
+  rays_->MarkMoved();
   return Status::Ok();
 }
 

@@ -7,73 +7,22 @@
 #include <string>
 #include <vector>
 
-#include "common/point_cloud.h"
 #include "common/status.h"
 #include "common/types.h"
 #include "simulator/drive.h"
 #include "simulator/mujoco_model.h"
-#include "simulator/ray_caster.h"
 #include "simulator/scenario.h"
-#include "simulator/sensors.h"
+#include "simulator/scene_rays.h"
+#include "simulator/sim_outputs.h"
+#include "simulator/sim_sensor.h"
 
 /// @file
 /// MujocoSim: the transport-free simulator. It owns the MuJoCo model and data of one scenario,
-/// steps the physics, drives the robots' wheels from velocity commands and produces sensor
-/// readings stamped with simulation time. cairn-sim publishes what it produces.
+/// steps the physics, drives the robots' wheels from velocity commands and asks each robot's
+/// sensors (SimSensor, built from the robot's SensorSet) for the readings that fell due,
+/// stamped with simulation time. cairn-sim publishes what it produces.
 
 namespace cairn::sim {
-
-/// Wheel odometry: pose of the base in the odometry frame (which starts at the spawn pose),
-/// and the twist in the base frame.
-struct OdometryReading {
-  int64_t utime{0};
-  std::string robot;
-  common::Pose3 pose;
-  common::Vector3 linear_velocity_mps{common::Vector3::Zero()};
-  common::Vector3 angular_velocity_radps{common::Vector3::Zero()};
-};
-
-/// True pose of the robot base; velocities in the world frame.
-struct GroundTruthReading {
-  int64_t utime{0};
-  std::string robot;
-  common::Pose3 pose;
-  common::Vector3 linear_velocity_mps{common::Vector3::Zero()};
-  common::Vector3 angular_velocity_radps{common::Vector3::Zero()};
-};
-
-/// IMU: orientation of the IMU frame in the world, rates and specific force in the IMU frame.
-struct ImuReading {
-  int64_t utime{0};
-  std::string robot;
-  common::Quaternion orientation{common::Quaternion::Identity()};
-  common::Vector3 angular_velocity_radps{common::Vector3::Zero()};
-  common::Vector3 linear_acceleration_mps2{common::Vector3::Zero()};
-  double orientation_variance_rad2{0.0};
-  double angular_velocity_variance{0.0};
-  double linear_acceleration_variance{0.0};
-};
-
-/// One line of a turret scanner: a planar scan in the line's frame and the pan angle.
-struct TurretLine {
-  common::LaserScan scan;
-  double pan_rad{0.0};
-  int64_t line{0};
-};
-
-/// Everything one or more steps produced.
-struct SimOutputs {
-  std::vector<common::LidarSlice> lidar;
-  std::vector<common::LaserScan> scans;
-  std::vector<TurretLine> turret_lines;
-  std::vector<OdometryReading> odometry;
-  std::vector<GroundTruthReading> poses;
-  std::vector<ImuReading> imu;
-  std::vector<std::string> events;  ///< notable events (watchdog stops), one line each
-
-  void Clear();
-  bool empty() const;
-};
 
 /// Shapes of spawnable objects.
 enum class ObjectShape { kBox, kCylinder, kSphere };
@@ -115,7 +64,7 @@ class MujocoSim {
   int64_t utime() const;
   double timestep_s() const;
   int64_t physics_steps() const { return stats_.physics_steps; }
-  const SimStats& stats() const { return stats_; }
+  SimStats stats() const;
   const Scenario& scenario() const { return scenario_; }
 
   // --- robots ----------------------------------------------------------------------------------
@@ -133,8 +82,14 @@ class MujocoSim {
   /// Linear velocity of the base in the world frame.
   common::Vector3 RobotVelocity(const std::string& robot) const;
   const DriveController& drive(const std::string& robot) const;
-  /// Current odometry estimate (also when the robot has no odometry sensor).
-  common::Pose2 OdometryPose(const std::string& robot) const;
+  /// The robot's sensor of kind `name`, or nullptr when it has none.
+  /// @throws std::invalid_argument for an unknown robot.
+  const SimSensor* sensor(const std::string& robot, const std::string& name) const;
+  /// The same as sensor class S (S::kName).
+  template <typename S>
+  const S* FindSensor(const std::string& robot) const {
+    return dynamic_cast<const S*>(sensor(robot, S::kName));
+  }
 
   // --- objects and doors -----------------------------------------------------------------------
   /// Places a new object (from the spawn pool). kAlreadyExists for a used name,
@@ -157,9 +112,9 @@ class MujocoSim {
   // --- internals for tests and benchmarks ------------------------------------------------------
   const mjModel* model() const { return model_.get(); }
   const mjData* data() const { return data_.get(); }
-  const RayScene& ray_scene() const { return *scene_; }
-  /// Casts lidar rays with a plain mj_ray loop instead of the ray caster (benchmark baseline).
-  void set_use_mj_ray(bool use) { use_mj_ray_ = use; }
+  const RayScene& ray_scene() const { return rays_->scene(); }
+  /// Casts sensor rays with a plain mj_ray loop instead of the ray caster (benchmark baseline).
+  void set_use_mj_ray(bool use) { rays_->set_use_mj_ray(use); }
   /// The composed MJCF text that was compiled.
   const std::string& composed_xml() const { return composed_xml_; }
 
@@ -167,20 +122,21 @@ class MujocoSim {
   struct Robot;
   struct Object;
 
+  void Compose();
+  void SetupSpawnPool();
+  void CollectMocapObjects();
+  void OpenDoors();
+  void SetupRobots();
   Robot& FindRobot(const std::string& id);
   const Robot& FindRobot(const std::string& id) const;
   void SetupRobot(Robot& robot, int index);
+  void SetupWheels(Robot& robot, const std::string& where);
+  void CreateSensors(Robot& robot);
   double GroundHeight(double x_m, double y_m) const;
   void PlaceRobot(Robot& robot, double x_m, double y_m, double yaw_rad, std::optional<double> z_m);
   void ApplyDrive(double now_s, double dt_s, SimOutputs* out);
-  void IntegrateOdometry(double dt_s);
+  void AfterPhysicsStep(double dt_s);
   void ProduceReadings(SimOutputs* out);
-  void CastLidar(Robot& robot, SimOutputs* out);
-  void CastPlanar(Robot& robot, SimOutputs* out);
-  void CastTurret(Robot& robot, SimOutputs* out);
-  common::Pose3 SitePose(int site) const;
-  void CastPattern(const Robot& robot, const common::Pose3& sensor, const RayPattern& pattern,
-                   int group_begin, int group_end, double max_range_m, std::vector<RayHit>* hits);
   void SetGeomEnabled(int geom, bool enabled);
   Object* FindObject(const std::string& name);
 
@@ -188,15 +144,10 @@ class MujocoSim {
   std::string composed_xml_;
   MjModelPtr model_;
   MjDataPtr data_;
-  std::unique_ptr<RayScene> scene_;
-  std::unique_ptr<ThreadPool> pool_;
-  std::unique_ptr<RayCaster> caster_;
+  std::unique_ptr<SceneRays> rays_;
   std::vector<std::unique_ptr<Robot>> robots_;
   std::map<std::string, std::unique_ptr<Object>> objects_;
-  std::vector<int> free_slots_;   ///< spawn pool geoms not in use
-  std::vector<float> intensity_;  ///< per geom, from its colour
-  bool scene_dirty_{true};
-  bool use_mj_ray_{false};
+  std::vector<int> free_slots_;  ///< spawn pool geoms not in use
   SimStats stats_;
 };
 

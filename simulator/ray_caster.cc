@@ -121,26 +121,110 @@ double RayTriangle(const double a[3], const double b[3], const double c[3], cons
   return t >= 0.0 ? t : -1.0;
 }
 
+// A height field's surface in its own frame: (nrow x ncol) heights over [-sx, sx] x [-sy, sy].
+struct HeightSurface {
+  int nrow, ncol;
+  const float* data;
+  double sx, sy, sz;
+  double dx, dy;  ///< cell size
+
+  double height(int r, int c) const { return static_cast<double>(data[r * ncol + c]) * sz; }
+  // The surface's height along the side wall `axis` (0: x, 1: y) that a ray with direction v
+  // enters through at point e.
+  double SideWallEdge(int axis, const double e[3], const double v[3]) const {
+    if (axis == 0) {
+      const int c = v[0] > 0 ? 0 : ncol - 1;
+      const double gy = std::clamp((e[1] + sy) / dy, 0.0, nrow - 1.0);
+      const int r = std::min(static_cast<int>(gy), nrow - 2);
+      return height(r, c) + (height(r + 1, c) - height(r, c)) * (gy - r);
+    }
+    const int r = v[1] > 0 ? 0 : nrow - 1;
+    const double gx = std::clamp((e[0] + sx) / dx, 0.0, ncol - 1.0);
+    const int c = std::min(static_cast<int>(gx), ncol - 2);
+    return height(r, c) + (height(r, c + 1) - height(r, c)) * (gx - c);
+  }
+  // The ray's hit on the two triangles of cell (r, c), or -1.
+  double CellHit(int r, int c, const double p[3], const double v[3]) const {
+    const double x0 = c * dx - sx, x1 = (c + 1) * dx - sx;
+    const double y0 = r * dy - sy, y1 = (r + 1) * dy - sy;
+    const double a[3] = {x0, y0, height(r, c)}, b[3] = {x1, y1, height(r + 1, c + 1)};
+    const double c1[3] = {x1, y0, height(r, c + 1)}, c2[3] = {x0, y1, height(r + 1, c)};
+    double hit = RayTriangle(a, b, c1, p, v);
+    const double hit2 = RayTriangle(a, b, c2, p, v);
+    if (hit2 >= 0.0 && (hit < 0.0 || hit2 < hit)) hit = hit2;
+    return hit;
+  }
+  // The first hit on the surface for ray parameters in [t_in, t_out], or -1: walks the cells
+  // under the ray's footprint in order (2-D DDA), skipping those it passes above.
+  double Walk(const double p[3], const double v[3], double t_in, double t_out) const;
+};
+
+double HeightSurface::Walk(const double p[3], const double v[3], double t_in, double t_out) const {
+  const double gx0 = (p[0] + t_in * v[0] + sx) / dx;
+  const double gy0 = (p[1] + t_in * v[1] + sy) / dy;
+  int c = std::clamp(static_cast<int>(std::floor(gx0)), 0, ncol - 2);
+  int r = std::clamp(static_cast<int>(std::floor(gy0)), 0, nrow - 2);
+  const int step_c = v[0] > 0 ? 1 : -1;
+  const int step_r = v[1] > 0 ? 1 : -1;
+  const double inf = kInfinity;
+  const double delta_c = std::abs(v[0]) > 1e-15 ? dx / std::abs(v[0]) : inf;
+  const double delta_r = std::abs(v[1]) > 1e-15 ? dy / std::abs(v[1]) : inf;
+  // Ray parameter at which the footprint crosses the next cell boundary in x and in y.
+  double next_c = inf, next_r = inf;
+  if (delta_c < inf) next_c = ((v[0] > 0 ? c + 1 : c) * dx - sx - p[0]) / v[0];
+  if (delta_r < inf) next_r = ((v[1] > 0 ? r + 1 : r) * dy - sy - p[1]) / v[1];
+  double t_cell = t_in;
+  while (true) {
+    const double t_exit = std::min({next_c, next_r, t_out});
+    // Skip the cell when the ray stays above its highest corner.
+    const double z_low = std::min(p[2] + t_cell * v[2], p[2] + t_exit * v[2]);
+    const double top = std::max(std::max(height(r, c), height(r, c + 1)),
+                                std::max(height(r + 1, c), height(r + 1, c + 1)));
+    if (z_low <= top + 1e-9) {
+      const double hit = CellHit(r, c, p, v);
+      if (hit >= 0.0) return hit;
+    }
+    if (t_exit >= t_out) return -1.0;
+    if (next_c <= next_r) {
+      c += step_c;
+      t_cell = next_c;
+      next_c += delta_c;
+    } else {
+      r += step_r;
+      t_cell = next_r;
+      next_r += delta_r;
+    }
+    if (c < 0 || c > ncol - 2 || r < 0 || r > nrow - 2) return -1.0;
+  }
+}
+
 }  // namespace
 
 double RayHeightField(const mjModel* m, const mjData* d, int g, const double pnt[3],
                       const double vec[3]) {
   const int h = m->geom_dataid[g];
-  const int nrow = m->hfield_nrow[h];
-  const int ncol = m->hfield_ncol[h];
   const double* size = m->hfield_size + 4 * h;
-  const float* data = m->hfield_data + m->hfield_adr[h];
-  const double* pos = d->geom_xpos + 3 * g;
-  const double* mat = d->geom_xmat + 9 * g;
+  HeightSurface surface;
+  surface.nrow = m->hfield_nrow[h];
+  surface.ncol = m->hfield_ncol[h];
+  surface.data = m->hfield_data + m->hfield_adr[h];
+  surface.sx = size[0];
+  surface.sy = size[1];
+  surface.sz = size[2];
+  surface.dx = 2.0 * size[0] / (surface.ncol - 1);
+  surface.dy = 2.0 * size[1] / (surface.nrow - 1);
+  const double base = size[3];
+  const double sx = size[0], sy = size[1], sz = size[2];
 
   // The ray in the height field's frame (geom_xmat is row-major, local = R^T (p - pos)).
+  const double* pos = d->geom_xpos + 3 * g;
+  const double* mat = d->geom_xmat + 9 * g;
   const double dif[3] = {pnt[0] - pos[0], pnt[1] - pos[1], pnt[2] - pos[2]};
   double p[3], v[3];
   for (int i = 0; i < 3; ++i) {
     p[i] = mat[i] * dif[0] + mat[3 + i] * dif[1] + mat[6 + i] * dif[2];
     v[i] = mat[i] * vec[0] + mat[3 + i] * vec[1] + mat[6 + i] * vec[2];
   }
-  const double sx = size[0], sy = size[1], sz = size[2], base = size[3];
 
   // The base box under the surface.
   double best = -1.0;
@@ -157,80 +241,14 @@ double RayHeightField(const mjModel* m, const mjData* d, int g, const double pnt
   if (best >= 0.0) t_out = std::min(t_out, best);
   if (t_in > t_out) return best;
 
-  const double dx = 2.0 * sx / (ncol - 1);
-  const double dy = 2.0 * sy / (nrow - 1);
-  auto height = [&](int r, int c) { return static_cast<double>(data[r * ncol + c]) * sz; };
-
   // Entering through a side wall below the surface edge: the side of the prism is hit.
   if (t_in > 0.0 && (axis == 0 || axis == 1)) {
-    const double ex = p[0] + t_in * v[0], ey = p[1] + t_in * v[1], ez = p[2] + t_in * v[2];
-    double edge;
-    if (axis == 0) {
-      const int c = v[0] > 0 ? 0 : ncol - 1;
-      const double gy = std::clamp((ey + sy) / dy, 0.0, nrow - 1.0);
-      const int r = std::min(static_cast<int>(gy), nrow - 2);
-      edge = height(r, c) + (height(r + 1, c) - height(r, c)) * (gy - r);
-    } else {
-      const int r = v[1] > 0 ? 0 : nrow - 1;
-      const double gx = std::clamp((ex + sx) / dx, 0.0, ncol - 1.0);
-      const int c = std::min(static_cast<int>(gx), ncol - 2);
-      edge = height(r, c) + (height(r, c + 1) - height(r, c)) * (gx - c);
-    }
-    if (ez <= edge) return best >= 0.0 ? std::min(best, t_in) : t_in;
+    const double e[3] = {p[0] + t_in * v[0], p[1] + t_in * v[1], p[2] + t_in * v[2]};
+    if (e[2] <= surface.SideWallEdge(axis, e, v)) return best >= 0.0 ? std::min(best, t_in) : t_in;
   }
-
-  // Walk the cells under the ray's footprint in order (2-D DDA).
-  const double gx0 = (p[0] + t_in * v[0] + sx) / dx;
-  const double gy0 = (p[1] + t_in * v[1] + sy) / dy;
-  int c = std::clamp(static_cast<int>(std::floor(gx0)), 0, ncol - 2);
-  int r = std::clamp(static_cast<int>(std::floor(gy0)), 0, nrow - 2);
-  const int step_c = v[0] > 0 ? 1 : -1;
-  const int step_r = v[1] > 0 ? 1 : -1;
-  const double inf = kInfinity;
-  const double delta_c = std::abs(v[0]) > 1e-15 ? dx / std::abs(v[0]) : inf;
-  const double delta_r = std::abs(v[1]) > 1e-15 ? dy / std::abs(v[1]) : inf;
-  // Ray parameter at which the footprint crosses the next cell boundary in x and in y.
-  double next_c = inf, next_r = inf;
-  if (delta_c < inf) {
-    const double boundary = (v[0] > 0 ? c + 1 : c) * dx - sx;
-    next_c = (boundary - p[0]) / v[0];
-  }
-  if (delta_r < inf) {
-    const double boundary = (v[1] > 0 ? r + 1 : r) * dy - sy;
-    next_r = (boundary - p[1]) / v[1];
-  }
-  double t_cell = t_in;
-  while (true) {
-    const double t_exit = std::min({next_c, next_r, t_out});
-    // Skip the cell when the ray stays above its highest corner.
-    const double z_a = p[2] + t_cell * v[2];
-    const double z_b = p[2] + t_exit * v[2];
-    const double h00 = height(r, c), h01 = height(r, c + 1);
-    const double h10 = height(r + 1, c), h11 = height(r + 1, c + 1);
-    const double top = std::max(std::max(h00, h01), std::max(h10, h11));
-    if (std::min(z_a, z_b) <= top + 1e-9) {
-      const double x0 = c * dx - sx, x1 = (c + 1) * dx - sx;
-      const double y0 = r * dy - sy, y1 = (r + 1) * dy - sy;
-      const double a[3] = {x0, y0, h00}, b[3] = {x1, y1, h11};
-      const double c1[3] = {x1, y0, h01}, c2[3] = {x0, y1, h10};
-      double hit = RayTriangle(a, b, c1, p, v);
-      const double hit2 = RayTriangle(a, b, c2, p, v);
-      if (hit2 >= 0.0 && (hit < 0.0 || hit2 < hit)) hit = hit2;
-      if (hit >= 0.0) return best >= 0.0 ? std::min(best, hit) : hit;
-    }
-    if (t_exit >= t_out) break;
-    if (next_c <= next_r) {
-      c += step_c;
-      t_cell = next_c;
-      next_c += delta_c;
-    } else {
-      r += step_r;
-      t_cell = next_r;
-      next_r += delta_r;
-    }
-    if (c < 0 || c > ncol - 2 || r < 0 || r > nrow - 2) break;
-  }
-  return best;
+  const double hit = surface.Walk(p, v, t_in, t_out);
+  if (hit < 0.0) return best;
+  return best >= 0.0 ? std::min(best, hit) : hit;
 }
 
 namespace {
@@ -270,6 +288,190 @@ double RayPlane(const mjModel* m, const mjData* d, int g, const double p[3], con
     }
   }
   return x;
+}
+
+// The geoms a group's rays may hit: boxes sorted by distance, with their vertical extent
+// (beyond which a ray cannot hit any of them), and the planes, tested for every ray.
+struct GroupCandidates {
+  std::vector<Candidate> boxes;
+  std::vector<Candidate> planes;
+  double z_low{kInfinity};
+  double z_high{-kInfinity};
+};
+
+// A plane: its distance along its normal bounds every hit from below.
+Candidate PlaneCandidate(const mjData* data, const RayScene::Bound& b, const double o[3]) {
+  const double* p = data->geom_xpos + 3 * b.geom;
+  const double* r = data->geom_xmat + 9 * b.geom;
+  Candidate c;
+  c.min_distance = std::abs((o[0] - p[0]) * r[2] + (o[1] - p[1]) * r[5] + (o[2] - p[2]) * r[8]);
+  c.lo[0] = r[2];
+  c.lo[1] = r[5];
+  c.lo[2] = r[8];
+  c.hi[0] = (o[0] - p[0]) * r[2] + (o[1] - p[1]) * r[5] + (o[2] - p[2]) * r[8];
+  c.geom = b.geom;
+  c.type = b.type;
+  c.infinite = true;
+  c.exact = false;
+  c.inside = false;
+  return c;
+}
+
+// True when even the box corner deepest on one plane's inner side is outside it.
+bool OutsidePyramid(const RayScene::Bound& b, const Eigen::Vector3d planes_world[4],
+                    const double o[3]) {
+  for (int k = 0; k < 4; ++k) {
+    const Eigen::Vector3d& n = planes_world[k];
+    double s = 0.0;
+    for (int i = 0; i < 3; ++i) s += n[i] * ((n[i] > 0.0 ? b.lo[i] : b.hi[i]) - o[i]);
+    if (s > 1e-12) return true;
+  }
+  return false;
+}
+
+// A box, relative to the sensor, `min_d` away from it.
+Candidate BoxCandidate(const RayScene::Bound& b, const double o[3], double min_d) {
+  Candidate c;
+  c.min_distance = min_d;
+  c.inside = true;
+  for (int k = 0; k < 3; ++k) {
+    c.lo[k] = b.lo[k] - o[k];
+    c.hi[k] = b.hi[k] - o[k];
+    c.inside = c.inside && c.lo[k] <= 0.0 && c.hi[k] >= 0.0;
+  }
+  c.geom = b.geom;
+  c.type = b.type;
+  c.infinite = false;
+  c.exact = b.exact;
+  return c;
+}
+
+// Broad phase for a whole group: the planes, and the geoms whose box lies within range and
+// meets the pyramid holding the group's rays; sorted by distance.
+void CollectCandidates(const RayScene& scene, const mjData* data, const double o[3],
+                       const Eigen::Matrix3d& rotation, const RayPattern::Group& g,
+                       double max_range_m, int exclude_owner, GroupCandidates* out) {
+  Eigen::Vector3d planes_world[4];
+  if (g.bounded) {
+    for (int k = 0; k < 4; ++k) planes_world[k] = rotation * g.planes[k];
+  }
+  std::vector<Candidate>& all = out->boxes;
+  all.clear();
+  for (const RayScene::Bound& b : scene.bounds()) {
+    if (b.owner >= 0 && b.owner == exclude_owner) continue;
+    if (b.infinite) {
+      all.push_back(PlaneCandidate(data, b, o));
+      continue;
+    }
+    double min_d2 = 0.0;
+    for (int i = 0; i < 3; ++i) {
+      const double q = std::max(b.lo[i] - o[i], std::max(0.0, o[i] - b.hi[i]));
+      min_d2 += q * q;
+    }
+    const double min_d = std::sqrt(min_d2);
+    if (min_d > max_range_m) continue;
+    if (g.bounded && OutsidePyramid(b, planes_world, o)) continue;
+    all.push_back(BoxCandidate(b, o, min_d));
+  }
+  std::sort(all.begin(), all.end(),
+            [](const Candidate& a, const Candidate& b) { return a.min_distance < b.min_distance; });
+  // Planes are unbounded: keep them aside. The rest are boxes; their vertical extent bounds
+  // where a ray can still hit anything.
+  out->planes.clear();
+  out->z_low = kInfinity;
+  out->z_high = -kInfinity;
+  size_t kept = 0;
+  for (const Candidate& c : all) {
+    if (c.infinite) {
+      out->planes.push_back(c);
+      continue;
+    }
+    out->z_low = std::min(out->z_low, c.lo[2]);
+    out->z_high = std::max(out->z_high, c.hi[2]);
+    all[kept++] = c;
+  }
+  all.resize(kept);
+}
+
+// Tests one candidate against the ray from `o` along `v` (world frame; `inv` its inverse,
+// `negative` its signs) and keeps the nearest hit no farther than *best. Separate scalars, not
+// a struct: `v` goes to MuJoCo's functions, and the hit state must stay in registers.
+inline void TestCandidate(const mjModel* m, const mjData* data, const double o[3],
+                          const double v[3], const double inv[3], const bool negative[3],
+                          const Candidate& c, double* best, int* best_geom) {
+  double x;
+  if (c.infinite) {
+    // Only the front face counts; planes met farther than `best` are skipped cheaply.
+    const double vz = c.lo[0] * v[0] + c.lo[1] * v[1] + c.lo[2] * v[2];
+    if (vz > -mjMINVAL || -c.hi[0] / vz > *best) return;
+    x = RayPlane(m, data, c.geom, o, v);
+  } else {
+    // Slab test (box relative to the sensor), clipped to [0, best].
+    double t_in = 0.0, t_out = *best;
+    for (int k = 0; k < 3; ++k) {
+      const double t_near = (negative[k] ? c.hi[k] : c.lo[k]) * inv[k];
+      const double t_far = (negative[k] ? c.lo[k] : c.hi[k]) * inv[k];
+      if (t_near > t_in) t_in = t_near;
+      if (t_far < t_out) t_out = t_far;
+    }
+    if (t_in > t_out) return;
+    if (!c.exact) {
+      x = Narrow(m, data, c.geom, c.type, o, v);
+    } else if (!c.inside) {
+      x = t_in;
+    } else {
+      // From inside a box a ray meets its far side (as mju_rayGeom reports).
+      x = kInfinity;
+      for (int k = 0; k < 3; ++k) x = std::min(x, (negative[k] ? c.lo[k] : c.hi[k]) * inv[k]);
+    }
+  }
+  if (x >= 0.0 && x <= *best) {
+    *best = x;
+    *best_geom = c.geom;
+  }
+}
+
+// Narrow phase of one ray (direction `dw` in the world): the geom the neighbouring ray hit
+// (`warm`, -1 for none) first, then the planes, then the boxes nearest first until the next
+// one lies beyond the nearest hit or beyond where the ray leaves the boxes' vertical extent.
+inline RayHit CastRay(const mjModel* m, const mjData* data, const GroupCandidates& candidates,
+                      const double o[3], const Eigen::Vector3d& dw, double max_range_m, int warm) {
+  const double v[3] = {dw.x(), dw.y(), dw.z()};
+  double inv[3];
+  bool negative[3];
+  for (int k = 0; k < 3; ++k) {
+    inv[k] = std::abs(v[k]) > 1e-12 ? 1.0 / v[k] : (v[k] >= 0 ? 1e12 : -1e12);
+    negative[k] = inv[k] < 0.0;
+  }
+  // Plain pointers: MuJoCo's functions are called in between, nothing is reloaded after them.
+  const Candidate* const boxes = candidates.boxes.data();
+  const Candidate* const boxes_end = boxes + candidates.boxes.size();
+  const Candidate* const planes = candidates.planes.data();
+  const Candidate* const planes_end = planes + candidates.planes.size();
+  double reach = max_range_m;
+  if (v[2] > 1e-12) {
+    reach = std::max(0.0, candidates.z_high * inv[2]);
+  } else if (v[2] < -1e-12) {
+    reach = std::max(0.0, candidates.z_low * inv[2]);
+  }
+  double best = max_range_m;
+  int best_geom = -1;
+  if (warm >= 0) {
+    for (const Candidate* c = boxes; c != boxes_end; ++c) {
+      if (c->geom == warm) {
+        TestCandidate(m, data, o, v, inv, negative, *c, &best, &best_geom);
+        break;
+      }
+    }
+  }
+  for (const Candidate* c = planes; c != planes_end; ++c) {
+    TestCandidate(m, data, o, v, inv, negative, *c, &best, &best_geom);
+  }
+  for (const Candidate* c = boxes; c != boxes_end; ++c) {
+    if (c->min_distance > best || c->min_distance > reach) break;
+    if (c->geom != warm) TestCandidate(m, data, o, v, inv, negative, *c, &best, &best_geom);
+  }
+  return RayHit{best_geom >= 0 ? best : -1.0, best_geom};
 }
 
 }  // namespace
@@ -389,64 +591,6 @@ void RayPattern::BuildGroups(int group_size) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// ThreadPool
-
-ThreadPool::ThreadPool(int threads) {
-  for (int i = 1; i < threads; ++i) workers_.emplace_back([this] { WorkerLoop(); });
-}
-
-ThreadPool::~ThreadPool() {
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    quit_ = true;
-  }
-  wake_.notify_all();
-  for (auto& w : workers_) w.join();
-}
-
-void ThreadPool::RunTasks() {
-  for (int i = next_.fetch_add(1); i < count_; i = next_.fetch_add(1)) (*task_)(i);
-}
-
-void ThreadPool::WorkerLoop() {
-  uint64_t seen = 0;
-  while (true) {
-    {
-      std::unique_lock<std::mutex> lock(mutex_);
-      wake_.wait(lock, [&] { return quit_ || generation_ != seen; });
-      if (quit_) return;
-      seen = generation_;
-    }
-    RunTasks();
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      --busy_;
-    }
-    done_.notify_one();
-  }
-}
-
-void ThreadPool::ParallelFor(int count, const std::function<void(int)>& task) {
-  if (workers_.empty() || count <= 1) {
-    for (int i = 0; i < count; ++i) task(i);
-    return;
-  }
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    task_ = &task;
-    count_ = count;
-    next_ = 0;
-    busy_ = static_cast<int>(workers_.size());
-    ++generation_;
-  }
-  wake_.notify_all();
-  RunTasks();
-  std::unique_lock<std::mutex> lock(mutex_);
-  done_.wait(lock, [&] { return busy_ == 0; });
-  task_ = nullptr;
-}
-
-// ---------------------------------------------------------------------------------------------
 // RayCaster
 
 void RayCaster::Cast(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
@@ -470,160 +614,15 @@ void RayCaster::Cast(const RayScene& scene, const mjData* data, const Eigen::Vec
 void RayCaster::CastGroup(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
                           const Eigen::Matrix3d& rotation, const RayPattern& pattern, int group,
                           double max_range_m, int exclude_owner, RayHit* hits) const {
-  const mjModel* m = scene.model();
   const RayPattern::Group& g = pattern.groups[group];
   const double o[3] = {origin.x(), origin.y(), origin.z()};
-
-  // Broad phase for the whole group: geoms whose box meets the group's pyramid within range.
-  Eigen::Vector3d planes_world[4];
-  if (g.bounded) {
-    for (int k = 0; k < 4; ++k) planes_world[k] = rotation * g.planes[k];
-  }
-  thread_local std::vector<Candidate> candidates;
-  candidates.clear();
-  for (const RayScene::Bound& b : scene.bounds()) {
-    if (b.owner >= 0 && b.owner == exclude_owner) continue;
-    if (b.infinite) {
-      // A plane: its distance along its normal bounds every hit from below.
-      const double* p = data->geom_xpos + 3 * b.geom;
-      const double* r = data->geom_xmat + 9 * b.geom;
-      const double dist =
-          std::abs((o[0] - p[0]) * r[2] + (o[1] - p[1]) * r[5] + (o[2] - p[2]) * r[8]);
-      Candidate c;
-      c.min_distance = dist;
-      c.lo[0] = r[2];
-      c.lo[1] = r[5];
-      c.lo[2] = r[8];
-      c.hi[0] = (o[0] - p[0]) * r[2] + (o[1] - p[1]) * r[5] + (o[2] - p[2]) * r[8];
-      c.geom = b.geom;
-      c.type = b.type;
-      c.infinite = true;
-      c.exact = false;
-      c.inside = false;
-      candidates.push_back(c);
-      continue;
-    }
-    double min_d2 = 0.0;
-    for (int i = 0; i < 3; ++i) {
-      const double q = std::max(b.lo[i] - o[i], std::max(0.0, o[i] - b.hi[i]));
-      min_d2 += q * q;
-    }
-    const double min_d = std::sqrt(min_d2);
-    if (min_d > max_range_m) continue;
-    if (g.bounded) {
-      // Outside when even the box corner deepest on a plane's inner side is outside it.
-      bool outside = false;
-      for (int k = 0; k < 4 && !outside; ++k) {
-        const Eigen::Vector3d& n = planes_world[k];
-        double s = 0.0;
-        for (int i = 0; i < 3; ++i) s += n[i] * ((n[i] > 0.0 ? b.lo[i] : b.hi[i]) - o[i]);
-        outside = s > 1e-12;
-      }
-      if (outside) continue;
-    }
-    Candidate c;
-    c.min_distance = min_d;
-    c.inside = true;
-    for (int k = 0; k < 3; ++k) {
-      c.lo[k] = b.lo[k] - o[k];
-      c.hi[k] = b.hi[k] - o[k];
-      c.inside = c.inside && c.lo[k] <= 0.0 && c.hi[k] >= 0.0;
-    }
-    c.geom = b.geom;
-    c.type = b.type;
-    c.infinite = false;
-    c.exact = b.exact;
-    candidates.push_back(c);
-  }
-  std::sort(candidates.begin(), candidates.end(),
-            [](const Candidate& a, const Candidate& b) { return a.min_distance < b.min_distance; });
-  // Planes are unbounded: keep them aside and test them for every ray. The rest are boxes;
-  // their vertical extent bounds where a ray can still hit anything.
-  thread_local std::vector<Candidate> planes;
-  planes.clear();
-  double z_low = kInfinity, z_high = -kInfinity;
-  size_t kept = 0;
-  for (const Candidate& c : candidates) {
-    if (c.infinite) {
-      planes.push_back(c);
-      continue;
-    }
-    z_low = std::min(z_low, c.lo[2]);
-    z_high = std::max(z_high, c.hi[2]);
-    candidates[kept++] = c;
-  }
-  candidates.resize(kept);
-
-  // Narrow phase per ray.
+  thread_local GroupCandidates candidates;
+  CollectCandidates(scene, data, o, rotation, g, max_range_m, exclude_owner, &candidates);
   for (int i = g.begin; i < g.end; ++i) {
-    const Eigen::Vector3d dw = rotation * pattern.directions[i];
-    const double v[3] = {dw.x(), dw.y(), dw.z()};
-    double inv[3];
-    bool negative[3];
-    for (int k = 0; k < 3; ++k) {
-      inv[k] = std::abs(v[k]) > 1e-12 ? 1.0 / v[k] : (v[k] >= 0 ? 1e12 : -1e12);
-      negative[k] = inv[k] < 0.0;
-    }
-    double best = max_range_m;
-    int best_geom = -1;
-    // Tests one candidate and keeps the nearest hit no farther than `best`.
-    auto test = [&](const Candidate& c) {
-      double x;
-      if (c.infinite) {
-        // Only the front face counts; planes met farther than `best` are skipped cheaply.
-        const double vz = c.lo[0] * v[0] + c.lo[1] * v[1] + c.lo[2] * v[2];
-        if (vz > -mjMINVAL || -c.hi[0] / vz > best) return;
-        x = RayPlane(m, data, c.geom, o, v);
-      } else {
-        // Slab test (box relative to the sensor), clipped to [0, best].
-        double t_in = 0.0, t_out = best;
-        for (int k = 0; k < 3; ++k) {
-          const double t_near = (negative[k] ? c.hi[k] : c.lo[k]) * inv[k];
-          const double t_far = (negative[k] ? c.lo[k] : c.hi[k]) * inv[k];
-          if (t_near > t_in) t_in = t_near;
-          if (t_far < t_out) t_out = t_far;
-        }
-        if (t_in > t_out) return;
-        if (!c.exact) {
-          x = Narrow(m, data, c.geom, c.type, o, v);
-        } else if (!c.inside) {
-          x = t_in;
-        } else {
-          // From inside a box a ray meets its far side (as mju_rayGeom reports).
-          x = kInfinity;
-          for (int k = 0; k < 3; ++k) x = std::min(x, (negative[k] ? c.lo[k] : c.hi[k]) * inv[k]);
-        }
-      }
-      if (x >= 0.0 && x <= best) {
-        best = x;
-        best_geom = c.geom;
-      }
-    };
-    // First the geom the neighbouring ray hit: usually the same, and it tightens `best`.
-    int warm = -1;
-    if (i - pattern.warm_stride >= g.begin) warm = hits[i - pattern.warm_stride].geom;
-    if (warm >= 0) {
-      for (const Candidate& c : candidates) {
-        if (c.geom == warm) {
-          test(c);
-          break;
-        }
-      }
-    }
-    for (const Candidate& c : planes) test(c);
-    // Where the ray leaves the boxes' vertical extent: boxes starting farther are out of reach.
-    double reach = max_range_m;
-    if (v[2] > 1e-12) {
-      reach = std::max(0.0, z_high * inv[2]);
-    } else if (v[2] < -1e-12) {
-      reach = std::max(0.0, z_low * inv[2]);
-    }
-    for (const Candidate& c : candidates) {
-      if (c.min_distance > best || c.min_distance > reach) break;
-      if (c.geom != warm) test(c);
-    }
-    hits[i].geom = best_geom;
-    hits[i].range_m = best_geom >= 0 ? best : -1.0;
+    // The geom the neighbouring ray hit: usually the same, and it tightens the search.
+    const int warm = i - pattern.warm_stride >= g.begin ? hits[i - pattern.warm_stride].geom : -1;
+    hits[i] = CastRay(scene.model(), data, candidates, o, rotation * pattern.directions[i],
+                      max_range_m, warm);
   }
 }
 

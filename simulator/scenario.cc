@@ -12,13 +12,6 @@
 #include "common/check.h"
 #include "simulator/mujoco_model.h"
 
-#ifndef CAIRN_SIM_DATA_DIR
-#define CAIRN_SIM_DATA_DIR "simulator"
-#endif
-#ifndef CAIRN_CONFIG_DIR
-#define CAIRN_CONFIG_DIR "config"
-#endif
-
 namespace cairn::sim {
 namespace fs = std::filesystem;
 namespace {
@@ -81,12 +74,10 @@ void ValidateAt(common::YamlMap& map, Fn&& fn) {
 
 // --- paths -------------------------------------------------------------------------------------
 
-SimPaths SimPaths::Default() {
+SimPaths SimPaths::InTree(const std::string& root) {
   SimPaths p;
-  const char* data = std::getenv("CAIRN_SIM_DATA_DIR");
-  const char* config = std::getenv("CAIRN_CONFIG_DIR");
-  p.data_dir = data && *data ? data : CAIRN_SIM_DATA_DIR;
-  p.config_dir = config && *config ? config : CAIRN_CONFIG_DIR;
+  p.data_dir = root + "/simulator";
+  p.config_dir = root + "/config";
   return p;
 }
 
@@ -136,105 +127,6 @@ std::string SimPaths::WorldSummary(const std::string& name) const {
     return text;
   }
   return "";
-}
-
-// --- sensors -----------------------------------------------------------------------------------
-
-void LoadLidarParams(common::YamlMap& map, LidarParams* p) {
-  map.Get("rings", &p->rings);
-  map.Get("min_elevation_deg", &p->min_elevation_deg);
-  map.Get("max_elevation_deg", &p->max_elevation_deg);
-  map.Get("azimuth_steps", &p->azimuth_steps);
-  map.Get("rate_hz", &p->rate_hz);
-  map.Get("slices_per_revolution", &p->slices_per_revolution);
-  map.Get("max_range_m", &p->max_range_m);
-  map.Get("min_range_m", &p->min_range_m);
-  map.Get("range_noise_sigma_m", &p->range_noise_sigma_m);
-  map.Get("azimuths_per_ray_group", &p->azimuths_per_ray_group);
-  map.Get("rings_per_ray_group", &p->rings_per_ray_group);
-  map.Get("mount_site", &p->mount_site);
-  map.Finish();
-  ValidateAt(map, [&] { p->Validate(); });
-}
-
-void LoadPlanarLaserParams(common::YamlMap& map, PlanarLaserParams* p) {
-  map.Get("fov_deg", &p->fov_deg);
-  map.Get("beams", &p->beams);
-  map.Get("max_range_m", &p->max_range_m);
-  map.Get("min_range_m", &p->min_range_m);
-  map.Get("rate_hz", &p->rate_hz);
-  map.Get("range_noise_sigma_m", &p->range_noise_sigma_m);
-  map.Get("mount_site", &p->mount_site);
-  map.Finish();
-  ValidateAt(map, [&] { p->Validate(); });
-}
-
-void LoadTurretParams(common::YamlMap& map, TurretParams* p) {
-  map.Get("fan_fov_deg", &p->fan_fov_deg);
-  map.Get("fan_beams", &p->fan_beams);
-  map.Get("max_range_m", &p->max_range_m);
-  map.Get("min_range_m", &p->min_range_m);
-  map.Get("line_rate_hz", &p->line_rate_hz);
-  map.Get("pan_step_deg", &p->pan_step_deg);
-  map.Get("pan_range_deg", &p->pan_range_deg);
-  map.Get("range_noise_sigma_m", &p->range_noise_sigma_m);
-  map.Get("mount_site", &p->mount_site);
-  map.Finish();
-  ValidateAt(map, [&] { p->Validate(); });
-}
-
-void LoadOdometryParams(common::YamlMap& map, OdometryParams* p) {
-  map.Get("rate_hz", &p->rate_hz);
-  map.Get("slip_noise_ratio", &p->slip_noise_ratio);
-  map.Finish();
-  ValidateAt(map, [&] { p->Validate(); });
-}
-
-void LoadImuParams(common::YamlMap& map, ImuParams* p) {
-  map.Get("rate_hz", &p->rate_hz);
-  map.Get("gyro_noise_sigma_radps", &p->gyro_noise_sigma_radps);
-  map.Get("accel_noise_sigma_mps2", &p->accel_noise_sigma_mps2);
-  map.Get("orientation_noise_sigma_rad", &p->orientation_noise_sigma_rad);
-  map.Get("site", &p->site);
-  map.Finish();
-  ValidateAt(map, [&] { p->Validate(); });
-}
-
-void LoadGroundTruthParams(common::YamlMap& map, GroundTruthParams* p) {
-  map.Get("rate_hz", &p->rate_hz);
-  map.Finish();
-  ValidateAt(map, [&] { p->Validate(); });
-}
-
-SensorSet LoadSensorSet(common::YamlMap& map, const SensorSet& defaults) {
-  SensorSet set;
-  for (const std::string& name : map.Keys()) {
-    common::YamlMap child = map.Child(name);
-    if (name == kSensorLidar) {
-      set.lidar = defaults.lidar.value_or(LidarParams{});
-      LoadLidarParams(child, &*set.lidar);
-    } else if (name == kSensorPlanarLaser) {
-      set.planar_laser = defaults.planar_laser.value_or(PlanarLaserParams{});
-      LoadPlanarLaserParams(child, &*set.planar_laser);
-    } else if (name == kSensorTurret) {
-      set.turret = defaults.turret.value_or(TurretParams{});
-      LoadTurretParams(child, &*set.turret);
-    } else if (name == kSensorOdometry) {
-      set.odometry = defaults.odometry.value_or(OdometryParams{});
-      LoadOdometryParams(child, &*set.odometry);
-    } else if (name == kSensorImu) {
-      set.imu = defaults.imu.value_or(ImuParams{});
-      LoadImuParams(child, &*set.imu);
-    } else if (name == kSensorGroundTruth) {
-      set.ground_truth = defaults.ground_truth.value_or(GroundTruthParams{});
-      LoadGroundTruthParams(child, &*set.ground_truth);
-    } else {
-      std::string known;
-      for (const auto& [n, d] : SensorCatalogue()) known += (known.empty() ? "" : ", ") + n;
-      map.Fail(map.Raw(name), "unknown sensor '" + name + "' (known: " + known + ")");
-    }
-  }
-  return set;
 }
 
 // --- robot models ------------------------------------------------------------------------------
@@ -318,6 +210,15 @@ RobotSpec ParseRobotFlag(const std::string& text, const SimPaths& paths) {
   return MakeRobotSpec(parts[0], parts[1], parts.size() >= 3 ? parts[2] : "", spawn, paths);
 }
 
+Scenario MakeScenario(const std::string& world, const std::vector<std::string>& robot_flags,
+                      const SimPaths& paths) {
+  Scenario s;
+  s.world = world;
+  s.world_path = paths.WorldPath(world);
+  for (const std::string& flag : robot_flags) s.robots.push_back(ParseRobotFlag(flag, paths));
+  return s;
+}
+
 void PhysicsParams::Validate() const {
   CAIRN_THROW_UNLESS(std::isfinite(timestep_s) && timestep_s > 0.0 && timestep_s <= 0.05,
                      "physics.timestep_s must be in (0, 0.05]");
@@ -348,28 +249,95 @@ void Scenario::Validate() const {
   }
 }
 
-Scenario LoadScenario(common::YamlMap& map, const SimPaths& paths) {
-  Scenario s;
-  s.world = map.Require<std::string>("world");
+PhysicsParams LoadPhysicsParams(common::YamlMap& map) {
+  PhysicsParams p;
+  map.Get("timestep_s", &p.timestep_s);
+  map.Get("integrator", &p.integrator);
+  map.Finish();
+  return p;
+}
+
+namespace {
+
+// The scenario's world: a shipped name or an MJCF path, a relative one taken relative to the
+// scenario file first.
+std::string ResolveWorld(common::YamlMap& map, const std::string& world, const SimPaths& paths) {
   try {
-    std::string path = s.world;
-    // A relative file path is taken relative to the scenario file first.
+    std::string path = world;
     if (LooksLikePath(path) && !fs::path(path).is_absolute()) {
       const fs::path beside = fs::path(map.file()).parent_path() / path;
       if (fs::exists(beside)) path = beside.string();
     }
-    s.world_path = paths.WorldPath(path);
+    return paths.WorldPath(path);
   } catch (const std::invalid_argument& e) {
     map.Fail(map.Raw("world"), e.what());
   }
+}
+
+SpawnPose LoadSpawn(common::YamlMap& map) {
+  SpawnPose spawn;
+  map.Get("x_m", &spawn.x_m);
+  map.Get("y_m", &spawn.y_m);
+  GetAngle(map, "yaw", &spawn.yaw_rad);
+  double z = 0.0;
+  if (map.Get("z_m", &z)) spawn.z_m = z;
+  map.Finish();
+  return spawn;
+}
+
+std::vector<ScriptedCommand> LoadCommands(common::YamlMap& robot) {
+  std::vector<ScriptedCommand> commands;
+  YAML::Node list = robot.Raw("commands");
+  if (!list.IsSequence()) robot.Fail(list, "'commands' must be a list");
+  for (const auto& item : list) {
+    common::YamlMap c = robot.Wrap(item, "commands");
+    ScriptedCommand cmd;
+    cmd.at_s = c.Require<double>("at_s");
+    cmd.duration_s = c.Require<double>("duration_s");
+    c.Get("linear_mps", &cmd.linear_mps);
+    c.Get("angular_radps", &cmd.angular_radps);
+    c.Finish();
+    commands.push_back(cmd);
+  }
+  return commands;
+}
+
+// One entry of `robots:`.
+RobotSpec LoadRobot(common::YamlMap& r, const YAML::Node& node, const SimPaths& paths,
+                    const SensorRegistry& sensors) {
+  const std::string id = r.Require<std::string>("id");
+  const std::string model = r.Require<std::string>("model");
+  std::string profile;
+  r.Get("profile", &profile);
+  common::YamlMap spawn_map = r.Child("spawn");
+  const SpawnPose spawn = LoadSpawn(spawn_map);
+  RobotSpec spec;
+  try {
+    spec = MakeRobotSpec(id, model, profile, spawn, paths);
+  } catch (const std::invalid_argument& e) {
+    r.Fail(node, e.what());
+  }
+  if (r.Has("sensors")) {
+    common::YamlMap map = r.Child("sensors");
+    spec.sensors = LoadSensorSet(map, spec.model.default_sensors, sensors);
+  }
+  if (r.Has("commands")) spec.commands = LoadCommands(r);
+  r.Finish();
+  return spec;
+}
+
+}  // namespace
+
+Scenario LoadScenario(common::YamlMap& map, const SimPaths& paths, const SensorRegistry& sensors) {
+  Scenario s;
+  s.world = map.Require<std::string>("world");
+  s.world_path = ResolveWorld(map, s.world, paths);
   int64_t seed = 1;
   if (map.Get("seed", &seed) && seed < 0) map.Fail(map.Raw("seed"), "seed must be >= 0");
   s.seed = static_cast<uint64_t>(seed);
   {
     common::YamlMap physics = map.Child("physics");
-    physics.Get("timestep_s", &s.physics.timestep_s);
-    physics.Get("integrator", &s.physics.integrator);
-    physics.Finish();
+    s.physics = LoadPhysicsParams(physics);
   }
   map.Get("ray_threads", &s.ray_threads);
   map.Get("spawn_slots", &s.spawn_slots);
@@ -380,55 +348,17 @@ Scenario LoadScenario(common::YamlMap& map, const SimPaths& paths) {
   int index = 0;
   for (const auto& node : robots) {
     common::YamlMap r = map.Wrap(node, "robots[" + std::to_string(index++) + "]");
-    const std::string id = r.Require<std::string>("id");
-    const std::string model = r.Require<std::string>("model");
-    std::string profile;
-    r.Get("profile", &profile);
-    SpawnPose spawn;
-    {
-      common::YamlMap sp = r.Child("spawn");
-      sp.Get("x_m", &spawn.x_m);
-      sp.Get("y_m", &spawn.y_m);
-      GetAngle(sp, "yaw", &spawn.yaw_rad);
-      double z = 0.0;
-      if (sp.Get("z_m", &z)) spawn.z_m = z;
-      sp.Finish();
-    }
-    RobotSpec spec;
-    try {
-      spec = MakeRobotSpec(id, model, profile, spawn, paths);
-    } catch (const std::invalid_argument& e) {
-      r.Fail(node, e.what());
-    }
-    if (r.Has("sensors")) {
-      common::YamlMap sensors = r.Child("sensors");
-      spec.sensors = LoadSensorSet(sensors, spec.model.default_sensors);
-    }
-    if (r.Has("commands")) {
-      YAML::Node list = r.Raw("commands");
-      if (!list.IsSequence()) r.Fail(list, "'commands' must be a list");
-      for (const auto& item : list) {
-        common::YamlMap c = r.Wrap(item, "commands");
-        ScriptedCommand cmd;
-        cmd.at_s = c.Require<double>("at_s");
-        cmd.duration_s = c.Require<double>("duration_s");
-        c.Get("linear_mps", &cmd.linear_mps);
-        c.Get("angular_radps", &cmd.angular_radps);
-        c.Finish();
-        spec.commands.push_back(cmd);
-      }
-    }
-    r.Finish();
-    s.robots.push_back(std::move(spec));
+    s.robots.push_back(LoadRobot(r, node, paths, sensors));
   }
   map.Finish();
   ValidateAt(map, [&] { s.Validate(); });
   return s;
 }
 
-Scenario LoadScenarioFile(const std::string& path, const SimPaths& paths) {
+Scenario LoadScenarioFile(const std::string& path, const SimPaths& paths,
+                          const SensorRegistry& sensors) {
   common::YamlMap map = common::YamlMap::LoadFile(path);
-  return LoadScenario(map, paths);
+  return LoadScenario(map, paths, sensors);
 }
 
 }  // namespace cairn::sim

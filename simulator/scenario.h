@@ -7,7 +7,7 @@
 
 #include "common/robot_profile.h"
 #include "common/yaml_reader.h"
-#include "simulator/sensor_params.h"
+#include "simulator/sensor_registry.h"
 
 /// @file
 /// What cairn-sim simulates: a world (a shipped name or any MJCF file) and robots, each with a
@@ -22,8 +22,9 @@ struct SimPaths {
   std::string data_dir;    ///< the simulator folder: worlds/, robots/
   std::string config_dir;  ///< the config folder: profiles/
 
-  /// The source tree's folders, overridden by CAIRN_SIM_DATA_DIR and CAIRN_CONFIG_DIR.
-  static SimPaths Default();
+  /// The folders of a tree rooted at `root`: root/simulator and root/config (the source tree;
+  /// cairn-sim's defaults, which --data-dir and --config-dir override).
+  static SimPaths InTree(const std::string& root);
 
   /// A shipped world name ("tunnel") or a path to an MJCF file.
   /// @throws std::invalid_argument listing the shipped worlds for an unknown name.
@@ -91,6 +92,9 @@ struct PhysicsParams {
   void Validate() const;
 };
 
+/// A scenario's `physics:` map (every key optional). @throws common::ConfigError.
+PhysicsParams LoadPhysicsParams(common::YamlMap& map);
+
 struct Scenario {
   std::string world;       ///< as given
   std::string world_path;  ///< resolved MJCF file
@@ -108,11 +112,19 @@ struct Scenario {
   void Validate() const;
 };
 
-/// Reads a scenario (see config/sim/*.yaml for the format).
-/// @throws common::ConfigError with file and line for unknown keys or bad values, and for
-/// unknown worlds, robot models and profiles.
-Scenario LoadScenario(common::YamlMap& map, const SimPaths& paths);
-Scenario LoadScenarioFile(const std::string& path, const SimPaths& paths);
+/// Reads a scenario (see config/sim/*.yaml for the format); robots' `sensors:` maps name kinds
+/// of `sensors`. @throws common::ConfigError with file and line for unknown keys or bad values,
+/// and for unknown worlds, robot models, profiles and sensors.
+Scenario LoadScenario(common::YamlMap& map, const SimPaths& paths,
+                      const SensorRegistry& sensors = BuiltinSensors());
+Scenario LoadScenarioFile(const std::string& path, const SimPaths& paths,
+                          const SensorRegistry& sensors = BuiltinSensors());
+
+/// A scenario of a world (a shipped name or an MJCF path) and robots given as --robot flags
+/// (below), with every other setting at its default.
+/// @throws std::invalid_argument for an unknown world or a bad robot flag.
+Scenario MakeScenario(const std::string& world, const std::vector<std::string>& robot_flags,
+                      const SimPaths& paths);
 
 /// "id:model[:profile[:x,y[,yaw_deg]]]" as given to cairn-sim --robot. Empty profile = the
 /// model's default. @throws std::invalid_argument saying what is wrong.
@@ -121,15 +133,5 @@ RobotSpec ParseRobotFlag(const std::string& text, const SimPaths& paths);
 /// A robot with the model's default profile and sensors.
 RobotSpec MakeRobotSpec(const std::string& id, const std::string& model, const std::string& profile,
                         const SpawnPose& spawn, const SimPaths& paths);
-
-// Sensor parameter overrides from YAML (every key optional, unknown keys are errors).
-void LoadLidarParams(common::YamlMap& map, LidarParams* params);
-void LoadPlanarLaserParams(common::YamlMap& map, PlanarLaserParams* params);
-void LoadTurretParams(common::YamlMap& map, TurretParams* params);
-void LoadOdometryParams(common::YamlMap& map, OdometryParams* params);
-void LoadImuParams(common::YamlMap& map, ImuParams* params);
-void LoadGroundTruthParams(common::YamlMap& map, GroundTruthParams* params);
-/// A `sensors:` map: the listed sensors only, each starting from `defaults` where it has one.
-SensorSet LoadSensorSet(common::YamlMap& map, const SensorSet& defaults);
 
 }  // namespace cairn::sim

@@ -1,89 +1,93 @@
 // cairn-sim: MuJoCo simulation of worlds, robots and their sensors on LCM.
 
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
-#include <sstream>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "common/flags.h"
 #include "common/log.h"
-#include "common/yaml_reader.h"
 #include "services/runtime/node.h"
+#include "simulator/catalogue.h"
+#include "simulator/lcm/sim_service.h"
 #include "simulator/mujoco_model.h"
 #include "simulator/mujoco_sim.h"
 #include "simulator/scenario.h"
-#include "simulator/lcm/sim_service.h"
 
 namespace {
 
-using cairn::sim::SimPaths;
-
-std::string WorldsHelp(const SimPaths& paths) {
-  std::ostringstream out;
-  for (const std::string& world : paths.ShippedWorlds()) {
-    out << "  " << world << ": " << paths.WorldSummary(world) << "\n";
-  }
-  out << "  (or the path of any MJCF file: robots are inserted into it)\n";
-  return out.str();
+// An environment variable when set and not empty, else the fallback.
+std::string EnvOr(const char* name, const std::string& fallback) {
+  const char* value = std::getenv(name);
+  return value != nullptr && *value != '\0' ? value : fallback;
 }
 
-std::string RobotsHelp(const SimPaths& paths) {
-  std::ostringstream out;
-  for (const std::string& name : paths.ShippedRobots()) {
-    try {
-      const cairn::sim::RobotModel model = cairn::sim::LoadRobotModel(paths, name);
-      out << "  " << name << ": " << model.description << "\n      default profile "
-          << model.default_profile << "; sensors:";
-      for (const std::string& s : model.default_sensors.Names()) out << " " << s;
-      out << "\n";
-    } catch (const std::exception& e) {
-      out << "  " << name << ": (unreadable: " << e.what() << ")\n";
-    }
-  }
-  return out.str();
+struct Flags {
+  std::string scenario_path;
+  std::string world = "tunnel";
+  std::vector<std::string> robots;
+  std::string speed = "1";
+  int seed = -1;
+  int ray_threads = 0;
+  bool paused = false;
+  std::string lcm_url;
+};
+
+void AddFlags(cairn::common::FlagParser& flags, Flags* f, cairn::sim::SimPaths* paths) {
+  flags.AddString("scenario", &f->scenario_path, "scenario YAML file (world, robots, sensors)");
+  flags.AddString("world", &f->world, "world name or MJCF path, when no scenario is given");
+  flags.AddStringList("robot", &f->robots,
+                      "robot as id:model[:profile[:x,y[,yaw_deg]]], when no scenario is given");
+  flags.AddString("speed", &f->speed, "1 = real time, N = N times real time, max = flat out");
+  flags.AddInt("seed", &f->seed, "noise seed; overrides the scenario's (-1 keeps it)");
+  flags.AddInt("ray-threads", &f->ray_threads,
+               "threads casting lidar rays (0 keeps the scenario's)");
+  flags.AddBool("paused", &f->paused, "start paused (resume through SIM.CONTROL)");
+  flags.AddString("lcm-url", &f->lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm ttl=0)");
+  flags.AddString("data-dir", &paths->data_dir,
+                  "folder of the shipped worlds/ and robots/ (env CAIRN_SIM_DATA_DIR)");
+  flags.AddString("config-dir", &paths->config_dir,
+                  "folder of the robot profiles/ (env CAIRN_CONFIG_DIR)");
+  // The catalogues of the default (or environment's) folders.
+  flags.AddHelpSection("worlds", cairn::sim::DescribeWorlds(*paths));
+  flags.AddHelpSection("robots", cairn::sim::DescribeRobots(*paths));
+  flags.AddHelpSection("sensors", cairn::sim::DescribeSensors());
 }
 
-std::string SensorsHelp() {
-  std::ostringstream out;
-  for (const auto& [name, description] : cairn::sim::SensorCatalogue()) {
-    out << "  " << name << ": " << description << "\n";
+// The scenario the flags ask for: a scenario file, or a world and robots.
+cairn::sim::Scenario LoadFromFlags(const Flags& f, const cairn::sim::SimPaths& paths) {
+  if (!f.scenario_path.empty() && !f.robots.empty()) {
+    throw std::invalid_argument("give --scenario or --robot, not both");
   }
-  return out.str();
+  cairn::sim::Scenario scenario = f.scenario_path.empty()
+                                      ? cairn::sim::MakeScenario(f.world, f.robots, paths)
+                                      : cairn::sim::LoadScenarioFile(f.scenario_path, paths);
+  if (f.seed >= 0) scenario.seed = static_cast<uint64_t>(f.seed);
+  if (f.ray_threads > 0) scenario.ray_threads = f.ray_threads;
+  scenario.Validate();
+  return scenario;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   cairn::common::SetLogTag("cairn-sim");
-  const SimPaths paths = SimPaths::Default();
+  // Shipped worlds, robots and profiles: the source tree's unless the environment or the
+  // flags say otherwise.
+  cairn::sim::SimPaths paths;
+  paths.data_dir = EnvOr("CAIRN_SIM_DATA_DIR", CAIRN_SIM_DATA_DIR);
+  paths.config_dir = EnvOr("CAIRN_CONFIG_DIR", CAIRN_CONFIG_DIR);
 
-  std::string scenario_path;
-  std::string world = "tunnel";
-  std::vector<std::string> robots;
-  std::string speed_text = "1";
-  int seed = -1;
-  int ray_threads = 0;
-  bool paused = false;
-  std::string lcm_url;
+  Flags f;
   cairn::common::FlagParser flags(
       "cairn-sim",
       "Simulates a world with robots on MuJoCo and publishes their sensors on LCM:\n"
       "<robot>.LIDAR/.SCAN/.TURRET_SCAN/.ODOM/.POSE/.IMU and SIM.CLOCK; takes <robot>.CMD_VEL\n"
       "and SIM.CONTROL (spawn, move, remove objects, doors, reset, pause, resume, speed, list).\n"
       "Give a scenario file (config/sim/*.yaml), or a world and robots.");
-  flags.AddString("scenario", &scenario_path, "scenario YAML file (world, robots, sensors)");
-  flags.AddString("world", &world, "world name or MJCF path, when no scenario is given");
-  flags.AddStringList("robot", &robots,
-                      "robot as id:model[:profile[:x,y[,yaw_deg]]], when no scenario is given");
-  flags.AddString("speed", &speed_text, "1 = real time, N = N times real time, max = flat out");
-  flags.AddInt("seed", &seed, "noise seed; overrides the scenario's (-1 keeps it)");
-  flags.AddInt("ray-threads", &ray_threads, "threads casting lidar rays (0 keeps the scenario's)");
-  flags.AddBool("paused", &paused, "start paused (resume through SIM.CONTROL)");
-  flags.AddString("lcm-url", &lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm ttl=0)");
-  flags.AddHelpSection("worlds", WorldsHelp(paths));
-  flags.AddHelpSection("robots", RobotsHelp(paths));
-  flags.AddHelpSection("sensors", SensorsHelp());
+  AddFlags(flags, &f, &paths);
   const int parsed = flags.Parse(argc, argv);
   if (parsed >= 0) return parsed;
   if (!flags.positional().empty()) {
@@ -97,49 +101,35 @@ int main(int argc, char** argv) {
   cairn::sim::Scenario scenario;
   double speed = 1.0;
   try {
-    speed = cairn::sim::ParseSpeed(speed_text);
-    if (!scenario_path.empty()) {
-      if (!robots.empty()) throw std::invalid_argument("give --scenario or --robot, not both");
-      scenario = cairn::sim::LoadScenarioFile(scenario_path, paths);
-    } else {
-      scenario.world = world;
-      scenario.world_path = paths.WorldPath(world);
-      for (const std::string& spec : robots) {
-        scenario.robots.push_back(cairn::sim::ParseRobotFlag(spec, paths));
-      }
-    }
-    if (seed >= 0) scenario.seed = static_cast<uint64_t>(seed);
-    if (ray_threads > 0) scenario.ray_threads = ray_threads;
-    scenario.Validate();
+    speed = cairn::sim::ParseSpeed(f.speed);
+    scenario = LoadFromFlags(f, paths);
   } catch (const std::exception& e) {
     CAIRN_LOG_ERROR("%s", e.what());
     return 1;
   }
 
   std::unique_ptr<cairn::sim::MujocoSim> sim;
+  std::unique_ptr<cairn::runtime::Node> node;
+  std::unique_ptr<cairn::sim::SimService> service;
+  const char* failure = "cannot start";
   try {
     sim = std::make_unique<cairn::sim::MujocoSim>(scenario);
+    failure = "cannot open the bus";
+    cairn::runtime::NodeOptions options;
+    options.process_name = "cairn-sim";
+    options.lcm_url = f.lcm_url;
+    node = std::make_unique<cairn::runtime::Node>(options);
+    failure = "cannot start";
+    cairn::sim::SimServiceParams params;
+    params.speed = speed;
+    params.start_paused = f.paused;
+    service = std::make_unique<cairn::sim::SimService>(*node, *sim, params);
   } catch (const std::exception& e) {
-    CAIRN_LOG_ERROR("cannot start: %s", e.what());
+    CAIRN_LOG_ERROR("%s: %s", failure, e.what());
     return 1;
   }
   if (scenario.robots.empty()) CAIRN_LOG_WARN("no robots: simulating the world alone");
 
-  cairn::runtime::NodeOptions options;
-  options.process_name = "cairn-sim";
-  options.lcm_url = lcm_url;
-  std::unique_ptr<cairn::runtime::Node> node;
-  try {
-    node = std::make_unique<cairn::runtime::Node>(options);
-  } catch (const std::exception& e) {
-    CAIRN_LOG_ERROR("cannot open the bus: %s", e.what());
-    return 1;
-  }
-
-  cairn::sim::SimServiceParams params;
-  params.speed = speed;
-  params.start_paused = paused;
-  cairn::sim::SimService service(*node, *sim, params);
   std::string robot_list;
   for (const auto& r : scenario.robots) {
     robot_list +=
@@ -148,6 +138,6 @@ int main(int argc, char** argv) {
   node->Event("world %s, %zu robots%s%s, seed %llu, speed %s, timestep %.4f s, bus %s",
               scenario.world.c_str(), scenario.robots.size(), robot_list.empty() ? "" : ": ",
               robot_list.c_str(), static_cast<unsigned long long>(scenario.seed),
-              speed == 0.0 ? "max" : speed_text.c_str(), sim->timestep_s(), node->url().c_str());
-  return service.Run();
+              speed == 0.0 ? "max" : f.speed.c_str(), sim->timestep_s(), node->url().c_str());
+  return service->Run();
 }

@@ -35,6 +35,9 @@
 #include "services/mapping/traversability.h"
 #include "simulator/mujoco_sim.h"
 #include "simulator/scenario.h"
+#include "simulator/sensors/lidar_sensor.h"
+#include "simulator/sensors/odometry_sensor.h"
+#include "simulator/sensors/planar_laser_sensor.h"
 
 namespace cairn::bench {
 namespace {
@@ -72,7 +75,7 @@ common::RobotProfile Profile(const std::string& name) {
 // Revolutions of the simulated HDL-32E on a P3-AT driving along lane `lane_y` of the tunnel.
 std::vector<common::LidarRevolution> RecordTunnel(int revolutions, double lane_y,
                                                   double speed_mps) {
-  const sim::SimPaths paths = sim::SimPaths::Default();
+  const sim::SimPaths paths = sim::SimPaths::InTree(CAIRN_SOURCE_DIR);
   sim::Scenario scenario;
   scenario.world = "tunnel";
   scenario.world_path = paths.WorldPath("tunnel");
@@ -80,8 +83,8 @@ std::vector<common::LidarRevolution> RecordTunnel(int revolutions, double lane_y
   sim::RobotSpec robot =
       sim::MakeRobotSpec("p1", "pioneer3at", "", {4.0, lane_y, 0.0, std::nullopt}, paths);
   robot.commands.push_back({0.3, 1000.0, speed_mps, 0.0});
-  robot.sensors.planar_laser.reset();
-  robot.sensors.odometry.reset();
+  robot.sensors.Remove(sim::PlanarLaserSensor::kName);
+  robot.sensors.Remove(sim::OdometrySensor::kName);
   scenario.robots.push_back(robot);
   sim::MujocoSim sim(scenario);
   std::map<int64_t, common::LidarRevolution> by_number;
@@ -90,7 +93,7 @@ std::vector<common::LidarRevolution> RecordTunnel(int revolutions, double lane_y
   while (complete < revolutions + 1) {
     out.Clear();
     sim.Step(&out);
-    for (auto& slice : out.lidar) {
+    for (auto& slice : out.Mutable<common::LidarSlice>(sim::LidarSensor::kName)) {
       auto& rev = by_number[slice.revolution];
       rev.revolution = slice.revolution;
       rev.robot = slice.robot;

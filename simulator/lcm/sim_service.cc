@@ -5,16 +5,9 @@
 #include <stdexcept>
 #include <thread>
 
-#include "cairn/lcmt_imu.hpp"
-#include "cairn/lcmt_laser_scan.hpp"
-#include "cairn/lcmt_odometry.hpp"
-#include "cairn/lcmt_point_cloud_slice.hpp"
-#include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_sim_clock.hpp"
 
 #include "common/channels.h"
-#include "services/runtime/conversions.h"
-#include "simulator/lcm/sim_conversions.h"
 
 namespace cairn::sim {
 namespace {
@@ -68,6 +61,24 @@ const char* OpName(int8_t op) {
   }
 }
 
+// The object a SPAWN request describes.
+common::Status ObjectFromRequest(const Request& msg, ObjectSpec* spec) {
+  spec->name = msg.name;
+  if (msg.shape == Request::SHAPE_BOX) {
+    spec->shape = ObjectShape::kBox;
+  } else if (msg.shape == Request::SHAPE_CYLINDER) {
+    spec->shape = ObjectShape::kCylinder;
+  } else if (msg.shape == Request::SHAPE_SPHERE) {
+    spec->shape = ObjectShape::kSphere;
+  } else {
+    return common::InvalidArgumentError("unknown shape " + std::to_string(msg.shape));
+  }
+  spec->size_m = common::Vector3(msg.size_m[0], msg.size_m[1], msg.size_m[2]);
+  spec->position_m = common::Vector3(msg.position_m[0], msg.position_m[1], msg.position_m[2]);
+  spec->yaw_rad = msg.yaw_rad;
+  return common::Status::Ok();
+}
+
 }  // namespace
 
 double ParseSpeed(const std::string& text) {
@@ -80,15 +91,26 @@ double ParseSpeed(const std::string& text) {
   return v;
 }
 
-SimService::SimService(runtime::Node& node, MujocoSim& sim, SimServiceParams params)
-    : node_(node), sim_(sim), params_(params), speed_(params.speed), paused_(params.start_paused) {
+SimService::SimService(runtime::Node& node, MujocoSim& sim, SimServiceParams params,
+                       const SensorPublishers& publishers)
+    : node_(node),
+      sim_(sim),
+      params_(params),
+      publishers_(publishers),
+      speed_(params.speed),
+      paused_(params.start_paused) {
+  for (const RobotSpec& r : sim_.scenario().robots) {
+    for (const std::string& sensor : r.sensors.Names()) {
+      if (publishers_.Find(sensor) == nullptr) {
+        throw std::invalid_argument("robot '" + r.id + "': sensor '" + sensor +
+                                    "' has no LCM publisher (simulator/lcm/sensor_publishers.cc)");
+      }
+    }
+  }
   for (const std::string& robot : sim_.robot_ids()) {
     node_.Subscribe<cairn::lcmt_velocity_command>(
         channels::ForRobot(robot, channels::kCmdVel),
         [this, robot](const cairn::lcmt_velocity_command& msg) { OnCommand(robot, msg); });
-  }
-  for (const RobotSpec& r : sim_.scenario().robots) {
-    if (r.sensors.turret) turret_line_period_s_[r.id] = 1.0 / r.sensors.turret->line_rate_hz;
   }
   node_.Subscribe<Request>(channels::kSimControl, [this](const Request& msg) { OnControl(msg); });
   Reanchor();
@@ -155,99 +177,81 @@ Reply SimService::Execute(const Request& msg) {
   reply.request_id = msg.request_id;
   reply.status = Reply::STATUS_OK;
   reply.num_names = 0;
-  auto finish = [&](const common::Status& status, const std::string& done) {
-    reply.status = StatusToReply(status.code());
-    reply.message = status.ok() ? done : status.message();
-    if (status.ok()) {
-      node_.Event("%s", done.c_str());
-    } else {
-      if (status.code() == common::StatusCode::kInvalidArgument) {
-        node_.CountDropped("bad_control_requests");
-      }
-      node_.Warn(std::string("control:") + OpName(msg.op), std::string("SIM.CONTROL ") +
-                                                               OpName(msg.op) + " '" + msg.name +
-                                                               "' refused: " + status.message());
-    }
-  };
-  const common::Vector3 position(msg.position_m[0], msg.position_m[1], msg.position_m[2]);
+  if (msg.op == Request::OP_LIST) {
+    const std::vector<std::string> names = sim_.ListNames();
+    reply.names = names;
+    reply.num_names = static_cast<int32_t>(names.size());
+    reply.message = std::to_string(names.size()) + " names";
+    return reply;
+  }
+  const auto [status, done] = Apply(msg);
+  Finish(msg, status, done, &reply);
+  return reply;
+}
 
+std::pair<common::Status, std::string> SimService::Apply(const Request& msg) {
+  const common::Vector3 position(msg.position_m[0], msg.position_m[1], msg.position_m[2]);
+  const std::string& name = msg.name;
   switch (msg.op) {
     case Request::OP_SPAWN: {
       ObjectSpec spec;
-      spec.name = msg.name;
-      if (msg.shape == Request::SHAPE_BOX) {
-        spec.shape = ObjectShape::kBox;
-      } else if (msg.shape == Request::SHAPE_CYLINDER) {
-        spec.shape = ObjectShape::kCylinder;
-      } else if (msg.shape == Request::SHAPE_SPHERE) {
-        spec.shape = ObjectShape::kSphere;
-      } else {
-        finish(common::InvalidArgumentError("unknown shape " + std::to_string(msg.shape)), "");
-        break;
-      }
-      spec.size_m = common::Vector3(msg.size_m[0], msg.size_m[1], msg.size_m[2]);
-      spec.position_m = position;
-      spec.yaw_rad = msg.yaw_rad;
-      finish(sim_.SpawnObject(spec), "spawned object '" + msg.name + "'");
-      break;
+      const common::Status parsed = ObjectFromRequest(msg, &spec);
+      if (!parsed.ok()) return {parsed, ""};
+      return {sim_.SpawnObject(spec), "spawned object '" + name + "'"};
     }
     case Request::OP_MOVE:
-      finish(sim_.MoveObject(msg.name, position, msg.yaw_rad), "moved object '" + msg.name + "'");
-      break;
+      return {sim_.MoveObject(name, position, msg.yaw_rad), "moved object '" + name + "'"};
     case Request::OP_REMOVE:
-      finish(sim_.RemoveObject(msg.name), "removed object '" + msg.name + "'");
-      break;
+      return {sim_.RemoveObject(name), "removed object '" + name + "'"};
     case Request::OP_OPEN_DOOR:
     case Request::OP_CLOSE_DOOR: {
       const bool open = msg.op == Request::OP_OPEN_DOOR;
-      finish(sim_.SetDoor(msg.name, open),
-             std::string(open ? "opened" : "closed") + " door '" + msg.name + "'");
-      break;
+      return {sim_.SetDoor(name, open),
+              std::string(open ? "opened" : "closed") + " door '" + name + "'"};
     }
     case Request::OP_RESET_ROBOT: {
       // z of 0 (or NaN) puts the robot on the surface below (x, y).
       std::optional<double> z;
-      if (std::isfinite(msg.position_m[2]) && msg.position_m[2] != 0.0) z = msg.position_m[2];
-      const bool finite_xy = std::isfinite(msg.position_m[0]) && std::isfinite(msg.position_m[1]);
-      finish(finite_xy
-                 ? sim_.ResetRobot(msg.name, msg.position_m[0], msg.position_m[1], msg.yaw_rad, z)
-                 : common::InvalidArgumentError("reset position must be finite"),
-             "reset robot '" + msg.name + "'");
-      break;
+      if (std::isfinite(position.z()) && position.z() != 0.0) z = position.z();
+      const bool finite_xy = std::isfinite(position.x()) && std::isfinite(position.y());
+      return {finite_xy ? sim_.ResetRobot(name, position.x(), position.y(), msg.yaw_rad, z)
+                        : common::InvalidArgumentError("reset position must be finite"),
+              "reset robot '" + name + "'"};
     }
     case Request::OP_PAUSE:
       paused_ = true;
-      finish(common::Status::Ok(), "paused");
-      break;
+      return {common::Status::Ok(), "paused"};
     case Request::OP_RESUME:
       paused_ = false;
       Reanchor();
-      finish(common::Status::Ok(), "resumed");
-      break;
+      return {common::Status::Ok(), "resumed"};
     case Request::OP_SET_SPEED:
       if (!std::isfinite(msg.speed) || msg.speed < 0.0) {
-        finish(common::InvalidArgumentError("speed must be >= 0 (0 = as fast as possible)"), "");
-      } else {
-        speed_ = msg.speed;
-        Reanchor();
-        finish(common::Status::Ok(), msg.speed == 0.0
-                                         ? std::string("speed set to max")
-                                         : "speed set to " + std::to_string(msg.speed));
+        return {common::InvalidArgumentError("speed must be >= 0 (0 = as fast as possible)"), ""};
       }
-      break;
-    case Request::OP_LIST: {
-      const std::vector<std::string> names = sim_.ListNames();
-      reply.names = names;
-      reply.num_names = static_cast<int32_t>(names.size());
-      reply.status = Reply::STATUS_OK;
-      reply.message = std::to_string(names.size()) + " names";
-      break;
-    }
+      speed_ = msg.speed;
+      Reanchor();
+      return {common::Status::Ok(), msg.speed == 0.0 ? std::string("speed set to max")
+                                                     : "speed set to " + std::to_string(msg.speed)};
     default:
-      finish(common::InvalidArgumentError("unknown op " + std::to_string(msg.op)), "");
-      break;
+      return {common::InvalidArgumentError("unknown op " + std::to_string(msg.op)), ""};
   }
-  return reply;
+}
+
+void SimService::Finish(const Request& msg, const common::Status& status, const std::string& done,
+                        Reply* reply) {
+  reply->status = StatusToReply(status.code());
+  reply->message = status.ok() ? done : status.message();
+  if (status.ok()) {
+    node_.Event("%s", done.c_str());
+    return;
+  }
+  if (status.code() == common::StatusCode::kInvalidArgument) {
+    node_.CountDropped("bad_control_requests");
+  }
+  node_.Warn(std::string("control:") + OpName(msg.op), std::string("SIM.CONTROL ") +
+                                                           OpName(msg.op) + " '" + msg.name +
+                                                           "' refused: " + status.message());
 }
 
 void SimService::HandlePending() {
@@ -259,26 +263,12 @@ void SimService::HandlePending() {
 // --- outputs -----------------------------------------------------------------------------------
 
 void SimService::PublishOutputs() {
-  using channels::ForRobot;
   for (const std::string& event : outputs_.events) node_.Event("%s", event.c_str());
-  for (const auto& slice : outputs_.lidar) {
-    node_.Publish(ForRobot(slice.robot, channels::kLidar), runtime::ToLcm(slice));
-  }
-  for (const auto& scan : outputs_.scans) {
-    node_.Publish(ForRobot(scan.robot, channels::kScan), runtime::ToLcm(scan));
-  }
-  for (const auto& line : outputs_.turret_lines) {
-    node_.Publish(ForRobot(line.scan.robot, channels::kTurretScan),
-                  ToLcm(line, turret_line_period_s_[line.scan.robot]));
-  }
-  for (const auto& odom : outputs_.odometry) {
-    node_.Publish(ForRobot(odom.robot, channels::kOdom), ToLcm(odom));
-  }
-  for (const auto& pose : outputs_.poses) {
-    node_.Publish(ForRobot(pose.robot, channels::kPose), ToLcm(pose));
-  }
-  for (const auto& imu : outputs_.imu) {
-    node_.Publish(ForRobot(imu.robot, channels::kImu), ToLcm(imu));
+  for (const auto& group : outputs_.groups()) {
+    if (group->empty()) continue;
+    const SensorPublisher* publisher = publishers_.Find(group->sensor());
+    CAIRN_DEMAND(publisher != nullptr);  // checked for every robot's sensors at construction
+    publisher->publish(node_, *group);
   }
   outputs_.Clear();
 }

@@ -12,15 +12,17 @@
 #include "cairn/lcmt_velocity_command.hpp"
 
 #include "services/runtime/node.h"
+#include "simulator/lcm/sensor_publishers.h"
 #include "simulator/mujoco_sim.h"
 
 /// @file
 /// SimService: cairn-sim's LCM face. It paces a MujocoSim against the wall clock, publishes its
-/// readings and SIM.CLOCK, takes velocity commands and answers SIM.CONTROL.
+/// readings (each sensor kind through its SensorPublisher) and SIM.CLOCK, takes velocity
+/// commands and answers SIM.CONTROL.
 ///
-/// Channels (per robot r): r.LIDAR (slices), r.SCAN, r.TURRET_SCAN, r.ODOM, r.POSE (ground
-/// truth), r.IMU out; r.CMD_VEL in. Fleet: SIM.CLOCK out, SIM.CONTROL in, SIM.CONTROL_REPLY out.
-/// Every message's utime is simulation time.
+/// Channels (per robot r): one per sensor kind (r.LIDAR, r.SCAN, r.TURRET_SCAN, r.ODOM, r.POSE,
+/// r.IMU for the built-in ones) out; r.CMD_VEL in. Fleet: SIM.CLOCK out, SIM.CONTROL in,
+/// SIM.CONTROL_REPLY out. Every message's utime is simulation time.
 
 namespace cairn::sim {
 
@@ -42,8 +44,11 @@ struct SimServiceParams {
 
 class SimService {
  public:
-  /// Subscribes to every robot's CMD_VEL and to SIM.CONTROL. `node` and `sim` must outlive it.
-  SimService(runtime::Node& node, MujocoSim& sim, SimServiceParams params);
+  /// Subscribes to every robot's CMD_VEL and to SIM.CONTROL. `node`, `sim` and `publishers`
+  /// must outlive it. @throws std::invalid_argument when a robot carries a sensor that has no
+  /// publisher.
+  SimService(runtime::Node& node, MujocoSim& sim, SimServiceParams params,
+             const SensorPublishers& publishers = BuiltinSensorPublishers());
   SimService(const SimService&) = delete;
   SimService& operator=(const SimService&) = delete;
 
@@ -70,6 +75,11 @@ class SimService {
 
   void OnCommand(const std::string& robot, const cairn::lcmt_velocity_command& msg);
   void OnControl(const cairn::lcmt_sim_control_request& msg);
+  /// Carries out every op but LIST; returns the outcome and what was done.
+  std::pair<common::Status, std::string> Apply(const cairn::lcmt_sim_control_request& msg);
+  /// Sets the reply's status and message, logs, counts refusals.
+  void Finish(const cairn::lcmt_sim_control_request& msg, const common::Status& status,
+              const std::string& done, cairn::lcmt_sim_control_reply* reply);
   void StepOnce();
   void PublishOutputs();
   void PublishClock();
@@ -79,6 +89,7 @@ class SimService {
   runtime::Node& node_;
   MujocoSim& sim_;
   SimServiceParams params_;
+  const SensorPublishers& publishers_;
   SimOutputs outputs_;
   double speed_{1.0};
   bool paused_{false};
@@ -94,7 +105,6 @@ class SimService {
   double rtf_{0.0};
   std::map<std::pair<std::string, int64_t>, cairn::lcmt_sim_control_reply> replies_;
   std::deque<std::pair<std::string, int64_t>> reply_order_;
-  std::map<std::string, double> turret_line_period_s_;
   int64_t warnings_reported_{0};
 };
 

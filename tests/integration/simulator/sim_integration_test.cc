@@ -402,6 +402,25 @@ TEST(SimIntegrationTest, HelpListsWorldsRobotsAndSensors) {
 
 // --- repeatability -----------------------------------------------------------------------------
 
+TEST(SimIntegrationTest, DataAndConfigFoldersComeFromTheFlags) {
+  ProcessSet procs(PrivateLcmUrl());
+  // An empty data folder has no shipped worlds; the message lists what it found (none).
+  ChildProcess& empty = procs.Start(
+      "cairn-sim", {"--data-dir", procs.dir(), "--world", "tunnel", "--robot", "a:kobuki"});
+  auto status = empty.WaitExit(20.0);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) != 0);
+  EXPECT_NE(empty.Log().find("unknown world 'tunnel'"), std::string::npos) << empty.Log();
+  // The config folder holds the profiles.
+  ChildProcess& no_profiles = procs.Start(
+      "cairn-sim", {"--config-dir", procs.dir(), "--world", "tunnel", "--robot", "a:kobuki"});
+  status = no_profiles.WaitExit(20.0);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) != 0);
+  EXPECT_NE(no_profiles.Log().find("unknown profile 'kobuki'"), std::string::npos)
+      << no_profiles.Log();
+}
+
 TEST(SimIntegrationTest, SameSeedAtMaxSpeedRepeatsTheRun) {
   // Three runs, each on its own bus: seeds 5, 5 and 6.
   ProcessSet procs(PrivateLcmUrl());

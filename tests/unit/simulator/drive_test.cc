@@ -5,8 +5,6 @@
 
 #include <gtest/gtest.h>
 
-#include "simulator/sensors.h"
-
 namespace cairn::sim {
 namespace {
 
@@ -78,62 +76,6 @@ TEST(DriveControllerTest, WatchdogStopsAfterHalfASecondWithoutCommands) {
   for (; t < 3.0; t += 0.01) EXPECT_FALSE(drive.Update(t, 0.01));  // fires once
   EXPECT_EQ(drive.linear_mps(), 0.0);
   EXPECT_EQ(drive.left_wheel_radps(), 0.0);
-}
-
-TEST(WheelOdometryTest, NoiseFreeIntegrationOfAnArcIsExact) {
-  const double radius_m = 0.1, track_m = 0.4;
-  WheelOdometry odom(OdometryParams{}, radius_m, track_m, NoiseSource(1, 2));
-  odom.Reset({1.0, 2.0, 0.3});
-  // A circle of radius R at speed v: wheels at R -/+ track/2.
-  const double big_r = 2.0, v = 0.5, dt = 0.002;
-  const double w = v / big_r;
-  const int steps = 5000;  // 10 s: 2.5 rad around the circle
-  for (int i = 0; i < steps; ++i) {
-    const double left = (v - w * track_m / 2) * dt / radius_m;
-    const double right = (v + w * track_m / 2) * dt / radius_m;
-    odom.Integrate(left, right, dt);
-  }
-  const double theta = w * steps * dt;
-  const double x = 1.0 + big_r * (std::sin(0.3 + theta) - std::sin(0.3));
-  const double y = 2.0 - big_r * (std::cos(0.3 + theta) - std::cos(0.3));
-  EXPECT_NEAR(odom.pose().x_m, x, 1e-9);
-  EXPECT_NEAR(odom.pose().y_m, y, 1e-9);
-  EXPECT_NEAR(odom.pose().yaw_rad, common::WrapAngle(0.3 + theta), 1e-9);
-  EXPECT_NEAR(odom.linear_mps(), v, 1e-9);
-  EXPECT_NEAR(odom.angular_radps(), w, 1e-9);
-}
-
-TEST(WheelOdometryTest, SlipNoiseDriftsRepeatablyPerSeed) {
-  OdometryParams noisy;
-  noisy.slip_noise_ratio = 0.05;
-  auto run = [&](uint64_t seed) {
-    WheelOdometry odom(noisy, 0.1, 0.4, NoiseSource(seed, 9));
-    odom.Reset({0, 0, 0});
-    for (int i = 0; i < 5000; ++i) odom.Integrate(0.01, 0.01, 0.002);  // straight, 5 m
-    return odom.pose();
-  };
-  const common::Pose2 a = run(1), b = run(1), c = run(2);
-  EXPECT_EQ(a, b);
-  EXPECT_FALSE(a == c);
-  // It drifted off the straight line.
-  EXPECT_GT(std::abs(a.y_m) + std::abs(a.yaw_rad), 1e-4);
-  EXPECT_NEAR(a.x_m, 5.0, 0.1);
-}
-
-TEST(NoiseSourceTest, GaussianHasUnitVarianceAndDependsOnlyOnIndex) {
-  NoiseSource noise(42, 7);
-  double sum = 0.0, sum2 = 0.0;
-  const int n = 200000;
-  for (int i = 0; i < n; ++i) {
-    const double x = noise.Gaussian(i);
-    sum += x;
-    sum2 += x * x;
-  }
-  EXPECT_NEAR(sum / n, 0.0, 0.01);
-  EXPECT_NEAR(sum2 / n, 1.0, 0.02);
-  EXPECT_EQ(noise.Gaussian(12345), NoiseSource(42, 7).Gaussian(12345));
-  EXPECT_NE(noise.Gaussian(12345), NoiseSource(43, 7).Gaussian(12345));
-  EXPECT_NE(noise.Gaussian(12345), NoiseSource(42, 8).Gaussian(12345));
 }
 
 }  // namespace

@@ -5,26 +5,23 @@
 
 #include <gtest/gtest.h>
 
+#include "simulator/sensors/ground_truth_sensor.h"
+#include "simulator/sensors/imu_sensor.h"
+#include "simulator/sensors/lidar_sensor.h"
+#include "simulator/sensors/odometry_sensor.h"
+#include "simulator/sensors/planar_laser_sensor.h"
+#include "simulator/sensors/turret_sensor.h"
 #include "tests/unit/simulator/sim_test_util.h"
 
 namespace cairn::sim {
 namespace {
 
+using testing::Drive;
 using testing::FlatWorld;
 using testing::InlineScenario;
 using testing::SimTest;
 
 constexpr double kDeg = M_PI / 180.0;
-
-// Drives `robot` with (v, w) for `duration_s` of sim time, commanding every step.
-void Drive(MujocoSim& sim, const std::string& robot, double v, double w, double duration_s,
-           SimOutputs* out) {
-  const double end = sim.time_s() + duration_s;
-  while (sim.time_s() < end) {
-    sim.Command(robot, v, w);
-    sim.Step(out);
-  }
-}
 
 // A solid ramp of `slope_deg` from x = 2 rising to a platform `height_m` high that ends at x_end.
 std::string RampWorld(double slope_deg, double height_m, double x_end) {
@@ -115,44 +112,6 @@ TEST_F(PhysicsTest, CommandedVelocitiesAreMetOnFlatGround) {
   }
 }
 
-class OdometryTest : public SimTest {};
-
-TEST_F(OdometryTest, DriftIsZeroWithNoiseOff) {
-  // Differential drives roll without slipping: with no slip noise, odometry follows the true
-  // path of a 3 m S-curve to within a centimetre and a degree.
-  for (const char* model : {"p3dx", "kobuki"}) {
-    Scenario s = InlineScenario(FlatWorld(), "r", model, 1.0, -2.0, 0.5);
-    ASSERT_TRUE(s.robots[0].sensors.odometry.has_value());
-    ASSERT_EQ(s.robots[0].sensors.odometry->slip_noise_ratio, 0.0);
-    MujocoSim sim(s);
-    SimOutputs out;
-    Drive(sim, "r", 0.3, 0.3, 5.0, &out);
-    Drive(sim, "r", 0.3, -0.3, 5.0, &out);
-    const common::Pose3 truth = sim.RobotPose("r");
-    const common::Pose2 odom = sim.OdometryPose("r");
-    EXPECT_NEAR(odom.x_m, truth.position_m.x(), 0.01) << model;
-    EXPECT_NEAR(odom.y_m, truth.position_m.y(), 0.01) << model;
-    EXPECT_NEAR(common::WrapAngle(odom.yaw_rad - truth.yaw_rad()), 0.0, 1.0 * kDeg) << model;
-    // The published readings carry the same estimate.
-    ASSERT_FALSE(out.odometry.empty());
-    EXPECT_NEAR(out.odometry.back().pose.position_m.x(), odom.x_m, 0.01);
-  }
-}
-
-TEST_F(OdometryTest, SlipNoiseMakesItDrift) {
-  Scenario s = InlineScenario(FlatWorld(), "r", "p3dx");
-  s.robots[0].sensors.odometry->slip_noise_ratio = 0.2;
-  MujocoSim sim(s);
-  SimOutputs out;
-  Drive(sim, "r", 0.3, 0.0, 10.0, &out);
-  const common::Pose3 truth = sim.RobotPose("r");
-  const common::Pose2 odom = sim.OdometryPose("r");
-  const double error =
-      std::hypot(odom.x_m - truth.position_m.x(), odom.y_m - truth.position_m.y()) +
-      std::abs(common::WrapAngle(odom.yaw_rad - truth.yaw_rad()));
-  EXPECT_GT(error, 0.02);
-}
-
 class DriveSimTest : public SimTest {};
 
 TEST_F(DriveSimTest, WatchdogStopsARobotThatIsNoLongerCommanded) {
@@ -201,7 +160,7 @@ TEST_F(DriveSimTest, ResetPutsTheRobotAtRestAndRestartsOdometry) {
   ASSERT_TRUE(sim.ResetRobot("r", 4.0, -3.0, 1.0).ok());
   EXPECT_NEAR(sim.RobotPose("r").position_m.x(), 4.0, 1e-9);
   EXPECT_NEAR(sim.RobotPose("r").yaw_rad(), 1.0, 1e-9);
-  EXPECT_NEAR(sim.OdometryPose("r").x_m, 4.0, 1e-9);
+  EXPECT_NEAR(sim.FindSensor<OdometrySensor>("r")->pose().x_m, 4.0, 1e-9);
   while (sim.time_s() < 3.0) sim.Step(&out);
   EXPECT_NEAR(sim.RobotPose("r").position_m.x(), 4.0, 0.01);
   EXPECT_NEAR(sim.RobotPose("r").position_m.z(), 0.0975, 0.005);
@@ -213,74 +172,43 @@ class SensorRatesTest : public SimTest {};
 
 TEST_F(SensorRatesTest, EverySensorAtItsRate) {
   Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
-  s.robots[0].sensors.turret = TurretParams{};
+  s.robots[0].sensors.Set<TurretSensor>(TurretParams{});
   MujocoSim sim(s);
   SimOutputs out;
   while (sim.time_s() < 2.0 - 1e-9) sim.Step(&out);
-  EXPECT_EQ(out.lidar.size(), 2u * 10u * 20u);  // 10 Hz x 20 slices for 2 s
-  EXPECT_EQ(out.scans.size(), 20u);
-  EXPECT_EQ(out.turret_lines.size(), 100u);
-  EXPECT_EQ(out.odometry.size(), 100u);
-  EXPECT_EQ(out.poses.size(), 100u);
-  EXPECT_EQ(out.imu.size(), 200u);
+  EXPECT_EQ(out.Readings<LidarSensor>().size(), 2u * 10u * 20u);  // 10 Hz x 20 slices for 2 s
+  EXPECT_EQ(out.Readings<PlanarLaserSensor>().size(), 20u);
+  EXPECT_EQ(out.Readings<TurretSensor>().size(), 100u);
+  EXPECT_EQ(out.Readings<OdometrySensor>().size(), 100u);
+  EXPECT_EQ(out.Readings<GroundTruthSensor>().size(), 100u);
+  EXPECT_EQ(out.Readings<ImuSensor>().size(), 200u);
   // Readings carry sim time.
-  EXPECT_EQ(out.poses.back().utime, sim.utime());
-  EXPECT_EQ(out.poses.front().utime, 20000);
-}
-
-TEST_F(SensorRatesTest, ImuReadsGravityAtRest) {
-  Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
-  MujocoSim sim(s);
-  SimOutputs out;
-  while (sim.time_s() < 1.0) sim.Step(&out);
-  ASSERT_FALSE(out.imu.empty());
-  const ImuReading& imu = out.imu.back();
-  EXPECT_NEAR(imu.linear_acceleration_mps2.z(), 9.81, 0.1);
-  EXPECT_NEAR(imu.angular_velocity_radps.norm(), 0.0, 0.02);
-  EXPECT_NEAR(imu.orientation.angularDistance(common::Quaternion::Identity()), 0.0, 0.02);
-}
-
-TEST_F(SensorRatesTest, TurretSweepsThePanRange) {
-  Scenario s = InlineScenario(FlatWorld(R"(<geom type="box" size="0.1 3 2" pos="4 0 2"/>)"), "r",
-                              "pioneer3at");
-  s.robots[0].sensors = SensorSet{};
-  TurretParams turret;
-  turret.range_noise_sigma_m = 0.0;
-  s.robots[0].sensors.turret = turret;
-  MujocoSim sim(s);
-  SimOutputs out;
-  while (sim.time_s() < 7.3) sim.Step(&out);  // 360 lines at 50 Hz
-  ASSERT_GE(out.turret_lines.size(), 360u);
-  EXPECT_NEAR(out.turret_lines[0].pan_rad, 0.0, 1e-12);
-  EXPECT_NEAR(out.turret_lines[1].pan_rad, 0.5 * kDeg, 1e-12);
-  EXPECT_NEAR(out.turret_lines[359].pan_rad, 179.5 * kDeg, 1e-9);
-  EXPECT_NEAR(out.turret_lines[360].pan_rad, 0.0, 1e-12);  // next sweep
-  // At pan 0 the beam at +90 deg points along the turret's x axis, at the wall 4 m ahead.
-  const common::LaserScan& scan = out.turret_lines[0].scan;
-  const int beam =
-      static_cast<int>(std::lround((M_PI / 2 - scan.angle_min_rad) / scan.angle_increment_rad));
-  const common::Vector3 end = scan.sensor_pose.Transform(
-      common::Vector3(std::cos(scan.angle_min_rad + beam * scan.angle_increment_rad),
-                      std::sin(scan.angle_min_rad + beam * scan.angle_increment_rad), 0.0) *
-      scan.ranges_m[beam]);
-  EXPECT_NEAR(end.x(), 3.9, 1e-3);
+  EXPECT_EQ(out.Readings<GroundTruthSensor>().back().utime, sim.utime());
+  EXPECT_EQ(out.Readings<GroundTruthSensor>().front().utime, 20000);
 }
 
 class DeterminismTest : public SimTest {};
 
 TEST_F(DeterminismTest, SameSeedSameRunDifferentSeedDifferentNoise) {
+  // The readings compared: ground truth, lidar and odometry.
+  struct Run {
+    std::vector<common::LidarSlice> lidar;
+    std::vector<GroundTruthReading> poses;
+    std::vector<OdometryReading> odometry;
+  };
   auto run = [](uint64_t seed) {
     Scenario s = InlineScenario(FlatWorld(R"(<geom type="box" size="0.5 0.5 0.5" pos="3 1 0.5"/>)"),
                                 "r", "pioneer3at");
     s.seed = seed;
-    s.robots[0].sensors.odometry->slip_noise_ratio = 0.05;
+    s.robots[0].sensors.Find<OdometrySensor>()->slip_noise_ratio = 0.05;
     s.robots[0].commands = {{0.0, 2.0, 0.4, 0.3}, {2.0, 1.0, 0.2, -0.5}};
     MujocoSim sim(s);
     SimOutputs out;
     while (sim.time_s() < 3.0) sim.Step(&out);
-    return out;
+    return Run{out.Readings<LidarSensor>(), out.Readings<GroundTruthSensor>(),
+               out.Readings<OdometrySensor>()};
   };
-  const SimOutputs a = run(11), b = run(11), c = run(12);
+  const Run a = run(11), b = run(11), c = run(12);
   ASSERT_EQ(a.poses.size(), b.poses.size());
   for (size_t i = 0; i < a.poses.size(); ++i) {
     ASSERT_EQ(a.poses[i].pose.position_m, b.poses[i].pose.position_m) << i;

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "simulator/mujoco_sim.h"
+#include "simulator/sensors/lidar_sensor.h"
 #include "tests/unit/simulator/sim_test_util.h"
 
 namespace cairn::sim {
@@ -15,8 +16,8 @@ using testing::SimTest;
 // Number of lidar points of the last full revolution in a box of the sensor frame.
 size_t PointsIn(const SimOutputs& out, double x0, double x1, double y0, double y1, double z0) {
   size_t n = 0;
-  const int64_t rev = out.lidar.back().revolution - 1;
-  for (const auto& slice : out.lidar) {
+  const int64_t rev = out.Readings<LidarSensor>().back().revolution - 1;
+  for (const auto& slice : out.Readings<LidarSensor>()) {
     if (slice.revolution != rev) continue;
     for (const auto& p : slice.points) {
       if (p.x_m > x0 && p.x_m < x1 && p.y_m > y0 && p.y_m < y1 && p.z_m > z0) ++n;
@@ -29,7 +30,7 @@ class ObjectsTest : public SimTest {};
 
 TEST_F(ObjectsTest, SpawnedObjectsAreSeenCollideAndGoAway) {
   Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
-  s.robots[0].sensors.lidar->range_noise_sigma_m = 0.0;
+  s.robots[0].sensors.Find<LidarSensor>()->range_noise_sigma_m = 0.0;
   MujocoSim sim(s);
   SimOutputs out;
   auto run = [&](double seconds) {

@@ -5,12 +5,16 @@
 #include <gtest/gtest.h>
 
 #include "simulator/mujoco_model.h"
+#include "simulator/mujoco_sim.h"
 #include "simulator/scenario.h"
 
 /// Helpers shared by the simulator unit tests: inline worlds and a fixture that turns MuJoCo
 /// warnings into failures.
 
 namespace cairn::sim::testing {
+
+/// The source tree's shipped worlds, robots and profiles.
+inline SimPaths TestPaths() { return SimPaths::InTree(CAIRN_SOURCE_DIR); }
 
 /// A 40 x 40 m floor (plane) and nothing else, wrapped around `extra` world-body XML.
 inline std::string FlatWorld(const std::string& extra = "") {
@@ -39,9 +43,19 @@ inline Scenario InlineScenario(const std::string& world_xml, const std::string& 
     spawn.x_m = x_m;
     spawn.y_m = y_m;
     spawn.yaw_rad = yaw_rad;
-    s.robots.push_back(MakeRobotSpec(robot_id, model, "", spawn, SimPaths::Default()));
+    s.robots.push_back(MakeRobotSpec(robot_id, model, "", spawn, testing::TestPaths()));
   }
   return s;
+}
+
+// Drives `robot` with (v, w) for `duration_s` of sim time, commanding every step.
+inline void Drive(MujocoSim& sim, const std::string& robot, double v, double w, double duration_s,
+                  SimOutputs* out) {
+  const double end = sim.time_s() + duration_s;
+  while (sim.time_s() < end) {
+    sim.Command(robot, v, w);
+    sim.Step(out);
+  }
 }
 
 /// Fails the test if MuJoCo printed a warning while it ran.

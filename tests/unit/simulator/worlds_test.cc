@@ -26,7 +26,7 @@ double SurfaceZ(const MujocoSim& sim, double x, double y, int* geom = nullptr) {
 }
 
 Scenario WorldOnly(const std::string& world) {
-  const SimPaths paths = SimPaths::Default();
+  const SimPaths paths = testing::TestPaths();
   Scenario s;
   s.world = world;
   s.world_path = paths.WorldPath(world);
@@ -36,7 +36,7 @@ Scenario WorldOnly(const std::string& world) {
 class WorldsTest : public SimTest {};
 
 TEST_F(WorldsTest, EveryShippedWorldHostsEveryRobot) {
-  const SimPaths paths = SimPaths::Default();
+  const SimPaths paths = testing::TestPaths();
   for (const std::string& world : paths.ShippedWorlds()) {
     Scenario s = WorldOnly(world);
     SpawnPose at;
@@ -65,7 +65,7 @@ TEST_F(WorldsTest, TunnelLanesMatchTheirContract) {
   Scenario s = WorldOnly("tunnel");
   MujocoSim sim(s);
   common::YamlMap doc =
-      common::YamlMap::LoadFile(SimPaths::Default().data_dir + "/worlds/tunnel_lanes.yaml");
+      common::YamlMap::LoadFile(testing::TestPaths().data_dir + "/worlds/tunnel_lanes.yaml");
   YAML::Node lanes = doc.Raw("lanes");
   ASSERT_EQ(lanes.size(), 10u);
   for (const auto& lane : lanes) {
@@ -113,7 +113,7 @@ TEST_F(WorldsTest, ApartmentRoomsDoorsAndPlaces) {
     EXPECT_NE(std::find(names.begin(), names.end(), furniture), names.end()) << furniture;
   }
   const std::vector<Place> places =
-      LoadPlacesFile(SimPaths::Default().data_dir + "/worlds/apartment_places.yaml");
+      LoadPlacesFile(testing::TestPaths().data_dir + "/worlds/apartment_places.yaml");
   std::vector<std::string> names;
   for (const Place& p : places) names.push_back(p.name);
   EXPECT_EQ(names, (std::vector<std::string>{"living_room", "kitchen", "corridor", "bedroom",

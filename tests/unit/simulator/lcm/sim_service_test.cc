@@ -16,6 +16,7 @@
 
 #include "common/channels.h"
 #include "services/runtime/conversions.h"
+#include "simulator/sensors/turret_sensor.h"
 #include "tests/unit/simulator/sim_test_util.h"
 
 namespace cairn::sim {
@@ -31,7 +32,7 @@ class SimServiceTest : public testing::SimTest {
   void SetUp() override {
     SimTest::SetUp();
     Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
-    s.robots[0].sensors.turret = TurretParams{};
+    s.robots[0].sensors.Set<TurretSensor>(TurretParams{});
     sim_ = std::make_unique<MujocoSim>(s);
     runtime::NodeOptions options;
     options.process_name = "cairn-sim";

@@ -1,3 +1,5 @@
+#include "simulator/sensors/lidar_sensor.h"
+
 #include <cmath>
 #include <map>
 #include <set>
@@ -5,7 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "simulator/mujoco_sim.h"
-#include "simulator/sensors.h"
+#include "simulator/sensors/planar_laser_sensor.h"
 #include "tests/unit/simulator/sim_test_util.h"
 
 namespace cairn::sim {
@@ -114,7 +116,7 @@ TEST_F(LidarSimTest, OneRevolutionIsSlicesCoveringTheTurnOnce) {
   // Slices of revolution 0 fall due over the first 0.1 s.
   while (sim.time_s() < 0.1 + 1e-9) sim.Step(&out);
   std::map<int, const common::LidarSlice*> by_index;
-  for (const auto& slice : out.lidar) {
+  for (const auto& slice : out.Readings<LidarSensor>()) {
     if (slice.revolution == 0) {
       EXPECT_TRUE(by_index.emplace(slice.slice_index, &slice).second) << slice.slice_index;
     }
@@ -151,13 +153,13 @@ TEST_F(LidarSimTest, WallAtKnownDistanceReadsWithinNoise) {
   MujocoSim sim(s);
   SimOutputs out;
   while (sim.time_s() < 0.3) sim.Step(&out);
-  const double sigma = s.robots[0].sensors.lidar->range_noise_sigma_m;
+  const double sigma = s.robots[0].sensors.Find<LidarSensor>()->range_noise_sigma_m;
   ASSERT_GT(sigma, 0.0);
 
   // Ring 23 is level (+0.0016 deg): its beams towards azimuth ~0 hit the wall face.
   int n = 0;
   double sum_error = 0.0;
-  for (const auto& slice : out.lidar) {
+  for (const auto& slice : out.Readings<LidarSensor>()) {
     if (slice.slice_index != 0 && slice.slice_index != 19) continue;
     const common::Pose3& sensor = slice.sensor_pose;
     const double distance_to_wall = 5.0 - sensor.position_m.x();
@@ -179,22 +181,22 @@ TEST_F(LidarSimTest, WallAtKnownDistanceReadsWithinNoise) {
   EXPECT_LT(std::abs(sum_error / n), 4.0 * sigma / std::sqrt(n));
 
   // The planar laser's centre beam also reads the wall within its noise.
-  ASSERT_FALSE(out.scans.empty());
-  const common::LaserScan& scan = out.scans.back();
+  ASSERT_FALSE(out.Readings<PlanarLaserSensor>().empty());
+  const common::LaserScan& scan = out.Readings<PlanarLaserSensor>().back();
   const int centre = static_cast<int>(scan.ranges_m.size() / 2);
   EXPECT_NEAR(scan.angle_min_rad + centre * scan.angle_increment_rad, 0.0, 1e-6);
-  const double laser_sigma = s.robots[0].sensors.planar_laser->range_noise_sigma_m;
+  const double laser_sigma = s.robots[0].sensors.Find<PlanarLaserSensor>()->range_noise_sigma_m;
   EXPECT_NEAR(scan.ranges_m[centre], 5.0 - scan.sensor_pose.position_m.x(), 5.0 * laser_sigma);
 }
 
 TEST_F(LidarSimTest, NoiseFreeLidarIsExact) {
   Scenario s = InlineScenario(RoomWorld(), "p3at", "pioneer3at");
-  s.robots[0].sensors.lidar->range_noise_sigma_m = 0.0;
+  s.robots[0].sensors.Find<LidarSensor>()->range_noise_sigma_m = 0.0;
   MujocoSim sim(s);
   SimOutputs out;
   while (sim.time_s() < 0.01) sim.Step(&out);
-  ASSERT_FALSE(out.lidar.empty());
-  const auto& slice = out.lidar.front();
+  ASSERT_FALSE(out.Readings<LidarSensor>().empty());
+  const auto& slice = out.Readings<LidarSensor>().front();
   ASSERT_EQ(slice.slice_index, 0);
   const double distance_to_wall = 5.0 - slice.sensor_pose.position_m.x();
   bool found = false;
@@ -212,13 +214,13 @@ TEST_F(LidarSimTest, RobotDoesNotSeeItselfButSeesOthers) {
   Scenario s = InlineScenario(FlatWorld(), "a", "pioneer3at");
   SpawnPose other;
   other.x_m = 3.0;
-  s.robots.push_back(MakeRobotSpec("b", "pioneer3at", "", other, SimPaths::Default()));
-  s.robots[0].sensors.lidar->range_noise_sigma_m = 0.0;
+  s.robots.push_back(MakeRobotSpec("b", "pioneer3at", "", other, testing::TestPaths()));
+  s.robots[0].sensors.Find<LidarSensor>()->range_noise_sigma_m = 0.0;
   MujocoSim sim(s);
   SimOutputs out;
   while (sim.time_s() < 0.1 + 1e-9) sim.Step(&out);
   size_t near_points = 0, toward_b = 0;
-  for (const auto& slice : out.lidar) {
+  for (const auto& slice : out.Readings<LidarSensor>()) {
     if (slice.robot != "a") continue;
     for (const auto& pt : slice.points) {
       const double r = std::hypot(pt.x_m, pt.y_m);

@@ -1,0 +1,69 @@
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "common/channels.h"
+#include "common/check.h"
+#include "services/runtime/node.h"
+#include "simulator/sim_outputs.h"
+
+/// @file
+/// How cairn-sim puts each sensor kind's readings on the bus: a registry by sensor name of the
+/// channel stream (<robot>.<stream>, from common/channels.h) and the conversion of a reading to
+/// its LCM message. BuiltinSensorPublishers() is the explicit list (sensor_publishers.cc) that
+/// matches the core's BuiltinSensors().
+
+namespace cairn::sim {
+
+/// Publishes the readings of one sensor kind.
+struct SensorPublisher {
+  std::string sensor;  ///< the kind's name ("hdl32e")
+  std::string stream;  ///< channel suffix ("LIDAR"): readings go to <robot>.<stream>
+  /// Converts and publishes every reading of `group` (which holds this kind's readings).
+  std::function<void(runtime::Node& node, const ReadingGroup& group)> publish;
+};
+
+/// A publisher that converts each Reading with `convert` and sends the message on
+/// <msg.robot>.<stream>.
+template <typename Reading, typename Msg>
+SensorPublisher MakeSensorPublisher(std::string sensor, std::string stream,
+                                    Msg (*convert)(const Reading&)) {
+  SensorPublisher p;
+  p.sensor = std::move(sensor);
+  p.stream = std::move(stream);
+  p.publish = [stream = p.stream, convert](runtime::Node& node, const ReadingGroup& group) {
+    const std::vector<Reading>* readings = group.As<Reading>();
+    CAIRN_DEMAND(readings != nullptr);
+    for (const Reading& reading : *readings) {
+      const Msg msg = convert(reading);
+      node.Publish(channels::ForRobot(msg.robot, stream.c_str()), msg);
+    }
+  };
+  return p;
+}
+
+/// Publishers by sensor name.
+class SensorPublishers {
+ public:
+  SensorPublishers() = default;
+  SensorPublishers(const SensorPublishers&) = default;
+  SensorPublishers& operator=(const SensorPublishers&) = default;
+  SensorPublishers(SensorPublishers&&) = default;
+  SensorPublishers& operator=(SensorPublishers&&) = default;
+
+  /// @throws std::invalid_argument when the sensor already has one.
+  void Add(SensorPublisher publisher);
+  /// nullptr when the sensor has none.
+  const SensorPublisher* Find(const std::string& sensor) const;
+  const std::vector<SensorPublisher>& publishers() const { return publishers_; }
+
+ private:
+  std::vector<SensorPublisher> publishers_;
+};
+
+/// One for each of the simulator's own sensors.
+const SensorPublishers& BuiltinSensorPublishers();
+
+}  // namespace cairn::sim

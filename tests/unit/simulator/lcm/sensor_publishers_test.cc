@@ -1,0 +1,251 @@
+#include "simulator/lcm/sensor_publishers.h"
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "cairn/lcmt_imu.hpp"
+#include "cairn/lcmt_laser_scan.hpp"
+#include "cairn/lcmt_odometry.hpp"
+#include "cairn/lcmt_point_cloud_slice.hpp"
+#include "cairn/lcmt_pose.hpp"
+
+#include "common/channels.h"
+#include "simulator/lcm/sim_service.h"
+#include "simulator/sensor_registry.h"
+#include "simulator/sensors/ground_truth_sensor.h"
+#include "simulator/sensors/imu_sensor.h"
+#include "simulator/sensors/lidar_sensor.h"
+#include "simulator/sensors/odometry_sensor.h"
+#include "simulator/sensors/planar_laser_sensor.h"
+#include "simulator/sensors/turret_sensor.h"
+#include "tests/unit/simulator/sim_test_util.h"
+
+namespace cairn::sim {
+namespace {
+
+using testing::FlatWorld;
+using testing::InlineScenario;
+
+std::unique_ptr<runtime::Node> MemqNode() {
+  runtime::NodeOptions options;
+  options.process_name = "sensor_publishers_test";
+  options.lcm_url = "memq://";
+  options.install_signal_handlers = false;
+  return std::make_unique<runtime::Node>(options);
+}
+
+// Publishes `out` through the built-in publishers and returns the last message on `channel`.
+template <typename Msg>
+Msg PublishAndReceive(const SimOutputs& out, const std::string& channel) {
+  auto node = MemqNode();
+  Msg received{};
+  int count = 0;
+  node->Subscribe<Msg>(channel, [&](const Msg& m) {
+    received = m;
+    ++count;
+  });
+  for (const auto& group : out.groups()) {
+    const SensorPublisher* publisher = BuiltinSensorPublishers().Find(group->sensor());
+    EXPECT_NE(publisher, nullptr) << group->sensor();
+    if (publisher != nullptr) publisher->publish(*node, *group);
+  }
+  while (node->lcm().handleTimeout(0) > 0) {
+  }
+  EXPECT_EQ(count, 1) << channel;
+  return received;
+}
+
+TEST(SensorPublishersTest, EveryBuiltinSensorHasOneOnItsChannel) {
+  const std::map<std::string, std::string> streams = {
+      {"hdl32e", channels::kLidar},      {"planar_laser", channels::kScan},
+      {"turret", channels::kTurretScan}, {"odometry", channels::kOdom},
+      {"imu", channels::kImu},           {"ground_truth", channels::kPose}};
+  for (const auto& [name, stream] : streams) {
+    const SensorPublisher* p = BuiltinSensorPublishers().Find(name);
+    ASSERT_NE(p, nullptr) << name;
+    EXPECT_EQ(p->stream, stream);
+  }
+  // Every core sensor kind, those added later too, has exactly one, and --help's description
+  // names its channel.
+  for (const auto& [name, description] : BuiltinSensors().Catalogue()) {
+    const SensorPublisher* p = BuiltinSensorPublishers().Find(name);
+    ASSERT_NE(p, nullptr) << name;
+    EXPECT_NE(description.find(std::string("<robot>.") + p->stream), std::string::npos) << name;
+  }
+  EXPECT_EQ(BuiltinSensorPublishers().publishers().size(), BuiltinSensors().kinds().size());
+}
+
+TEST(SensorPublishersTest, LidarSlicesAndScans) {
+  SimOutputs out;
+  common::LidarSlice slice;
+  slice.utime = 5000;
+  slice.robot = "r";
+  slice.slice_index = 3;
+  slice.slice_count = 20;
+  slice.points.push_back({1.f, 2.f, 3.f, 40.f, 7});
+  out.Add(LidarSensor::kName, slice);
+  const auto lidar = PublishAndReceive<cairn::lcmt_point_cloud_slice>(out, "r.LIDAR");
+  EXPECT_EQ(lidar.utime, 5000);
+  EXPECT_EQ(lidar.slice_index, 3);
+  EXPECT_EQ(lidar.robot, "r");
+
+  SimOutputs scans;
+  common::LaserScan scan;
+  scan.utime = 7000;
+  scan.robot = "k";
+  scan.ranges_m = {1.f, 2.f};
+  scan.intensities = {0.f, 0.f};
+  scans.Add(PlanarLaserSensor::kName, scan);
+  const auto msg = PublishAndReceive<cairn::lcmt_laser_scan>(scans, "k.SCAN");
+  EXPECT_EQ(msg.utime, 7000);
+  EXPECT_EQ(msg.ranges_m, (std::vector<float>{1.f, 2.f}));
+}
+
+TEST(SensorPublishersTest, TurretLineCarriesPanPeriodAndFrame) {
+  SimOutputs out;
+  TurretLine line;
+  line.scan.utime = 20000;
+  line.scan.robot = "r";
+  line.scan.ranges_m = {4.f};
+  line.scan.intensities = {10.f};
+  line.pan_rad = 0.25;
+  line.line_period_s = 0.02;
+  out.Add(TurretSensor::kName, line);
+  const auto m = PublishAndReceive<cairn::lcmt_laser_scan>(out, "r.TURRET_SCAN");
+  EXPECT_EQ(m.frame, "turret");
+  EXPECT_EQ(m.turret_angle_rad, 0.25);
+  EXPECT_EQ(m.scan_time_s, 0.02f);
+  EXPECT_EQ(m.utime, 20000);
+}
+
+TEST(SensorPublishersTest, OdometryImuAndGroundTruth) {
+  SimOutputs out;
+  OdometryReading odom;
+  odom.utime = 1;
+  odom.robot = "r";
+  odom.pose.position_m = {1.0, 2.0, 0.1};
+  odom.linear_velocity_mps = {0.5, 0.0, 0.0};
+  out.Add(OdometrySensor::kName, odom);
+  ImuReading imu;
+  imu.utime = 2;
+  imu.robot = "r";
+  imu.orientation = common::Quaternion(0.0, 1.0, 0.0, 0.0);
+  imu.linear_acceleration_mps2 = {0.0, 0.0, 9.81};
+  imu.angular_velocity_variance = 4e-6;
+  out.Add(ImuSensor::kName, imu);
+  GroundTruthReading truth;
+  truth.utime = 3;
+  truth.robot = "r";
+  truth.pose.position_m = {4.0, 5.0, 6.0};
+  truth.angular_velocity_radps = {0.0, 0.0, 0.3};
+  out.Add(GroundTruthSensor::kName, truth);
+
+  const auto o = PublishAndReceive<cairn::lcmt_odometry>(out, "r.ODOM");
+  EXPECT_EQ(o.frame, "odom");
+  EXPECT_EQ(o.child_frame, "base_link");
+  EXPECT_EQ(o.position_m[1], 2.0);
+  EXPECT_EQ(o.linear_velocity_mps[0], 0.5);
+  EXPECT_EQ(o.pose_covariance[0], 0.0);
+  const auto i = PublishAndReceive<cairn::lcmt_imu>(out, "r.IMU");
+  EXPECT_EQ(i.frame, "imu");
+  EXPECT_EQ(i.orientation_wxyz[1], 1.0);
+  EXPECT_EQ(i.linear_acceleration_mps2[2], 9.81);
+  EXPECT_EQ(i.angular_velocity_variance, 4e-6);
+  const auto p = PublishAndReceive<cairn::lcmt_pose>(out, "r.POSE");
+  EXPECT_EQ(p.utime, 3);
+  EXPECT_EQ(p.position_m[2], 6.0);
+  EXPECT_EQ(p.angular_velocity_radps[2], 0.3);
+}
+
+// --- the seam on the LCM side: a sensor and its publisher written here -------------------------
+
+struct BeaconParams {
+  double rate_hz{10.0};
+  void Validate() const {}
+};
+BeaconParams LoadBeaconParams(common::YamlMap& map, const BeaconParams& defaults) {
+  BeaconParams p = defaults;
+  map.Get("rate_hz", &p.rate_hz);
+  FinishSensorParams(map, p);
+  return p;
+}
+struct BeaconReading {
+  int64_t utime{0};
+  std::string robot;
+};
+
+class BeaconSensor final : public SimSensor {
+ public:
+  static constexpr char kName[] = "beacon";
+  static constexpr char kDescription[] = "a robot's id, 10 times a second (a test sensor)";
+  using Params = BeaconParams;
+  using Reading = BeaconReading;
+  static constexpr auto kLoadParams = &LoadBeaconParams;
+
+  BeaconSensor(const BeaconParams& params, const SensorContext& context) : robot_(context.robot) {
+    schedule_.rate_hz = params.rate_hz;
+  }
+  bool Due(double now_s) const override { return schedule_.Due(now_s); }
+  void Produce(const SensorFrame& frame, SimOutputs* out) override {
+    schedule_.Advance(frame.now_s);
+    out->Add(kName, BeaconReading{frame.utime, robot_});
+  }
+
+ private:
+  std::string robot_;
+  SensorSchedule schedule_;
+};
+
+cairn::lcmt_pose BeaconToLcm(const BeaconReading& r) {
+  cairn::lcmt_pose m{};
+  m.utime = r.utime;
+  m.robot = r.robot;
+  m.frame = "beacon";
+  return m;
+}
+
+TEST(SensorPublishersSeamTest, ANewSensorWithItsPublisherIsOnTheBus) {
+  InstallMujocoLogHooks();
+  Scenario s = InlineScenario(FlatWorld(), "r", "p3dx");
+  s.robots[0].sensors.Set<BeaconSensor>();
+  MujocoSim sim(s);
+  auto node = MemqNode();
+  SensorPublishers publishers = BuiltinSensorPublishers();
+  publishers.Add(MakeSensorPublisher(BeaconSensor::kName, "BEACON", &BeaconToLcm));
+  SimService dut(*node, sim, SimServiceParams{}, publishers);
+  std::vector<cairn::lcmt_pose> beacons;
+  int64_t scans = 0;
+  node->Subscribe<cairn::lcmt_pose>("r.BEACON",
+                                    [&](const cairn::lcmt_pose& m) { beacons.push_back(m); });
+  node->SubscribeRaw("r.SCAN", [&](const std::string&, const void*, int, int64_t) { ++scans; });
+  dut.StepAndPublish(500);  // 1 s
+  dut.HandlePending();
+  ASSERT_EQ(beacons.size(), 10u);
+  EXPECT_EQ(beacons.back().utime, 1000000);
+  EXPECT_EQ(beacons.back().frame, "beacon");
+  EXPECT_EQ(scans, 10);  // the built-in sensors beside it are unchanged
+  // Two publishers for one sensor are refused.
+  EXPECT_THROW(publishers.Add(MakeSensorPublisher(BeaconSensor::kName, "X", &BeaconToLcm)),
+               std::invalid_argument);
+}
+
+TEST(SensorPublishersSeamTest, ASensorWithoutPublisherStopsTheServiceAtStart) {
+  InstallMujocoLogHooks();
+  Scenario s = InlineScenario(FlatWorld(), "r", "p3dx");
+  s.robots[0].sensors.Set<BeaconSensor>();
+  MujocoSim sim(s);
+  auto node = MemqNode();
+  try {
+    SimService dut(*node, sim, SimServiceParams{});
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("sensor 'beacon' has no LCM publisher"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace cairn::sim
