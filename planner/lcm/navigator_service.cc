@@ -25,12 +25,13 @@ LcmMapClientParams MapClientParams(const std::string& robot, const common::Robot
   LcmMapClientParams p;
   p.robot = robot;
   p.layer = config.map.LayerFor(profile.name);
-  p.encoding = config.map.encoding;
-  p.occupancy = config.map.occupancy;
   p.map_name = config.map_name;
   p.requester = kProcess;
   p.resend_interval_s = config.resend_interval_s;
-  p.incomplete_timeout_s = config.incomplete_map_timeout_s;
+  p.snapshot.encoding = config.map.encoding;
+  p.snapshot.occupancy = config.map.occupancy;
+  p.snapshot.cost = config.cost_map;
+  p.snapshot.incomplete_timeout_s = config.incomplete_map_timeout_s;
   return p;
 }
 
@@ -47,7 +48,7 @@ NavigatorService::NavigatorService(runtime::Node& node, NavigatorConfig config,
       navigator_(profile_, config_.navigator, config_.local_planner, std::move(places)),
       planner_(config_.global_planner),
       map_client_(node, MapClientParams(node.options().robot, profile_, config_),
-                  profile_.footprint_m, config_.cost_map) {
+                  profile_.footprint_m) {
   CAIRN_THROW_UNLESS(!robot_.empty(), "the navigator needs a robot name");
   map_control_requests_ = runtime::Node::WallUtime();  // request ids unique across restarts
   node_.Subscribe<cairn::lcmt_goal>(ch::ForRobot(robot_, ch::kGoal),
