@@ -318,32 +318,5 @@ TEST_F(NavigatorServiceTest, AsksForMissingTilesAndCancelStops) {
   EXPECT_EQ(statuses_.back().reason, kReasonCancelled);
 }
 
-TEST(NavigatorConfigTest, LoadsTheShippedFileAndRefusesUnknownKeys) {
-  const NavigatorConfig c =
-      LoadNavigatorConfigFile(std::string(CAIRN_SOURCE_DIR) + "/config/navigator/navigator.yaml");
-  EXPECT_EQ(c.global_planner.planner, "RRTConnect");
-  EXPECT_EQ(c.local_planner.generator.vx_samples, 20);
-  EXPECT_DOUBLE_EQ(c.navigator.control_period_s, 0.05);
-  EXPECT_DOUBLE_EQ(c.local_planner.generator.control_period_s, 0.05);
-  EXPECT_EQ(c.navigator.recovery.sequence.size(), 4u);
-  auto error = [](const std::string& yaml) {
-    try {
-      common::YamlMap root = common::YamlMap::FromString(yaml, "nav.yaml");
-      LoadNavigatorConfig(root);
-    } catch (const common::ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
-  EXPECT_NE(error("local_planner:\n  critics:\n    speedd_scale: 1\n").find("nav.yaml:3"),
-            std::string::npos);
-  EXPECT_NE(error("global_planner:\n  planner: RRTfast\n").find("RRTfast"), std::string::npos);
-  EXPECT_NE(error("global_planner:\n  state_space: se3\n").find("nav.yaml:2"), std::string::npos);
-  EXPECT_NE(error("recovery:\n  sequence: [rotate, dance]\n").find("dance"), std::string::npos);
-  EXPECT_NE(error("pose_source: gps\n").find("nav.yaml:1"), std::string::npos);
-  EXPECT_NE(error("control_rate_hz: -1\n").find("control_rate_hz"), std::string::npos);
-  EXPECT_EQ(error("navigator:\n  xy_goal_tolerance_m: 0.3\n"), "");
-}
-
 }  // namespace
 }  // namespace cairn::planner

@@ -1,0 +1,51 @@
+#include "planner/global/grid_astar.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/planner/test_maps.h"
+
+namespace cairn::planner {
+namespace {
+
+using common::Vector2;
+using testing::PioneerFootprint;
+using testing::SmallFootprint;
+using testing::TestLayer;
+
+// 20 m × 10 m at 0.1 m with a wall across x = 10 m that has one 1.2 m gap at y in [6, 7.2].
+TestLayer WallWithGap() {
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 7.2, 10.2, 10.0, 100.0f);
+  return layer;
+}
+
+TEST(GridAStarTest, ShortestAroundTheWallAndCostAware) {
+  const auto map = WallWithGap().Build(PioneerFootprint());
+  const GridPath p = GridAStar(*map, {2.0, 2.0}, {18.0, 2.0});
+  ASSERT_TRUE(p.found);
+  EXPECT_GT(p.length_m, 16.0);
+  EXPECT_LT(p.length_m, 2.0 * std::hypot(8.0, 4.8) * 1.09);  // octile path through the gap
+  // A graded band across an open map: a high weight makes the path go around it.
+  TestLayer band(200, 100, 0.1);
+  band.Rect(9.0, 0.0, 11.0, 8.0, 90.0f);
+  const auto banded = band.Build(SmallFootprint());
+  GridAStarParams cheap;
+  cheap.traversal_cost_weight = 0.0;
+  GridAStarParams careful;
+  careful.traversal_cost_weight = 10.0;
+  const GridPath straight = GridAStar(*banded, {2.0, 2.0}, {18.0, 2.0}, cheap);
+  const GridPath around = GridAStar(*banded, {2.0, 2.0}, {18.0, 2.0}, careful);
+  ASSERT_TRUE(straight.found && around.found);
+  EXPECT_NEAR(straight.length_m, 16.0, 0.05);
+  EXPECT_GT(around.length_m, 18.0);
+  for (const Vector2& q : around.points_m) EXPECT_FALSE(q.x() > 9.0 && q.x() < 11.0 && q.y() < 8.0);
+  // Not found across a closed wall.
+  TestLayer closed = WallWithGap();
+  closed.Rect(9.8, 5.9, 10.2, 7.3, 100.0f);
+  EXPECT_FALSE(GridAStar(*closed.Build(PioneerFootprint()), {2.0, 2.0}, {18.0, 2.0}).found);
+}
+
+}  // namespace
+}  // namespace cairn::planner
