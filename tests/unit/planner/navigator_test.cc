@@ -493,19 +493,6 @@ TEST(NavigatorTest, NewGoalReplacesTheOldOne) {
   EXPECT_LT((sim.pose_.position() - Vector2(4.0, 8.0)).norm(), 0.5);
 }
 
-TEST(NavigatorTest, ReasonsMapOneToOneOntoPlanStatus) {
-  std::set<int> seen;
-  for (const PlanStatus s :
-       {PlanStatus::kSuccess, PlanStatus::kStartOccupied, PlanStatus::kGoalOccupied,
-        PlanStatus::kOutOfBounds, PlanStatus::kNoPath, PlanStatus::kTimedOut,
-        PlanStatus::kCancelled, PlanStatus::kApproximate}) {
-    const NavReason r = ReasonOf(s);
-    EXPECT_STREQ(NavReasonName(r), PlanStatusName(s));
-    seen.insert(static_cast<int>(r));
-  }
-  EXPECT_EQ(seen.size(), 8u);
-}
-
 TEST(NavigatorTest, NoCommandExceedsTheLimitsInRandomSituations) {
   // Property: over many seeded random worlds, goals, stale-input episodes, cancels and new
   // goals, every command but the safety stop is reachable from the previous one within the
