@@ -101,5 +101,37 @@ TEST(NavigatorConfigTest, CriticListsAreCheckedAtTheirLine) {
             std::string::npos);
 }
 
+TEST(NavigatorMapConfigTest, DefaultIsTheProfileCostLayer) {
+  common::YamlMap root = common::YamlMap::FromString("control_rate_hz: 20\n", "nav.yaml");
+  const NavigatorConfig c = LoadNavigatorConfig(root);
+  EXPECT_EQ(c.map.encoding, MapEncoding::kCost);
+  EXPECT_EQ(c.map.LayerFor("kobuki"), "cost/kobuki");
+}
+
+TEST(NavigatorMapConfigTest, OccupancySectionAndErrors) {
+  common::YamlMap root = common::YamlMap::FromString(
+      "map:\n  encoding: occupancy\n  occupied_threshold_og: 30\n  free_threshold_og: 10\n",
+      "nav.yaml");
+  const NavigatorConfig c = LoadNavigatorConfig(root);
+  EXPECT_EQ(c.map.encoding, MapEncoding::kOccupancy);
+  EXPECT_EQ(c.map.LayerFor("kobuki"), "final");  // the dynamic map server's composed layer
+  EXPECT_FLOAT_EQ(c.map.occupancy.occupied_threshold_og, 30.f);
+  EXPECT_FLOAT_EQ(c.map.occupancy.free_threshold_og, 10.f);
+  const auto error = ConfigError;
+  EXPECT_NE(error("map:\n  encoding: pgm\n").find("nav.yaml:2"), std::string::npos);
+  EXPECT_NE(error("map:\n  occupied_thresh: 0.65\n").find("nav.yaml:2"), std::string::npos);
+  EXPECT_NE(error("map:\n  encoding: occupancy\n  free_threshold_og: 80\n").find("free_threshold"),
+            std::string::npos);
+}
+
+TEST(NavigatorMapConfigTest, LoadsTheShippedApartmentFile) {
+  const NavigatorConfig c =
+      LoadNavigatorConfigFile(std::string(CAIRN_SOURCE_DIR) + "/config/navigator/apartment.yaml");
+  EXPECT_EQ(c.map.encoding, MapEncoding::kOccupancy);
+  EXPECT_EQ(c.map.LayerFor("kobuki"), "final");
+  EXPECT_LT(c.map.occupancy.free_threshold_og, c.map.occupancy.occupied_threshold_og);
+  EXPECT_FALSE(c.cost_map.unknown_is_traversable);
+}
+
 }  // namespace
 }  // namespace cairn::planner

@@ -28,9 +28,14 @@ class NavSim {
         nav_(profile_, params, DwaParams{}, std::move(places)),
         planner_(PlannerParams(seed)) {}
 
+  // Plans as the navigator's defaults make them, but with wall-clock caps far beyond what a
+  // plan needs (here and in Run), so that a plan is the same for a seed on a loaded machine.
   static GlobalPlannerParams PlannerParams(uint32_t seed) {
     GlobalPlannerParams p;
     p.seed = seed;
+    p.time_budget_s = 60.0;
+    p.improvement_time_s = 60.0;
+    p.simplify_time_s = 60.0;
     return p;
   }
 
@@ -47,7 +52,9 @@ class NavSim {
       const StepOutput out = nav_.Step(t_);
       if (out.plan) {
         ++plans_;
-        last_plan_ = planner_.Plan(*out.plan->map, out.plan->request);
+        PlanRequest request = out.plan->request;
+        request.time_budget_s = 60.0;
+        last_plan_ = planner_.Plan(*out.plan->map, request);
         nav_.OnPlanResult(out.plan->request_id, last_plan_, t_);
       }
       if (out.clear_short_term) ++clears_;

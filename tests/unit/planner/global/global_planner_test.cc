@@ -25,10 +25,16 @@ TestLayer WallWithGap() {
   return layer;
 }
 
+// The tests assert what a plan is, never how fast it comes: every wall-clock cap (the budget,
+// the improvement rounds' time, the simplifier's time) is far beyond what a plan needs, so a
+// plan is the same for a seed however loaded the machine is. Speed is bench_planner's to
+// measure.
 GlobalPlannerParams Params(const std::string& planner = "RRTConnect") {
   GlobalPlannerParams p;
   p.planner = planner;
-  p.time_budget_s = 2.0;
+  p.time_budget_s = 60.0;
+  p.improvement_time_s = 60.0;
+  p.simplify_time_s = 60.0;
   p.seed = 7;
   return p;
 }
@@ -74,8 +80,7 @@ TEST(GlobalPlannerTest, FindsAnExactPathThroughTheGap) {
 
 TEST(GlobalPlannerTest, SameSeedSamePath) {
   const auto map = WallWithGap().Build(PioneerFootprint());
-  GlobalPlannerParams p = Params();
-  p.simplify_time_s = 0.0;  // the simplifier stops on wall time; the planner alone is seeded
+  GlobalPlannerParams p = Params();  // simplified and improved, no cap binding
   const GlobalPlanner dut(p);
   const PlanRequest req{{2.0, 2.0, 0.0}, {18.0, 8.0, 0.0}, false};
   const PlanResult a = dut.Plan(*map, req);
@@ -85,7 +90,10 @@ TEST(GlobalPlannerTest, SameSeedSamePath) {
   for (size_t i = 0; i < a.poses.size(); ++i) {
     EXPECT_DOUBLE_EQ(a.poses[i].x_m, b.poses[i].x_m);
     EXPECT_DOUBLE_EQ(a.poses[i].y_m, b.poses[i].y_m);
+    EXPECT_DOUBLE_EQ(a.poses[i].yaw_rad, b.poses[i].yaw_rad);
   }
+  EXPECT_EQ(a.solutions, b.solutions);
+  EXPECT_DOUBLE_EQ(a.cost, b.cost);
   p.seed = 8;
   const PlanResult c = GlobalPlanner(p).Plan(*map, req);
   ASSERT_TRUE(c.ok());
@@ -195,11 +203,13 @@ TEST(GlobalPlannerTest, NoPathIsProvedQuicklyWhenTheGoalIsWalledOff) {
   TestLayer layer = WallWithGap();
   layer.Rect(9.8, 5.9, 10.2, 7.3, 100.0f);  // close the gap
   const auto map = layer.Build(PioneerFootprint());
-  GlobalPlannerParams p = Params();
-  p.time_budget_s = 30.0;
-  const PlanResult r = GlobalPlanner(p).Plan(*map, {{2.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
+  const PlanResult r =
+      GlobalPlanner(Params()).Plan(*map, {{2.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
   EXPECT_EQ(r.status, PlanStatus::kNoPath) << r.message;
-  EXPECT_LT(r.total_time_s, 1.0);  // proved on the grid, not by exhausting the 30 s budget
+  // Proved on the grid: OMPL never ran (it could only have exhausted its 60 s budget).
+  EXPECT_EQ(r.message, "the goal is not connected to the start");
+  EXPECT_EQ(r.solve_time_s, 0.0);
+  EXPECT_EQ(r.solutions, 0);
 }
 
 TEST(GlobalPlannerTest, NoPathWhenTheGapIsNarrowerThanTheRobot) {
@@ -273,8 +283,9 @@ TEST(GlobalPlannerTest, TimedOutWhenTheBudgetIsTooSmall) {
   p.time_budget_s = 1e-4;
   const PlanResult r = GlobalPlanner(p).Plan(*map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false});
   EXPECT_EQ(r.status, PlanStatus::kTimedOut) << r.message;
-  // The same problem is solvable with time.
-  p.time_budget_s = 10.0;
+  // The same problem is solvable with time (the first solution is enough to show it).
+  p.time_budget_s = 60.0;
+  p.improvement_rounds = 0;
   EXPECT_EQ(GlobalPlanner(p).Plan(*map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false}).status,
             PlanStatus::kSuccess);
 }
@@ -288,20 +299,18 @@ TEST(GlobalPlannerTest, CancelledBeforeAndDuringTheSolve) {
   const PlanRequest req{{2.0, 8.0, 0.0}, {18.0, 2.0, 0.0}, false};
   EXPECT_EQ(GlobalPlanner(Params()).Plan(*map, req, &cancel).status, PlanStatus::kCancelled);
 
-  // Without the grid proof OMPL would search the whole budget; a cancel ends it early.
+  // Without the grid proof OMPL would search its whole budget (it can never reach the goal,
+  // and would end kApproximate or kTimedOut); a cancel from another thread ends it.
   GlobalPlannerParams p = Params();
   p.grid_precheck = false;
-  p.time_budget_s = 20.0;
   cancel = false;
   std::thread canceller([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     cancel = true;
   });
-  const auto t0 = std::chrono::steady_clock::now();
   const PlanResult r = GlobalPlanner(p).Plan(*map, req, &cancel);
   canceller.join();
-  EXPECT_EQ(r.status, PlanStatus::kCancelled);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  EXPECT_EQ(r.status, PlanStatus::kCancelled) << r.message;
 }
 
 TEST(GlobalPlannerTest, ApproximateSolutionIsAFailure) {
