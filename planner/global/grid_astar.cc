@@ -22,6 +22,7 @@ class SearchGrid {
         sy_(map.geometry().size_y),
         res_(map.geometry().resolution_m),
         dist_(map.blocked_distance_cells().data()),
+        nonfree_(map.nonfree_distance_cells().data()),
         cost_(map.cost().data()),
         unknown_cost_(map.params().unknown_cost),
         lethal_(map.params().lethal_cost),
@@ -41,6 +42,11 @@ class SearchGrid {
     return map_.geometry().CenterOf({static_cast<int>(i % sx_), static_cast<int>(i / sx_)});
   }
   bool Passable(int64_t i) const { return dist_[i] > 0.0f && dist_[i] >= clearance_cells_; }
+  // Straight-line distance between two cell centres (m).
+  double Distance(int64_t a, int64_t b) const {
+    return res_ * std::hypot(static_cast<double>(a % sx_ - b % sx_),
+                             static_cast<double>(a / sx_ - b / sx_));
+  }
 
   // Cell cost in units of cost/100, proximity folded in (same scale as the OMPL objective).
   float Traversal(int64_t i) const {
@@ -55,38 +61,66 @@ class SearchGrid {
   }
 
   // Every cell the segment between the two cell centres passes (sampled every quarter cell)
-  // is passable.
+  // is passable. Samples whose cell is passable for certain are skipped: the distance field is
+  // 1-Lipschitz between cell centres, so from a sample in a cell `clearance + 1.5 + s` cells
+  // from blocking, every cell within s cells along the segment is passable (sphere tracing).
   bool LineOfSight(int64_t a, int64_t b) const {
     const double ax = static_cast<double>(a % sx_), ay = static_cast<double>(a / sx_);
     const double dx = static_cast<double>(b % sx_) - ax, dy = static_cast<double>(b / sx_) - ay;
-    const int n = std::max(1, static_cast<int>(std::ceil(4.0 * std::hypot(dx, dy))));
-    for (int k = 1; k < n; ++k) {
+    const double length = std::hypot(dx, dy);
+    const int n = std::max(1, static_cast<int>(std::ceil(4.0 * length)));
+    const double sample_cells = length / n;
+    for (int k = 1; k < n;) {
       const double t = static_cast<double>(k) / n;
-      const int ix = static_cast<int>(std::floor(ax + t * dx + 0.5));
-      const int iy = static_cast<int>(std::floor(ay + t * dy + 0.5));
-      if (!Passable(Index(ix, iy))) return false;
+      const int64_t cell = Index(static_cast<int>(std::floor(ax + t * dx + 0.5)),
+                                 static_cast<int>(std::floor(ay + t * dy + 0.5)));
+      if (!Passable(cell)) return false;
+      const double free_cells = dist_[cell] - clearance_cells_ - 1.5;
+      if (free_cells >= length) return true;  // nothing blocks within the segment's reach
+      k += free_cells > sample_cells ? static_cast<int>(free_cells / sample_cells) : 1;
     }
     return true;
   }
 
   // The cost of the straight segment between two cell centres: its length times (1 + the mean
-  // traversal / 100), by the trapezoid rule over samples about a cell apart.
+  // traversal / 100), by the trapezoid rule over samples about a cell apart. Samples where the
+  // traversal is certainly 0 (ZeroCostReach) add nothing and are skipped.
   double LineCost(int64_t a, int64_t b) const {
     const double ax = static_cast<double>(a % sx_), ay = static_cast<double>(a / sx_);
     const double dx = static_cast<double>(b % sx_) - ax, dy = static_cast<double>(b / sx_) - ay;
     const double cells = std::hypot(dx, dy);
     const int n = std::max(1, static_cast<int>(std::ceil(cells)));
+    const double sample_cells = cells / n;
     double sum = 0.0;
     double previous = Traversal(a);
-    for (int k = 1; k <= n; ++k) {
+    for (int k = 1; k <= n;) {
       const double t = static_cast<double>(k) / n;
-      const double c = k == n ? Traversal(b)
-                              : Traversal(Index(static_cast<int>(std::floor(ax + t * dx + 0.5)),
-                                                static_cast<int>(std::floor(ay + t * dy + 0.5))));
+      const int64_t cell = k == n ? b
+                                  : Index(static_cast<int>(std::floor(ax + t * dx + 0.5)),
+                                          static_cast<int>(std::floor(ay + t * dy + 0.5)));
+      const double c = Traversal(cell);
       sum += 0.5 * (previous + c);
       previous = c;
+      int skip = 0;
+      if (c == 0.0) {
+        const double reach = ZeroCostReach(cell);
+        if (reach > sample_cells)
+          skip = static_cast<int>(std::min<double>(n - k, reach / sample_cells));
+      }
+      k += 1 + skip;
     }
     return cells * res_ * (1.0 + sum / n / 100.0);
+  }
+
+  // Cells whose centre lies within this many cells of a point in cell i have a zero traversal
+  // (free, and beyond the proximity band): the distance fields are 1-Lipschitz between cell
+  // centres, less 1.5 cells for the points' offsets from their cells' centres.
+  double ZeroCostReach(int64_t i) const {
+    double reach = nonfree_[i];
+    if (params_.clearance_weight > 0.0 && inflation_cells_ > 0.0) {
+      reach = std::min(reach, static_cast<double>(dist_[i]) - inscribed_cells_ - inflation_cells_);
+    }
+    return reach - 1.5;
   }
 
  private:
@@ -96,6 +130,7 @@ class SearchGrid {
   int sy_;
   double res_;
   const float* dist_;
+  const float* nonfree_;
   const float* cost_;
   float unknown_cost_;
   float lethal_;
@@ -175,7 +210,12 @@ class Search {
       if (nx < 0 || ny < 0 || nx >= sx || ny >= grid_.size_y()) continue;
       const int64_t j = grid_.Index(nx, ny);
       if (closed_[j] || !grid_.Passable(j)) continue;
-      // Theta*: straight from the parent when it sees the neighbour.
+      // Theta*: straight from the parent when it sees the neighbour. Every cost is at least the
+      // distance, so when even the straight line from the parent cannot improve the neighbour,
+      // neither can the step from this cell (triangle inequality): nothing to do.
+      if (grandparent >= 0 && g_cost_[grandparent] + grid_.Distance(grandparent, j) >= g_cost_[j]) {
+        continue;
+      }
       if (grandparent >= 0 && grid_.LineOfSight(grandparent, j)) {
         Relax(j, grandparent,
               g_cost_[grandparent] + static_cast<float>(grid_.LineCost(grandparent, j)));
