@@ -15,6 +15,7 @@ using common::Pose2;
 using common::Vector2;
 using testing::PioneerFootprint;
 using testing::TestLayer;
+using testing::WallWithGap;
 
 // A kinematic robot, a map publisher and a synchronous planner around a Navigator, on fake
 // time: every cycle advances 50 ms.
@@ -119,13 +120,6 @@ class NavSim {
   std::vector<NavState> states_;
   std::vector<std::string> events_;
 };
-
-// 20 m × 10 m, a wall across x = 10 with a gap at y in [6, 7.2].
-TestLayer WallWithGap() {
-  TestLayer layer(200, 100, 0.1);
-  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 7.2, 10.2, 10.0, 100.0f);
-  return layer;
-}
 
 NavGoal PoseGoal(double x, double y, int64_t id = 1) {
   NavGoal g;

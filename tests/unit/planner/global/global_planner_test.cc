@@ -17,13 +17,7 @@ using common::Vector2;
 using testing::PioneerFootprint;
 using testing::SmallFootprint;
 using testing::TestLayer;
-
-// 20 m × 10 m at 0.1 m with a wall across x = 10 m that has one 1.2 m gap at y in [6, 7.2].
-TestLayer WallWithGap() {
-  TestLayer layer(200, 100, 0.1);
-  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 7.2, 10.2, 10.0, 100.0f);
-  return layer;
-}
+using testing::WallWithGap;
 
 // The tests assert what a plan is, never how fast it comes: every wall-clock cap (the budget,
 // the improvement rounds' time, the simplifier's time) is far beyond what a plan needs, so a
