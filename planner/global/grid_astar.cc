@@ -42,12 +42,6 @@ class SearchGrid {
     return map_.geometry().CenterOf({static_cast<int>(i % sx_), static_cast<int>(i / sx_)});
   }
   bool Passable(int64_t i) const { return dist_[i] > 0.0f && dist_[i] >= clearance_cells_; }
-  // Straight-line distance between two cell centres (m).
-  double Distance(int64_t a, int64_t b) const {
-    return res_ * std::hypot(static_cast<double>(a % sx_ - b % sx_),
-                             static_cast<double>(a / sx_ - b / sx_));
-  }
-
   // Cell cost in units of cost/100, proximity folded in (same scale as the OMPL objective).
   float Traversal(int64_t i) const {
     const float v = cost_[i];
@@ -210,12 +204,7 @@ class Search {
       if (nx < 0 || ny < 0 || nx >= sx || ny >= grid_.size_y()) continue;
       const int64_t j = grid_.Index(nx, ny);
       if (closed_[j] || !grid_.Passable(j)) continue;
-      // Theta*: straight from the parent when it sees the neighbour. Every cost is at least the
-      // distance, so when even the straight line from the parent cannot improve the neighbour,
-      // neither can the step from this cell (triangle inequality): nothing to do.
-      if (grandparent >= 0 && g_cost_[grandparent] + grid_.Distance(grandparent, j) >= g_cost_[j]) {
-        continue;
-      }
+      // Theta*: straight from the parent when it sees the neighbour.
       if (grandparent >= 0 && grid_.LineOfSight(grandparent, j)) {
         Relax(j, grandparent,
               g_cost_[grandparent] + static_cast<float>(grid_.LineCost(grandparent, j)));
