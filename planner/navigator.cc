@@ -25,84 +25,6 @@ std::string Format(const char* format, double value) {
 
 }  // namespace
 
-const char* NavStateName(NavState state) {
-  switch (state) {
-    case NavState::kIdle:
-      return "IDLE";
-    case NavState::kPlanning:
-      return "PLANNING";
-    case NavState::kDriving:
-      return "DRIVING";
-    case NavState::kRecovering:
-      return "RECOVERING";
-    case NavState::kReached:
-      return "REACHED";
-    case NavState::kFailed:
-      return "FAILED";
-    case NavState::kCancelled:
-      return "CANCELLED";
-    case NavState::kStopped:
-      return "STOPPED";
-  }
-  return "UNKNOWN";
-}
-
-const char* NavReasonName(NavReason reason) {
-  switch (reason) {
-    case NavReason::kNone:
-      return "NONE";
-    case NavReason::kSuccess:
-      return "SUCCESS";
-    case NavReason::kStartOccupied:
-      return "START_OCCUPIED";
-    case NavReason::kGoalOccupied:
-      return "GOAL_OCCUPIED";
-    case NavReason::kOutOfBounds:
-      return "OUT_OF_BOUNDS";
-    case NavReason::kNoPath:
-      return "NO_PATH";
-    case NavReason::kTimedOut:
-      return "TIMED_OUT";
-    case NavReason::kCancelled:
-      return "CANCELLED";
-    case NavReason::kApproximate:
-      return "APPROXIMATE";
-    case NavReason::kStaleOdom:
-      return "STALE_ODOM";
-    case NavReason::kStaleMap:
-      return "STALE_MAP";
-    case NavReason::kUnknownPlace:
-      return "UNKNOWN_PLACE";
-    case NavReason::kRecoveryExhausted:
-      return "RECOVERY_EXHAUSTED";
-    case NavReason::kNoMap:
-      return "NO_MAP";
-  }
-  return "UNKNOWN";
-}
-
-NavReason ReasonOf(PlanStatus status) {
-  switch (status) {
-    case PlanStatus::kSuccess:
-      return NavReason::kSuccess;
-    case PlanStatus::kStartOccupied:
-      return NavReason::kStartOccupied;
-    case PlanStatus::kGoalOccupied:
-      return NavReason::kGoalOccupied;
-    case PlanStatus::kOutOfBounds:
-      return NavReason::kOutOfBounds;
-    case PlanStatus::kNoPath:
-      return NavReason::kNoPath;
-    case PlanStatus::kTimedOut:
-      return NavReason::kTimedOut;
-    case PlanStatus::kCancelled:
-      return NavReason::kCancelled;
-    case PlanStatus::kApproximate:
-      return NavReason::kApproximate;
-  }
-  return NavReason::kNone;
-}
-
 void NavigatorParams::Validate() const {
   CAIRN_THROW_UNLESS(control_period_s > 0.0, "control_period_s must be positive");
   CAIRN_THROW_UNLESS(xy_goal_tolerance_m > 0.0, "xy_goal_tolerance_m must be positive");
@@ -423,12 +345,26 @@ bool Navigator::PathBlockedAhead() const {
   return false;
 }
 
-Velocity Navigator::Drive(double now_s, StepOutput* out) {
+Velocity Navigator::Drive(double now_s) {
+  if (const auto command = ArriveOrAlign(now_s)) return *command;
+  if (const auto command = RecoverWithoutProgress(now_s)) return *command;
+  // The local goal: a carrot `lookahead_m` along the path (nearer where a corner hides it), or
+  // the goal itself near the end.
+  Vector2 carrot = goal_pose_->position();
+  if (path_arc_m_ + params_.lookahead_m < path_.length_m()) {
+    carrot = VisibleCarrot(*map_, path_, *pose_, path_arc_m_, params_.lookahead_m,
+                           params_.min_lookahead_m);
+  }
+  if (const auto command = TurnTowardCarrot(now_s, carrot)) return *command;
+  return FollowPath(now_s, carrot);
+}
+
+// Within the goal tolerance: reached, or turning in place to the goal's heading.
+std::optional<Velocity> Navigator::ArriveOrAlign(double now_s) {
   const auto& gen = dwa_.generator();
   const Pose2& pose = *pose_;
   const Pose2& goal = *goal_pose_;
   const double to_goal = (pose.position() - goal.position()).norm();
-
   if (phase_ == Phase::kFollow && to_goal <= xy_tolerance_m_) {
     if (!goal_has_yaw_) {
       SetState(NavState::kReached, NavReason::kSuccess, "goal reached");
@@ -440,91 +376,82 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
     phase_ = Phase::kAlign;
     status_.message = "turning to the goal heading";
   }
-  if (phase_ == Phase::kAlign) {
-    const double error = common::WrapAngle(goal.yaw_rad - pose.yaw_rad);
-    if (std::abs(error) <= yaw_tolerance_rad_) {
-      SetState(NavState::kReached, NavReason::kSuccess, "goal reached");
-      status_.progress = 1.0;
-      goal_.reset();
-      stop_cycles_left_ = params_.stop_repeat_cycles;
-      return gen.Brake(last_command_);
-    }
-    const Velocity turn{0.0, std::copysign(limits_.max_vel_theta_radps, error)};
-    if (!MotionClear(map_.get(), pose, turn, params_.recovery.collision_lookahead_s)) {
-      Fail(NavReason::kRecoveryExhausted,
-           "at the goal position, but turning to the goal heading is blocked");
-      return gen.Brake(last_command_);
-    }
-    RestartProgressTimer(now_s);
-    return RotateInPlaceCommand(gen, last_command_, error, limits_.max_vel_theta_radps);
+  if (phase_ != Phase::kAlign) return std::nullopt;
+  const double error = common::WrapAngle(goal.yaw_rad - pose.yaw_rad);
+  if (std::abs(error) <= yaw_tolerance_rad_) {
+    SetState(NavState::kReached, NavReason::kSuccess, "goal reached");
+    status_.progress = 1.0;
+    goal_.reset();
+    stop_cycles_left_ = params_.stop_repeat_cycles;
+    return gen.Brake(last_command_);
   }
+  const Velocity turn{0.0, std::copysign(limits_.max_vel_theta_radps, error)};
+  if (!MotionClear(map_.get(), pose, turn, params_.recovery.collision_lookahead_s)) {
+    Fail(NavReason::kRecoveryExhausted,
+         "at the goal position, but turning to the goal heading is blocked");
+    return gen.Brake(last_command_);
+  }
+  RestartProgressTimer(now_s);
+  return RotateInPlaceCommand(gen, last_command_, error, limits_.max_vel_theta_radps);
+}
 
-  // Re-arm the recoveries once the robot has made real progress after one.
+// Re-arms the recoveries after real progress; starts one after too long without progress.
+std::optional<Velocity> Navigator::RecoverWithoutProgress(double now_s) {
+  const Pose2& pose = *pose_;
   if (recovery_index_ > 0 &&
       (pose.position() - recovery_anchor_).norm() > params_.recovery_reset_distance_m) {
     recovery_index_ = 0;
   }
-  // No progress for too long: recover.
   if ((pose.position() - progress_anchor_).norm() >= params_.progress_distance_m) {
     progress_anchor_ = pose.position();
     RestartProgressTimer(now_s);
-  } else if (now_s - progress_anchor_s_ > params_.progress_timeout_s) {
-    const std::string why = Format("no progress for %.1f s", params_.progress_timeout_s) +
-                            DescribeWindow((pose.position() - progress_anchor_).norm());
-    RestartProgressTimer(now_s);
-    StartRecoveryOrFail(NavReason::kNone, why, now_s);
-    (void)out;
-    return gen.Brake(last_command_);
+    return std::nullopt;
   }
+  if (now_s - progress_anchor_s_ <= params_.progress_timeout_s) return std::nullopt;
+  const std::string why =
+      Format("no progress for %.1f s", params_.progress_timeout_s) +
+      drive_log_.Describe((pose.position() - progress_anchor_).norm(), dwa_.critic_names(), pose_,
+                          path_.length_m() - path_arc_m_);
+  RestartProgressTimer(now_s);
+  StartRecoveryOrFail(NavReason::kNone, why, now_s);
+  return dwa_.generator().Brake(last_command_);
+}
 
-  // The local goal: a carrot `lookahead_m` along the path (nearer where a corner hides it), or
-  // the goal itself near the end.
-  Vector2 carrot = goal.position();
-  if (path_arc_m_ + params_.lookahead_m < path_.length_m()) {
-    carrot = VisibleCarrot(*map_, path_, pose, path_arc_m_, params_.lookahead_m,
-                           params_.min_lookahead_m);
-  }
+// Far off the carrot's bearing: turn in place toward it first, where the turn is clear.
+std::optional<Velocity> Navigator::TurnTowardCarrot(double now_s, const Vector2& carrot) {
+  const Pose2& pose = *pose_;
   const Vector2 d = carrot - pose.position();
   const double heading_error = common::WrapAngle(std::atan2(d.y(), d.x()) - pose.yaw_rad);
-  if (std::abs(heading_error) > params_.rotate_to_heading_threshold_rad) {
-    const Velocity turn{0.0, std::copysign(limits_.max_vel_theta_radps, heading_error)};
-    if (MotionClear(map_.get(), pose, turn, params_.recovery.collision_lookahead_s)) {
-      no_valid_since_s_ = -1.0;
-      // A turn toward the path gets half the no-progress timeout once per timer: turning back
-      // and forth between this branch and the DWA must not hold recoveries off for ever.
-      if (!turn_extended_) {
-        progress_anchor_s_ = std::max(progress_anchor_s_, now_s - params_.progress_timeout_s / 2);
-        turn_extended_ = true;
-      }
-      ++window_.turning;
-      return RotateInPlaceCommand(gen, last_command_, heading_error, limits_.max_vel_theta_radps);
-    }
+  if (std::abs(heading_error) <= params_.rotate_to_heading_threshold_rad) return std::nullopt;
+  const Velocity turn{0.0, std::copysign(limits_.max_vel_theta_radps, heading_error)};
+  if (!MotionClear(map_.get(), pose, turn, params_.recovery.collision_lookahead_s)) {
+    return std::nullopt;
   }
+  no_valid_since_s_ = -1.0;
+  // A turn toward the path gets half the no-progress timeout once per timer: turning back
+  // and forth between this branch and the DWA must not hold recoveries off for ever.
+  if (!turn_extended_) {
+    progress_anchor_s_ = std::max(progress_anchor_s_, now_s - params_.progress_timeout_s / 2);
+    turn_extended_ = true;
+  }
+  drive_log_.CountTurn();
+  return RotateInPlaceCommand(dwa_.generator(), last_command_, heading_error,
+                              limits_.max_vel_theta_radps);
+}
 
+// The DWA toward the carrot along the path's local window; recoveries when no trajectory has
+// been valid for too long.
+Velocity Navigator::FollowPath(double now_s, const Vector2& carrot) {
   DwaInput in;
   in.map = map_.get();
-  in.pose = pose;
+  in.pose = *pose_;
   in.last_command = last_command_;
   in.path = &path_;
   in.segment_begin = path_segment_;
   in.segment_end = path_.IndexAt(path_arc_m_ + params_.local_path_window_m);
   in.local_goal = carrot;
   const DwaResult r = dwa_.Compute(in);
-  ++window_.dwa;
-  window_.samples = r.samples;
-  window_.last_best = r.command;
-  window_.last_values = r.best_values;
-  window_.has_forward = r.has_best_forward;
-  window_.last_forward = r.best_forward;
-  window_.last_forward_values = r.best_forward_values;
-  window_.carrot = carrot;
-  window_.sum_v_mps += r.command.linear_mps;
-  window_.sum_abs_w_radps += std::abs(r.command.angular_radps);
-  if (window_.rejections.size() < r.rejections.size()) {
-    window_.rejections.resize(r.rejections.size(), 0);
-  }
-  for (size_t i = 0; i < r.rejections.size(); ++i) window_.rejections[i] += r.rejections[i];
-  if (!r.found) ++window_.dwa_invalid;
+  drive_log_.Record(r, carrot);
   if (!r.found) {
     if (no_valid_since_s_ < 0.0) no_valid_since_s_ = now_s;
     if (now_s - no_valid_since_s_ > params_.no_valid_trajectory_patience_s) {
@@ -540,54 +467,7 @@ Velocity Navigator::Drive(double now_s, StepOutput* out) {
 void Navigator::RestartProgressTimer(double now_s) {
   progress_anchor_s_ = now_s;
   turn_extended_ = false;
-  window_ = DriveWindow{};
-}
-
-std::string Navigator::DescribeWindow(double moved_m) const {
-  std::ostringstream m;
-  m.setf(std::ios::fixed);
-  m.precision(2);
-  m << " (moved " << moved_m << " m; " << window_.turning << " cycles turning toward the path, "
-    << window_.dwa << " DWA cycles";
-  if (window_.dwa > 0) {
-    m << " at a mean " << window_.sum_v_mps / window_.dwa << " m/s, "
-      << window_.sum_abs_w_radps / window_.dwa << " rad/s, " << window_.dwa_invalid
-      << " without a valid sample";
-    // The critics that rejected most samples, highest first.
-    std::vector<size_t> order(window_.rejections.size());
-    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(),
-              [&](size_t a, size_t b) { return window_.rejections[a] > window_.rejections[b]; });
-    const auto& names = dwa_.critic_names();
-    const int samples = window_.samples;
-    bool first = true;
-    for (size_t k = 0; k < order.size() && k < 2; ++k) {
-      const size_t i = order[k];
-      if (window_.rejections[i] == 0 || i >= names.size()) break;
-      m << (first ? "; rejected per cycle: " : ", ") << names[i] << " "
-        << static_cast<double>(window_.rejections[i]) / window_.dwa << "/" << samples;
-      first = false;
-    }
-    m << "; last choice (" << window_.last_best.linear_mps << ", "
-      << window_.last_best.angular_radps << ")";
-    for (size_t i = 0; i < window_.last_values.size() && i < names.size(); ++i) {
-      m << (i == 0 ? " scored " : ", ") << names[i] << " " << window_.last_values[i];
-    }
-    if (window_.has_forward && !(window_.last_forward == window_.last_best)) {
-      m << "; best forward (" << window_.last_forward.linear_mps << ", "
-        << window_.last_forward.angular_radps << ")";
-      for (size_t i = 0; i < window_.last_forward_values.size() && i < names.size(); ++i) {
-        m << (i == 0 ? " scored " : ", ") << names[i] << " " << window_.last_forward_values[i];
-      }
-    }
-  }
-  if (pose_) {
-    m << "; at (" << pose_->x_m << ", " << pose_->y_m << ", " << pose_->yaw_rad << "), carrot ("
-      << window_.carrot.x() << ", " << window_.carrot.y() << "), " << path_.length_m() - path_arc_m_
-      << " m of path left";
-  }
-  m << ")";
-  return m.str();
+  drive_log_.Clear();
 }
 
 Vector2 VisibleCarrot(const CostMap& map, const Path& path, const Pose2& pose, double arc_m,
@@ -621,84 +501,111 @@ StepOutput Navigator::Step(double now_s) {
     out.cancel_plan = true;
     cancel_plan_pending_ = false;
   }
-  auto finish = [&](const Velocity& command, bool emergency) {
-    out.command = command;
-    out.emergency_stop = emergency;
-    last_command_ = command;
-    if (pose_) dwa_.Commit(command, *pose_);
-    status_.critic_rejections = dwa_.rejection_counts();
-    if (path_changed_pending_) {
-      out.path_changed = true;
-      path_changed_pending_ = false;
-    }
-    out.status_changed = status_changed_;
-    status_changed_ = false;
-    out.events = std::move(pending_events_);
-    pending_events_.clear();
-    return out;
-  };
-
-  if (!active()) {
-    // After a goal ends: brake within the limits, then repeat zero a few times, then go quiet.
-    if (!IsZero(last_command_)) return finish(gen.Brake(last_command_), false);
-    if (stop_cycles_left_ > 0) {
-      --stop_cycles_left_;
-      return finish(Velocity{}, false);
-    }
-    if (path_changed_pending_) {
-      out.path_changed = true;
-      path_changed_pending_ = false;
-    }
-    out.status_changed = status_changed_;
-    status_changed_ = false;
-    return out;
-  }
-
-  // Safety: stale or missing inputs stop the robot at once. An input counts as stale one control
-  // period early: by the next cycle it would be older than its limit, so the stop goes out by then.
-  NavReason stale = NavReason::kNone;
-  std::string why;
-  if (!pose_) {
-    stale = NavReason::kStaleOdom;
-    why = "no pose received yet";
-  } else if (now_s - pose_stamp_s_ > params_.max_pose_age_s - params_.control_period_s) {
-    stale = NavReason::kStaleOdom;
-    why = Format("the pose is %.2f s old", now_s - pose_stamp_s_);
-  } else if (pose_stamp_s_ - now_s > params_.max_clock_skew_s) {
-    stale = NavReason::kStaleOdom;
-    why = Format("the pose is stamped %.2f s in the future", pose_stamp_s_ - now_s);
-  } else if (!map_) {
-    stale = NavReason::kNoMap;
-    why = "no cost layer received yet";
-  } else if (now_s - map_rx_s_ > params_.max_map_age_s - params_.control_period_s) {
-    stale = NavReason::kStaleMap;
-    why = Format("the cost layer is %.2f s old", now_s - map_rx_s_);
-  } else if (map_rx_s_ - now_s > params_.max_clock_skew_s) {
-    stale = NavReason::kStaleMap;
-    why = Format("the cost layer is stamped %.2f s in the future", map_rx_s_ - now_s);
-  } else if (map_->missing_tiles() > 0) {
-    // Holes read as lethal: planning on them would fail the goal for want of tiles (a mapper
-    // that just restarted), so wait for them like for a late layer.
-    stale = NavReason::kNoMap;
-    why = "the cost layer lacks " + std::to_string(map_->missing_tiles()) + " tiles";
-  }
-  if (stale != NavReason::kNone) {
-    if (status_.state != NavState::kStopped) {
-      resume_state_ = status_.state;
-      resume_reason_ = status_.reason;
-    }
-    SetState(NavState::kStopped, stale, why + ": stopped");
-    // Timers that measure progress do not run while stopped.
-    RestartProgressTimer(now_s);
-    no_valid_since_s_ = -1.0;
-    return finish(Velocity{}, true);
-  }
+  if (!active()) return Idle(std::move(out));
+  if (StopOnStaleInputs(now_s)) return Emit(Velocity{}, true, std::move(out));
   if (status_.state == NavState::kStopped) {
     SetState(resume_state_, resume_reason_, "inputs are fresh again: resuming");
   }
-
-  // Replan when the map changed under the path ahead, the robot strayed, or periodically.
   UpdatePathProgress();
+  DecideReplan(now_s);
+  if (!StartWantedPlan(now_s, &out)) return Emit(gen.Brake(last_command_), false, std::move(out));
+  const Velocity command = Command(now_s, &out);
+  return Emit(command, false, std::move(out));
+}
+
+// Sends the cycle's command (and tells the DWA's critics), with what changed since the last.
+StepOutput Navigator::Emit(const Velocity& command, bool emergency, StepOutput out) {
+  out.command = command;
+  out.emergency_stop = emergency;
+  last_command_ = command;
+  if (pose_) dwa_.Commit(command, *pose_);
+  status_.critic_rejections = dwa_.rejection_counts();
+  return Flush(std::move(out));
+}
+
+StepOutput Navigator::Flush(StepOutput out) {
+  if (path_changed_pending_) {
+    out.path_changed = true;
+    path_changed_pending_ = false;
+  }
+  out.status_changed = status_changed_;
+  status_changed_ = false;
+  out.events = std::move(pending_events_);
+  pending_events_.clear();
+  return out;
+}
+
+// After a goal ends: brake within the limits, then repeat zero a few times, then go quiet.
+StepOutput Navigator::Idle(StepOutput out) {
+  if (!IsZero(last_command_))
+    return Emit(dwa_.generator().Brake(last_command_), false, std::move(out));
+  if (stop_cycles_left_ > 0) {
+    --stop_cycles_left_;
+    return Emit(Velocity{}, false, std::move(out));
+  }
+  if (path_changed_pending_) {
+    out.path_changed = true;
+    path_changed_pending_ = false;
+  }
+  out.status_changed = status_changed_;
+  status_changed_ = false;
+  return out;
+}
+
+// Safety: stale or missing inputs stop the robot at once. An input counts as stale one control
+// period early: by the next cycle it would be older than its limit, so the stop goes out by then.
+NavReason Navigator::StaleInput(double now_s, std::string* why) const {
+  const double period = params_.control_period_s;
+  if (!pose_) {
+    *why = "no pose received yet";
+    return NavReason::kStaleOdom;
+  }
+  if (now_s - pose_stamp_s_ > params_.max_pose_age_s - period) {
+    *why = Format("the pose is %.2f s old", now_s - pose_stamp_s_);
+    return NavReason::kStaleOdom;
+  }
+  if (pose_stamp_s_ - now_s > params_.max_clock_skew_s) {
+    *why = Format("the pose is stamped %.2f s in the future", pose_stamp_s_ - now_s);
+    return NavReason::kStaleOdom;
+  }
+  if (!map_) {
+    *why = "no cost layer received yet";
+    return NavReason::kNoMap;
+  }
+  if (now_s - map_rx_s_ > params_.max_map_age_s - period) {
+    *why = Format("the cost layer is %.2f s old", now_s - map_rx_s_);
+    return NavReason::kStaleMap;
+  }
+  if (map_rx_s_ - now_s > params_.max_clock_skew_s) {
+    *why = Format("the cost layer is stamped %.2f s in the future", map_rx_s_ - now_s);
+    return NavReason::kStaleMap;
+  }
+  if (map_->missing_tiles() > 0) {
+    // Holes read as lethal: planning on them would fail the goal for want of tiles (a mapper
+    // that just restarted), so wait for them like for a late layer.
+    *why = "the cost layer lacks " + std::to_string(map_->missing_tiles()) + " tiles";
+    return NavReason::kNoMap;
+  }
+  return NavReason::kNone;
+}
+
+bool Navigator::StopOnStaleInputs(double now_s) {
+  std::string why;
+  const NavReason stale = StaleInput(now_s, &why);
+  if (stale == NavReason::kNone) return false;
+  if (status_.state != NavState::kStopped) {
+    resume_state_ = status_.state;
+    resume_reason_ = status_.reason;
+  }
+  SetState(NavState::kStopped, stale, why + ": stopped");
+  // Timers that measure progress do not run while stopped.
+  RestartProgressTimer(now_s);
+  no_valid_since_s_ = -1.0;
+  return true;
+}
+
+// Replan when the map changed under the path ahead, the robot strayed, or periodically.
+void Navigator::DecideReplan(double now_s) {
   if (status_.state == NavState::kDriving && !path_.empty() && replan_why_.empty()) {
     if (map_changed_ && PathBlockedAhead()) {
       replan_why_ = "the map changed under the path";
@@ -724,63 +631,61 @@ StepOutput Navigator::Step(double now_s) {
   } else if (status_.state != NavState::kDriving) {
     replan_why_.clear();
   }
+}
 
-  // Start a plan when one is wanted.
-  if (plan_wanted_ &&
-      (status_.state == NavState::kPlanning || status_.state == NavState::kDriving)) {
-    if (!ResolveGoal()) {
-      return finish(gen.Brake(last_command_), false);
-    }
-    plan_wanted_ = false;
-    const double to_goal = (pose_->position() - goal_pose_->position()).norm();
-    if (to_goal <= xy_tolerance_m_) {
-      // Already there: only the heading may be left to do.
-      path_ = Path({*pose_, *goal_pose_});
-      path_changed_pending_ = true;
-      SetState(NavState::kDriving, NavReason::kNone, "at the goal position");
-    } else {
-      PlanJob job;
-      job.request_id = next_request_id_++;
-      job.request.start = *pose_;
-      job.request.goal = *goal_pose_;
-      job.request.goal_has_yaw = goal_has_yaw_;
-      job.request.time_budget_s = params_.plan_time_budget_s;
-      if (to_goal > params_.occupied_goal_far_m) {
-        job.request.goal_shift_radius_m = params_.occupied_goal_shift_m;
-      }
-      job.map = map_;
-      pending_request_ = job.request_id;
-      last_plan_request_s_ = now_s;
-      if (out.cancel_plan) out.cancel_plan = false;  // the new job supersedes the old one
-      out.plan = std::move(job);
-    }
+// Starts a plan when one is wanted; false when the goal cannot be resolved this cycle.
+bool Navigator::StartWantedPlan(double now_s, StepOutput* out) {
+  if (!plan_wanted_ ||
+      (status_.state != NavState::kPlanning && status_.state != NavState::kDriving)) {
+    return true;
   }
+  if (!ResolveGoal()) return false;
+  plan_wanted_ = false;
+  const double to_goal = (pose_->position() - goal_pose_->position()).norm();
+  if (to_goal <= xy_tolerance_m_) {
+    // Already there: only the heading may be left to do.
+    path_ = Path({*pose_, *goal_pose_});
+    path_changed_pending_ = true;
+    SetState(NavState::kDriving, NavReason::kNone, "at the goal position");
+    return true;
+  }
+  PlanJob job;
+  job.request_id = next_request_id_++;
+  job.request.start = *pose_;
+  job.request.goal = *goal_pose_;
+  job.request.goal_has_yaw = goal_has_yaw_;
+  job.request.time_budget_s = params_.plan_time_budget_s;
+  if (to_goal > params_.occupied_goal_far_m) {
+    job.request.goal_shift_radius_m = params_.occupied_goal_shift_m;
+  }
+  job.map = map_;
+  pending_request_ = job.request_id;
+  last_plan_request_s_ = now_s;
+  if (out->cancel_plan) out->cancel_plan = false;  // the new job supersedes the old one
+  out->plan = std::move(job);
+  return true;
+}
 
-  Velocity command;
+// The command of the current state.
+Velocity Navigator::Command(double now_s, StepOutput* out) {
+  const auto& gen = dwa_.generator();
   switch (status_.state) {
-    case NavState::kPlanning:
-      command = gen.Brake(last_command_);
-      break;
     case NavState::kDriving:
-      command = path_.empty() ? gen.Brake(last_command_) : Drive(now_s, &out);
-      break;
+      return path_.empty() ? gen.Brake(last_command_) : Drive(now_s);
     case NavState::kRecovering: {
       const RecoveryStep step = recovery_.Step(*pose_, last_command_, map_.get(), now_s);
-      command = step.command;
-      if (step.request_clear_short_term) out.clear_short_term = true;
+      if (step.request_clear_short_term) out->clear_short_term = true;
       if (step.done) {
         SetState(NavState::kPlanning, failure_reason_,
                  std::string("after ") + RecoveryKindName(recovery_.kind()) + " (" + step.note +
                      "): planning again");
         plan_wanted_ = true;
       }
-      break;
+      return step.command;
     }
-    default:
-      command = gen.Brake(last_command_);
-      break;
+    default:  // planning, or the goal just ended
+      return gen.Brake(last_command_);
   }
-  return finish(command, false);
 }
 
 }  // namespace cairn::planner

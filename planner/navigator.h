@@ -9,8 +9,10 @@
 #include "common/robot_profile.h"
 #include "common/types.h"
 #include "planner/cost_map.h"
+#include "planner/drive_log.h"
 #include "planner/global/global_planner.h"
 #include "planner/local/dwa_planner.h"
+#include "planner/nav_status.h"
 #include "planner/path.h"
 #include "planner/places.h"
 #include "planner/recovery.h"
@@ -39,41 +41,6 @@
 ///   the dynamic window of the previous one.
 
 namespace cairn::planner {
-
-/// Navigation states; values equal lcmt_nav_status STATE_* constants.
-enum class NavState : int8_t {
-  kIdle = 0,
-  kPlanning = 1,
-  kDriving = 2,
-  kRecovering = 3,
-  kReached = 4,
-  kFailed = 5,
-  kCancelled = 6,
-  kStopped = 7,
-};
-
-/// Why the navigator is in its state; values equal lcmt_nav_status REASON_* constants. The
-/// plan outcomes map one to one onto PlanStatus.
-enum class NavReason : int8_t {
-  kNone = 0,
-  kSuccess = 1,
-  kStartOccupied = 2,
-  kGoalOccupied = 3,
-  kOutOfBounds = 4,
-  kNoPath = 5,
-  kTimedOut = 6,
-  kCancelled = 7,
-  kApproximate = 8,
-  kStaleOdom = 9,
-  kStaleMap = 10,
-  kUnknownPlace = 11,
-  kRecoveryExhausted = 12,
-  kNoMap = 13,
-};
-
-const char* NavStateName(NavState state);
-const char* NavReasonName(NavReason reason);
-NavReason ReasonOf(PlanStatus status);
 
 /// The DWA's local goal: the path point `lookahead_m` past `arc_m`, brought back along the path
 /// (in steps of half a cell and at least 5 cm, not nearer than `min_lookahead_m`) until the robot's
@@ -131,20 +98,6 @@ struct NavGoal {
   bool use_yaw{false};
   double xy_tolerance_m{0.0};     ///< 0: the params' tolerance
   double yaw_tolerance_rad{0.0};  ///< 0: the params' tolerance
-};
-
-struct NavStatus {
-  int64_t goal_id{0};
-  NavState state{NavState::kIdle};
-  NavReason reason{NavReason::kNone};
-  std::string message;
-  double progress{0.0};              ///< 0..1 along the current path
-  double distance_remaining_m{0.0};  ///< along the path from the robot
-  double distance_travelled_m{0.0};
-  int32_t replans{0};
-  int32_t recoveries{0};
-  std::vector<std::string> critic_names;
-  std::vector<int64_t> critic_rejections;
 };
 
 /// A plan to run: the snapshot and request to hand to GlobalPlanner::Plan.
@@ -213,9 +166,24 @@ class Navigator {
   void UpdatePathProgress();
   /// The no-progress timer starts again at now_s.
   void RestartProgressTimer(double now_s);
-  Velocity Drive(double now_s, StepOutput* out);
-  Velocity Stop(StepOutput* out);
   void ResetGoalState();
+
+  // Step(), stage by stage.
+  StepOutput Idle(StepOutput out);
+  StepOutput Emit(const Velocity& command, bool emergency, StepOutput out);
+  StepOutput Flush(StepOutput out);
+  /// Why the pose or the map cannot be used now (kNone: they can).
+  NavReason StaleInput(double now_s, std::string* why) const;
+  bool StopOnStaleInputs(double now_s);
+  void DecideReplan(double now_s);
+  bool StartWantedPlan(double now_s, StepOutput* out);
+  Velocity Command(double now_s, StepOutput* out);
+  // Driving along the path.
+  Velocity Drive(double now_s);
+  std::optional<Velocity> ArriveOrAlign(double now_s);
+  std::optional<Velocity> RecoverWithoutProgress(double now_s);
+  std::optional<Velocity> TurnTowardCarrot(double now_s, const common::Vector2& carrot);
+  Velocity FollowPath(double now_s, const common::Vector2& carrot);
 
   common::RobotProfile profile_;
   NavigatorParams params_;
@@ -257,25 +225,8 @@ class Navigator {
   common::Vector2 progress_anchor_{common::Vector2::Zero()};
   double progress_anchor_s_{0.0};
   bool turn_extended_{false};  ///< the turn-in-place extension of this timer is spent
-  /// What the driving did since the progress timer last restarted, for the no-progress message.
-  struct DriveWindow {
-    int turning{0};      ///< cycles turning in place toward the path
-    int dwa{0};          ///< cycles the DWA chose the command
-    int dwa_invalid{0};  ///< ... of which no sample was valid
-    int samples{0};      ///< samples in the last DWA cycle
-    double sum_v_mps{0.0};
-    double sum_abs_w_radps{0.0};
-    std::vector<int64_t> rejections;  ///< per critic, over the window
-    Velocity last_best;               ///< the last DWA cycle's choice ...
-    std::vector<double> last_values;  ///< ... and its scale × value per critic
-    bool has_forward{false};          ///< the last cycle's best forward sample ...
-    Velocity last_forward;
-    std::vector<double> last_forward_values;
-    common::Vector2 carrot{common::Vector2::Zero()};
-  };
-  DriveWindow window_;
+  DriveLog drive_log_;         ///< since the progress timer last restarted
   std::vector<std::string> pending_events_;
-  std::string DescribeWindow(double moved_m) const;
   size_t recovery_index_{0};
   common::Vector2 recovery_anchor_{common::Vector2::Zero()};
   NavReason failure_reason_{NavReason::kNone};

@@ -4,6 +4,7 @@
 
 #include "common/check.h"
 #include "common/layers.h"
+#include "planner/local/critic_registry.h"
 
 namespace cairn::planner {
 
@@ -71,30 +72,53 @@ void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
   map.Finish();
 }
 
+// One critic's own key: a number, or a boolean (1 or 0).
+double CriticValue(const YamlMap& entry, const YAML::Node& value, const std::string& key) {
+  double number = 0.0;
+  if (YAML::convert<double>::decode(value, number)) return number;
+  bool flag = false;
+  if (YAML::convert<bool>::decode(value, flag)) return flag ? 1.0 : 0.0;
+  entry.Fail(value, "critic key '" + key + "' must be a number or true/false");
+}
+
+// local_planner.critics: a list of {name, scale, <the critic's own keys>...} in scoring order,
+// each checked against the shipped critics (an unknown name or key is an error at its line).
+void LoadCritics(YamlMap& map, std::vector<CriticConfig>* out) {
+  if (!map.Has("critics")) return;
+  const YAML::Node list = map.Raw("critics");
+  if (!list.IsSequence()) {
+    map.Fail(list, "local_planner.critics must be a list of {name, scale, ...} in scoring order");
+  }
+  out->clear();
+  for (const YAML::Node& item : list) {
+    YamlMap entry = map.Wrap(item, "local_planner.critics");
+    CriticConfig critic;
+    critic.name = entry.Require<std::string>("name");
+    critic.scale = entry.Require<double>("scale");
+    for (const std::string& key : entry.Keys()) {
+      if (key != "name" && key != "scale") critic.params[key] = CriticValue(entry, item[key], key);
+    }
+    try {
+      BuiltinCritics().Check(critic);
+    } catch (const std::invalid_argument& e) {
+      entry.Fail(item, e.what());
+    }
+    out->push_back(std::move(critic));
+  }
+}
+
 void LoadLocal(YamlMap map, DwaParams* p) {
   map.Get("vx_samples", &p->generator.vx_samples);
   map.Get("vtheta_samples", &p->generator.vtheta_samples);
   map.Get("sim_time_s", &p->generator.sim_time_s);
   map.Get("sim_step_s", &p->generator.sim_step_s);
-  map.Get("forward_point_distance_m", &p->forward_point_distance_m);
-  map.Get("oscillation_reset_dist_m", &p->oscillation_reset_dist_m);
-  map.Get("oscillation_reset_angle_rad", &p->oscillation_reset_angle_rad);
-  map.Get("admissible_braking", &p->admissible_braking);
-  map.Get("braking_margin_s", &p->braking_margin_s);
-  map.Get("clearance_inflation_m", &p->clearance_inflation_m);
   map.Get("path_tracking", &p->path_tracking);
   map.Get("stall_speed_mps", &p->stall_speed_mps);
   map.Get("tracking_lookaheads_m", &p->tracking_lookaheads_m);
   map.Get("tracking_turn_in_place_rad", &p->tracking_turn_in_place_rad);
   map.Get("tracking_min_radius_m", &p->tracking_min_radius_m);
   map.Get("tracking_slow_distance_m", &p->tracking_slow_distance_m);
-  YamlMap critics = map.Child("critics");
-  critics.Get("path_align_scale", &p->path_align_scale);
-  critics.Get("goal_dist_scale", &p->goal_dist_scale);
-  critics.Get("clearance_scale", &p->clearance_scale);
-  critics.Get("speed_scale", &p->speed_scale);
-  critics.Get("oscillation_scale", &p->oscillation_scale);
-  critics.Finish();
+  LoadCritics(map, &p->critics);
   map.Finish();
 }
 

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include <yaml-cpp/yaml.h>
@@ -97,40 +98,49 @@ const Place* FindPlace(const std::vector<Place>& places, const std::string& name
   return nullptr;
 }
 
-PlaceGoal ResolvePlace(const Place& place, const CostMap& map, const PlaceGoalParams& params) {
-  PlaceGoal out;
-  const auto& g = map.geometry();
-  const double res = g.resolution_m;
-  // Cell range holding the polygon, widened by a margin so that clearance sees nearby walls.
+namespace {
+
+// The cells holding a place's polygon, widened by a margin so that clearance sees nearby walls.
+struct CellWindow {
+  int x0{0};
+  int y0{0};
+  int nx{0};
+  int ny{0};
+  Vector2 centroid{Vector2::Zero()};  // of the polygon's vertices (world)
+};
+
+std::optional<CellWindow> PlaceWindow(const Place& place, const CostMap& map) {
   double min_x = std::numeric_limits<double>::infinity(), min_y = min_x;
   double max_x = -min_x, max_y = -min_x;
-  Vector2 centroid = Vector2::Zero();
+  CellWindow w;
   for (const Vector2& v : place.polygon_m) {
     const Vector2 c = map.ToGridCells(v);
     min_x = std::min(min_x, c.x());
     min_y = std::min(min_y, c.y());
     max_x = std::max(max_x, c.x());
     max_y = std::max(max_y, c.y());
-    centroid += v;
+    w.centroid += v;
   }
-  centroid /= static_cast<double>(place.polygon_m.size());
-  const int margin = static_cast<int>(std::ceil(2.0 / res)) + 1;
-  const int x0 = static_cast<int>(std::floor(min_x)) - margin;
-  const int y0 = static_cast<int>(std::floor(min_y)) - margin;
-  const int x1 = static_cast<int>(std::floor(max_x)) + margin;
-  const int y1 = static_cast<int>(std::floor(max_y)) + margin;
-  const int nx = x1 - x0 + 1;
-  const int ny = y1 - y0 + 1;
-  if (nx <= 0 || ny <= 0 || static_cast<int64_t>(nx) * ny > 50'000'000) {
-    out.message = "place '" + place.name + "' has an unusable extent";
-    return out;
+  w.centroid /= static_cast<double>(place.polygon_m.size());
+  const int margin = static_cast<int>(std::ceil(2.0 / map.resolution_m())) + 1;
+  w.x0 = static_cast<int>(std::floor(min_x)) - margin;
+  w.y0 = static_cast<int>(std::floor(min_y)) - margin;
+  w.nx = static_cast<int>(std::floor(max_x)) + margin - w.x0 + 1;
+  w.ny = static_cast<int>(std::floor(max_y)) + margin - w.y0 + 1;
+  if (w.nx <= 0 || w.ny <= 0 || static_cast<int64_t>(w.nx) * w.ny > 50'000'000) {
+    return std::nullopt;
   }
+  return w;
+}
 
-  // Obstacles for clearance: lethal, unknown and off-map cells.
-  GridMask mask(nx, ny);
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nx; ++i) {
-      const common::CellIndex cell{x0 + i, y0 + j};
+// Distance (cells) from every cell of the window to the nearest obstacle: a lethal, unknown or
+// off-map cell.
+Eigen::MatrixXf ObstacleClearance(const CellWindow& w, const CostMap& map) {
+  const auto& g = map.geometry();
+  GridMask mask(w.nx, w.ny);
+  for (int j = 0; j < w.ny; ++j) {
+    for (int i = 0; i < w.nx; ++i) {
+      const common::CellIndex cell{w.x0 + i, w.y0 + j};
       bool obstacle = true;
       if (g.Contains(cell)) {
         const float v = map.cost()(cell.ix, cell.iy);
@@ -139,39 +149,62 @@ PlaceGoal ResolvePlace(const Place& place, const CostMap& map, const PlaceGoalPa
       mask(i, j) = obstacle ? 1 : 0;
     }
   }
-  const Eigen::MatrixXf clearance = DistanceTransform(mask);
+  return DistanceTransform(mask);
+}
 
-  struct Candidate {
-    double clearance;
-    float cost;
-    double to_centroid;
-    common::CellIndex cell;
-  };
+struct Candidate {
+  double clearance;
+  float cost;
+  double to_centroid;
+  common::CellIndex cell;
+};
+
+// The known cells inside the polygon cheaper than max_goal_cost: farthest from obstacles first,
+// then cheapest, then nearest the centroid.
+std::vector<Candidate> RankCandidates(const Place& place, const CostMap& map, const CellWindow& w,
+                                      const Eigen::MatrixXf& clearance,
+                                      const PlaceGoalParams& params) {
+  const auto& g = map.geometry();
   std::vector<Candidate> candidates;
-  for (int j = 0; j < ny; ++j) {
-    for (int i = 0; i < nx; ++i) {
-      const common::CellIndex cell{x0 + i, y0 + j};
+  for (int j = 0; j < w.ny; ++j) {
+    for (int i = 0; i < w.nx; ++i) {
+      const common::CellIndex cell{w.x0 + i, w.y0 + j};
       if (!g.Contains(cell)) continue;
       const float v = map.cost()(cell.ix, cell.iy);
       if (std::isnan(v) || v >= params.max_goal_cost) continue;
       const Vector2 center = g.CenterOf(cell);
       if (!PointInPolygon(place.polygon_m, center)) continue;
-      candidates.push_back({clearance(i, j) * res, v, (center - centroid).norm(), cell});
+      candidates.push_back(
+          {clearance(i, j) * g.resolution_m, v, (center - w.centroid).norm(), cell});
     }
-  }
-  if (candidates.empty()) {
-    out.message = "place '" + place.name + "' has no known free cell in the map";
-    return out;
   }
   std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
     if (a.clearance != b.clearance) return a.clearance > b.clearance;
     if (a.cost != b.cost) return a.cost < b.cost;
     return a.to_centroid < b.to_centroid;
   });
+  return candidates;
+}
+
+}  // namespace
+
+PlaceGoal ResolvePlace(const Place& place, const CostMap& map, const PlaceGoalParams& params) {
+  PlaceGoal out;
+  const std::optional<CellWindow> window = PlaceWindow(place, map);
+  if (!window) {
+    out.message = "place '" + place.name + "' has an unusable extent";
+    return out;
+  }
+  const std::vector<Candidate> candidates =
+      RankCandidates(place, map, *window, ObstacleClearance(*window, map), params);
+  if (candidates.empty()) {
+    out.message = "place '" + place.name + "' has no known free cell in the map";
+    return out;
+  }
   // The best candidate where the footprint fits at some heading.
   const int yaws = std::max(1, params.yaw_samples);
   for (const Candidate& c : candidates) {
-    const Vector2 center = g.CenterOf(c.cell);
+    const Vector2 center = map.geometry().CenterOf(c.cell);
     for (int k = 0; k < yaws; ++k) {
       const Pose2 pose{center.x(), center.y(), common::WrapAngle(2.0 * M_PI * k / yaws)};
       if (map.IsValid(pose)) {

@@ -1,5 +1,6 @@
 #include "planner/lcm/navigator_service.h"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -25,12 +26,13 @@ LcmMapClientParams MapClientParams(const std::string& robot, const common::Robot
   LcmMapClientParams p;
   p.robot = robot;
   p.layer = config.map.LayerFor(profile.name);
-  p.encoding = config.map.encoding;
-  p.occupancy = config.map.occupancy;
   p.map_name = config.map_name;
   p.requester = kProcess;
   p.resend_interval_s = config.resend_interval_s;
-  p.incomplete_timeout_s = config.incomplete_map_timeout_s;
+  p.snapshot.encoding = config.map.encoding;
+  p.snapshot.occupancy = config.map.occupancy;
+  p.snapshot.cost = config.cost_map;
+  p.snapshot.incomplete_timeout_s = config.incomplete_map_timeout_s;
   return p;
 }
 
@@ -47,7 +49,7 @@ NavigatorService::NavigatorService(runtime::Node& node, NavigatorConfig config,
       navigator_(profile_, config_.navigator, config_.local_planner, std::move(places)),
       planner_(config_.global_planner),
       map_client_(node, MapClientParams(node.options().robot, profile_, config_),
-                  profile_.footprint_m, config_.cost_map) {
+                  profile_.footprint_m) {
   CAIRN_THROW_UNLESS(!robot_.empty(), "the navigator needs a robot name");
   map_control_requests_ = runtime::Node::WallUtime();  // request ids unique across restarts
   node_.Subscribe<cairn::lcmt_goal>(ch::ForRobot(robot_, ch::kGoal),
@@ -96,6 +98,7 @@ void NavigatorService::WorkerLoop() {
       job = std::move(*queued_);
       queued_.reset();
       cancel_current_ = false;
+      worker_busy_ = true;
     }
     PlanResult result;
     try {
@@ -104,9 +107,19 @@ void NavigatorService::WorkerLoop() {
       result.status = PlanStatus::kTimedOut;
       result.message = std::string("planner error: ") + e.what();
     }
-    std::lock_guard<std::mutex> lock(worker_mutex_);
-    results_.emplace_back(job.request_id, std::move(result));
+    {
+      std::lock_guard<std::mutex> lock(worker_mutex_);
+      results_.emplace_back(job.request_id, std::move(result));
+      worker_busy_ = false;
+    }
+    idle_cv_.notify_all();
   }
+}
+
+bool NavigatorService::WaitForPlanner(double timeout_s) {
+  std::unique_lock<std::mutex> lock(worker_mutex_);
+  return idle_cv_.wait_for(lock, std::chrono::duration<double>(timeout_s),
+                           [this] { return !worker_busy_ && !queued_.has_value(); });
 }
 
 void NavigatorService::StartPlan(PlanJob job) {
@@ -158,8 +171,19 @@ void NavigatorService::HandlePlanResults(double now_s) {
 void NavigatorService::Tick() {
   const double now_s = NowS();
   HandlePlanResults(now_s);
+  FeedMap();
+  const StepOutput out = navigator_.Step(now_s);
+  if (out.cancel_plan) CancelPlan();
+  if (out.plan) StartPlan(*out.plan);
+  if (out.clear_short_term) AskToClearShortTerm();
+  if (out.command) PublishCommand(*out.command, out.emergency_stop);
+  if (out.path_changed) PublishPath();
+  for (const std::string& event : out.events) node_.Event("%s", event.c_str());
+  ReportState(out.status_changed);
+}
 
-  // Feed a new snapshot, or note that the mapper re-announced the current one.
+// Feeds a new snapshot, or notes that the mapper re-announced the current one.
+void NavigatorService::FeedMap() {
   map_client_.Poll();
   const auto latest = map_client_.Latest();
   const int64_t heard = map_client_.last_heard_utime();
@@ -176,51 +200,53 @@ void NavigatorService::Tick() {
     navigator_.OnMapHeartbeat(static_cast<double>(heard) * 1e-6);
     fed_heard_utime_ = heard;
   }
+}
 
-  const StepOutput out = navigator_.Step(now_s);
-  if (out.cancel_plan) CancelPlan();
-  if (out.plan) StartPlan(*out.plan);
-  if (out.clear_short_term) {
-    cairn::lcmt_map_control_request r{};
-    r.utime = node_.NowUtime();
-    r.request_id = ++map_control_requests_;
-    r.requester = kProcess;
-    r.op = cairn::lcmt_map_control_request::OP_CLEAR_SHORT_TERM;
-    r.profile = profile_.name;
-    r.has_profile = false;
-    node_.Publish(ch::ForRobot(robot_, ch::kMapControl), r);
-    node_.Event("asked the mapper to clear its short-term layer (request %lld)",
-                static_cast<long long>(r.request_id));
+void NavigatorService::AskToClearShortTerm() {
+  cairn::lcmt_map_control_request r{};
+  r.utime = node_.NowUtime();
+  r.request_id = ++map_control_requests_;
+  r.requester = kProcess;
+  r.op = cairn::lcmt_map_control_request::OP_CLEAR_SHORT_TERM;
+  r.profile = profile_.name;
+  r.has_profile = false;
+  node_.Publish(ch::ForRobot(robot_, ch::kMapControl), r);
+  node_.Event("asked the mapper to clear its short-term layer (request %lld)",
+              static_cast<long long>(r.request_id));
+}
+
+void NavigatorService::PublishCommand(const Velocity& command, bool emergency_stop) {
+  cairn::lcmt_velocity_command cmd{};
+  cmd.utime = node_.NowUtime();
+  cmd.robot = robot_;
+  cmd.source = kProcess;
+  cmd.linear_mps = command.linear_mps;
+  cmd.angular_radps = command.angular_radps;
+  node_.Publish(ch::ForRobot(robot_, ch::kCmdVel), cmd);
+  node_.Count("commands");
+  if (emergency_stop) node_.Count("safety_stops");
+}
+
+void NavigatorService::PublishPath() {
+  cairn::lcmt_path path{};
+  path.utime = node_.NowUtime();
+  path.robot = robot_;
+  path.goal_id = navigator_.status().goal_id;
+  path.planner = config_.global_planner.planner;
+  path.cost = navigator_.path_cost();
+  for (const common::Pose2& p : navigator_.path().poses()) {
+    path.x_m.push_back(p.x_m);
+    path.y_m.push_back(p.y_m);
+    path.yaw_rad.push_back(p.yaw_rad);
   }
-  if (out.command) {
-    cairn::lcmt_velocity_command cmd{};
-    cmd.utime = node_.NowUtime();
-    cmd.robot = robot_;
-    cmd.source = kProcess;
-    cmd.linear_mps = out.command->linear_mps;
-    cmd.angular_radps = out.command->angular_radps;
-    node_.Publish(ch::ForRobot(robot_, ch::kCmdVel), cmd);
-    node_.Count("commands");
-    if (out.emergency_stop) node_.Count("safety_stops");
-  }
-  if (out.path_changed) {
-    cairn::lcmt_path path{};
-    path.utime = node_.NowUtime();
-    path.robot = robot_;
-    path.goal_id = navigator_.status().goal_id;
-    path.planner = config_.global_planner.planner;
-    path.cost = navigator_.path_cost();
-    for (const common::Pose2& p : navigator_.path().poses()) {
-      path.x_m.push_back(p.x_m);
-      path.y_m.push_back(p.y_m);
-      path.yaw_rad.push_back(p.yaw_rad);
-    }
-    path.num_poses = static_cast<int32_t>(path.x_m.size());
-    node_.Publish(ch::ForRobot(robot_, ch::kPath), path);
-  }
-  for (const std::string& event : out.events) node_.Event("%s", event.c_str());
+  path.num_poses = static_cast<int32_t>(path.x_m.size());
+  node_.Publish(ch::ForRobot(robot_, ch::kPath), path);
+}
+
+// The status on a change (logged once per state), and HEALTH DEGRADED while stopped.
+void NavigatorService::ReportState(bool status_changed) {
   const NavStatus& s = navigator_.status();
-  if (out.status_changed) {
+  if (status_changed) {
     PublishStatus();
     if (s.state != last_logged_state_ || s.reason != last_logged_reason_ ||
         s.goal_id != last_logged_goal_) {

@@ -52,6 +52,10 @@ class NavigatorService {
   void Tick();
   /// Publishes the navigation status now.
   void PublishStatus();
+  /// Blocks until no plan is queued or running (its result waits for the next Tick), or until
+  /// `timeout_s` of wall time passed; returns whether the planner is idle. For tests that drive
+  /// the service's clock themselves: plans run in wall time on the worker thread.
+  bool WaitForPlanner(double timeout_s);
 
   const Navigator& navigator() const { return navigator_; }
   const LcmMapClient& map_client() const { return map_client_; }
@@ -70,6 +74,11 @@ class NavigatorService {
   void StartPlan(PlanJob job);
   void CancelPlan();
   void HandlePlanResults(double now_s);
+  void FeedMap();
+  void AskToClearShortTerm();
+  void PublishCommand(const Velocity& command, bool emergency_stop);
+  void PublishPath();
+  void ReportState(bool status_changed);
   void AcceptPose(const common::Pose3& pose, int64_t utime);
   void RefuseGoal(const cairn::lcmt_goal& goal, const std::string& why);
   double NowS() const { return static_cast<double>(node_.NowUtime()) * 1e-6; }
@@ -94,7 +103,9 @@ class NavigatorService {
   std::thread worker_;
   std::mutex worker_mutex_;
   std::condition_variable worker_cv_;
+  std::condition_variable idle_cv_;  // a job finished
   bool worker_exit_{false};
+  bool worker_busy_{false};  // a job is being planned
   std::optional<PlanJob> queued_;
   std::atomic<bool> cancel_current_{false};
   std::vector<std::pair<int64_t, PlanResult>> results_;

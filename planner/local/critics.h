@@ -51,6 +51,10 @@ class TrajectoryCritic {
   virtual void Commit(const Velocity& /*sent*/, const common::Pose2& /*pose*/) {}
   /// Forget any history (new goal).
   virtual void Reset() {}
+  /// True when this critic rejects only from its memory of past commands (oscillation): when
+  /// such critics alone leave no valid trajectory, the DWA clears their memory (Reset) and
+  /// takes the best of those trajectories, so memory alone never stalls the robot.
+  virtual bool RejectsByMemory() const { return false; }
 
  protected:
   const CriticContext& context() const { return *context_; }
@@ -104,6 +108,9 @@ class ClearanceCritic : public TrajectoryCritic {
       : TrajectoryCritic("clearance", scale), params_(params) {}
   void Prepare(const CriticContext& context) override;
   Score Evaluate(const Trajectory& trajectory) const override;
+  /// True for a score of a trajectory that is clear over its whole horizon (not one blocked
+  /// beyond its braking distance, which scores 2..3).
+  static bool ClearOverHorizon(const Score& score) { return score.valid && score.value < 2.0; }
   /// Blocking cells under the robot this cycle (empty when it is clear).
   const std::vector<int64_t>& escaping_cells() const { return escaping_; }
   /// The proximity (0..1) the global path itself has near the robot this cycle.
@@ -162,6 +169,7 @@ class OscillationCritic : public TrajectoryCritic {
   Score Evaluate(const Trajectory& trajectory) const override;
   void Commit(const Velocity& sent, const common::Pose2& pose) override;
   void Reset() override;
+  bool RejectsByMemory() const override { return true; }
 
   bool linear_flipped() const { return linear_flipped_; }
   bool angular_flipped() const { return angular_flipped_; }

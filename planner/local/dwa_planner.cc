@@ -2,20 +2,36 @@
 
 #include <cmath>
 #include <limits>
+#include <set>
 
 #include "common/check.h"
 
 namespace cairn::planner {
 
+CriticConfig* DwaParams::FindCritic(const std::string& name) {
+  for (CriticConfig& c : critics) {
+    if (c.name == name) return &c;
+  }
+  return nullptr;
+}
+
+const CriticConfig* DwaParams::FindCritic(const std::string& name) const {
+  for (const CriticConfig& c : critics) {
+    if (c.name == name) return &c;
+  }
+  return nullptr;
+}
+
 void DwaParams::Validate() const {
   generator.Validate();
-  for (const double s :
-       {path_align_scale, goal_dist_scale, clearance_scale, speed_scale, oscillation_scale}) {
-    CAIRN_THROW_UNLESS(std::isfinite(s) && s >= 0.0, "critic scales must be finite and >= 0");
+  CAIRN_THROW_UNLESS(!critics.empty(), "the DWA needs at least one critic");
+  std::set<std::string> names;
+  for (const CriticConfig& c : critics) {
+    CAIRN_THROW_UNLESS(!c.name.empty(), "a critic of the list has no name");
+    CAIRN_THROW_UNLESS(names.insert(c.name).second, "critic '" << c.name << "' is listed twice");
+    CAIRN_THROW_UNLESS(std::isfinite(c.scale) && c.scale >= 0.0,
+                       "critic '" << c.name << "': scale must be finite and >= 0");
   }
-  CAIRN_THROW_UNLESS(braking_margin_s >= 0.0, "braking_margin_s must not be negative");
-  CAIRN_THROW_UNLESS(clearance_inflation_m >= 0.0, "clearance_inflation_m must not be negative");
-  CAIRN_THROW_UNLESS(forward_point_distance_m >= 0.0, "forward_point_distance_m must be >= 0");
   for (const double l : tracking_lookaheads_m) {
     CAIRN_THROW_UNLESS(std::isfinite(l) && l > 0.0, "tracking_lookaheads_m must be positive");
   }
@@ -25,39 +41,44 @@ void DwaParams::Validate() const {
   CAIRN_THROW_UNLESS(stall_speed_mps >= 0.0, "stall_speed_mps must not be negative");
   CAIRN_THROW_UNLESS(tracking_slow_distance_m >= 0.0,
                      "tracking_slow_distance_m must not be negative");
-  CAIRN_THROW_UNLESS(oscillation_reset_dist_m > 0.0, "oscillation_reset_dist_m must be positive");
-  CAIRN_THROW_UNLESS(oscillation_reset_angle_rad > 0.0,
-                     "oscillation_reset_angle_rad must be positive");
 }
 
-DwaPlanner::DwaPlanner(const VelocityLimits& limits, const DwaParams& params)
+DwaPlanner::DwaPlanner(const VelocityLimits& limits, const DwaParams& params,
+                       const CriticRegistry& registry)
     : params_(params), generator_(limits, params.generator) {
   params_.Validate();
-  // Cheap critics first; clearance (footprint rasterisation) last.
-  critics_.push_back(std::make_unique<SpeedCritic>(params_.speed_scale, limits.max_vel_x_mps));
-  auto oscillation = std::make_unique<OscillationCritic>(params_.oscillation_scale,
-                                                         params_.oscillation_reset_dist_m,
-                                                         params_.oscillation_reset_angle_rad);
-  oscillation_ = oscillation.get();
-  critics_.push_back(std::move(oscillation));
-  critics_.push_back(std::make_unique<GoalDistCritic>(params_.goal_dist_scale));
-  critics_.push_back(std::make_unique<PathAlignCritic>(params_.path_align_scale,
-                                                       params_.forward_point_distance_m));
-  ClearanceCritic::Params clearance;
-  clearance.admissible_braking = params_.admissible_braking;
-  clearance.sim_step_s = params_.generator.sim_step_s;
-  clearance.margin_s = params_.braking_margin_s;
-  clearance.inflation_m = params_.clearance_inflation_m;
-  clearance.acc_lim_x_mps2 = limits.acc_lim_x_mps2;
-  clearance.acc_lim_theta_radps2 = limits.acc_lim_theta_radps2;
-  // As far as the fastest sample goes over the horizon, plus the footprint's reach.
-  clearance.path_reach_m = limits.max_vel_x_mps * params_.generator.sim_time_s + 0.3;
-  auto clearance_critic = std::make_unique<ClearanceCritic>(params_.clearance_scale, clearance);
-  clearance_ = clearance_critic.get();
-  critics_.push_back(std::move(clearance_critic));
-  for (const auto& c : critics_) names_.push_back(c->name());
+  const CriticSetup setup{limits, params_.generator};
+  for (const CriticConfig& c : params_.critics) {
+    critics_.push_back(registry.Make(c, setup));
+    names_.push_back(critics_.back()->name());
+    const auto* clearance = dynamic_cast<const ClearanceCritic*>(critics_.back().get());
+    if (clearance != nullptr && clearance_ == nullptr) {
+      clearance_ = clearance;
+      clearance_index_ = critics_.size() - 1;
+    }
+  }
   rejections_.assign(critics_.size(), 0);
 }
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}  // namespace
+
+struct DwaPlanner::Cycle {
+  DwaResult result;
+  std::vector<double> values;  // scratch: scale × value per critic
+  double best{kInf};
+  double best_forward{kInf};
+  // The best trajectory that only critics rejecting from memory refused (the fallback when
+  // nothing is valid).
+  double best_released{kInf};
+  Trajectory released;
+  std::vector<double> released_values;
+  // The best tracking trajectory clear over its whole horizon (the stall fallback).
+  double best_tracking{kInf};
+  Trajectory tracking;
+  std::vector<double> tracking_values;
+};
 
 DwaResult DwaPlanner::Compute(const DwaInput& input) {
   CAIRN_DEMAND(input.map != nullptr);
@@ -71,118 +92,135 @@ DwaResult DwaPlanner::Compute(const DwaInput& input) {
   context.local_goal = input.local_goal;
   for (auto& c : critics_) c->Prepare(context);
 
-  DwaResult result;
-  result.rejections.assign(critics_.size(), 0);
+  Cycle cycle;
+  cycle.result.rejections.assign(critics_.size(), 0);
+  cycle.values.assign(critics_.size(), 0.0);
   const std::vector<Velocity> samples = generator_.Samples(input.last_command);
-  result.samples = static_cast<int>(samples.size());
-  double best = std::numeric_limits<double>::infinity();
-  double best_forward = std::numeric_limits<double>::infinity();
-  // Best among samples rejected by the oscillation critic alone (the fallback).
-  double best_oscillating = std::numeric_limits<double>::infinity();
-  Trajectory oscillating;
-  std::vector<double> values(critics_.size(), 0.0), oscillating_values;
-  // Scores scratch_ with every critic and keeps it when it is the best so far.
-  double best_tracking = std::numeric_limits<double>::infinity();
-  Trajectory tracking_trajectory;
-  std::vector<double> tracking_values;
-  auto consider = [&](bool tracking) {
-    double total = 0.0;
-    bool valid = true;
-    bool only_oscillation = true;
-    for (size_t i = 0; i < critics_.size(); ++i) {
-      const Score s = critics_[i]->Evaluate(scratch_);
-      values[i] = 0.0;
-      if (!s.valid) {
-        valid = false;
-        ++result.rejections[i];
-        if (critics_[i].get() != oscillation_) only_oscillation = false;
-        continue;
-      }
-      values[i] = critics_[i]->scale() * s.value;
-      total += values[i];
-    }
-    if (valid) {
-      ++result.valid;
-      if (total < best) {
-        best = total;
-        result.best = scratch_;
-        result.best_values = values;
-        result.tracking_chosen = tracking;
-      }
-      // The best tracking trajectory that is clear over its whole horizon (the fallback below).
-      if (tracking && values.back() < 2.0 * critics_.back()->scale() && total < best_tracking) {
-        best_tracking = total;
-        tracking_trajectory = scratch_;
-        tracking_values = values;
-      }
-      if (scratch_.target.linear_mps > 1e-6 && total < best_forward) {
-        best_forward = total;
-        result.has_best_forward = true;
-        result.best_forward = scratch_.target;
-        result.best_forward_values = values;
-      }
-    } else if (only_oscillation && total < best_oscillating) {
-      best_oscillating = total;
-      oscillating = scratch_;
-      oscillating_values = values;
-    }
-  };
+  cycle.result.samples = static_cast<int>(samples.size());
   for (const Velocity& v : samples) {
     generator_.Simulate(input.pose, v, &scratch_);
-    consider(false);
+    Consider(false, &cycle);
   }
-  // More candidates: the robot tracking the global path itself.
-  if (params_.path_tracking && input.path != nullptr) {
-    TrajectoryGenerator::TrackingParams tracking;
-    tracking.turn_in_place_rad = params_.tracking_turn_in_place_rad;
-    tracking.min_radius_m = params_.tracking_min_radius_m;
-    tracking.slow_distance_m = params_.tracking_slow_distance_m;
-    for (const double lookahead_m : params_.tracking_lookaheads_m) {
-      tracking.lookahead_m = lookahead_m;
-      if (!generator_.TrackPath(input.pose, input.last_command, *input.path, input.segment_begin,
-                                tracking, input.map, &scratch_)) {
-        break;
-      }
-      ++result.samples;
-      consider(true);
-    }
-  }
-  for (size_t i = 0; i < critics_.size(); ++i) rejections_[i] += result.rejections[i];
+  ScoreTracking(input, &cycle);
+  for (size_t i = 0; i < critics_.size(); ++i) rejections_[i] += cycle.result.rejections[i];
+  PreferTracking(&cycle);
+  Decide(input, &cycle);
+  return std::move(cycle.result);
+}
 
-  // A stall the path can break: the critics' sum picked standing still or creeping, while
-  // tracking the global path is clear and drives on. Near an obstacle the path bends past (a
-  // door beside a wall, a table leg) every constant arc that gains ground clips the obstacle or
-  // costs more than it gains, and the dynamic window alone would stand there for ever.
-  // And where the path itself runs within the clearance inflation of a blocking cell (a door,
-  // a gap between table legs) it is the local plan: samples that score better by leaving it
-  // take the robot off a line with centimetres to spare.
+// Scores scratch_ with every critic and keeps it where it is the best so far.
+void DwaPlanner::Consider(bool tracking, Cycle* cycle) {
+  DwaResult& result = cycle->result;
+  std::vector<double>& values = cycle->values;
+  double total = 0.0;
+  bool valid = true;
+  bool only_memory = true;
+  bool clear_ahead = clearance_ == nullptr;
+  for (size_t i = 0; i < critics_.size(); ++i) {
+    const Score s = critics_[i]->Evaluate(scratch_);
+    values[i] = 0.0;
+    if (!s.valid) {
+      valid = false;
+      ++result.rejections[i];
+      if (!critics_[i]->RejectsByMemory()) only_memory = false;
+      continue;
+    }
+    if (clearance_ != nullptr && i == clearance_index_) {
+      clear_ahead = ClearanceCritic::ClearOverHorizon(s);
+    }
+    values[i] = critics_[i]->scale() * s.value;
+    total += values[i];
+  }
+  if (!valid) {
+    if (only_memory && total < cycle->best_released) {
+      cycle->best_released = total;
+      cycle->released = scratch_;
+      cycle->released_values = values;
+    }
+    return;
+  }
+  ++result.valid;
+  if (total < cycle->best) {
+    cycle->best = total;
+    result.best = scratch_;
+    result.best_values = values;
+    result.tracking_chosen = tracking;
+  }
+  // The best tracking trajectory that is clear over its whole horizon (PreferTracking).
+  if (tracking && clear_ahead && total < cycle->best_tracking) {
+    cycle->best_tracking = total;
+    cycle->tracking = scratch_;
+    cycle->tracking_values = values;
+  }
+  if (scratch_.target.linear_mps > 1e-6 && total < cycle->best_forward) {
+    cycle->best_forward = total;
+    result.has_best_forward = true;
+    result.best_forward = scratch_.target;
+    result.best_forward_values = values;
+  }
+}
+
+// More candidates: the robot tracking the global path itself, one per lookahead.
+void DwaPlanner::ScoreTracking(const DwaInput& input, Cycle* cycle) {
+  if (!params_.path_tracking || input.path == nullptr) return;
+  TrajectoryGenerator::TrackingParams tracking;
+  tracking.turn_in_place_rad = params_.tracking_turn_in_place_rad;
+  tracking.min_radius_m = params_.tracking_min_radius_m;
+  tracking.slow_distance_m = params_.tracking_slow_distance_m;
+  for (const double lookahead_m : params_.tracking_lookaheads_m) {
+    tracking.lookahead_m = lookahead_m;
+    if (!generator_.TrackPath(input.pose, input.last_command, *input.path, input.segment_begin,
+                              tracking, input.map, &scratch_)) {
+      break;
+    }
+    ++cycle->result.samples;
+    Consider(true, cycle);
+  }
+}
+
+// A stall the path can break: the critics' sum picked standing still or creeping, while
+// tracking the global path is clear and drives on. Near an obstacle the path bends past (a
+// door beside a wall, a table leg) every constant arc that gains ground clips the obstacle or
+// costs more than it gains, and the dynamic window alone would stand there for ever.
+// And where the path itself runs within the clearance inflation of a blocking cell (a door,
+// a gap between table legs) it is the local plan: samples that score better by leaving it
+// take the robot off a line with centimetres to spare.
+void DwaPlanner::PreferTracking(Cycle* cycle) const {
+  DwaResult& result = cycle->result;
   const bool stalled = std::abs(result.best.target.linear_mps) < params_.stall_speed_mps &&
-                       tracking_trajectory.target.linear_mps >= params_.stall_speed_mps;
-  const bool tight = clearance_->path_proximity() > 0.0;
-  if (result.valid > 0 && !result.tracking_chosen && std::isfinite(best_tracking) &&
+                       cycle->tracking.target.linear_mps >= params_.stall_speed_mps;
+  const bool tight = clearance_ != nullptr && clearance_->path_proximity() > 0.0;
+  if (result.valid > 0 && !result.tracking_chosen && std::isfinite(cycle->best_tracking) &&
       (stalled || tight)) {
-    result.best = tracking_trajectory;
-    result.best_values = tracking_values;
+    result.best = cycle->tracking;
+    result.best_values = cycle->tracking_values;
     result.tracking_chosen = true;
     result.tracking_broke_stall = stalled;
-    best = best_tracking;
+    cycle->best = cycle->best_tracking;
   }
+}
+
+// The command: the best valid trajectory's, else the best one only memory refused (that memory
+// cleared), else braking.
+void DwaPlanner::Decide(const DwaInput& input, Cycle* cycle) {
+  DwaResult& result = cycle->result;
   if (result.valid > 0) {
     result.found = true;
     result.command = result.best.velocity;
-    result.score = best;
-  } else if (std::isfinite(best_oscillating)) {
-    oscillation_->Reset();
+    result.score = cycle->best;
+  } else if (std::isfinite(cycle->best_released)) {
+    for (auto& c : critics_) {
+      if (c->RejectsByMemory()) c->Reset();
+    }
     result.oscillation_reset = true;
     result.found = true;
-    result.best = oscillating;
-    result.best_values = oscillating_values;
-    result.command = oscillating.velocity;
-    result.score = best_oscillating;
+    result.best = cycle->released;
+    result.best_values = cycle->released_values;
+    result.command = cycle->released.velocity;
+    result.score = cycle->best_released;
   } else {
     result.command = generator_.Brake(input.last_command);
   }
-  return result;
 }
 
 void DwaPlanner::Commit(const Velocity& sent, const common::Pose2& pose) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "planner/cost_map.h"
+#include "planner/local/critic_registry.h"
 #include "planner/local/critics.h"
 #include "planner/local/trajectory_generator.h"
 #include "planner/path.h"
@@ -13,29 +14,17 @@
 /// @file
 /// DwaPlanner: TrajectoryGenerator × critics, weighted sum and argmin (Nav2 DWB). Every command
 /// it returns lies inside the dynamic window of the previous command, so it never exceeds the
-/// profile's velocity or acceleration limits.
+/// profile's velocity or acceleration limits. The critics are DwaParams::critics, made by name
+/// through a CriticRegistry and scored in the listed order.
 
 namespace cairn::planner {
 
 struct DwaParams {
   TrajectoryGeneratorParams generator;
-  // Critic scales (weights of each critic's value in the sum).
-  double path_align_scale{1.0};
-  double goal_dist_scale{1.5};
-  double clearance_scale{1.0};
-  double speed_scale{0.4};
-  double oscillation_scale{0.2};
-  /// Clearance: keep trajectories that are blocked only beyond the braking distance (see
-  /// ClearanceCritic), with this reaction margin.
-  bool admissible_braking{true};
-  double braking_margin_s{0.3};
-  /// Clearance: getting closer than this beyond the inscribed radius to a blocking cell costs.
-  double clearance_inflation_m{0.3};
-  /// PathAlign looks this far ahead of the final pose (Nav2's forward_point_distance).
-  double forward_point_distance_m{0.325};
-  /// Oscillation memory is cleared after this much motion since the first reversal.
-  double oscillation_reset_dist_m{0.05};
-  double oscillation_reset_angle_rad{0.2};
+  /// The critics in scoring order, each with its weight and its own params (critic_registry.h).
+  /// Every critic scores every trajectory; the order is that of the per-critic rejection counts
+  /// and values (DwaResult, NavStatus, the navigator's diagnostics).
+  std::vector<CriticConfig> critics{DefaultCritics()};
   /// Also score trajectories that track the global path by pure pursuit (see
   /// TrajectoryGenerator::TrackPath), one per lookahead: a short one threads a door beside a
   /// wall, a long one smooths a straight; each turns in place beyond the angle. They compete
@@ -49,7 +38,12 @@ struct DwaParams {
   double tracking_min_radius_m{0.9};     ///< slower on curves tighter than this ...
   double tracking_slow_distance_m{0.6};  ///< ... and this close to blocking cells
 
-  /// @throws std::invalid_argument naming the bad field.
+  /// The entry of the critic named `name`, or nullptr.
+  CriticConfig* FindCritic(const std::string& name);
+  const CriticConfig* FindCritic(const std::string& name) const;
+
+  /// @throws std::invalid_argument naming the bad field (an empty critic list, an empty or
+  /// repeated critic name, a bad scale; unknown critics are the registry's to refuse).
   void Validate() const;
 };
 
@@ -70,7 +64,9 @@ struct DwaResult {
   Trajectory best;
   int samples{0};
   int valid{0};
-  bool oscillation_reset{false};     ///< every valid sample was an oscillation: memory cleared
+  /// Every otherwise valid sample was rejected by critics that reject from memory only
+  /// (oscillation): their memory was cleared and the best of those samples taken.
+  bool oscillation_reset{false};
   bool tracking_chosen{false};       ///< a path-tracking trajectory was chosen ...
   bool tracking_broke_stall{false};  ///< ... over a best sample that stood still or crept
   std::vector<int64_t> rejections;   ///< this cycle, per critic (same order as critic_names())
@@ -83,21 +79,27 @@ struct DwaResult {
 
 class DwaPlanner {
  public:
-  /// @throws std::invalid_argument for invalid limits or params.
-  DwaPlanner(const VelocityLimits& limits, const DwaParams& params);
+  /// Makes params.critics through `registry` (which need not outlive the planner).
+  /// @throws std::invalid_argument for invalid limits or params, or a critic the registry
+  /// does not know or refuses.
+  DwaPlanner(const VelocityLimits& limits, const DwaParams& params,
+             const CriticRegistry& registry = BuiltinCritics());
   DwaPlanner(const DwaPlanner&) = delete;
   DwaPlanner& operator=(const DwaPlanner&) = delete;
 
   /// Scores every sample of the window around `input.last_command` and returns the best.
   /// When every sample is rejected, returns the braking command with found = false. If the
-  /// only rejections of otherwise valid samples came from the oscillation critic, its memory is
-  /// cleared and the best of those is used (so oscillation alone never stalls the robot).
+  /// only rejections of otherwise valid samples came from critics that reject from memory
+  /// (TrajectoryCritic::RejectsByMemory: oscillation), their memory is cleared and the best of
+  /// those is used (so oscillation alone never stalls the robot). The path-tracking fallback
+  /// (DwaParams::path_tracking) reads the first "clearance" critic of the list, if any.
   DwaResult Compute(const DwaInput& input);
   /// Tells the stateful critics which command was sent.
   void Commit(const Velocity& sent, const common::Pose2& pose);
   /// Clears critic memory and rejection counts (new goal).
   void Reset();
 
+  /// The critics' names in scoring order (the order of every per-critic vector).
   const std::vector<std::string>& critic_names() const { return names_; }
   /// Trajectories rejected by each critic since the last Reset().
   const std::vector<int64_t>& rejection_counts() const { return rejections_; }
@@ -105,11 +107,17 @@ class DwaPlanner {
   const DwaParams& params() const { return params_; }
 
  private:
+  struct Cycle;  // one Compute()'s running bests
+  void Consider(bool tracking, Cycle* cycle);
+  void ScoreTracking(const DwaInput& input, Cycle* cycle);
+  void PreferTracking(Cycle* cycle) const;
+  void Decide(const DwaInput& input, Cycle* cycle);
+
   DwaParams params_;
   TrajectoryGenerator generator_;
   std::vector<std::unique_ptr<TrajectoryCritic>> critics_;
-  ClearanceCritic* clearance_{nullptr};
-  OscillationCritic* oscillation_{nullptr};
+  const ClearanceCritic* clearance_{nullptr};  // the first "clearance" critic, if any
+  size_t clearance_index_{0};
   std::vector<std::string> names_;
   std::vector<int64_t> rejections_;
   Trajectory scratch_;

@@ -96,10 +96,25 @@ class NavigatorStackTest : public ::testing::Test {
     return path;
   }
 
+  // The shipped navigator configuration driving on the simulator's wheel odometry
+  // (<robot>.ODOM) instead of ground truth.
+  std::string OdometryNavigatorConfig() {
+    std::ifstream in(testing::SourcePath("config/navigator/navigator.yaml"));
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string yaml =
+        std::regex_replace(text.str(), std::regex("\npose_source: pose"), "\npose_source: odom");
+    EXPECT_NE(yaml, text.str()) << "the navigator config no longer names pose_source: pose";
+    const std::string path = procs_.dir() + "/navigator_odom.yaml";
+    std::ofstream(path) << yaml;
+    return path;
+  }
+
   // The three processes as a graph under cairn-launch (as a user starts them), on the test's
   // private bus; their logs are printed when a test fails. Nothing restarts: a crash fails the
-  // test instead of hiding in a restart.
-  void StartStack(double x, double y, double yaw_deg, const std::string& nav_config = "") {
+  // test instead of hiding in a restart. `mapper_args` are added to the mapper's arguments.
+  void StartStack(double x, double y, double yaw_deg, const std::string& nav_config = "",
+                  const std::string& mapper_args = "") {
     const std::string dir = procs_.dir();
     std::ostringstream robot;
     robot << kRobot << ":pioneer3at:pioneer3at:" << x << "," << y << "," << yaw_deg;
@@ -115,7 +130,8 @@ class NavigatorStackTest : public ::testing::Test {
           << "    restart: never\n"
           << "  mapper:\n"
           << "    command: " << testing::BinPath("cairn-mapper") << "\n"
-          << "    args: [--robot, " << kRobot << ", --config, " << MapperConfig() << "]\n"
+          << "    args: [--robot, " << kRobot << ", --config, " << MapperConfig()
+          << (mapper_args.empty() ? std::string() : ", " + mapper_args) << "]\n"
           << "    robot: " << kRobot << "\n"
           << "    depends_on: [sim]\n"
           << "    restart: never\n"
@@ -448,6 +464,36 @@ TEST_F(NavigatorStackTest, StopsWithinHalfASecondOfSimTimeWhenTheMapperStops) {
         return p && std::hypot(p->linear_velocity_mps[0], p->linear_velocity_mps[1]) < 0.02;
       },
       3.0, [&] { bus_.Pump(20); }));
+}
+
+
+// Every test above drives on ground-truth poses. Here the navigator drives on the simulator's
+// wheel odometry (pose_source: odom; frame odom, which starts at the spawn pose) and the mapper
+// builds its layers on the same odometry, as on a robot without localisation: map and pose share
+// one frame and drift together. Arrival is judged on ground truth.
+TEST_F(NavigatorStackTest, DrivesOnOdometryToAGoalAFewMetresAway) {
+  StartStack(4.0, 18.0, 0.0, OdometryNavigatorConfig(), "--pose-source, odometry");
+  if (HasFatalFailure()) return;
+  // The navigator really listens to the odometry (it names its pose channel at start-up).
+  EXPECT_NE(testing::TailOfFile(run_dir_ + "/logs/navigator.log", 200).find("pose from p3at.ODOM"),
+            std::string::npos);
+  SendGoal(8, 8.5, 18.5);  // lane 4, open floor (the 1 cm plate starts at x = 10)
+  ASSERT_TRUE(WaitState(kStateReached, 100.0)) << StatusText();
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  const Pose2 start = ToPose2(poses.front());
+  const Pose2 last = ToPose2(poses.back());
+  EXPECT_GT(last.x_m - start.x_m, 4.0) << "it did not drive the 4.5 m";
+  // The goal tolerance is 0.25 m in the odometry frame; a few metres of noise-free wheel
+  // odometry on a skid-steer base drift by centimetres.
+  EXPECT_LT(std::hypot(last.x_m - 8.5, last.y_m - 18.5), 0.4)
+      << "ground truth (" << last.x_m << ", " << last.y_m << ")";
+  // Ground truth: the footprint never touched a lane wall (y = 16 and y = 20, 0.2 m thick).
+  for (const auto& p : poses) {
+    const auto fp = FootprintAt(ToPose2(p));
+    ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, 15.9, 24.0, 16.1), 0.0)) << "touched the south wall";
+    ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, 19.9, 24.0, 20.1), 0.0)) << "touched the north wall";
+  }
 }
 
 }  // namespace

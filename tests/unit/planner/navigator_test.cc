@@ -15,6 +15,7 @@ using common::Pose2;
 using common::Vector2;
 using testing::PioneerFootprint;
 using testing::TestLayer;
+using testing::WallWithGap;
 
 // A kinematic robot, a map publisher and a synchronous planner around a Navigator, on fake
 // time: every cycle advances 50 ms.
@@ -28,9 +29,14 @@ class NavSim {
         nav_(profile_, params, DwaParams{}, std::move(places)),
         planner_(PlannerParams(seed)) {}
 
+  // Plans as the navigator's defaults make them, but with wall-clock caps far beyond what a
+  // plan needs (here and in Run), so that a plan is the same for a seed on a loaded machine.
   static GlobalPlannerParams PlannerParams(uint32_t seed) {
     GlobalPlannerParams p;
     p.seed = seed;
+    p.time_budget_s = 60.0;
+    p.improvement_time_s = 60.0;
+    p.simplify_time_s = 60.0;
     return p;
   }
 
@@ -47,7 +53,9 @@ class NavSim {
       const StepOutput out = nav_.Step(t_);
       if (out.plan) {
         ++plans_;
-        last_plan_ = planner_.Plan(*out.plan->map, out.plan->request);
+        PlanRequest request = out.plan->request;
+        request.time_budget_s = 60.0;
+        last_plan_ = planner_.Plan(*out.plan->map, request);
         nav_.OnPlanResult(out.plan->request_id, last_plan_, t_);
       }
       if (out.clear_short_term) ++clears_;
@@ -112,13 +120,6 @@ class NavSim {
   std::vector<NavState> states_;
   std::vector<std::string> events_;
 };
-
-// 20 m × 10 m, a wall across x = 10 with a gap at y in [6, 7.2].
-TestLayer WallWithGap() {
-  TestLayer layer(200, 100, 0.1);
-  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 7.2, 10.2, 10.0, 100.0f);
-  return layer;
-}
 
 NavGoal PoseGoal(double x, double y, int64_t id = 1) {
   NavGoal g;
@@ -491,19 +492,6 @@ TEST(NavigatorTest, NewGoalReplacesTheOldOne) {
   ASSERT_TRUE(sim.RunUntilState(100.0, NavState::kReached));
   EXPECT_EQ(sim.nav_.status().goal_id, 2);
   EXPECT_LT((sim.pose_.position() - Vector2(4.0, 8.0)).norm(), 0.5);
-}
-
-TEST(NavigatorTest, ReasonsMapOneToOneOntoPlanStatus) {
-  std::set<int> seen;
-  for (const PlanStatus s :
-       {PlanStatus::kSuccess, PlanStatus::kStartOccupied, PlanStatus::kGoalOccupied,
-        PlanStatus::kOutOfBounds, PlanStatus::kNoPath, PlanStatus::kTimedOut,
-        PlanStatus::kCancelled, PlanStatus::kApproximate}) {
-    const NavReason r = ReasonOf(s);
-    EXPECT_STREQ(NavReasonName(r), PlanStatusName(s));
-    seen.insert(static_cast<int>(r));
-  }
-  EXPECT_EQ(seen.size(), 8u);
 }
 
 TEST(NavigatorTest, NoCommandExceedsTheLimitsInRandomSituations) {

@@ -1,5 +1,4 @@
-// Occupancy-to-cost conversion (Nav2 static layer with trinary_costmap off) and the navigator
-// configuration's `map:` section.
+// Occupancy-to-cost conversion (Nav2 static layer with trinary_costmap off).
 
 #include "planner/occupancy_cost.h"
 
@@ -7,9 +6,6 @@
 #include <string>
 
 #include <gtest/gtest.h>
-
-#include "common/yaml_reader.h"
-#include "planner/navigator_config.h"
 
 namespace cairn::planner {
 namespace {
@@ -89,46 +85,6 @@ TEST(OccupancyCostTest, RefusesBadParams) {
   EXPECT_EQ(MapEncodingFromName("cost"), MapEncoding::kCost);
   EXPECT_NE(ThrownMessage([] { MapEncodingFromName("octomap"); }).find("octomap"),
             std::string::npos);
-}
-
-TEST(NavigatorMapConfigTest, DefaultIsTheProfileCostLayer) {
-  common::YamlMap root = common::YamlMap::FromString("control_rate_hz: 20\n", "nav.yaml");
-  const NavigatorConfig c = LoadNavigatorConfig(root);
-  EXPECT_EQ(c.map.encoding, MapEncoding::kCost);
-  EXPECT_EQ(c.map.LayerFor("kobuki"), "cost/kobuki");
-}
-
-TEST(NavigatorMapConfigTest, OccupancySectionAndErrors) {
-  common::YamlMap root = common::YamlMap::FromString(
-      "map:\n  encoding: occupancy\n  occupied_threshold_og: 30\n  free_threshold_og: 10\n",
-      "nav.yaml");
-  const NavigatorConfig c = LoadNavigatorConfig(root);
-  EXPECT_EQ(c.map.encoding, MapEncoding::kOccupancy);
-  EXPECT_EQ(c.map.LayerFor("kobuki"), "final");  // the dynamic map server's composed layer
-  EXPECT_FLOAT_EQ(c.map.occupancy.occupied_threshold_og, 30.f);
-  EXPECT_FLOAT_EQ(c.map.occupancy.free_threshold_og, 10.f);
-  auto error = [](const std::string& yaml) {
-    try {
-      common::YamlMap r = common::YamlMap::FromString(yaml, "nav.yaml");
-      LoadNavigatorConfig(r);
-    } catch (const common::ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
-  EXPECT_NE(error("map:\n  encoding: pgm\n").find("nav.yaml:2"), std::string::npos);
-  EXPECT_NE(error("map:\n  occupied_thresh: 0.65\n").find("nav.yaml:2"), std::string::npos);
-  EXPECT_NE(error("map:\n  encoding: occupancy\n  free_threshold_og: 80\n").find("free_threshold"),
-            std::string::npos);
-}
-
-TEST(NavigatorMapConfigTest, LoadsTheShippedApartmentFile) {
-  const NavigatorConfig c =
-      LoadNavigatorConfigFile(std::string(CAIRN_SOURCE_DIR) + "/config/navigator/apartment.yaml");
-  EXPECT_EQ(c.map.encoding, MapEncoding::kOccupancy);
-  EXPECT_EQ(c.map.LayerFor("kobuki"), "final");
-  EXPECT_LT(c.map.occupancy.free_threshold_og, c.map.occupancy.occupied_threshold_og);
-  EXPECT_FALSE(c.cost_map.unknown_is_traversable);
 }
 
 }  // namespace

@@ -41,6 +41,13 @@ struct TestLayer {
   }
 };
 
+/// 20 m × 10 m at 0.1 m with a wall across x = 10 m that has one 1.2 m gap at y in [6, 7.2].
+inline TestLayer WallWithGap() {
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 7.2, 10.2, 10.0, 100.0f);
+  return layer;
+}
+
 /// The pioneer3at footprint (0.63 m × 0.50 m).
 inline std::vector<common::Vector2> PioneerFootprint() {
   return common::RectangleFootprint(0.63, 0.50);

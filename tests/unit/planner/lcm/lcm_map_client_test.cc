@@ -31,10 +31,10 @@ LcmMapClientParams OccupancyParams() {
   LcmMapClientParams p;
   p.robot = "r1";
   p.layer = layers::kFinal;
-  p.encoding = MapEncoding::kOccupancy;
-  p.occupancy.occupied_threshold_og = 20.f;
-  p.occupancy.free_threshold_og = 5.f;
-  p.incomplete_timeout_s = 0.0;
+  p.snapshot.encoding = MapEncoding::kOccupancy;
+  p.snapshot.occupancy.occupied_threshold_og = 20.f;
+  p.snapshot.occupancy.free_threshold_og = 5.f;
+  p.snapshot.incomplete_timeout_s = 0.0;
   return p;
 }
 
@@ -64,7 +64,7 @@ class LcmMapClientTest : public ::testing::Test {
 
   std::unique_ptr<LcmMapClient> Client(LcmMapClientParams params) {
     return std::make_unique<LcmMapClient>(node_, std::move(params),
-                                          testing::PioneerProfile().footprint_m, CostMapParams{});
+                                          testing::PioneerProfile().footprint_m);
   }
   runtime::LayerTiler::Batch Tiles(const common::GridMap& map) {
     return tiler_.Update(map, layers::kFinal, runtime::TileEncoding::kOccupancy, ++utime_);
@@ -158,7 +158,7 @@ TEST_F(LcmMapClientTest, MissingTilesAreLethalAndAskedFor) {
 
 TEST_F(LcmMapClientTest, RefusesBadThresholds) {
   LcmMapClientParams p = OccupancyParams();
-  p.occupancy.free_threshold_og = 50.f;
+  p.snapshot.occupancy.free_threshold_og = 50.f;
   EXPECT_THROW(Client(p), std::invalid_argument);
 }
 

@@ -1,8 +1,5 @@
 #include "planner/lcm/navigator_service.h"
 
-#include <chrono>
-#include <thread>
-
 #include <gtest/gtest.h>
 
 #include "cairn/lcmt_map_control_request.hpp"
@@ -45,7 +42,8 @@ runtime::NodeOptions Options() {
 
 // The service on an in-process bus, with the test playing simulator (clock and pose), mapper
 // (tiles and manifests) and a kinematic robot that follows the commands. Timers are not run:
-// the test calls Tick() once per simulated 50 ms.
+// the test calls Tick() once per simulated 50 ms and lets no simulated time pass while a plan
+// runs, so nothing depends on the machine's speed.
 class NavigatorServiceTest : public ::testing::Test {
  protected:
   NavigatorServiceTest() : node_(Options()), tiler_("r1", "live", 50) {
@@ -67,6 +65,9 @@ class NavigatorServiceTest : public ::testing::Test {
 
   void Start(std::vector<Place> places = {}) {
     NavigatorConfig config;
+    // The test drives the clock and waits for every plan (Step), so a plan's wall-clock budget
+    // must not decide the outcome on a loaded machine.
+    config.global_planner.time_budget_s = 30.0;
     config.Finalize();
     dut_ = std::make_unique<NavigatorService>(node_, config, testing::PioneerProfile(), places);
   }
@@ -113,13 +114,15 @@ class NavigatorServiceTest : public ::testing::Test {
       pose_.y_m += c.linear_mps * 0.05 * std::sin(pose_.yaw_rad);
       pose_.yaw_rad = common::WrapAngle(pose_.yaw_rad + c.angular_radps * 0.05);
     }
-    // Give the planner thread a moment (it runs in wall time).
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    // A plan started this cycle runs in wall time on the worker: the simulated time waits for
+    // it, and its result is taken at the next cycle.
+    ASSERT_TRUE(dut_->WaitForPlanner(60.0)) << "the planner did not finish within 60 s";
   }
   bool StepUntil(const std::function<bool()>& done, int max_ticks, bool pose = true,
                  bool map = true) {
     for (int k = 0; k < max_ticks; ++k) {
       Step(pose, map);
+      if (HasFatalFailure()) return false;
       if (done()) return true;
     }
     return false;
@@ -316,33 +319,6 @@ TEST_F(NavigatorServiceTest, AsksForMissingTilesAndCancelStops) {
   ASSERT_TRUE(StepUntil([&] { return commands_.back().linear_mps == 0.0; }, 40));
   EXPECT_EQ(LastState(), kStateCancelled);
   EXPECT_EQ(statuses_.back().reason, kReasonCancelled);
-}
-
-TEST(NavigatorConfigTest, LoadsTheShippedFileAndRefusesUnknownKeys) {
-  const NavigatorConfig c =
-      LoadNavigatorConfigFile(std::string(CAIRN_SOURCE_DIR) + "/config/navigator/navigator.yaml");
-  EXPECT_EQ(c.global_planner.planner, "RRTConnect");
-  EXPECT_EQ(c.local_planner.generator.vx_samples, 20);
-  EXPECT_DOUBLE_EQ(c.navigator.control_period_s, 0.05);
-  EXPECT_DOUBLE_EQ(c.local_planner.generator.control_period_s, 0.05);
-  EXPECT_EQ(c.navigator.recovery.sequence.size(), 4u);
-  auto error = [](const std::string& yaml) {
-    try {
-      common::YamlMap root = common::YamlMap::FromString(yaml, "nav.yaml");
-      LoadNavigatorConfig(root);
-    } catch (const common::ConfigError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
-  EXPECT_NE(error("local_planner:\n  critics:\n    speedd_scale: 1\n").find("nav.yaml:3"),
-            std::string::npos);
-  EXPECT_NE(error("global_planner:\n  planner: RRTfast\n").find("RRTfast"), std::string::npos);
-  EXPECT_NE(error("global_planner:\n  state_space: se3\n").find("nav.yaml:2"), std::string::npos);
-  EXPECT_NE(error("recovery:\n  sequence: [rotate, dance]\n").find("dance"), std::string::npos);
-  EXPECT_NE(error("pose_source: gps\n").find("nav.yaml:1"), std::string::npos);
-  EXPECT_NE(error("control_rate_hz: -1\n").find("control_rate_hz"), std::string::npos);
-  EXPECT_EQ(error("navigator:\n  xy_goal_tolerance_m: 0.3\n"), "");
 }
 
 }  // namespace

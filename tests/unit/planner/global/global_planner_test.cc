@@ -17,18 +17,18 @@ using common::Vector2;
 using testing::PioneerFootprint;
 using testing::SmallFootprint;
 using testing::TestLayer;
+using testing::WallWithGap;
 
-// 20 m × 10 m at 0.1 m with a wall across x = 10 m that has one 1.2 m gap at y in [6, 7.2].
-TestLayer WallWithGap() {
-  TestLayer layer(200, 100, 0.1);
-  layer.Rect(9.8, 0.0, 10.2, 6.0, 100.0f).Rect(9.8, 7.2, 10.2, 10.0, 100.0f);
-  return layer;
-}
-
+// The tests assert what a plan is, never how fast it comes: every wall-clock cap (the budget,
+// the improvement rounds' time, the simplifier's time) is far beyond what a plan needs, so a
+// plan is the same for a seed however loaded the machine is. Speed is bench_planner's to
+// measure.
 GlobalPlannerParams Params(const std::string& planner = "RRTConnect") {
   GlobalPlannerParams p;
   p.planner = planner;
-  p.time_budget_s = 2.0;
+  p.time_budget_s = 60.0;
+  p.improvement_time_s = 60.0;
+  p.simplify_time_s = 60.0;
   p.seed = 7;
   return p;
 }
@@ -74,8 +74,7 @@ TEST(GlobalPlannerTest, FindsAnExactPathThroughTheGap) {
 
 TEST(GlobalPlannerTest, SameSeedSamePath) {
   const auto map = WallWithGap().Build(PioneerFootprint());
-  GlobalPlannerParams p = Params();
-  p.simplify_time_s = 0.0;  // the simplifier stops on wall time; the planner alone is seeded
+  GlobalPlannerParams p = Params();  // simplified and improved, no cap binding
   const GlobalPlanner dut(p);
   const PlanRequest req{{2.0, 2.0, 0.0}, {18.0, 8.0, 0.0}, false};
   const PlanResult a = dut.Plan(*map, req);
@@ -85,7 +84,10 @@ TEST(GlobalPlannerTest, SameSeedSamePath) {
   for (size_t i = 0; i < a.poses.size(); ++i) {
     EXPECT_DOUBLE_EQ(a.poses[i].x_m, b.poses[i].x_m);
     EXPECT_DOUBLE_EQ(a.poses[i].y_m, b.poses[i].y_m);
+    EXPECT_DOUBLE_EQ(a.poses[i].yaw_rad, b.poses[i].yaw_rad);
   }
+  EXPECT_EQ(a.solutions, b.solutions);
+  EXPECT_DOUBLE_EQ(a.cost, b.cost);
   p.seed = 8;
   const PlanResult c = GlobalPlanner(p).Plan(*map, req);
   ASSERT_TRUE(c.ok());
@@ -195,11 +197,13 @@ TEST(GlobalPlannerTest, NoPathIsProvedQuicklyWhenTheGoalIsWalledOff) {
   TestLayer layer = WallWithGap();
   layer.Rect(9.8, 5.9, 10.2, 7.3, 100.0f);  // close the gap
   const auto map = layer.Build(PioneerFootprint());
-  GlobalPlannerParams p = Params();
-  p.time_budget_s = 30.0;
-  const PlanResult r = GlobalPlanner(p).Plan(*map, {{2.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
+  const PlanResult r =
+      GlobalPlanner(Params()).Plan(*map, {{2.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false});
   EXPECT_EQ(r.status, PlanStatus::kNoPath) << r.message;
-  EXPECT_LT(r.total_time_s, 1.0);  // proved on the grid, not by exhausting the 30 s budget
+  // Proved on the grid: OMPL never ran (it could only have exhausted its 60 s budget).
+  EXPECT_EQ(r.message, "the goal is not connected to the start");
+  EXPECT_EQ(r.solve_time_s, 0.0);
+  EXPECT_EQ(r.solutions, 0);
 }
 
 TEST(GlobalPlannerTest, NoPathWhenTheGapIsNarrowerThanTheRobot) {
@@ -273,8 +277,9 @@ TEST(GlobalPlannerTest, TimedOutWhenTheBudgetIsTooSmall) {
   p.time_budget_s = 1e-4;
   const PlanResult r = GlobalPlanner(p).Plan(*map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false});
   EXPECT_EQ(r.status, PlanStatus::kTimedOut) << r.message;
-  // The same problem is solvable with time.
-  p.time_budget_s = 10.0;
+  // The same problem is solvable with time (the first solution is enough to show it).
+  p.time_budget_s = 60.0;
+  p.improvement_rounds = 0;
   EXPECT_EQ(GlobalPlanner(p).Plan(*map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false}).status,
             PlanStatus::kSuccess);
 }
@@ -288,20 +293,18 @@ TEST(GlobalPlannerTest, CancelledBeforeAndDuringTheSolve) {
   const PlanRequest req{{2.0, 8.0, 0.0}, {18.0, 2.0, 0.0}, false};
   EXPECT_EQ(GlobalPlanner(Params()).Plan(*map, req, &cancel).status, PlanStatus::kCancelled);
 
-  // Without the grid proof OMPL would search the whole budget; a cancel ends it early.
+  // Without the grid proof OMPL would search its whole budget (it can never reach the goal,
+  // and would end kApproximate or kTimedOut); a cancel from another thread ends it.
   GlobalPlannerParams p = Params();
   p.grid_precheck = false;
-  p.time_budget_s = 20.0;
   cancel = false;
   std::thread canceller([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     cancel = true;
   });
-  const auto t0 = std::chrono::steady_clock::now();
   const PlanResult r = GlobalPlanner(p).Plan(*map, req, &cancel);
   canceller.join();
-  EXPECT_EQ(r.status, PlanStatus::kCancelled);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  EXPECT_EQ(r.status, PlanStatus::kCancelled) << r.message;
 }
 
 TEST(GlobalPlannerTest, ApproximateSolutionIsAFailure) {
@@ -394,32 +397,6 @@ TEST(GlobalPlannerTest, BadParamsAreRejectedWithTheirName) {
   p.planner = "RRT";
   EXPECT_NO_THROW(GlobalPlanner{p});
   EXPECT_THROW(StateSpaceKindFromName("se3"), std::invalid_argument);
-}
-
-TEST(GridAStarTest, ShortestAroundTheWallAndCostAware) {
-  const auto map = WallWithGap().Build(PioneerFootprint());
-  const GridPath p = GridAStar(*map, {2.0, 2.0}, {18.0, 2.0});
-  ASSERT_TRUE(p.found);
-  EXPECT_GT(p.length_m, 16.0);
-  EXPECT_LT(p.length_m, 2.0 * std::hypot(8.0, 4.8) * 1.09);  // octile path through the gap
-  // A graded band across an open map: a high weight makes the path go around it.
-  TestLayer band(200, 100, 0.1);
-  band.Rect(9.0, 0.0, 11.0, 8.0, 90.0f);
-  const auto banded = band.Build(SmallFootprint());
-  GridAStarParams cheap;
-  cheap.traversal_cost_weight = 0.0;
-  GridAStarParams careful;
-  careful.traversal_cost_weight = 10.0;
-  const GridPath straight = GridAStar(*banded, {2.0, 2.0}, {18.0, 2.0}, cheap);
-  const GridPath around = GridAStar(*banded, {2.0, 2.0}, {18.0, 2.0}, careful);
-  ASSERT_TRUE(straight.found && around.found);
-  EXPECT_NEAR(straight.length_m, 16.0, 0.05);
-  EXPECT_GT(around.length_m, 18.0);
-  for (const Vector2& q : around.points_m) EXPECT_FALSE(q.x() > 9.0 && q.x() < 11.0 && q.y() < 8.0);
-  // Not found across a closed wall.
-  TestLayer closed = WallWithGap();
-  closed.Rect(9.8, 5.9, 10.2, 7.3, 100.0f);
-  EXPECT_FALSE(GridAStar(*closed.Build(PioneerFootprint()), {2.0, 2.0}, {18.0, 2.0}).found);
 }
 
 }  // namespace
