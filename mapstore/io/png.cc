@@ -50,19 +50,24 @@ Result<Rendered> RenderValues(const common::GridMap& map, const std::string& lay
 }
 
 void DrawCells(const Rendered& r, Canvas* canvas) {
-  const int w = static_cast<int>(r.values.rows()), h = static_cast<int>(r.values.cols());
+  // Locals, not r's fields: the canvas writes bytes, which may alias anything.
+  const common::Layer& values = r.values;
+  const bool occupancy = r.occupancy;
+  const float lo = r.lo, hi = r.hi;
+  const int scale = r.scale;
+  const int w = static_cast<int>(values.rows()), h = static_cast<int>(values.cols());
   for (int iy = 0; iy < h; ++iy) {
     for (int ix = 0; ix < w; ++ix) {
-      const float v = r.values(ix, iy);
+      const float v = values(ix, iy);
       Rgb c;
-      if (r.occupancy) {
+      if (occupancy) {
         c = OccupancyColour(v);
       } else if (std::isnan(v)) {
         c = kUnknownColour;
       } else {
-        c = RampColour(r.hi > r.lo ? (v - r.lo) / (r.hi - r.lo) : 0.5f);
+        c = RampColour(hi > lo ? (v - lo) / (hi - lo) : 0.5f);
       }
-      canvas->Fill(ix * r.scale, (h - 1 - iy) * r.scale, r.scale, r.scale, c);
+      canvas->Fill(ix * scale, (h - 1 - iy) * scale, scale, scale, c);
     }
   }
 }

@@ -73,12 +73,6 @@ constexpr Glyph kFont[] = {
 
 }  // namespace
 
-void Canvas::Fill(int x0, int y0, int w, int h, Rgb c) {
-  for (int y = y0; y < y0 + h; ++y) {
-    for (int x = x0; x < x0 + w; ++x) Set(x, y, c);
-  }
-}
-
 void Canvas::Frame(int x0, int y0, int w, int h, Rgb c) {
   for (int x = x0; x < x0 + w; ++x) {
     Set(x, y0, c);

@@ -30,7 +30,11 @@ class Canvas {
     p[1] = c.g;
     p[2] = c.b;
   }
-  void Fill(int x0, int y0, int w, int h, Rgb c);
+  void Fill(int x0, int y0, int w, int h, Rgb c) {  // inline: a render calls it per cell
+    for (int y = y0; y < y0 + h; ++y) {
+      for (int x = x0; x < x0 + w; ++x) Set(x, y, c);
+    }
+  }
   void Frame(int x0, int y0, int w, int h, Rgb c);
   /// Draws text (upper-cased; unknown characters as blanks); returns the end x.
   int Text(int x, int y, const std::string& text, Rgb c);

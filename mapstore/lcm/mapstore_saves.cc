@@ -261,7 +261,6 @@ void MapstoreService::FollowRobot(const std::string& robot) {
           node_.CountDropped("bad_mapper_octomap");
         }
       });
-  followed_.insert(robot);
   node_.Event("following the live map of %s for pull saves", robot.c_str());
 }
 

@@ -164,7 +164,6 @@ class MapstoreService {
   std::map<std::string, Reply> replies_;
   std::deque<std::string> reply_order_;
   SaveAssembler saves_;
-  std::set<std::string> followed_;  // robots whose live map is subscribed
   // Heavy requests waiting for a worker, and the keys of those queued or running.
   std::deque<std::unique_ptr<Job>> queue_;
   std::set<std::string> busy_keys_;
