@@ -7,6 +7,34 @@
 
 namespace cairn::mapstore {
 
+std::string SiteOf(const cairn::lcmt_mapstore_request& request) {
+  return request.site.empty() ? kDefaultSite : request.site;
+}
+
+MapRef RefOf(const cairn::lcmt_mapstore_request& request) {
+  return {SiteOf(request), request.map_name, request.version};
+}
+
+WriteContext ContextOf(const cairn::lcmt_mapstore_request& request) {
+  return {request.requester.empty() ? "unknown" : request.requester, request.request_id, 0};
+}
+
+SaveRequest SaveRequestOf(const cairn::lcmt_mapstore_request& r) {
+  SaveRequest s;
+  s.requester = r.requester;
+  s.request_id = r.request_id;
+  s.site = r.site;
+  s.map_name = r.map_name;
+  s.robot = r.robot;
+  s.layers = r.layers;
+  s.profile = r.profile;
+  s.code_version = r.code_version;
+  s.parameters = r.parameters;
+  s.expect_obstacles = r.expect_obstacles;
+  s.expect_octomap = r.expect_octomap;
+  return s;
+}
+
 cairn::lcmt_map_info ToLcm(const MapInfo& info) {
   cairn::lcmt_map_info m{};
   m.site = info.site;

@@ -6,6 +6,7 @@
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
 #include "cairn/lcmt_map_info.hpp"
+#include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_occupancy_tile.hpp"
 #include "cairn/lcmt_octomap.hpp"
 #include "cairn/lcmt_place.hpp"
@@ -14,6 +15,7 @@
 #include "common/status.h"
 #include "mapstore/map_store.h"
 #include "mapstore/octomap_chunks.h"
+#include "mapstore/save_assembler.h"
 #include "mapstore/tile_assembler.h"
 
 /// @file
@@ -23,6 +25,15 @@
 /// a CheckedTile only after its cells were checked against its CRC.
 
 namespace cairn::mapstore {
+
+/// The site a request names, kDefaultSite when it names none.
+std::string SiteOf(const cairn::lcmt_mapstore_request& request);
+/// The map version a request names (its site defaulted).
+MapRef RefOf(const cairn::lcmt_mapstore_request& request);
+/// Who changes the store for a request: its requester ("unknown" when none) and request id.
+WriteContext ContextOf(const cairn::lcmt_mapstore_request& request);
+/// An OP_SAVE request in core terms (layers as they are: the caller checks num_layers).
+SaveRequest SaveRequestOf(const cairn::lcmt_mapstore_request& request);
 
 cairn::lcmt_map_info ToLcm(const MapInfo& info);
 cairn::lcmt_place ToLcm(const Place& place);

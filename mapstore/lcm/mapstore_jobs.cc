@@ -19,18 +19,6 @@ using Request = cairn::lcmt_mapstore_request;
 
 namespace {
 
-double SecondsSince(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-MapRef RefOf(const Request& request) {
-  return {request.site.empty() ? kDefaultSite : request.site, request.map_name, request.version};
-}
-
-WriteContext ContextOf(const Request& request) {
-  return {request.requester.empty() ? "unknown" : request.requester, request.request_id, 0};
-}
-
 // Obstacles into a reply, at most `max` (a bus message stays under its size limit).
 void AddObstacles(const std::vector<common::Obstacle>& obstacles, int max, Reply* reply) {
   for (const auto& o : obstacles) {
@@ -234,7 +222,7 @@ void MapstoreService::JobExport(const Request& request, JobResult* out) const {
 
 void MapstoreService::JobImport(const Request& request, JobResult* out) const {
   ImportOptions options;
-  options.site = request.site.empty() ? kDefaultSite : request.site;
+  options.site = SiteOf(request);
   options.name = request.map_name;
   if (!request.layers.empty()) options.layer = request.layers.front();
   auto path = io::PathBelow(params_.files_root, request.path);

@@ -22,22 +22,6 @@ namespace {
 
 constexpr char kActor[] = "cairn-mapstore";
 
-SaveRequest SaveRequestOf(const Request& r) {
-  SaveRequest s;
-  s.requester = r.requester;
-  s.request_id = r.request_id;
-  s.site = r.site;
-  s.map_name = r.map_name;
-  s.robot = r.robot;
-  s.layers = r.layers;
-  s.profile = r.profile;
-  s.code_version = r.code_version;
-  s.parameters = r.parameters;
-  s.expect_obstacles = r.expect_obstacles;
-  s.expect_octomap = r.expect_octomap;
-  return s;
-}
-
 }  // namespace
 
 template <typename Msg>

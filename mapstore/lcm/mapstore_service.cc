@@ -15,10 +15,6 @@ using Request = cairn::lcmt_mapstore_request;
 
 namespace {
 
-double SecondsSince(std::chrono::steady_clock::time_point t) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
 ReplyPayloadParams PayloadParamsOf(const MapstoreServiceParams& p) {
   ReplyPayloadParams out;
   out.tile_size = p.reply_tile_size;
@@ -29,14 +25,6 @@ ReplyPayloadParams PayloadParamsOf(const MapstoreServiceParams& p) {
   out.burst_pause_ms = p.burst_pause_ms;
   out.max_kept_cells = p.max_kept_reply_cells;
   return out;
-}
-
-std::string SiteOf(const Request& request) {
-  return request.site.empty() ? kDefaultSite : request.site;
-}
-
-WriteContext ContextOf(const Request& request) {
-  return {request.requester.empty() ? "unknown" : request.requester, request.request_id, 0};
 }
 
 }  // namespace
@@ -97,6 +85,10 @@ int64_t MapstoreService::pending_saves() const {
 int64_t MapstoreService::running_jobs() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return static_cast<int64_t>(busy_keys_.size());
+}
+
+double MapstoreService::SecondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
 std::string MapstoreService::RequestKey(const Request& request) const {

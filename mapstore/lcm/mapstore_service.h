@@ -115,6 +115,7 @@ class MapstoreService {
   void Publish(const Reply& reply);
   void SetStatus(const common::Status& status, Reply* reply);
   std::string RequestKey(const Request& request) const;
+  static double SecondsSince(Clock::time_point t);
   void OnResend(const cairn::lcmt_tile_resend_request& request);
 
   // ---- Worker jobs (mapstore_jobs.cc): they use the store, the deriver and the parameters ----

@@ -104,5 +104,29 @@ TEST(MapstoreConversionsTest, ResendRequestsAndOctomapChunksRoundTrip) {
   EXPECT_EQ(FromLcm(bad).status().code(), common::StatusCode::kInvalidArgument);
 }
 
+TEST(MapstoreConversionsTest, RequestsNameTheirMapWriterAndSave) {
+  cairn::lcmt_mapstore_request r{};
+  r.request_id = 42;
+  r.map_name = "hall";
+  r.version = 3;
+  r.layers = {"elevation"};
+  r.robot = "rover1";
+  r.expect_octomap = true;
+  EXPECT_EQ(SiteOf(r), kDefaultSite);
+  EXPECT_EQ(RefOf(r).version, 3);
+  EXPECT_EQ(ContextOf(r).actor, "unknown");
+  EXPECT_EQ(ContextOf(r).request_id, 42);
+  r.site = "lab";
+  r.requester = "navigator";
+  EXPECT_EQ(RefOf(r).site, "lab");
+  EXPECT_EQ(ContextOf(r).actor, "navigator");
+  const SaveRequest save = SaveRequestOf(r);
+  EXPECT_EQ(SaveKey(save), "navigator#42");
+  EXPECT_EQ(PushName(save), "42/hall");
+  EXPECT_EQ(save.robot, "rover1");
+  EXPECT_EQ(save.layers, r.layers);
+  EXPECT_TRUE(save.expect_octomap);
+}
+
 }  // namespace
 }  // namespace cairn::mapstore
