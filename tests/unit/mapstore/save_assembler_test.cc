@@ -45,6 +45,16 @@ SaveRequest PushRequest(const MapSnapshot& s, int64_t id = 11) {
   return r;
 }
 
+SaveRequest PullRequest(int64_t id, const std::string& map, const std::string& robot) {
+  SaveRequest r;
+  r.requester = "unit";
+  r.request_id = id;
+  r.site = "lab";
+  r.map_name = map;
+  r.robot = robot;
+  return r;
+}
+
 class SaveAssemblerTest : public ::testing::Test {
  protected:
   SaveAssemblerTest() : snapshot_(testing::SampleSnapshot("corridor", 37, 23)) {}
@@ -256,12 +266,7 @@ TEST_F(SaveAssemblerTest, APushWaitsForItsOctomapAndObstacles) {
 // companion map.
 TEST_F(SaveAssemblerTest, APullSaveTakesTheLiveMapsRobotAgnosticLayers) {
   SaveAssembler dut(store_, Params());
-  SaveRequest request;
-  request.requester = "unit";
-  request.request_id = 21;
-  request.site = "lab";
-  request.map_name = "tunnel";
-  request.robot = "rover1";
+  const SaveRequest request = PullRequest(21, "tunnel", "rover1");
   SaveProgress started = dut.Start(request, T(0.0));
   EXPECT_EQ(started.new_robots, std::vector<std::string>{"rover1"});
   EXPECT_EQ(started.publish_all, std::vector<std::string>{"rover1"});
@@ -308,12 +313,7 @@ TEST_F(SaveAssemblerTest, APullSaveTakesTheLiveMapsRobotAgnosticLayers) {
 
 TEST_F(SaveAssemblerTest, APullSaveOnlyTakesManifestsNewerThanItsRequest) {
   SaveAssembler dut(store_, Params());
-  SaveRequest request;
-  request.requester = "unit";
-  request.request_id = 21;
-  request.site = "lab";
-  request.map_name = "tunnel";
-  request.robot = "rover1";
+  SaveRequest request = PullRequest(21, "tunnel", "rover1");
   request.layers = {layers::kElevation};
   dut.Start(request, T(0.0));  // follows rover1 from now on
   const auto cut = CutLayer(snapshot_.base, layers::kElevation, 10, "live");
@@ -340,13 +340,7 @@ TEST_F(SaveAssemblerTest, APullSaveOnlyTakesManifestsNewerThanItsRequest) {
 
 TEST_F(SaveAssemblerTest, APullFromARobotWithoutAMapperTimesOut) {
   SaveAssembler dut(store_, Params());
-  SaveRequest request;
-  request.requester = "unit";
-  request.request_id = 31;
-  request.site = "lab";
-  request.map_name = "nothing";
-  request.robot = "ghost";
-  dut.Start(request, T(0.0));
+  dut.Start(PullRequest(31, "nothing", "ghost"), T(0.0));
   SaveProgress p = dut.Poll(T(2.5));
   ASSERT_EQ(p.finished.size(), 1u);
   EXPECT_EQ(p.finished[0].status.message(),

@@ -17,7 +17,6 @@ using common::StatusCode;
 using testing::Geometry;
 using testing::Pattern;
 using testing::TempDir;
-using testing::WriteText;
 namespace fs = std::filesystem;
 
 TEST(FilesTest, WritersStayInTheirFolder) {

@@ -15,8 +15,6 @@ namespace cairn::mapstore::io {
 namespace {
 
 using common::StatusCode;
-using testing::Geometry;
-using testing::Pattern;
 using testing::TempDir;
 using testing::WriteText;
 namespace fs = std::filesystem;

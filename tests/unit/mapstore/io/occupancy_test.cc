@@ -14,10 +14,6 @@ namespace {
 
 using common::StatusCode;
 using testing::Geometry;
-using testing::Pattern;
-using testing::TempDir;
-using testing::WriteText;
-namespace fs = std::filesystem;
 
 TEST(OccupancyTest, OccupancyPercentConvertsLogOddsAndRefusesElevation) {
   common::GridMap map(Geometry(2, 1));

@@ -16,11 +16,8 @@ namespace cairn::mapstore::io {
 namespace {
 
 using common::StatusCode;
-using testing::Geometry;
-using testing::Pattern;
 using testing::TempDir;
 using testing::WriteText;
-namespace fs = std::filesystem;
 
 TEST(OctomapFilesTest, OctomapFilesConvertBetweenBinaryAndFull) {
   const std::string dir = TempDir();

@@ -20,7 +20,6 @@ using common::StatusCode;
 using testing::Geometry;
 using testing::Pattern;
 using testing::TempDir;
-using testing::WriteText;
 namespace fs = std::filesystem;
 
 TEST(PngTest, PngRenderHasTheMapAndALegend) {
