@@ -9,11 +9,16 @@
 #include "common/grid_map.h"
 #include "common/status.h"
 #include "mapstore/map_store.h"
+#include "mapstore/parallel_for.h"
+#include "mapstore/registry_codec.h"
+#include "mapstore/tile_grid.h"
 
 /// @file
 /// How the map store keeps bytes: blobs compressed with zstd (float tiles byte-shuffled first,
 /// which lets zstd find the repeated exponent bytes of smooth terrain), each with the CRC-32 of
-/// its raw bytes, addressed by content. And how a layer is cut into tiles.
+/// its raw bytes, addressed by content. How a layer is cut into tiles is in tile_grid.h, the
+/// registry's bytes in registry_codec.h and the thread helper in parallel_for.h (included here:
+/// most users of the codec want them too).
 
 namespace cairn::mapstore {
 
@@ -40,12 +45,6 @@ struct EncodedBlob {
   /// frame checksum, XXH64-based, for compressed blobs) and the raw size.
   std::string key;
 };
-
-/// Runs fn(i) for every i in [0, n) on up to `threads` threads (the caller's among them).
-/// The first exception thrown by fn is rethrown in the caller after all threads finished. The
-/// helper threads are kept for the next call (one caller at a time; a concurrent caller starts
-/// its own).
-void ParallelFor(size_t n, int threads, const std::function<void(size_t)>& fn);
 
 /// CRC-32 of a blob row as stored: its bytes, then its codec (int32), raw size (int64) and raw
 /// CRC-32 (uint32), little-endian. A damaged byte or header field changes it, so a reader can
@@ -95,45 +94,8 @@ common::Status DecodeFloatBlobRows(Codec codec, const char* data, size_t size, i
 common::Result<std::string> DecodeBlob(Codec codec, const std::string& data, int64_t raw_size,
                                        uint32_t raw_crc32, bool verify_crc = false);
 
-/// One tile of a layer: tile (tile_ix, tile_iy) covers cells [x0, x0 + cells_x) x
-/// [y0, y0 + cells_y).
-struct TileSpec {
-  int tile_ix{0};
-  int tile_iy{0};
-  int x0{0};
-  int y0{0};
-  int cells_x{0};
-  int cells_y{0};
-};
-
-/// Every tile of a grid (or only those overlapping `region` when given), row by row.
-std::vector<TileSpec> TilesOf(const common::GridGeometry& geometry, int tile_size,
-                              const std::optional<CellBox>& region = std::nullopt);
-/// Cells of one tile, x fastest (the product's order).
-std::vector<float> ExtractTile(const common::Layer& layer, const TileSpec& tile);
-/// True when every cell is NaN (such tiles are not stored: absent = unknown).
-bool AllUnknown(const std::vector<float>& cells);
-/// Writes tile cells into `layer`, whose cell (0, 0) is cell (offset_ix, offset_iy) of the full
-/// grid; cells outside the layer are skipped.
-void PasteTile(const TileSpec& tile, const float* cells, int offset_ix, int offset_iy,
-               common::Layer* layer);
-
 /// kOk when a stored tile's bytes decode to its size and checksums; kCorrupt saying what did
 /// not match otherwise. Thread-safe.
 common::Status CheckStoredTile(const StoredTile& tile);
-
-/// The box clipped to a grid; empty when they do not overlap.
-CellBox ClipBox(const CellBox& box, const common::GridGeometry& geometry);
-/// Geometry of a box of a grid (same resolution and yaw, origin at the box's minimum corner).
-common::GridGeometry SubGeometry(const common::GridGeometry& geometry, const CellBox& box);
-
-/// Serialises a registry (obstacles, outlines, verdicts) in a compact little-endian form.
-std::string SerializeRegistry(const common::ObstacleRegistry& registry);
-/// kCorrupt when the bytes are not a registry.
-common::Result<common::ObstacleRegistry> ParseRegistry(const std::string& bytes);
-
-/// Polygons as little-endian doubles x0 y0 x1 y1 ...
-std::string SerializePolygon(const std::vector<common::Vector2>& polygon);
-common::Result<std::vector<common::Vector2>> ParsePolygon(const std::string& bytes);
 
 }  // namespace cairn::mapstore

@@ -5,8 +5,9 @@
 ///
 ///   cairn-map list     maps of every site (latest versions; --all-versions, --deleted)
 ///   cairn-map show     one map version: provenance, geometry, layers, obstacles, cache, audit
-///   cairn-map export   ROS map_server YAML + PGM (trinary, scale, raw), PNG with a legend,
-///                      OctoMap .bt/.ot, CSV of obstacles
+///   cairn-map export   a registered format (mapstore/io/format_registry.h): ROS map_server
+///                      YAML + PGM (trinary, scale, raw), PNG with a legend, OctoMap .bt/.ot,
+///                      CSV of obstacles; `cairn-map help` lists them
 ///   cairn-map import   a YAML + PGM map (hand-drawn static maps too), .bt/.ot, .csv
 ///   cairn-map share    derive a map for another profile and list the verdicts that change
 ///   cairn-map diff     two versions, or one version under two profiles

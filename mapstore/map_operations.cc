@@ -275,6 +275,96 @@ LayerDiff CompareLayers(const std::string& name_a, const common::Layer& a,
   return d;
 }
 
+namespace {
+
+// What differs between two obstacles of one id ("" when nothing does).
+std::string ObstacleChange(const common::Obstacle& x, const common::Obstacle* o) {
+  std::string what;
+  auto cmp = [&](const char* field, double va, double vb) {
+    const bool same = (std::isnan(va) && std::isnan(vb)) || std::abs(va - vb) <= 1e-9;
+    if (!same)
+      what += std::string(what.empty() ? "" : ", ") + field + " " + Num(va) + " -> " + Num(vb);
+  };
+  if (x.kind != o->kind) {
+    what = std::string("kind ") + common::ObstacleKindName(x.kind) + " -> " +
+           common::ObstacleKindName(o->kind);
+  }
+  cmp("slope_rad", x.slope_rad, o->slope_rad);
+  cmp("height_m", x.height_m, o->height_m);
+  cmp("width_m", x.width_m, o->width_m);
+  cmp("length_m", x.length_m, o->length_m);
+  cmp("depth_m", x.depth_m, o->depth_m);
+  for (const auto& v : o->verdicts) {
+    const auto* w = x.VerdictFor(v.profile);
+    if (w != nullptr && w->crossable != v.crossable) {
+      what += std::string(what.empty() ? "" : ", ") + v.profile + " " +
+              (w->crossable ? "crossable -> blocked" : "blocked -> crossable");
+    }
+  }
+  return what;
+}
+
+// Layers of two versions of one grid, compared by name.
+Status DiffLayers(const MapStore& store, const MapInfo& ia, const MapInfo& ib,
+                  const std::vector<std::string>& layers, double tolerance, MapDiff* diff) {
+  const MapRef ea{ia.site, ia.name, ia.version}, eb{ib.site, ib.name, ib.version};
+  std::set<std::string> names_a(ia.layers.begin(), ia.layers.end());
+  std::set<std::string> names_b(ib.layers.begin(), ib.layers.end());
+  std::set<std::string> names;
+  if (layers.empty()) {
+    names.insert(names_a.begin(), names_a.end());
+    names.insert(names_b.begin(), names_b.end());
+  } else {
+    names.insert(layers.begin(), layers.end());
+  }
+  const int64_t cells = ia.geometry.num_cells();
+  for (const std::string& name : names) {
+    const bool in_a = names_a.count(name) > 0, in_b = names_b.count(name) > 0;
+    if (!in_a && !in_b) return common::NotFoundError("neither map has a layer '" + name + "'");
+    if (!in_a || !in_b) {
+      LayerDiff d;
+      d.layer_a = in_a ? name : "";
+      d.layer_b = in_b ? name : "";
+      d.cells_different = cells;
+      diff->layers.push_back(d);
+      continue;
+    }
+    auto la = store.LoadLayers(ea, {{name}, std::nullopt});
+    if (!la.ok()) return la.status();
+    auto lb = store.LoadLayers(eb, {{name}, std::nullopt});
+    if (!lb.ok()) return lb.status();
+    diff->layers.push_back(CompareLayers(name, la->at(name), name, lb->at(name), tolerance));
+  }
+
+  return Status::Ok();
+}
+
+// Obstacles of two versions, compared by id.
+Status DiffObstacles(const MapStore& store, const MapRef& ea, const MapRef& eb, MapDiff* diff) {
+  auto oa = store.LoadObstacles(ea);
+  if (!oa.ok()) return oa.status();
+  auto ob = store.LoadObstacles(eb);
+  if (!ob.ok()) return ob.status();
+  std::map<int32_t, const common::Obstacle*> ma, mb;
+  for (const auto& o : oa->obstacles) ma[o.id] = &o;
+  for (const auto& o : ob->obstacles) mb[o.id] = &o;
+  for (const auto& [id, o] : ma) {
+    if (!mb.count(id)) diff->obstacles.push_back({id, "only in A"});
+  }
+  for (const auto& [id, o] : mb) {
+    auto it = ma.find(id);
+    if (it == ma.end()) {
+      diff->obstacles.push_back({id, "only in B"});
+      continue;
+    }
+    const std::string what = ObstacleChange(*it->second, o);
+    if (!what.empty()) diff->obstacles.push_back({id, what});
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
 Result<MapDiff> DiffVersions(const MapStore& store, const MapRef& a, const MapRef& b,
                              const std::vector<std::string>& layers, double tolerance) {
   auto ia = store.GetMapInfo(a);
@@ -290,76 +380,11 @@ Result<MapDiff> DiffVersions(const MapStore& store, const MapRef& a, const MapRe
   MapDiff diff;
   diff.a_label = Label(*ia);
   diff.b_label = Label(*ib);
-  const MapRef ea{ia->site, ia->name, ia->version}, eb{ib->site, ib->name, ib->version};
-  std::set<std::string> names_a(ia->layers.begin(), ia->layers.end());
-  std::set<std::string> names_b(ib->layers.begin(), ib->layers.end());
-  std::set<std::string> names;
-  if (layers.empty()) {
-    names.insert(names_a.begin(), names_a.end());
-    names.insert(names_b.begin(), names_b.end());
-  } else {
-    names.insert(layers.begin(), layers.end());
-  }
-  const int64_t cells = ia->geometry.num_cells();
-  for (const std::string& name : names) {
-    const bool in_a = names_a.count(name) > 0, in_b = names_b.count(name) > 0;
-    if (!in_a && !in_b) return common::NotFoundError("neither map has a layer '" + name + "'");
-    if (!in_a || !in_b) {
-      LayerDiff d;
-      d.layer_a = in_a ? name : "";
-      d.layer_b = in_b ? name : "";
-      d.cells_different = cells;
-      diff.layers.push_back(d);
-      continue;
-    }
-    auto la = store.LoadLayers(ea, {{name}, std::nullopt});
-    if (!la.ok()) return la.status();
-    auto lb = store.LoadLayers(eb, {{name}, std::nullopt});
-    if (!lb.ok()) return lb.status();
-    diff.layers.push_back(CompareLayers(name, la->at(name), name, lb->at(name), tolerance));
-  }
-
-  auto oa = store.LoadObstacles(ea);
-  if (!oa.ok()) return oa.status();
-  auto ob = store.LoadObstacles(eb);
-  if (!ob.ok()) return ob.status();
-  std::map<int32_t, const common::Obstacle*> ma, mb;
-  for (const auto& o : oa->obstacles) ma[o.id] = &o;
-  for (const auto& o : ob->obstacles) mb[o.id] = &o;
-  for (const auto& [id, o] : ma) {
-    if (!mb.count(id)) diff.obstacles.push_back({id, "only in A"});
-  }
-  for (const auto& [id, o] : mb) {
-    auto it = ma.find(id);
-    if (it == ma.end()) {
-      diff.obstacles.push_back({id, "only in B"});
-      continue;
-    }
-    const common::Obstacle& x = *it->second;
-    std::string what;
-    auto cmp = [&](const char* field, double va, double vb) {
-      const bool same = (std::isnan(va) && std::isnan(vb)) || std::abs(va - vb) <= 1e-9;
-      if (!same)
-        what += std::string(what.empty() ? "" : ", ") + field + " " + Num(va) + " -> " + Num(vb);
-    };
-    if (x.kind != o->kind) {
-      what = std::string("kind ") + common::ObstacleKindName(x.kind) + " -> " +
-             common::ObstacleKindName(o->kind);
-    }
-    cmp("slope_rad", x.slope_rad, o->slope_rad);
-    cmp("height_m", x.height_m, o->height_m);
-    cmp("width_m", x.width_m, o->width_m);
-    cmp("length_m", x.length_m, o->length_m);
-    cmp("depth_m", x.depth_m, o->depth_m);
-    for (const auto& v : o->verdicts) {
-      const auto* w = x.VerdictFor(v.profile);
-      if (w != nullptr && w->crossable != v.crossable) {
-        what += std::string(what.empty() ? "" : ", ") + v.profile + " " +
-                (w->crossable ? "crossable -> blocked" : "blocked -> crossable");
-      }
-    }
-    if (!what.empty()) diff.obstacles.push_back({id, what});
-  }
+  Status s = DiffLayers(store, *ia, *ib, layers, tolerance, &diff);
+  if (!s.ok()) return s;
+  s = DiffObstacles(store, {ia->site, ia->name, ia->version}, {ib->site, ib->name, ib->version},
+                    &diff);
+  if (!s.ok()) return s;
   return diff;
 }
 

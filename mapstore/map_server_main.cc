@@ -3,22 +3,24 @@
 // `cairn-map serve ...` runs this program with the same flags.
 
 #include <cstdio>
+#include <functional>
 #include <memory>
 
 #include "common/flags.h"
 #include "common/log.h"
-#include "mapstore/map_server.h"
 #include "mapstore/lcm/map_server_service.h"
+#include "mapstore/map_server.h"
+#include "mapstore/mapping_deriver.h"
 #include "mapstore/sqlite_map_store.h"
 #include "services/runtime/node.h"
-#include "mapstore/mapping_deriver.h"
 
-int main(int argc, char** argv) {
-  namespace ms = cairn::mapstore;
-  ms::MapServerParams params;
-  params.db_path = "var/cairn.db";
+namespace {
+
+namespace ms = cairn::mapstore;
+
+// Parses the flags into `params`; the parser's exit status, or -1 to go on.
+int ParseFlags(int argc, char** argv, ms::MapServerParams* params, std::string* lcm_url) {
   int version = 0;
-  std::string lcm_url;
   cairn::common::FlagParser flags(
       "cairn-map-server",
       "Serves a stored map to a robot that has no mapper of its own (no lidar): loads the map for\n"
@@ -27,22 +29,22 @@ int main(int argc, char** argv) {
       "elevation and cost/<profile> layers as a mapper would, so the robot's cairn-navigator\n"
       "plans on them. With --wait-s it waits for a map that has not been saved yet.\n"
       "Also run as `cairn-map serve`.");
-  flags.AddString("db", &params.db_path, "SQLite map store file (opened read-only)");
-  flags.AddString("site", &params.ref.site, "site");
-  flags.AddString("map", &params.ref.name, "map name");
+  flags.AddString("db", &params->db_path, "SQLite map store file (opened read-only)");
+  flags.AddString("site", &params->ref.site, "site");
+  flags.AddString("map", &params->ref.name, "map name");
   flags.AddInt("version", &version, "map version (0 = the latest, and follow newer ones)");
-  flags.AddString("profile", &params.profile, "the robot's profile: serves cost/<profile>");
-  flags.AddString("robot", &params.robot, "robot id: publishes on <robot>.MAP.*");
-  flags.AddDouble("wait-s", &params.wait_s,
+  flags.AddString("profile", &params->profile, "the robot's profile: serves cost/<profile>");
+  flags.AddString("robot", &params->robot, "robot id: publishes on <robot>.MAP.*");
+  flags.AddDouble("wait-s", &params->wait_s,
                   "wait this long (wall seconds) for the map to be saved (0 = fail at once)");
-  flags.AddDouble("poll-s", &params.poll_period_s, "look at the store this often while waiting");
-  flags.AddDouble("announce-s", &params.announce_period_s,
+  flags.AddDouble("poll-s", &params->poll_period_s, "look at the store this often while waiting");
+  flags.AddDouble("announce-s", &params->announce_period_s,
                   "manifests of the served layers this often (below the navigator's 0.5 s)");
-  flags.AddDouble("follow-s", &params.follow_period_s,
+  flags.AddDouble("follow-s", &params->follow_period_s,
                   "with version 0, look for a newer version this often");
-  flags.AddBool("follow", &params.follow_latest,
+  flags.AddBool("follow", &params->follow_latest,
                 "with version 0, serve newer versions as they are saved");
-  flags.AddString("lcm-url", &lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm ttl=0)");
+  flags.AddString("lcm-url", lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm ttl=0)");
   flags.AddHelpSection(
       "Channels",
       "in:  <robot>.MAP.TILE_RESEND\n"
@@ -52,35 +54,51 @@ int main(int argc, char** argv) {
                        "0 stopped by SIGINT/SIGTERM, 1 no map to serve (or it never came), 2 bad "
                        "usage");
   const int rc = flags.Parse(argc, argv);
+  params->ref.version = version;
+  return rc;
+}
+
+// The store, opened read-only on the first attempt that finds the file: the server may start
+// before the map store created it.
+class LazyStore {
+ public:
+  explicit LazyStore(std::string path) : path_(std::move(path)) {}
+  cairn::common::Result<const ms::MapStore*> operator()() {
+    if (!store_) {
+      ms::SqliteOptions options;
+      options.read_only = true;
+      options.create_if_missing = false;
+      options.compression_threads = 1;
+      auto opened = ms::SqliteMapStore::Open(path_, options);
+      if (!opened.ok()) {
+        // A missing or half-created file may be fine a moment later.
+        return cairn::common::UnavailableError(opened.status().message());
+      }
+      store_ = std::move(opened).value();
+    }
+    return store_.get();
+  }
+
+ private:
+  std::string path_;
+  std::unique_ptr<ms::SqliteMapStore> store_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ms::MapServerParams params;
+  params.db_path = "var/cairn.db";
+  std::string lcm_url;
+  const int rc = ParseFlags(argc, argv, &params, &lcm_url);
   if (rc >= 0) return rc;
   cairn::common::SetLogTag("cairn-map-server");
-  params.ref.version = version;
   try {
     params.Validate();
   } catch (const std::exception& e) {
     std::fprintf(stderr, "cairn-map-server: %s (see --help)\n", e.what());
     return 2;
   }
-
-  // The store is opened read-only, on the first attempt that finds the file: the server may
-  // start before the map store created it.
-  std::unique_ptr<ms::SqliteMapStore> store;
-  auto open_store = [&]() -> cairn::common::Result<const ms::MapStore*> {
-    if (!store) {
-      ms::SqliteOptions options;
-      options.read_only = true;
-      options.create_if_missing = false;
-      options.compression_threads = 1;
-      auto opened = ms::SqliteMapStore::Open(params.db_path, options);
-      if (!opened.ok()) {
-        // A missing or half-created file may be fine a moment later.
-        return cairn::common::UnavailableError(opened.status().message());
-      }
-      store = std::move(opened).value();
-    }
-    return store.get();
-  };
-
   try {
     cairn::runtime::NodeOptions node_options;
     node_options.process_name = "cairn-map-server";
@@ -90,9 +108,11 @@ int main(int argc, char** argv) {
     const ms::ProfileDeriver deriver = ms::MappingDeriver();
     node.Event("map %s/%s%s for robot %s (profile %s) from %s, bus %s", params.ref.site.c_str(),
                params.ref.name.c_str(),
-               version > 0 ? (" v" + std::to_string(version)).c_str() : "", params.robot.c_str(),
-               params.profile.c_str(), params.db_path.c_str(), node.url().c_str());
-    ms::MapServerService service(node, params, &deriver, open_store);
+               params.ref.version > 0 ? (" v" + std::to_string(params.ref.version)).c_str() : "",
+               params.robot.c_str(), params.profile.c_str(), params.db_path.c_str(),
+               node.url().c_str());
+    LazyStore store(params.db_path);
+    ms::MapServerService service(node, params, &deriver, std::ref(store));
     node.Spin();
     const bool failed = service.state() == ms::MapServerService::State::kFailed;
     node.SetState(cairn::runtime::HealthState::kStopping);

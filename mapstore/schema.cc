@@ -186,19 +186,9 @@ common::Status AuditMigration(sqlite::Database* db, int64_t utime, const std::st
   return audit.Run();
 }
 
-// Version 1 -> 2: versions get their own table with full provenance, tile data move into the
-// content-addressed blob table, and the new tables start empty.
-common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
-  common::Status s = db->Exec(R"SQL(
-    ALTER TABLE maps RENAME TO v1_maps;
-    ALTER TABLE tiles RENAME TO v1_tiles;
-    ALTER TABLE obstacles RENAME TO v1_obstacles;
-    ALTER TABLE profiles RENAME TO v1_profiles;
-    ALTER TABLE sites RENAME TO v1_sites;
-  )SQL");
-  if (!s.ok()) return s;
-  s = CreateV2(db);
-  if (!s.ok()) return s;
+// Version 1 -> 2, rows: sites, maps, versions with full provenance, layers and obstacles.
+common::Status MoveV1Rows(sqlite::Database* db) {
+  common::Status s;
   s = db->Exec(R"SQL(
     INSERT INTO sites(id, name, created_utime) SELECT id, name, created_utime FROM v1_sites;
     INSERT INTO maps(site_id, name, created_utime)
@@ -216,66 +206,86 @@ common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
       SELECT map_id, obstacle_id, kind, centroid_x_m, centroid_y_m, slope_rad, height_m, width_m,
              length_m, depth_m, area_m2, num_cells, X'' FROM v1_obstacles;
   )SQL");
+  return s;
+}
+
+// Version 1 -> 2, tiles: their data move into blobs under their content address.
+common::Status MoveV1Tiles(sqlite::Database* db) {
+  common::Status s;
+  sqlite::Statement read = db->Prepare(
+      "SELECT t.map_id, t.layer, t.tile_ix, t.tile_iy, t.codec, t.raw_size, t.crc32, t.data, "
+      "l.id FROM v1_tiles t JOIN layers l ON l.map_version_id = t.map_id AND l.name = t.layer");
+  sqlite::Statement insert_blob = db->Prepare(
+      "INSERT INTO blobs(key, codec, raw_size, raw_crc32, data) VALUES(?, ?, ?, ?, ?) "
+      "ON CONFLICT(key) DO NOTHING");
+  sqlite::Statement find_blob = db->Prepare("SELECT id FROM blobs WHERE key = ?");
+  sqlite::Statement insert_tile = db->Prepare(
+      "INSERT INTO layer_tiles(layer_id, tile_ix, tile_iy, blob_id) VALUES(?, ?, ?, ?)");
+  while (read.Step()) {
+    const std::string data = read.Blob(7);
+    const uint32_t raw_crc = static_cast<uint32_t>(read.Int(6));
+    const std::string key = [&] {
+      char buf[64];
+      std::snprintf(buf, sizeof(buf), "%08x-%08x-%lld", raw_crc,
+                    common::Crc32(data.data(), data.size()), static_cast<long long>(read.Int(5)));
+      return std::string(buf);
+    }();
+    insert_blob.Reset();
+    insert_blob.Bind(1, key).Bind(2, read.Int(4)).Bind(3, read.Int(5)).Bind(4, read.Int(6));
+    insert_blob.BindBlob(5, data.data(), data.size());
+    if (!(s = insert_blob.Run()).ok()) return s;
+    find_blob.Reset();
+    find_blob.Bind(1, key);
+    if (!find_blob.Step()) return common::InternalError("migrated blob vanished");
+    insert_tile.Reset();
+    insert_tile.Bind(1, read.Int(8)).Bind(2, read.Int(2)).Bind(3, read.Int(3));
+    insert_tile.Bind(4, find_blob.Int(0));
+    if (!(s = insert_tile.Run()).ok()) return s;
+  }
+  if (!read.status().ok()) return read.status();
+  return common::Status::Ok();
+}
+
+// Version 1 -> 2, profiles: re-read with today's loader so hashes and canonical text match new
+// puts; a profile today's loader refuses is kept verbatim.
+common::Status MoveV1Profiles(sqlite::Database* db) {
+  common::Status s;
+  sqlite::Statement read =
+      db->Prepare("SELECT name, content_hash, yaml, updated_utime FROM v1_profiles");
+  sqlite::Statement insert = db->Prepare(
+      "INSERT OR IGNORE INTO profiles(name, content_hash, yaml, created_utime) "
+      "VALUES(?, ?, ?, ?)");
+  while (read.Step()) {
+    std::string name = read.Text(0), hash = read.Text(1), yaml = read.Text(2);
+    try {
+      const common::RobotProfile p = common::LoadRobotProfileString(yaml, "profile " + name);
+      hash = p.ContentHash();
+      yaml = p.ToYaml();
+    } catch (const std::exception&) {
+    }
+    insert.Reset();
+    insert.Bind(1, name).Bind(2, hash).Bind(3, yaml).Bind(4, read.Int(3));
+    if (!(s = insert.Run()).ok()) return s;
+  }
+  if (!read.status().ok()) return read.status();
+  return common::Status::Ok();
+}
+
+// Version 1 -> 2: versions get their own table with full provenance, tile data move into the
+// content-addressed blob table, and the new tables start empty.
+common::Status MigrateV1ToV2(sqlite::Database* db, int64_t utime) {
+  common::Status s = db->Exec(R"SQL(
+    ALTER TABLE maps RENAME TO v1_maps;
+    ALTER TABLE tiles RENAME TO v1_tiles;
+    ALTER TABLE obstacles RENAME TO v1_obstacles;
+    ALTER TABLE profiles RENAME TO v1_profiles;
+    ALTER TABLE sites RENAME TO v1_sites;
+  )SQL");
+  if (s.ok()) s = CreateV2(db);
+  if (s.ok()) s = MoveV1Rows(db);
+  if (s.ok()) s = MoveV1Tiles(db);
+  if (s.ok()) s = MoveV1Profiles(db);
   if (!s.ok()) return s;
-
-  // Tile data move into blobs under their content address.
-  {
-    sqlite::Statement read = db->Prepare(
-        "SELECT t.map_id, t.layer, t.tile_ix, t.tile_iy, t.codec, t.raw_size, t.crc32, t.data, "
-        "l.id FROM v1_tiles t JOIN layers l ON l.map_version_id = t.map_id AND l.name = t.layer");
-    sqlite::Statement insert_blob = db->Prepare(
-        "INSERT INTO blobs(key, codec, raw_size, raw_crc32, data) VALUES(?, ?, ?, ?, ?) "
-        "ON CONFLICT(key) DO NOTHING");
-    sqlite::Statement find_blob = db->Prepare("SELECT id FROM blobs WHERE key = ?");
-    sqlite::Statement insert_tile = db->Prepare(
-        "INSERT INTO layer_tiles(layer_id, tile_ix, tile_iy, blob_id) VALUES(?, ?, ?, ?)");
-    while (read.Step()) {
-      const std::string data = read.Blob(7);
-      const uint32_t raw_crc = static_cast<uint32_t>(read.Int(6));
-      const std::string key = [&] {
-        char buf[64];
-        std::snprintf(buf, sizeof(buf), "%08x-%08x-%lld", raw_crc, common::Crc32(data.data(), data.size()),
-                      static_cast<long long>(read.Int(5)));
-        return std::string(buf);
-      }();
-      insert_blob.Reset();
-      insert_blob.Bind(1, key).Bind(2, read.Int(4)).Bind(3, read.Int(5)).Bind(4, read.Int(6));
-      insert_blob.BindBlob(5, data.data(), data.size());
-      if (!(s = insert_blob.Run()).ok()) return s;
-      find_blob.Reset();
-      find_blob.Bind(1, key);
-      if (!find_blob.Step()) return common::InternalError("migrated blob vanished");
-      insert_tile.Reset();
-      insert_tile.Bind(1, read.Int(8)).Bind(2, read.Int(2)).Bind(3, read.Int(3));
-      insert_tile.Bind(4, find_blob.Int(0));
-      if (!(s = insert_tile.Run()).ok()) return s;
-    }
-    if (!read.status().ok()) return read.status();
-  }
-
-  // Profiles: re-read with today's loader so hashes and canonical text match new puts; a
-  // profile today's loader refuses is kept verbatim.
-  {
-    sqlite::Statement read =
-        db->Prepare("SELECT name, content_hash, yaml, updated_utime FROM v1_profiles");
-    sqlite::Statement insert = db->Prepare(
-        "INSERT OR IGNORE INTO profiles(name, content_hash, yaml, created_utime) "
-        "VALUES(?, ?, ?, ?)");
-    while (read.Step()) {
-      std::string name = read.Text(0), hash = read.Text(1), yaml = read.Text(2);
-      try {
-        const common::RobotProfile p = common::LoadRobotProfileString(yaml, "profile " + name);
-        hash = p.ContentHash();
-        yaml = p.ToYaml();
-      } catch (const std::exception&) {
-      }
-      insert.Reset();
-      insert.Bind(1, name).Bind(2, hash).Bind(3, yaml).Bind(4, read.Int(3));
-      if (!(s = insert.Run()).ok()) return s;
-    }
-    if (!read.status().ok()) return read.status();
-  }
-
   s = db->Exec(R"SQL(
     DROP TABLE v1_tiles;
     DROP TABLE v1_obstacles;

@@ -5,7 +5,10 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "mapstore/blob_codec.h"
 #include "mapstore/map_store.h"
@@ -109,34 +112,61 @@ class SqliteMapStore final : public MapStore {
   int schema_version() const { return schema_version_; }
 
  private:
+  // Rows and the blobs of a save (mapstore/sqlite_store_rows.h).
   struct VersionRow;
+  struct TileRow;
+  struct DerivedHeader;
+  struct EncodedTiles;
   SqliteMapStore(std::string path, SqliteOptions options, std::unique_ptr<sqlite::Database> db);
+
+  // ---- Opening (sqlite_map_store.cc) ----
   common::Status Initialise();
+  common::Status InitialiseReadOnly(bool empty, int64_t version);
+  common::Status InitialiseWritable(bool empty, int64_t version);
+  /// Runs `body` inside BEGIN IMMEDIATE ... COMMIT, retrying while the database is busy.
+  common::Status WriteTransaction(const std::function<common::Status()>& body);
+
+  // ---- Version rows (sqlite_map_store.cc): the one decoder of a kVersionSelect row ----
+  static VersionRow ReadVersionRow(const sqlite::Statement& st);
   common::Result<VersionRow> Resolve(const MapRef& ref) const;
+  /// Why `ref` resolves to no version: no such map, deleted, or no such version.
+  common::Status NoVersion(const MapRef& ref) const;
   common::Result<MapInfo> InfoOf(const VersionRow& row) const;
-  /// Layer ids of a version by name; fills an empty `wanted` with every layer, and gives
-  /// kNotFound for a wanted layer the version lacks.
-  common::Result<std::map<std::string, int64_t>> LayerIds(const MapRef& ref, const VersionRow& row,
-                                                          std::vector<std::string>* wanted) const;
   common::Result<int64_t> SiteId(const std::string& site, bool create, int64_t utime);
   common::Status Audit(const WriteContext& ctx, int64_t utime, const std::string& op,
                        const std::string& site, const std::string& map, int64_t version,
                        const std::string& detail);
-  /// Reads the tiles a bound statement yields (tile_ix, tile_iy, codec, raw_size, raw_crc32,
-  /// data) into `layer`, which covers `box` of the full grid and starts all unknown.
+
+  // ---- Saves (sqlite_save.cc) ----
+  /// Every tile of `layers` compressed and checksummed (all-unknown ones left out), or, where
+  /// `caller` holds a compressed blob for it (layer-major, as the tiles are ordered), that blob
+  /// adopted: at once when `caller_checked`, else when its CRC is that of the cells.
+  EncodedTiles EncodeLayers(const common::GridMap& layers, int tile_size,
+                            const std::vector<const StoredTile*>& caller,
+                            bool caller_checked) const;
+  /// EncodeLayers of a snapshot's base (adopting its encoded layers) and its OctoMap.
+  EncodedTiles EncodeSnapshot(const MapSnapshot& snapshot) const;
+  /// Inserts the site, map and version rows; (version, version row id).
+  common::Result<std::pair<int64_t, int64_t>> InsertVersion(const MapSnapshot& snapshot,
+                                                            int64_t now);
+  common::Status InsertLayerTiles(int64_t version_id, const EncodedTiles& tiles);
+  common::Status InsertObstacles(int64_t version_id, const common::ObstacleRegistry& registry);
+  common::Status InsertOctomap(int64_t version_id, const EncodedBlob& blob,
+                               const OctomapData& octomap);
+  /// Writes blobs (or finds identical ones) and returns their ids.
+  common::Status WriteBlobs(const std::vector<EncodedBlob>& blobs, std::vector<int64_t>* ids);
+
+  // ---- Layers and tiles (sqlite_layers.cc): the one decoder of a kTileColumns row ----
+  static TileRow ReadTileRow(const sqlite::Statement& st);
+  /// Layer ids of a version by name; fills an empty `wanted` with every layer, and gives
+  /// kNotFound for a wanted layer the version lacks.
+  common::Result<std::map<std::string, int64_t>> LayerIds(const MapRef& ref, const VersionRow& row,
+                                                          std::vector<std::string>* wanted) const;
+  /// Reads the tiles a bound statement yields (kTileColumns) into `layer`, which covers `box`
+  /// of the full grid and starts all unknown.
   common::Status ReadTiles(sqlite::Statement* stmt, const std::string& label, int tile_size,
                            const common::GridGeometry& full, const CellBox& box,
                            common::Layer* layer) const;
-  /// The cache entry of (version, profile hash, code version): its id, profile name, creation
-  /// time, registry and layer names; nullopt on a miss.
-  struct DerivedHeader;
-  common::Result<std::optional<DerivedHeader>> FindDerivedHeader(
-      const VersionRow& row, const std::string& profile_hash,
-      const std::string& code_version) const;
-  /// Resolve and FindDerivedHeader together: the version and its cache entry, nullopt on a
-  /// miss. The caller holds mutex_.
-  common::Result<std::optional<std::pair<VersionRow, DerivedHeader>>> ResolveDerived(
-      const MapRef& ref, const std::string& profile_hash, const std::string& code_version) const;
   /// Appends the tiles a bound statement yields (row by row) to `layer` as stored, checking
   /// their place and size; `label` names the layer in errors.
   common::Status ReadStoredTiles(sqlite::Statement* stmt, const std::string& label,
@@ -144,10 +174,26 @@ class SqliteMapStore final : public MapStore {
   /// Decodes every tile of `layers` against its checksum (in parallel), naming the first bad one.
   common::Status CheckStoredLayers(const std::vector<StoredLayer>& layers,
                                    const std::string& label) const;
-  /// Writes tiles of layers and returns their blob ids through `insert_tile`.
-  common::Status WriteBlobs(const std::vector<EncodedBlob>& blobs, std::vector<int64_t>* ids);
-  /// Runs `body` inside BEGIN IMMEDIATE ... COMMIT, retrying while the database is busy.
-  common::Status WriteTransaction(const std::function<common::Status()>& body);
+
+  // ---- The derived cache (sqlite_derived.cc) ----
+  /// The cache entry of (version, profile hash, code version): its id, profile name, creation
+  /// time, registry and layer names; nullopt on a miss.
+  common::Result<std::optional<DerivedHeader>> FindDerivedHeader(
+      const VersionRow& row, const std::string& profile_hash,
+      const std::string& code_version) const;
+  /// Resolve and FindDerivedHeader together: the version and its cache entry, nullopt on a
+  /// miss. The caller holds mutex_.
+  common::Result<std::optional<std::pair<VersionRow, DerivedHeader>>> ResolveDerived(
+      const MapRef& ref, const std::string& profile_hash, const std::string& code_version) const;
+  common::Status InsertDerived(const VersionRow& row, const DerivedProfile& derived,
+                               const EncodedTiles& tiles, const EncodedBlob& registry, int64_t now);
+
+  // ---- The integrity check (sqlite_catalog.cc) ----
+  /// PRAGMA integrity_check (`*go_on` false when the file is too damaged to go on), foreign
+  /// keys and the header.
+  common::Status CheckPragmas(CheckReport* report, bool* go_on) const;
+  common::Status CheckTilePlaces(CheckReport* report) const;
+  common::Status CheckBlobs(CheckReport* report, const ProgressFn& progress) const;
 
   std::string path_;
   SqliteOptions options_;

@@ -10,10 +10,13 @@
 
 #include "cairn/lcmt_obstacle_registry.hpp"
 
-#include "common/crc32.h"
 #include "common/channels.h"
+#include "common/crc32.h"
 #include "mapstore/blob_codec.h"
+#include "mapstore/lcm/mapstore_conversions.h"
 #include "mapstore/lcm/tile_wire.h"
+#include "mapstore/octomap_chunks.h"
+#include "mapstore/save_assembler.h"
 #include "services/runtime/conversions.h"
 
 namespace cairn::mapstore {
@@ -23,8 +26,6 @@ using common::Status;
 using Clock = std::chrono::steady_clock;
 
 namespace {
-
-constexpr size_t kOctomapChunkBytes = 192 * 1024;
 
 double Since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
@@ -150,11 +151,11 @@ void MapstoreClient::OnOctomap(const lcm::ReceiveBuffer*, const std::string&,
 void MapstoreClient::OnPushResend(const lcm::ReceiveBuffer*, const std::string&,
                                   const cairn::lcmt_tile_resend_request* m) {
   if (!push_ || m->map_name != push_->map_name) return;
-  if (m->layer == "#obstacles") {
+  if (m->layer == kResendObstacles) {
     if (push_->obstacles) lcm_.publish(channels::kMapstorePushObstacles, &*push_->obstacles);
     return;
   }
-  if (m->layer == "#octomap") {
+  if (m->layer == kResendOctomap) {
     for (const auto& c : push_->octomap) lcm_.publish(channels::kMapstorePushOctomap, &c);
     return;
   }
@@ -225,10 +226,10 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Call(cairn::lcmt_mapstore_req
   return *reply_;
 }
 
-Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snapshot) {
+namespace {
+
+cairn::lcmt_mapstore_request SaveRequestOf(const MapSnapshot& snapshot) {
   cairn::lcmt_mapstore_request request{};
-  request.request_id = NextRequestId();
-  request.requester = requester_;
   request.op = cairn::lcmt_mapstore_request::OP_SAVE;
   request.site = snapshot.site;
   request.map_name = snapshot.name;
@@ -239,19 +240,20 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snaps
   request.has_profile = false;
   request.expect_obstacles = !snapshot.obstacles.obstacles.empty();
   request.expect_octomap = snapshot.octomap.has_value();
-  const int64_t utime = WallUtimeNow();
+  return request;
+}
 
-  // Everything goes out before the request; the store asks for what it missed.
-  push_ = std::make_unique<Push>();
-  push_->map_name = std::to_string(request.request_id) + "/" + snapshot.name;
-  push_->robot = snapshot.provenance.source_robot;
-  for (const std::string& layer : request.layers) {
+}  // namespace
+
+Status MapstoreClient::PushLayers(const std::vector<std::string>& layers,
+                                  const MapSnapshot& snapshot, int64_t utime) {
+  for (const std::string& layer : layers) {
     push_->tilers[layer] =
         std::make_unique<runtime::LayerTiler>(push_->robot, push_->map_name, options_.tile_size);
   }
   // Layers are tiled and compressed on compression_threads threads, in order, while this
   // thread publishes each one as soon as it is ready (its pauses leave the cores to them).
-  const size_t num_layers = request.layers.size();
+  const size_t num_layers = layers.size();
   std::vector<runtime::LayerTiler::Batch> batches(num_layers);
   std::vector<char> ready(num_layers, 0);
   bool failed = false;
@@ -261,9 +263,8 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snaps
   std::thread producer([&] {
     try {
       ParallelFor(num_layers, std::max(1, options_.compression_threads), [&](size_t l) {
-        const std::string& layer = request.layers[l];
-        runtime::LayerTiler::Batch batch = push_->tilers.at(layer)->Update(
-            snapshot.base, layer, runtime::TileEncoding::kFloat, utime, true);
+        runtime::LayerTiler::Batch batch = push_->tilers.at(layers[l])->Update(
+            snapshot.base, layers[l], runtime::TileEncoding::kFloat, utime, true);
         if (options_.compress_tiles) {
           for (auto& tile : batch.tiles) CompressTile(&tile);
         }
@@ -291,41 +292,137 @@ Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snaps
     PublishPushed(push_->map_name, batch.tiles);
   }
   producer.join();
-  if (failed) {
+  if (failed) return common::InternalError("tiling the map to push it: " + failure);
+  return Status::Ok();
+}
+
+void MapstoreClient::PushOctomap(const OctomapData& octomap, int64_t utime) {
+  for (const OctomapChunk& chunk : SplitOctomap(octomap)) {
+    cairn::lcmt_octomap c = ToLcm(chunk, push_->robot, push_->map_name, utime);
+    lcm_.publish(channels::kMapstorePushOctomap, &c);
+    push_->octomap.push_back(std::move(c));
+  }
+}
+
+Result<cairn::lcmt_mapstore_reply> MapstoreClient::Save(const MapSnapshot& snapshot) {
+  cairn::lcmt_mapstore_request request = SaveRequestOf(snapshot);
+  request.request_id = NextRequestId();
+  request.requester = requester_;
+  const int64_t utime = WallUtimeNow();
+  // Everything goes out before the request; the store asks for what it missed.
+  push_ = std::make_unique<Push>();
+  push_->map_name = std::to_string(request.request_id) + "/" + snapshot.name;
+  push_->robot = snapshot.provenance.source_robot;
+  const Status pushed = PushLayers(request.layers, snapshot, utime);
+  if (!pushed.ok()) {
     push_.reset();
-    return common::InternalError("tiling the map to push it: " + failure);
+    return pushed;
   }
   if (request.expect_obstacles) {
     push_->obstacles = runtime::ToLcm(snapshot.obstacles, utime, push_->robot, push_->map_name);
     lcm_.publish(channels::kMapstorePushObstacles, &*push_->obstacles);
   }
-  if (snapshot.octomap) {
-    const std::string& bytes = snapshot.octomap->bytes;
-    const int32_t count = static_cast<int32_t>(
-        std::max<size_t>(1, (bytes.size() + kOctomapChunkBytes - 1) / kOctomapChunkBytes));
-    const int64_t crc = common::Crc32(bytes.data(), bytes.size());
-    for (int32_t i = 0; i < count; ++i) {
-      cairn::lcmt_octomap c{};
-      c.utime = utime;
-      c.robot = push_->robot;
-      c.map_name = push_->map_name;
-      c.resolution_m = snapshot.octomap->resolution_m;
-      c.binary = snapshot.octomap->binary;
-      c.version = 1;
-      c.chunk_index = i;
-      c.chunk_count = count;
-      c.total_bytes = static_cast<int64_t>(bytes.size());
-      c.checksum = crc;
-      const size_t b = i * kOctomapChunkBytes, e = std::min(bytes.size(), b + kOctomapChunkBytes);
-      c.data.assign(bytes.begin() + b, bytes.begin() + e);
-      c.num_bytes = static_cast<int32_t>(c.data.size());
-      lcm_.publish(channels::kMapstorePushOctomap, &c);
-      push_->octomap.push_back(std::move(c));
-    }
-  }
+  if (snapshot.octomap) PushOctomap(*snapshot.octomap, utime);
   auto reply = Call(request);
   push_.reset();
   return reply;
+}
+
+bool MapstoreClient::PayloadComplete(const cairn::lcmt_mapstore_reply& reply,
+                                     bool want_octomap) const {
+  for (const std::string& layer : reply.layers) {
+    if (!incoming_->manifests.count(layer) || !incoming_->assembler.Complete(layer)) return false;
+  }
+  return !want_octomap || OctomapComplete();
+}
+
+bool MapstoreClient::OctomapComplete() const {
+  return incoming_->has_octomap_head && static_cast<int32_t>(incoming_->octomap_chunks.size()) ==
+                                            incoming_->octomap_head.chunk_count;
+}
+
+int MapstoreClient::AskForMissing(const cairn::lcmt_mapstore_reply& reply, bool want_octomap,
+                                  bool long_quiet) {
+  // A layer whose manifest never came is asked for whole, after a longer silence.
+  int asked = 0;
+  for (const std::string& layer : reply.layers) {
+    std::optional<cairn::lcmt_tile_resend_request> r;
+    if (incoming_->manifests.count(layer)) {
+      r = incoming_->assembler.MakeResendRequest(layer, requester_, WallUtimeNow());
+    } else if (long_quiet) {
+      cairn::lcmt_tile_resend_request all{};
+      all.utime = WallUtimeNow();
+      all.requester = requester_;
+      all.layer = layer;
+      r = all;
+    }
+    if (!r) continue;
+    r->map_name = incoming_->map_name;
+    lcm_.publish(channels::kMapstoreTileResend, &*r);
+    ++asked;
+  }
+  if (want_octomap && long_quiet && !OctomapComplete()) {
+    cairn::lcmt_tile_resend_request r{};
+    r.utime = WallUtimeNow();
+    r.requester = requester_;
+    r.map_name = incoming_->map_name;
+    r.layer = kResendOctomap;
+    lcm_.publish(channels::kMapstoreTileResend, &r);
+    ++asked;
+  }
+  return asked;
+}
+
+Status MapstoreClient::AwaitPayload(const cairn::lcmt_mapstore_reply& reply, bool want_octomap,
+                                    Clock::time_point start, Loaded* loaded) {
+  incoming_->last_progress = Clock::now();  // the tiles follow the reply
+  // Collect the tiles, asking again for what does not arrive.
+  auto last_ask = Clock::now();
+  while (!PayloadComplete(reply, want_octomap)) {
+    if (Since(start) > options_.total_timeout_s) {
+      return common::UnavailableError("tiles of '" + reply.map_name + "' did not all arrive");
+    }
+    const double quiet = Since(incoming_->last_progress);
+    if (quiet > options_.resend_interval_s && Since(last_ask) > options_.resend_interval_s) {
+      loaded->resend_requests +=
+          AskForMissing(reply, want_octomap, quiet > 5 * options_.resend_interval_s);
+      last_ask = Clock::now();
+    }
+    lcm_.handleTimeout(5);
+  }
+  return Status::Ok();
+}
+
+Status MapstoreClient::CollectPayload(const cairn::lcmt_mapstore_reply& reply, bool want_octomap,
+                                      Loaded* loaded) {
+  bool first = true;
+  for (const std::string& layer : reply.layers) {
+    auto grid = incoming_->assembler.TakeLayer(layer);
+    if (!grid) continue;
+    if (first) {
+      loaded->layers = common::GridMap(grid->geometry());
+      first = false;
+    }
+    if (grid->geometry() == loaded->layers.geometry()) {
+      loaded->layers.AddLayer(layer, std::move(grid->at(layer)));
+    }
+  }
+  for (const auto& m : reply.obstacles) {
+    auto o = runtime::FromLcm(m);
+    if (o.ok()) loaded->obstacles.obstacles.push_back(std::move(o).value());
+  }
+  loaded->obstacles.map_version = reply.version;
+  if (!want_octomap) return Status::Ok();
+  OctomapData octomap;
+  octomap.binary = incoming_->octomap_head.binary;
+  octomap.resolution_m = incoming_->octomap_head.resolution_m;
+  for (const auto& [i, bytes] : incoming_->octomap_chunks) octomap.bytes += bytes;
+  if (common::Crc32(octomap.bytes.data(), octomap.bytes.size()) !=
+      static_cast<uint32_t>(incoming_->octomap_head.checksum)) {
+    return common::CorruptError("the OctoMap arrived damaged");
+  }
+  loaded->octomap = std::move(octomap);
+  return Status::Ok();
 }
 
 Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site, const std::string& map,
@@ -346,104 +443,13 @@ Result<MapstoreClient::Loaded> MapstoreClient::Load(const std::string& site, con
   incoming_->map_name = std::to_string(request.request_id) + "/" + map;
   const auto start = Clock::now();
   auto reply = Call(request);
-  if (!reply.ok()) {
-    incoming_.reset();
-    return reply.status();
-  }
-  Status status = StatusOfReply(*reply);
-  if (!status.ok()) {
-    incoming_.reset();
-    return status;
-  }
+  Status status = reply.ok() ? StatusOfReply(*reply) : reply.status();
   Loaded loaded;
-  loaded.reply = *reply;
-  incoming_->last_progress = Clock::now();  // the tiles follow the reply
-  // Collect the tiles, asking again for what does not arrive.
-  auto complete = [&]() {
-    for (const std::string& layer : reply->layers) {
-      if (!incoming_->manifests.count(layer) || !incoming_->assembler.Complete(layer)) return false;
-    }
-    if (want_octomap) {
-      if (!incoming_->has_octomap_head) return false;
-      if (static_cast<int32_t>(incoming_->octomap_chunks.size()) !=
-          incoming_->octomap_head.chunk_count) {
-        return false;
-      }
-    }
-    return true;
-  };
-  auto last_ask = Clock::now();
-  while (!complete()) {
-    if (Since(start) > options_.total_timeout_s) {
-      incoming_.reset();
-      return common::UnavailableError("tiles of '" + map + "' did not all arrive");
-    }
-    const double quiet = Since(incoming_->last_progress);
-    if (quiet > options_.resend_interval_s && Since(last_ask) > options_.resend_interval_s) {
-      // Quiet for a while: ask for what is missing. A layer whose manifest never came is asked
-      // for whole, after a longer silence.
-      const bool long_quiet = quiet > 5 * options_.resend_interval_s;
-      for (const std::string& layer : reply->layers) {
-        std::optional<cairn::lcmt_tile_resend_request> r;
-        if (incoming_->manifests.count(layer)) {
-          r = incoming_->assembler.MakeResendRequest(layer, requester_, WallUtimeNow());
-        } else if (long_quiet) {
-          cairn::lcmt_tile_resend_request all{};
-          all.utime = WallUtimeNow();
-          all.requester = requester_;
-          all.layer = layer;
-          r = all;
-        }
-        if (!r) continue;
-        r->map_name = incoming_->map_name;
-        lcm_.publish(channels::kMapstoreTileResend, &*r);
-        ++loaded.resend_requests;
-      }
-      if (want_octomap && long_quiet &&
-          (!incoming_->has_octomap_head || static_cast<int32_t>(incoming_->octomap_chunks.size()) !=
-                                               incoming_->octomap_head.chunk_count)) {
-        cairn::lcmt_tile_resend_request r{};
-        r.utime = WallUtimeNow();
-        r.requester = requester_;
-        r.map_name = incoming_->map_name;
-        r.layer = "#octomap";
-        lcm_.publish(channels::kMapstoreTileResend, &r);
-        ++loaded.resend_requests;
-      }
-      last_ask = Clock::now();
-    }
-    lcm_.handleTimeout(5);
-  }
-  bool first = true;
-  for (const std::string& layer : reply->layers) {
-    auto grid = incoming_->assembler.TakeLayer(layer);
-    if (!grid) continue;
-    if (first) {
-      loaded.layers = common::GridMap(grid->geometry());
-      first = false;
-    }
-    if (grid->geometry() == loaded.layers.geometry()) {
-      loaded.layers.AddLayer(layer, std::move(grid->at(layer)));
-    }
-  }
-  for (const auto& m : reply->obstacles) {
-    auto o = runtime::FromLcm(m);
-    if (o.ok()) loaded.obstacles.obstacles.push_back(std::move(o).value());
-  }
-  loaded.obstacles.map_version = reply->version;
-  if (want_octomap) {
-    OctomapData octomap;
-    octomap.binary = incoming_->octomap_head.binary;
-    octomap.resolution_m = incoming_->octomap_head.resolution_m;
-    for (const auto& [i, bytes] : incoming_->octomap_chunks) octomap.bytes += bytes;
-    if (common::Crc32(octomap.bytes.data(), octomap.bytes.size()) !=
-        static_cast<uint32_t>(incoming_->octomap_head.checksum)) {
-      incoming_.reset();
-      return common::CorruptError("the OctoMap arrived damaged");
-    }
-    loaded.octomap = std::move(octomap);
-  }
+  if (status.ok()) status = AwaitPayload(*reply, want_octomap, start, &loaded);
+  if (status.ok()) status = CollectPayload(*reply, want_octomap, &loaded);
   incoming_.reset();
+  if (!status.ok()) return status;
+  loaded.reply = *reply;
   return loaded;
 }
 

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -89,6 +90,21 @@ class MapstoreClient {
   void OnOctomap(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_octomap* m);
   void OnPushResend(const lcm::ReceiveBuffer*, const std::string&,
                     const cairn::lcmt_tile_resend_request* m);
+  /// Tiles (and compresses) the layers on worker threads and publishes each as it is ready.
+  common::Status PushLayers(const std::vector<std::string>& layers, const MapSnapshot& snapshot,
+                            int64_t utime);
+  void PushOctomap(const OctomapData& octomap, int64_t utime);
+  /// Whether every layer a reply announces (and the OctoMap, when asked for) arrived.
+  bool PayloadComplete(const cairn::lcmt_mapstore_reply& reply, bool want_octomap) const;
+  bool OctomapComplete() const;
+  /// Asks the store for what is missing; returns how many requests went out.
+  int AskForMissing(const cairn::lcmt_mapstore_reply& reply, bool want_octomap, bool long_quiet);
+  /// Waits for a reply's tiles and OctoMap, asking again for what does not arrive.
+  common::Status AwaitPayload(const cairn::lcmt_mapstore_reply& reply, bool want_octomap,
+                              std::chrono::steady_clock::time_point start, Loaded* loaded);
+  /// Moves the arrived layers, obstacles and OctoMap into `loaded`.
+  common::Status CollectPayload(const cairn::lcmt_mapstore_reply& reply, bool want_octomap,
+                                Loaded* loaded);
   /// Publishes a pushed float tile, pausing after every burst.
   void PublishPaced(const cairn::lcmt_grid_tile& tile);
   /// Publishes pushed tiles: compressed ones in batches of batch_bytes, floats one by one.

@@ -168,6 +168,13 @@ TEST(MapstoreCliTest, EveryCommandPrintsHelp) {
   }
   CliResult top = RunCli(procs, {"--help"});
   EXPECT_EQ(top.exit_code, 0);
+  // The formats come from the io registry: every registered one is listed.
+  CliResult export_help = RunCli(procs, {"export", "--help"});
+  for (const char* format : {"ros-raw", "png", "bt", "ot", "csv"}) {
+    EXPECT_NE(export_help.output.find(std::string(format) + ":"), std::string::npos)
+        << format << " in " << export_help.output;
+    EXPECT_NE(top.output.find(format), std::string::npos) << format;
+  }
   CliResult unknown = RunCli(procs, {"frobnicate"});
   EXPECT_EQ(unknown.exit_code, 2);
   CliResult store_help = RunCli(procs, {});

@@ -1,0 +1,25 @@
+#pragma once
+
+#include <string>
+
+#include "common/obstacle.h"
+#include "common/status.h"
+
+/// @file
+/// CSV of obstacles: one obstacle per row with its measurements, outline and verdicts; it
+/// round-trips exactly. Formats: export and import "csv" (the export with a profile carries that
+/// profile's verdicts).
+
+namespace cairn::mapstore::io {
+
+class FormatRegistry;
+
+/// <stem>.csv: one obstacle per row.
+common::Result<std::string> WriteObstaclesCsv(const std::string& folder, const std::string& stem,
+                                              const common::ObstacleRegistry& registry);
+common::Result<common::ObstacleRegistry> ReadObstaclesCsv(const std::string& path);
+
+/// Registers the csv export and import formats.
+void RegisterObstaclesCsvFormats(FormatRegistry* registry);
+
+}  // namespace cairn::mapstore::io

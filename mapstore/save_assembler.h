@@ -1,0 +1,209 @@
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "common/obstacle.h"
+#include "common/status.h"
+#include "mapstore/map_store.h"
+#include "mapstore/octomap_chunks.h"
+#include "mapstore/tile_assembler.h"
+
+/// @file
+/// SaveAssembler: how the map store puts a save together from pieces that arrive one by one
+/// (the domain half of OP_SAVE; cairn-mapstore's MapstoreService only converts messages and
+/// moves them). No LCM: it works on core tiles, manifests and chunks, and on a MapStore.
+///
+/// Saves come two ways:
+/// - push: the client stages a manifest and the tiles of every layer, the obstacles and the
+///   OctoMap under the name "<request_id>/<map>" (StageTile, StageManifest, StageObstacles,
+///   StageOctomapChunk), then asks to save naming the layers (Start). A save finishes the moment
+///   its last piece arrives (OnPushed), or when Poll finds it complete; the store is handed the
+///   pushed compressed tiles as they came (checked on receipt), so it keeps their bytes without
+///   reading the cells again.
+/// - pull: a save request naming a robot. The assembler follows that robot's live map (the
+///   Mirror* calls feed it), asks its mapper to publish everything (SaveProgress::publish_all)
+///   and saves its robot-agnostic layers (cost and geometric profile layers are left out: the
+///   store derives them per profile) once every wanted layer is complete in a manifest newer
+///   than the request. A mapper's layers on another grid become companion maps
+///   "<map>-<layer>".
+///
+/// Missing pieces are asked for again every resend_interval_s (SaveProgress::resends); a save
+/// still incomplete after save_timeout_s fails with kUnavailable naming what is missing. Staged
+/// data nobody asks to save are dropped after staging_timeout_s; staged cells are bounded by
+/// max_staged_cells. Time is passed in (`now`), so tests need no clock.
+///
+/// Not thread-safe: one caller at a time.
+
+namespace cairn::mapstore {
+
+/// Pseudo layer names a push client is asked to send again (they cannot be layer names).
+inline constexpr char kResendObstacles[] = "#obstacles";
+inline constexpr char kResendOctomap[] = "#octomap";
+
+struct SaveAssemblerParams {
+  double save_timeout_s{20.0};            ///< a save gives up waiting for its data after this
+  double resend_interval_s{0.05};         ///< asks again for missing data this often
+  double staging_timeout_s{30.0};         ///< pushed data no save asked for are dropped after this
+  double pull_settle_s{0.5};              ///< a pull without named layers waits this long for more
+  int64_t max_staged_cells{128'000'000};  ///< pushed cells held at once, every push together
+
+  /// @throws std::invalid_argument naming the first bad field.
+  void Validate() const;
+};
+
+/// OP_SAVE in core terms.
+struct SaveRequest {
+  std::string requester;  ///< "" is "unknown" in the audit log
+  int64_t request_id{0};
+  std::string site;                 ///< "" = kDefaultSite
+  std::string map_name;             ///< the map saved
+  std::string robot;                ///< set: a pull save from this robot's mapper
+  std::vector<std::string> layers;  ///< push: required; pull: "" = every robot-agnostic layer
+  std::string profile;              ///< the profile the map was made with (provenance)
+  std::string code_version;         ///< provenance
+  std::string parameters;           ///< provenance
+  bool expect_obstacles{false};     ///< push: wait for pushed obstacles
+  bool expect_octomap{false};       ///< push: wait for a pushed OctoMap
+};
+
+/// "<requester>#<request_id>": what identifies a request (and its replays).
+std::string SaveKey(const SaveRequest& request);
+/// "<request_id>/<map>": the name pushed data are staged under.
+std::string PushName(const SaveRequest& request);
+
+/// How a save ended: the reply's content.
+struct SaveOutcome {
+  SaveRequest request;  ///< site filled in
+  std::string key;      ///< SaveKey(request)
+  std::chrono::steady_clock::time_point started;
+  common::Status status;
+  int64_t version{0};               ///< the map's new version (0 on failure)
+  std::vector<std::string> layers;  ///< the map's layers
+  std::vector<MapInfo> maps;        ///< the map, then its companion maps
+  std::string message;              ///< "" on failure (the status says why)
+  std::vector<std::string> events;  ///< log lines: one per stored map
+  int saved_maps{0};                ///< maps stored (the map and its companions)
+  bool timed_out{false};
+};
+
+/// Something a pending save needs sent: a request for missing tiles of a push
+/// (MAPSTORE.PUSH.TILE_RESEND) or of a robot's live map (<robot>.MAP.TILE_RESEND).
+struct ResendAsk {
+  std::string pull_robot;  ///< set: ask this robot's mapper; empty: ask the pusher
+  TileRequest tiles;
+};
+
+/// What the caller must do after a call: reply to finished saves, send resend requests, and ask
+/// mappers to publish everything.
+struct SaveProgress {
+  std::vector<SaveOutcome> finished;
+  std::vector<ResendAsk> resends;
+  std::vector<std::string> publish_all;  ///< robots whose mapper must publish every layer
+  std::vector<std::string> new_robots;   ///< robots followed from now on (feed Mirror*)
+  int abandoned_pushes{0};               ///< staged pushes dropped (nobody asked to save them)
+  std::vector<std::string> warnings;     ///< unexpected failures (also in their outcome)
+};
+
+class SaveAssembler {
+ public:
+  using Clock = std::chrono::steady_clock;
+
+  /// `store` must outlive the assembler.
+  SaveAssembler(MapStore& store, SaveAssemblerParams params);
+  ~SaveAssembler();
+  SaveAssembler(const SaveAssembler&) = delete;
+  SaveAssembler& operator=(const SaveAssembler&) = delete;
+
+  // ---- Pushed data, by map name "<request_id>/<map>" ----
+  enum class Intake {
+    kHeld,         ///< kept
+    kRefused,      ///< bad data (or a name without '/'): count it as a dropped input
+    kStagingFull,  ///< the staged cells would exceed max_staged_cells: dropped
+  };
+  /// A pushed tile. `codec` and `bytes`: a compressed tile's codec (mapstore::Codec) and bytes
+  /// as they came; the store keeps them instead of compressing the cells again.
+  Intake StageTile(const CheckedTile& tile, std::optional<int> codec, std::string bytes,
+                   Clock::time_point now);
+  Intake StageManifest(const TileManifest& manifest, Clock::time_point now);
+  /// Pushed obstacles, or why they could not be read (the save then fails as invalid).
+  Intake StageObstacles(const std::string& map_name,
+                        common::Result<common::ObstacleRegistry> registry, Clock::time_point now);
+  Intake StageOctomapChunk(const std::string& map_name, const OctomapChunk& chunk,
+                           Clock::time_point now);
+
+  // ---- Live maps of robots pulled from (only robots in SaveProgress::new_robots) ----
+  /// False when the tile was refused (or the robot is not followed).
+  bool MirrorTile(const std::string& robot, const CheckedTile& tile);
+  void MirrorManifest(const std::string& robot, const TileManifest& manifest,
+                      Clock::time_point now);
+  void MirrorObstacles(const std::string& robot, common::ObstacleRegistry registry,
+                       Clock::time_point now);
+  /// False for an inconsistent chunk.
+  bool MirrorOctomapChunk(const std::string& robot, const OctomapChunk& chunk);
+
+  // ---- Saves ----
+  /// Starts a save. A bad request, or one the audit log says was saved already (a replay after
+  /// a restart), finishes at once; so does a push whose data all arrived already.
+  SaveProgress Start(SaveRequest request, Clock::time_point now);
+  /// Pushed data for `map_name` arrived: the save waiting for them finishes now when nothing is
+  /// missing any more.
+  SaveProgress OnPushed(const std::string& map_name, Clock::time_point now);
+  /// Finishes, asks again for, or gives up on every pending save; drops abandoned pushes.
+  SaveProgress Poll(Clock::time_point now);
+
+  /// Whether a save with this key (SaveKey) is waiting for data.
+  bool IsPending(const std::string& key) const;
+  int64_t pending_saves() const;
+  /// Cells staged by every push together.
+  int64_t staged_cells() const;
+
+ private:
+  struct Staging;
+  struct PendingSave;
+  struct LiveMirror;
+  struct Gathered;
+
+  /// Tries to finish a pending save (erasing it when it ends); appends to `progress`.
+  void TryFinish(const std::string& key, bool timed_out, Clock::time_point now,
+                 SaveProgress* progress);
+  void TryFinishGuarded(const std::string& key, bool timed_out, Clock::time_point now,
+                        SaveProgress* progress);
+  /// What a pull or push save has and lacks now.
+  Gathered GatherPull(PendingSave& save, Clock::time_point now);
+  Gathered GatherPush(PendingSave& save);
+  /// Stores the gathered layers: the map, and a companion map per other grid.
+  void Store(const PendingSave& save, Gathered& gathered, Clock::time_point now,
+             SaveOutcome* outcome);
+  /// Stores one grid's layers (the map itself, or a companion map); `event` gets its log line.
+  common::Result<MapInfo> StoreGroup(const PendingSave& save, Gathered& gathered,
+                                     const std::vector<std::string>& group, bool companion,
+                                     Clock::time_point now, std::string* event);
+  Provenance ProvenanceOf(const PendingSave& save, const std::string& push_robot) const;
+  /// The compressed tiles pushed for `group` that are the tiles the assembler holds (same CRC,
+  /// checked when each was decoded on receipt): the store keeps them as they came. They move
+  /// out of the staging.
+  static std::vector<StoredLayer> TakeEncodedLayers(Staging* staging,
+                                                    const TileAssembler& assembler,
+                                                    const std::vector<std::string>& group);
+  /// Ends a save: its staging goes, its outcome is appended.
+  void End(const std::string& key, SaveOutcome outcome, SaveProgress* progress);
+  SaveOutcome OutcomeOf(const PendingSave& save) const;
+  Staging* StagingFor(const std::string& map_name, Clock::time_point now);
+  LiveMirror* MirrorOf(const std::string& robot);
+  void DropAbandoned(Clock::time_point now, SaveProgress* progress);
+
+  MapStore& store_;
+  SaveAssemblerParams params_;
+  std::map<std::string, std::unique_ptr<Staging>> staging_;      // by push name
+  std::map<std::string, std::unique_ptr<PendingSave>> pending_;  // by SaveKey
+  std::map<std::string, std::unique_ptr<LiveMirror>> mirrors_;   // by robot
+};
+
+}  // namespace cairn::mapstore

@@ -1,0 +1,204 @@
+#include "mapstore/tile_assembler.h"
+
+#include <algorithm>
+
+namespace cairn::mapstore {
+
+namespace {
+
+// A tile whose header and cells agree, in a usable grid.
+bool Admissible(const CheckedTile& tile) {
+  const TileHeader& h = tile.header;
+  if (h.cells_x < 0 || h.cells_y < 0 || h.tile_size <= 0 || h.cells_x > h.tile_size ||
+      h.cells_y > h.tile_size ||
+      tile.num_cells != static_cast<size_t>(h.cells_x) * static_cast<size_t>(h.cells_y) ||
+      (tile.num_cells > 0 && tile.cells == nullptr)) {
+    return false;
+  }
+  const common::GridGeometry& g = h.geometry;
+  return g.resolution_m > 0 && g.size_x >= 0 && g.size_y >= 0 &&
+         int64_t{g.size_x} * g.size_y <= TileAssembler::kMaxLayerCells;
+}
+
+}  // namespace
+
+TileAssembler::LayerState& TileAssembler::StateFor(const std::string& layer,
+                                                   const common::GridGeometry& geometry,
+                                                   int tile_size) {
+  LayerState& state = layers_[layer];
+  if (state.geometry != geometry || state.tile_size != tile_size) {
+    state = LayerState();
+    state.geometry = geometry;
+    state.tile_size = tile_size;
+  }
+  return state;
+}
+
+void TileAssembler::Paste(LayerState* state, std::pair<int, int> key, int cells_x, int cells_y,
+                          const float* cells) {
+  common::Layer& canvas = state->cells;
+  const int64_t x0 = int64_t{key.first} * state->tile_size;
+  const int64_t y0 = int64_t{key.second} * state->tile_size;
+  if (x0 < 0 || y0 < 0 || x0 >= canvas.rows() || y0 >= canvas.cols()) return;
+  const int nx = static_cast<int>(std::min<int64_t>(cells_x, canvas.rows() - x0));
+  const int ny = static_cast<int>(std::min<int64_t>(cells_y, canvas.cols() - y0));
+  // Rows are contiguous (x fastest): one copy per tile row.
+  for (int y = 0; y < ny; ++y) {
+    const float* row = cells + static_cast<size_t>(y) * cells_x;
+    std::copy(row, row + nx, &canvas(x0, y0 + y));
+  }
+}
+
+bool TileAssembler::OnTile(const CheckedTile& tile) {
+  if (!Admissible(tile)) {
+    ++refused_tiles_;
+    return false;
+  }
+  const TileHeader& h = tile.header;
+  LayerState& state = StateFor(h.layer, h.geometry, h.tile_size);
+  state.robot = h.robot;
+  state.map_name = h.map_name;
+  const std::pair<int, int> key{h.tile_ix, h.tile_iy};
+  auto held = state.tiles.find(key);
+  if (held != state.tiles.end() && h.tile_version < held->second.tile_version) {
+    return true;  // older than what is held
+  }
+  if (state.cells.size() == 0 && h.geometry.size_x > 0 && h.geometry.size_y > 0) {
+    // Not filled: every cell is written by its tile, or made unknown by Layer / TakeLayer.
+    state.cells.resize(h.geometry.size_x, h.geometry.size_y);
+  }
+  Held& slot = state.tiles[key];
+  slot.tile_version = h.tile_version;
+  slot.checksum = h.checksum;
+  slot.cells_x = h.cells_x;
+  slot.cells_y = h.cells_y;
+  Paste(&state, key, h.cells_x, h.cells_y, tile.cells);
+  return true;
+}
+
+void TileAssembler::OnManifest(const TileManifest& m) {
+  LayerState& state = StateFor(m.layer, m.geometry, m.tile_size);
+  if (state.has_manifest && m.layer_version < state.manifest_version) return;
+  state.has_manifest = true;
+  state.manifest_version = m.layer_version;
+  state.robot = m.robot;
+  state.map_name = m.map_name;
+  state.expected.clear();
+  for (const TileManifest::Entry& e : m.tiles) state.expected[{e.tile_ix, e.tile_iy}] = e.checksum;
+  // Tiles no longer in the manifest became all unknown.
+  for (auto it = state.tiles.begin(); it != state.tiles.end();) {
+    if (state.expected.count(it->first) == 0 && it->second.tile_version <= m.layer_version) {
+      it = state.tiles.erase(it);
+    } else {
+      ++it;
+    }
+  }
+}
+
+std::vector<std::string> TileAssembler::layers() const {
+  std::vector<std::string> names;
+  for (const auto& [name, state] : layers_) names.push_back(name);
+  return names;
+}
+
+int64_t TileAssembler::version(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  return it == layers_.end() ? 0 : it->second.manifest_version;
+}
+
+std::vector<std::pair<int, int>> TileAssembler::Missing(const std::string& layer) const {
+  std::vector<std::pair<int, int>> missing;
+  auto it = layers_.find(layer);
+  if (it == layers_.end() || !it->second.has_manifest) return missing;
+  for (const auto& [key, crc] : it->second.expected) {
+    auto held = it->second.tiles.find(key);
+    if (held == it->second.tiles.end() || held->second.checksum != crc) missing.push_back(key);
+  }
+  return missing;
+}
+
+bool TileAssembler::Complete(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  return it != layers_.end() && it->second.has_manifest && Missing(layer).empty();
+}
+
+std::optional<TileRequest> TileAssembler::MissingRequest(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end() || !it->second.has_manifest) return std::nullopt;
+  std::vector<std::pair<int, int>> missing = Missing(layer);
+  if (missing.empty()) return std::nullopt;
+  TileRequest r;
+  r.robot = it->second.robot;
+  r.map_name = it->second.map_name;
+  r.layer = layer;
+  r.layer_version = it->second.manifest_version;
+  r.tiles = std::move(missing);
+  return r;
+}
+
+std::optional<uint32_t> TileAssembler::HeldChecksum(const std::string& layer, int tile_ix,
+                                                    int tile_iy) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  auto held = it->second.tiles.find({tile_ix, tile_iy});
+  if (held == it->second.tiles.end()) return std::nullopt;
+  return held->second.checksum;
+}
+
+std::optional<common::GridGeometry> TileAssembler::Geometry(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  return it->second.geometry;
+}
+
+void TileAssembler::FillUnheld(const LayerState& state, common::Layer* cells) {
+  if (cells->size() == 0 || state.tile_size <= 0) return;
+  const int64_t ts = state.tile_size;
+  const int nx = static_cast<int>((cells->rows() + ts - 1) / ts);
+  const int ny = static_cast<int>((cells->cols() + ts - 1) / ts);
+  for (int ty = 0; ty < ny; ++ty) {
+    for (int tx = 0; tx < nx; ++tx) {
+      const int64_t x0 = tx * ts, y0 = ty * ts;
+      const int64_t w = std::min<int64_t>(ts, cells->rows() - x0);
+      const int64_t h = std::min<int64_t>(ts, cells->cols() - y0);
+      auto held = state.tiles.find({tx, ty});
+      if (held == state.tiles.end()) {
+        cells->block(x0, y0, w, h).setConstant(common::kUnknown);
+        continue;
+      }
+      // A held tile smaller than its place leaves the rest of it unknown.
+      const int64_t hx = std::min<int64_t>(held->second.cells_x, w);
+      const int64_t hy = std::min<int64_t>(held->second.cells_y, h);
+      if (hx < w) cells->block(x0 + hx, y0, w - hx, h).setConstant(common::kUnknown);
+      if (hy < h) cells->block(x0, y0 + hy, hx, h - hy).setConstant(common::kUnknown);
+    }
+  }
+}
+
+common::GridMap TileAssembler::AsMap(const std::string& layer, const LayerState& state,
+                                     common::Layer cells) {
+  common::GridMap map(state.geometry);
+  if (cells.size() == 0) {
+    map.AddLayer(layer, common::kUnknown);  // no tile arrived: all unknown
+  } else {
+    FillUnheld(state, &cells);
+    map.AddLayer(layer, std::move(cells));
+  }
+  return map;
+}
+
+std::optional<common::GridMap> TileAssembler::Layer(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  return AsMap(layer, it->second, it->second.cells);
+}
+
+std::optional<common::GridMap> TileAssembler::TakeLayer(const std::string& layer) {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  common::GridMap map = AsMap(layer, it->second, std::move(it->second.cells));
+  layers_.erase(it);
+  return map;
+}
+
+}  // namespace cairn::mapstore

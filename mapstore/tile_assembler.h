@@ -1,0 +1,155 @@
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "common/grid_map.h"
+
+/// @file
+/// Layers rebuilt from tiles, in core terms (no LCM): what the map store's save assembly needs
+/// of a receiver of tiled layers. A sender cuts a layer into tiles of `tile_size` cells per side
+/// (tile (ix, iy) covers cells [ix * tile_size, + cells_x) x [iy * tile_size, + cells_y)) and
+/// announces, in a manifest, every tile it holds with its version and CRC-32; a tile absent from
+/// the manifest is all unknown. The receiver checks each tile's cells against its CRC before it
+/// hands the tile over (CheckedTile): the assembler never reads cells twice.
+///
+/// The bus adapter (mapstore/lcm/mapstore_conversions.h) turns lcmt_grid_tile,
+/// lcmt_occupancy_tile and lcmt_grid_manifest into these types and a TileRequest into an
+/// lcmt_tile_resend_request; runtime::LayerAssembler is the same receiver on wire types.
+
+namespace cairn::mapstore {
+
+/// Where a tile lies, in which grid, and what its sender declared about it.
+struct TileHeader {
+  std::string robot;
+  std::string map_name;
+  std::string layer;
+  common::GridGeometry geometry;  ///< the whole layer's grid
+  int tile_size{0};               ///< cells per side of a whole tile
+  int tile_ix{0};
+  int tile_iy{0};
+  int cells_x{0};  ///< cells of this tile (fewer at the grid's far edges)
+  int cells_y{0};
+  int64_t tile_version{0};
+  uint32_t checksum{0};  ///< CRC-32 of the cells as sent (float bytes, or int8 occupancy)
+};
+
+/// A tile whose cells its receiver checked against `header.checksum` (by computing the CRC, or
+/// with a codec that verified the bytes the sender declared). The cells are borrowed for the
+/// call that takes the tile.
+struct CheckedTile {
+  TileHeader header;
+  const float* cells{nullptr};  ///< cells_x * cells_y floats, x fastest
+  size_t num_cells{0};
+};
+
+/// The tiles a sender holds of one layer: its newest manifest.
+struct TileManifest {
+  std::string robot;
+  std::string map_name;
+  std::string layer;
+  int64_t layer_version{0};
+  common::GridGeometry geometry;
+  int tile_size{0};
+  struct Entry {
+    int tile_ix{0};
+    int tile_iy{0};
+    int64_t tile_version{0};
+    uint32_t checksum{0};
+  };
+  std::vector<Entry> tiles;
+};
+
+/// Tiles a receiver asks its sender for again: the tiles named, or the whole layer (its manifest
+/// comes with it) when none is named.
+struct TileRequest {
+  std::string robot;
+  std::string map_name;
+  std::string layer;
+  int64_t layer_version{0};
+  std::vector<std::pair<int, int>> tiles;  ///< (tile_ix, tile_iy); empty: every tile
+};
+
+/// Rebuilds layers from checked tiles and manifests. Not thread-safe.
+class TileAssembler {
+ public:
+  TileAssembler() = default;
+  TileAssembler(const TileAssembler&) = delete;
+  TileAssembler& operator=(const TileAssembler&) = delete;
+  TileAssembler(TileAssembler&&) = default;
+  TileAssembler& operator=(TileAssembler&&) = default;
+
+  /// Layers larger than this are refused (a tile declaring such a grid is refused).
+  static constexpr int64_t kMaxLayerCells = 64'000'000;
+
+  /// Pastes a tile into its layer. False (and counted as refused) when its size disagrees with
+  /// its header or its grid is unusable. A tile older than the one held at its place is ignored
+  /// (true); a tile of another grid than its layer's restarts the layer.
+  bool OnTile(const CheckedTile& tile);
+  /// Takes a manifest unless an older one than the layer's newest; tiles it no longer lists
+  /// become unknown.
+  void OnManifest(const TileManifest& manifest);
+
+  /// Layers seen so far (from tiles or manifests), sorted.
+  std::vector<std::string> layers() const;
+  /// True when every tile of the newest manifest of `layer` is held with its checksum.
+  bool Complete(const std::string& layer) const;
+  /// Version of the newest manifest of a layer (0 if none).
+  int64_t version(const std::string& layer) const;
+  /// Tiles of the newest manifest not held (or held stale), as (tile_ix, tile_iy).
+  std::vector<std::pair<int, int>> Missing(const std::string& layer) const;
+  /// A request for the missing tiles (robot and map name as the manifest said); nullopt when
+  /// nothing is missing or no manifest arrived.
+  std::optional<TileRequest> MissingRequest(const std::string& layer) const;
+  /// The grid of a layer as Layer would return it, without assembling it.
+  std::optional<common::GridGeometry> Geometry(const std::string& layer) const;
+  /// The checksum of the tile held at (tile_ix, tile_iy) of a layer; nullopt when none is held.
+  std::optional<uint32_t> HeldChecksum(const std::string& layer, int tile_ix, int tile_iy) const;
+  /// The layer as a one-layer GridMap (cells of tiles not held are unknown); nullopt if the
+  /// layer was never seen.
+  std::optional<common::GridMap> Layer(const std::string& layer) const;
+  /// Layer without a copy: the cells move out and the layer is forgotten.
+  std::optional<common::GridMap> TakeLayer(const std::string& layer);
+
+  /// Tiles refused so far.
+  int64_t refused_tiles() const { return refused_tiles_; }
+
+ private:
+  struct Held {
+    int64_t tile_version{0};
+    uint32_t checksum{0};
+    int cells_x{0};
+    int cells_y{0};
+  };
+  struct LayerState {
+    common::GridGeometry geometry;
+    int tile_size{0};
+    bool has_manifest{false};
+    int64_t manifest_version{0};
+    std::string robot;
+    std::string map_name;
+    std::map<std::pair<int, int>, uint32_t> expected;  // from the newest manifest
+    std::map<std::pair<int, int>, Held> tiles;
+    // Geometry-sized, allocated with the first tile. Cells of held tiles are theirs; the others
+    // are undefined until Layer or TakeLayer makes them unknown.
+    common::Layer cells;
+  };
+  LayerState& StateFor(const std::string& layer, const common::GridGeometry& geometry,
+                       int tile_size);
+  /// Pastes `cells` (x fastest) into the place of tile `key`, clipped to the layer.
+  static void Paste(LayerState* state, std::pair<int, int> key, int cells_x, int cells_y,
+                    const float* cells);
+  /// Makes the cells of every place without a held tile unknown.
+  static void FillUnheld(const LayerState& state, common::Layer* cells);
+  static common::GridMap AsMap(const std::string& layer, const LayerState& state,
+                               common::Layer cells);
+
+  std::map<std::string, LayerState> layers_;
+  int64_t refused_tiles_{0};
+};
+
+}  // namespace cairn::mapstore

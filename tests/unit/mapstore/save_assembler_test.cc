@@ -1,0 +1,351 @@
+// SaveAssembler against the in-memory store (and, where the stored bytes matter, SQLite in
+// memory): push and pull saves put together from pieces, with time passed in.
+
+#include "mapstore/save_assembler.h"
+
+#include <gtest/gtest.h>
+
+#include "common/layers.h"
+#include "mapstore/in_memory_map_store.h"
+#include "mapstore/sqlite_map_store.h"
+#include "tests/unit/mapstore/core_tiles.h"
+#include "tests/unit/mapstore/fake_deriver.h"
+
+namespace cairn::mapstore {
+namespace {
+
+using Clock = SaveAssembler::Clock;
+using Intake = SaveAssembler::Intake;
+using testing::CutLayer;
+using testing::SameLayer;
+
+Clock::time_point T(double s) {
+  return Clock::time_point() +
+         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1000.0 + s));
+}
+
+SaveAssemblerParams Params() {
+  SaveAssemblerParams p;
+  p.save_timeout_s = 2.0;
+  p.resend_interval_s = 0.1;
+  p.staging_timeout_s = 5.0;
+  p.pull_settle_s = 0.5;
+  return p;
+}
+
+SaveRequest PushRequest(const MapSnapshot& s, int64_t id = 11) {
+  SaveRequest r;
+  r.requester = "unit";
+  r.request_id = id;
+  r.site = s.site;
+  r.map_name = s.name;
+  r.layers = s.base.layer_names();
+  r.profile = s.provenance.source_profile;
+  r.code_version = s.provenance.code_version;
+  return r;
+}
+
+SaveRequest PullRequest(int64_t id, const std::string& map, const std::string& robot) {
+  SaveRequest r;
+  r.requester = "unit";
+  r.request_id = id;
+  r.site = "lab";
+  r.map_name = map;
+  r.robot = robot;
+  return r;
+}
+
+class SaveAssemblerTest : public ::testing::Test {
+ protected:
+  SaveAssemblerTest() : snapshot_(testing::SampleSnapshot("corridor", 37, 23)) {}
+
+  // Stages every layer of the snapshot under the push name of request `id` (dropping tile
+  // `skip` of the first layer when >= 0), compressed when `compress`.
+  void Stage(SaveAssembler& dut, int64_t id, bool compress = false, int skip = -1,
+             double at = 0.0) {
+    const std::string name = std::to_string(id) + "/" + snapshot_.name;
+    bool first = true;
+    for (const std::string& layer : snapshot_.base.layer_names()) {
+      const auto cut = CutLayer(snapshot_.base, layer, 10, name);
+      EXPECT_EQ(dut.StageManifest(cut.manifest, T(at)), Intake::kHeld);
+      for (size_t i = 0; i < cut.tiles.size(); ++i) {
+        if (first && static_cast<int>(i) == skip) continue;
+        StageTile(dut, cut.tiles[i], compress, at);
+      }
+      first = false;
+    }
+  }
+  Intake StageTile(SaveAssembler& dut, const testing::OwnedTile& t, bool compress, double at) {
+    if (!compress) return dut.StageTile(t.As(), std::nullopt, "", T(at));
+    const EncodedBlob blob = t.Compressed();
+    return dut.StageTile(t.As(), static_cast<int>(blob.codec), blob.data, T(at));
+  }
+
+  MapSnapshot snapshot_;
+  InMemoryMapStore store_;
+};
+
+TEST_F(SaveAssemblerTest, APushSaveFinishesTheMomentItsLastTileArrives) {
+  SaveAssembler dut(store_, Params());
+  Stage(dut, 11, false, /*skip=*/2);
+  SaveProgress started = dut.Start(PushRequest(snapshot_), T(0.0));
+  EXPECT_TRUE(started.finished.empty());
+  EXPECT_TRUE(dut.IsPending("unit#11"));
+  // The missing tile is asked for at once, on the push channel.
+  ASSERT_EQ(started.resends.size(), 1u);
+  EXPECT_TRUE(started.resends[0].pull_robot.empty());
+  EXPECT_EQ(started.resends[0].tiles.map_name, "11/corridor");
+  const auto cut = CutLayer(snapshot_.base, snapshot_.base.layer_names()[0], 10, "11/corridor");
+  const std::pair<int, int> missing{cut.tiles[2].header.tile_ix, cut.tiles[2].header.tile_iy};
+  EXPECT_EQ(started.resends[0].tiles.tiles, (std::vector<std::pair<int, int>>{missing}));
+
+  EXPECT_TRUE(dut.OnPushed("11/other", T(0.01)).finished.empty());  // another push: no change
+  EXPECT_EQ(StageTile(dut, cut.tiles[2], false, 0.01), Intake::kHeld);
+  SaveProgress done = dut.OnPushed("11/corridor", T(0.01));
+  ASSERT_EQ(done.finished.size(), 1u);
+  const SaveOutcome& outcome = done.finished[0];
+  ASSERT_TRUE(outcome.status.ok()) << outcome.status.ToString();
+  EXPECT_EQ(outcome.version, 1);
+  EXPECT_EQ(outcome.message, "saved version 1");
+  EXPECT_EQ(outcome.saved_maps, 1);
+  EXPECT_EQ(outcome.key, "unit#11");
+  ASSERT_EQ(outcome.events.size(), 1u);
+  EXPECT_NE(outcome.events[0].find("saved lab/corridor v1 from a push"), std::string::npos);
+  EXPECT_FALSE(dut.IsPending("unit#11"));
+  EXPECT_EQ(dut.staged_cells(), 0);  // the staging went with the save
+
+  auto stored = store_.LoadLayers({"lab", "corridor", 1}, {});
+  ASSERT_TRUE(stored.ok());
+  for (const std::string& layer : snapshot_.base.layer_names()) {
+    EXPECT_TRUE(SameLayer(stored->at(layer), snapshot_.base.at(layer))) << layer;
+  }
+  auto info = store_.GetMapInfo({"lab", "corridor", 1});
+  EXPECT_EQ(info->provenance.source_robot, "rover1");  // the pushed tiles' robot
+  EXPECT_EQ(info->provenance.code_version, "mapping-7");
+}
+
+TEST_F(SaveAssemblerTest, ResendsArePacedAndASaveStillIncompleteTimesOutNamingWhatIsMissing) {
+  SaveAssembler dut(store_, Params());
+  Stage(dut, 11, false, /*skip=*/0);
+  SaveRequest request = PushRequest(snapshot_);
+  request.expect_obstacles = true;
+  EXPECT_EQ(dut.Start(request, T(0.0)).resends.size(), 2u);  // the tile and "#obstacles"
+  EXPECT_TRUE(dut.Poll(T(0.05)).resends.empty());            // within the resend interval
+  SaveProgress again = dut.Poll(T(0.1));
+  ASSERT_EQ(again.resends.size(), 2u);
+  EXPECT_EQ(again.resends[1].tiles.layer, kResendObstacles);
+  EXPECT_TRUE(again.resends[1].tiles.tiles.empty());  // "send it all"
+  EXPECT_TRUE(dut.Poll(T(1.9)).finished.empty());
+  SaveProgress late = dut.Poll(T(2.01));
+  ASSERT_EQ(late.finished.size(), 1u);
+  EXPECT_TRUE(late.finished[0].timed_out);
+  EXPECT_EQ(late.finished[0].status.code(), common::StatusCode::kUnavailable);
+  EXPECT_EQ(late.finished[0].status.message(),
+            "timed out after 2 s waiting for: elevation, #obstacles");
+  EXPECT_FALSE(dut.IsPending("unit#11"));
+  EXPECT_FALSE(store_.GetMapInfo({"lab", "corridor", 0}).ok());
+}
+
+TEST_F(SaveAssemblerTest, PushedCompressedTilesAreStoredAsTheyCame) {
+  auto sqlite = SqliteMapStore::Open(":memory:", [] {
+    SqliteOptions o;
+    o.tile_size_cells = 10;
+    return o;
+  }());
+  ASSERT_TRUE(sqlite.ok());
+  SaveAssembler dut(**sqlite, Params());
+  Stage(dut, 11, /*compress=*/true);
+  SaveProgress done = dut.Start(PushRequest(snapshot_), T(0.0));  // everything is there
+  ASSERT_EQ(done.finished.size(), 1u);
+  ASSERT_TRUE(done.finished[0].status.ok()) << done.finished[0].status.ToString();
+  auto blobs = (*sqlite)->BaseBlobBytes({"lab", "corridor", 1});
+  ASSERT_TRUE(blobs.ok());
+  size_t compared = 0;
+  for (const std::string& layer : snapshot_.base.layer_names()) {
+    for (const auto& t : CutLayer(snapshot_.base, layer, 10, "x").tiles) {
+      const std::string key =
+          layer + "/" + std::to_string(t.header.tile_ix) + "/" + std::to_string(t.header.tile_iy);
+      ASSERT_TRUE(blobs->count(key)) << key;
+      EXPECT_EQ(blobs->at(key), t.Compressed().data) << key;
+      ++compared;
+    }
+  }
+  EXPECT_EQ(compared, blobs->size());
+  auto loaded = (*sqlite)->LoadLayers({"lab", "corridor", 1}, {});
+  ASSERT_TRUE(loaded.ok());
+  EXPECT_TRUE(SameLayer(loaded->at(layers::kElevation), snapshot_.base.at(layers::kElevation)));
+}
+
+TEST_F(SaveAssemblerTest, BadRequestsAndBadObstaclesFailAsInvalid) {
+  SaveAssembler dut(store_, Params());
+  SaveRequest no_layers = PushRequest(snapshot_);
+  no_layers.layers.clear();
+  SaveProgress p = dut.Start(no_layers, T(0.0));
+  ASSERT_EQ(p.finished.size(), 1u);
+  EXPECT_EQ(p.finished[0].status.code(), common::StatusCode::kInvalidArgument);
+  EXPECT_EQ(p.finished[0].status.message(), "a pushed save must name its layers");
+  SaveRequest bad_name = PushRequest(snapshot_);
+  bad_name.map_name = "../etc";
+  EXPECT_EQ(dut.Start(bad_name, T(0.0)).finished.at(0).status.code(),
+            common::StatusCode::kInvalidArgument);
+
+  Stage(dut, 12);
+  EXPECT_EQ(dut.StageObstacles("12/corridor", common::InvalidArgumentError("kind 9"), T(0.0)),
+            Intake::kRefused);
+  SaveProgress refused = dut.Start(PushRequest(snapshot_, 12), T(0.0));
+  ASSERT_EQ(refused.finished.size(), 1u);
+  EXPECT_EQ(refused.finished[0].status.code(), common::StatusCode::kInvalidArgument);
+  EXPECT_EQ(refused.finished[0].status.message(), "pushed obstacles: kind 9");
+  EXPECT_EQ(dut.staged_cells(), 0);
+  // Data without a push name ("<request_id>/<map>") are refused.
+  EXPECT_EQ(
+      dut.StageManifest(CutLayer(snapshot_.base, layers::kElevation, 10, "live").manifest, T(0.0)),
+      Intake::kRefused);
+}
+
+TEST_F(SaveAssemblerTest, ASaveReplayedAfterARestartAnswersWithTheVersionItMade) {
+  {
+    SaveAssembler first(store_, Params());
+    Stage(first, 11);
+    ASSERT_TRUE(first.Start(PushRequest(snapshot_), T(0.0)).finished.at(0).status.ok());
+  }
+  SaveAssembler restarted(store_, Params());
+  SaveProgress replay = restarted.Start(PushRequest(snapshot_), T(0.0));
+  ASSERT_EQ(replay.finished.size(), 1u);
+  EXPECT_EQ(replay.finished[0].version, 1);
+  EXPECT_EQ(replay.finished[0].message, "already saved as version 1");
+  EXPECT_FALSE(store_.GetMapInfo({"lab", "corridor", 2}).ok());  // saved once
+}
+
+TEST_F(SaveAssemblerTest, StagedCellsAreBoundedAndAbandonedPushesDropped) {
+  SaveAssemblerParams params = Params();
+  const int64_t layer_cells = snapshot_.base.geometry().num_cells();
+  params.max_staged_cells = layer_cells + 50;  // one layer and a bit
+  SaveAssembler dut(store_, params);
+  const auto elevation = CutLayer(snapshot_.base, layers::kElevation, 10, "11/corridor");
+  int full = 0;
+  for (const std::string& layer : snapshot_.base.layer_names()) {
+    for (const auto& t : CutLayer(snapshot_.base, layer, 10, "11/corridor").tiles) {
+      full += StageTile(dut, t, false, 0.0) == Intake::kStagingFull ? 1 : 0;
+    }
+  }
+  EXPECT_GT(full, 0);
+  EXPECT_LE(dut.staged_cells(), params.max_staged_cells);
+  // Nobody asks to save it: dropped after staging_timeout_s without news.
+  EXPECT_EQ(dut.Poll(T(4.9)).abandoned_pushes, 0);
+  EXPECT_EQ(dut.Poll(T(5.1)).abandoned_pushes, 1);
+  EXPECT_EQ(dut.staged_cells(), 0);
+  EXPECT_EQ(StageTile(dut, elevation.tiles[0], false, 5.2), Intake::kHeld);  // room again
+}
+
+TEST_F(SaveAssemblerTest, APushWaitsForItsOctomapAndObstacles) {
+  SaveAssembler dut(store_, Params());
+  Stage(dut, 11);
+  SaveRequest request = PushRequest(snapshot_);
+  request.expect_obstacles = true;
+  request.expect_octomap = true;
+  EXPECT_TRUE(dut.Start(request, T(0.0)).finished.empty());
+  EXPECT_EQ(dut.StageObstacles("11/corridor", snapshot_.obstacles, T(0.01)), Intake::kHeld);
+  EXPECT_TRUE(dut.OnPushed("11/corridor", T(0.01)).finished.empty());
+  OctomapData tree;
+  tree.binary = true;
+  tree.resolution_m = 0.1;
+  tree.bytes = std::string(1000, 'o');
+  for (const OctomapChunk& c : SplitOctomap(tree, 400)) {
+    EXPECT_EQ(dut.StageOctomapChunk("11/corridor", c, T(0.02)), Intake::kHeld);
+  }
+  SaveProgress done = dut.OnPushed("11/corridor", T(0.02));
+  ASSERT_EQ(done.finished.size(), 1u);
+  ASSERT_TRUE(done.finished[0].status.ok());
+  EXPECT_EQ(store_.LoadOctomap({"lab", "corridor", 1}).value(), tree);
+  EXPECT_EQ(store_.LoadObstacles({"lab", "corridor", 1}).value().obstacles.size(), 2u);
+}
+
+// A mapper's live map: the store asks for everything, follows the manifests and tiles that
+// come after the request and saves the robot-agnostic layers; a layer of another grid becomes a
+// companion map.
+TEST_F(SaveAssemblerTest, APullSaveTakesTheLiveMapsRobotAgnosticLayers) {
+  SaveAssembler dut(store_, Params());
+  const SaveRequest request = PullRequest(21, "tunnel", "rover1");
+  SaveProgress started = dut.Start(request, T(0.0));
+  EXPECT_EQ(started.new_robots, std::vector<std::string>{"rover1"});
+  EXPECT_EQ(started.publish_all, std::vector<std::string>{"rover1"});
+  EXPECT_TRUE(started.finished.empty());
+
+  common::GridMap live = snapshot_.base;
+  live.AddLayer("cost/rover", 0.f);  // a profile layer: left out
+  common::GridGeometry fine = live.geometry();
+  fine.resolution_m = 0.05;
+  fine.size_x *= 4;
+  fine.size_y *= 4;
+  common::GridMap occupancy(fine);
+  occupancy.AddLayer("occupancy", 50.f);
+  std::vector<testing::TiledLayer> cuts;
+  for (const std::string& layer : live.layer_names()) {
+    cuts.push_back(CutLayer(live, layer, 10, "live"));
+  }
+  cuts.push_back(CutLayer(occupancy, "occupancy", 50, "live"));
+  for (const auto& cut : cuts) {
+    dut.MirrorManifest("rover1", cut.manifest, T(0.1));
+    for (const auto& t : cut.tiles) EXPECT_TRUE(dut.MirrorTile("rover1", t.As()));
+  }
+  EXPECT_TRUE(dut.Poll(T(0.3)).finished.empty());  // still settling
+  SaveProgress later = dut.Poll(T(0.6));           // no obstacles yet: still waiting
+  EXPECT_TRUE(later.finished.empty());
+  for (const ResendAsk& ask : later.resends) EXPECT_EQ(ask.pull_robot, "rover1");
+  dut.MirrorObstacles("rover1", snapshot_.obstacles, T(0.7));
+  SaveProgress done = dut.Poll(T(0.8));
+  ASSERT_EQ(done.finished.size(), 1u);
+  const SaveOutcome& outcome = done.finished[0];
+  ASSERT_TRUE(outcome.status.ok()) << outcome.status.ToString();
+  EXPECT_EQ(outcome.saved_maps, 2);
+  EXPECT_EQ(outcome.layers,
+            (std::vector<std::string>{layers::kElevation, layers::kObservationCount}));
+  ASSERT_EQ(outcome.maps.size(), 2u);
+  EXPECT_EQ(outcome.maps[1].name, "tunnel-occupancy");
+  EXPECT_EQ(outcome.message,
+            "saved version 1; also tunnel-occupancy v1 (1 layers of another grid)");
+  auto info = store_.GetMapInfo({"lab", "tunnel", 1});
+  EXPECT_EQ(info->provenance.source_robot, "rover1");
+  EXPECT_EQ(info->num_obstacles, 2);
+  EXPECT_TRUE(store_.GetMapInfo({"lab", "tunnel-occupancy", 1}).ok());
+}
+
+TEST_F(SaveAssemblerTest, APullSaveOnlyTakesManifestsNewerThanItsRequest) {
+  SaveAssembler dut(store_, Params());
+  SaveRequest request = PullRequest(21, "tunnel", "rover1");
+  request.layers = {layers::kElevation};
+  dut.Start(request, T(0.0));  // follows rover1 from now on
+  const auto cut = CutLayer(snapshot_.base, layers::kElevation, 10, "live");
+  dut.MirrorManifest("rover1", cut.manifest, T(0.1));
+  for (const auto& t : cut.tiles) dut.MirrorTile("rover1", t.As());
+  dut.MirrorObstacles("rover1", {}, T(0.1));
+  ASSERT_EQ(dut.Poll(T(0.2)).finished.size(), 1u);
+  // A second pull: the manifest it has is older than the request, so it asks for the layer.
+  request.request_id = 22;
+  SaveProgress second = dut.Start(request, T(1.0));
+  EXPECT_TRUE(second.new_robots.empty());  // followed already
+  SaveProgress waiting = dut.Poll(T(1.6));
+  EXPECT_TRUE(waiting.finished.empty());
+  ASSERT_FALSE(waiting.resends.empty());
+  EXPECT_EQ(waiting.resends[0].tiles.layer, layers::kElevation);
+  EXPECT_EQ(waiting.resends[0].tiles.map_name, "live");
+  EXPECT_TRUE(waiting.resends[0].tiles.tiles.empty());  // the whole layer
+  dut.MirrorManifest("rover1", cut.manifest, T(1.7));
+  dut.MirrorObstacles("rover1", {}, T(1.7));
+  SaveProgress done = dut.Poll(T(1.8));
+  ASSERT_EQ(done.finished.size(), 1u);
+  EXPECT_EQ(done.finished[0].version, 2);
+}
+
+TEST_F(SaveAssemblerTest, APullFromARobotWithoutAMapperTimesOut) {
+  SaveAssembler dut(store_, Params());
+  dut.Start(PullRequest(31, "nothing", "ghost"), T(0.0));
+  SaveProgress p = dut.Poll(T(2.5));
+  ASSERT_EQ(p.finished.size(), 1u);
+  EXPECT_EQ(p.finished[0].status.message(),
+            "timed out after 2 s waiting for: any layer (is the mapper of 'ghost' running?)");
+}
+
+}  // namespace
+}  // namespace cairn::mapstore
