@@ -13,7 +13,7 @@
 #include "common/status.h"
 #include "mapstore/map_store.h"
 #include "mapstore/octomap_chunks.h"
-#include "mapstore/tile_assembler.h"
+#include "common/tile_assembler.h"
 
 /// @file
 /// SaveAssembler: how the map store puts a save together from pieces that arrive one by one
@@ -42,6 +42,12 @@
 /// Not thread-safe: one caller at a time.
 
 namespace cairn::mapstore {
+
+using common::CheckedTile;
+using common::TileAssembler;
+using common::TileHeader;
+using common::TileManifest;
+using common::TileRequest;
 
 /// Pseudo layer names a push client is asked to send again (they cannot be layer names).
 inline constexpr char kResendObstacles[] = "#obstacles";

@@ -16,15 +16,21 @@
 #include "mapstore/map_store.h"
 #include "mapstore/octomap_chunks.h"
 #include "mapstore/save_assembler.h"
-#include "mapstore/tile_assembler.h"
+#include "services/runtime/tile_conversions.h"
 
 /// @file
-/// ToLcm / FromLcm for the map store's own types (the rest lives in services/runtime): map
-/// infos, places, and the tiles, manifests, resend requests and OctoMap chunks of the save
-/// assembly (mapstore/tile_assembler.h, mapstore/octomap_chunks.h). A tile from the bus becomes
-/// a CheckedTile only after its cells were checked against its CRC.
+/// ToLcm / FromLcm for the map store's own types: map infos, places and the OctoMap chunks of the
+/// save assembly (mapstore/octomap_chunks.h). Tiles, manifests and resend requests convert in
+/// services/runtime/tile_conversions.h (the save assembly's core types are common's).
 
 namespace cairn::mapstore {
+
+using runtime::CheckFloatTile;
+using runtime::CheckOccupancyTile;
+using runtime::DecodedTile;
+using runtime::HeaderOf;
+using runtime::FromLcm;
+using runtime::ToLcm;
 
 /// The site a request names, kDefaultSite when it names none.
 std::string SiteOf(const cairn::lcmt_mapstore_request& request);
@@ -39,29 +45,6 @@ cairn::lcmt_map_info ToLcm(const MapInfo& info);
 cairn::lcmt_place ToLcm(const Place& place);
 /// @returns kInvalidArgument when the arrays disagree with their count or a vertex is not finite.
 common::Result<Place> FromLcm(const cairn::lcmt_place& msg);
-
-/// Where a tile lies and what its sender declared (not its cells).
-TileHeader HeaderOf(const cairn::lcmt_grid_tile& tile);
-TileHeader HeaderOf(const cairn::lcmt_occupancy_tile& tile);
-/// A float tile whose CRC-32 holds, borrowing the message's cells. kInvalidArgument for a
-/// compressed tile or one whose cells disagree with num_cells, kCorrupt for a CRC that fails.
-common::Result<CheckedTile> CheckFloatTile(const cairn::lcmt_grid_tile& tile);
-/// A compressed tile its receiver decoded into `cells` with a codec that verified the bytes
-/// against the sender's checksum (DecodeTileCells): the declared checksum stands for the cells.
-CheckedTile DecodedTile(const cairn::lcmt_grid_tile& tile, const std::vector<float>& cells);
-/// An occupancy tile whose CRC-32 (of its int8 cells) holds, its cells as floats in `*cells`
-/// (-1 becomes unknown). Errors as CheckFloatTile.
-common::Result<CheckedTile> CheckOccupancyTile(const cairn::lcmt_occupancy_tile& tile,
-                                               std::vector<float>* cells);
-
-/// kInvalidArgument when an array disagrees with num_tiles.
-common::Result<TileManifest> FromLcm(const cairn::lcmt_grid_manifest& msg);
-/// A manifest as LayerTiler would publish it (for tests and senders).
-cairn::lcmt_grid_manifest ToLcm(const TileManifest& manifest, int64_t utime);
-
-cairn::lcmt_tile_resend_request ToLcm(const TileRequest& request, const std::string& requester,
-                                      int64_t utime);
-TileRequest FromLcm(const cairn::lcmt_tile_resend_request& msg);
 
 /// An OctoMap chunk borrowing the message's bytes; kInvalidArgument when num_bytes disagrees.
 common::Result<OctomapChunk> FromLcm(const cairn::lcmt_octomap& msg);

@@ -11,6 +11,7 @@
 
 #include "common/status.h"
 #include "mapstore/blob_codec.h"
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 
 /// @file

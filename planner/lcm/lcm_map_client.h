@@ -14,6 +14,7 @@
 #include "planner/map_snapshot_policy.h"
 #include "planner/map_source.h"
 #include "services/runtime/node.h"
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 
 /// @file

@@ -26,16 +26,6 @@ void FillGeometry(const common::GridGeometry& g, int tile_size, Msg* m) {
   m->tile_size = tile_size;
 }
 
-template <typename Msg>
-common::GridGeometry GeometryOf(const Msg& m) {
-  common::GridGeometry g;
-  g.resolution_m = m.resolution_m;
-  g.size_x = m.layer_size_x;
-  g.size_y = m.layer_size_y;
-  g.origin = {m.origin_x_m, m.origin_y_m, m.origin_yaw_rad};
-  return g;
-}
-
 }  // namespace
 
 LayerTiler::LayerTiler(std::string robot, std::string map_name, int tile_size_cells,
@@ -183,11 +173,10 @@ namespace {
 
 // The fields every tile message shares: where the tile sits, its versions and checksum.
 template <typename TileMsg>
-void FillTileHeader(const std::string& robot, const std::string& map_name,
-                    const std::string& layer, int64_t utime, int64_t layer_version,
-                    const common::GridGeometry& geometry, int tile_size, int ix, int iy,
-                    int64_t tile_version, int cells_x, int cells_y, uint32_t checksum,
-                    TileMsg* m) {
+void FillTileHeader(const std::string& robot, const std::string& map_name, const std::string& layer,
+                    int64_t utime, int64_t layer_version, const common::GridGeometry& geometry,
+                    int tile_size, int ix, int iy, int64_t tile_version, int cells_x, int cells_y,
+                    uint32_t checksum, TileMsg* m) {
   m->utime = utime;
   m->robot = robot;
   m->map_name = map_name;
@@ -207,9 +196,8 @@ void FillTileHeader(const std::string& robot, const std::string& map_name,
 void LayerTiler::AppendTile(const std::string& layer, const LayerState& state, int ix, int iy,
                             const TileState& tile, Batch* batch) const {
   auto header = [&](auto* m) {
-    FillTileHeader(robot_, map_name_, layer, state.utime, state.version, state.geometry,
-                   tile_size_, ix, iy, tile.tile_version, tile.cells_x, tile.cells_y,
-                   tile.checksum, m);
+    FillTileHeader(robot_, map_name_, layer, state.utime, state.version, state.geometry, tile_size_,
+                   ix, iy, tile.tile_version, tile.cells_x, tile.cells_y, tile.checksum, m);
   };
   if (state.encoding == TileEncoding::kFloat) {
     cairn::lcmt_grid_tile m{};
@@ -270,285 +258,6 @@ LayerTiler::Batch LayerTiler::Resend(const cairn::lcmt_tile_resend_request& requ
   batch.manifest = MakeManifest(request.layer, state);
   batch.changed = !batch.tiles.empty() || !batch.occupancy_tiles.empty();
   return batch;
-}
-
-LayerAssembler::LayerState& LayerAssembler::StateFor(const std::string& layer,
-                                                     const common::GridGeometry& geometry,
-                                                     int tile_size) {
-  LayerState& state = layers_[layer];
-  if (state.geometry != geometry || state.tile_size != tile_size) {
-    state = LayerState();
-    state.geometry = geometry;
-    state.tile_size = tile_size;
-  }
-  return state;
-}
-
-void LayerAssembler::Paste(LayerState* state, std::pair<int, int> key, int cells_x, int cells_y,
-                           const float* data) {
-  common::Layer& cells = state->cells;
-  const int64_t x0 = int64_t{key.first} * state->tile_size;
-  const int64_t y0 = int64_t{key.second} * state->tile_size;
-  if (x0 < 0 || y0 < 0 || x0 >= cells.rows() || y0 >= cells.cols()) return;
-  const int nx = static_cast<int>(std::min<int64_t>(cells_x, cells.rows() - x0));
-  const int ny = static_cast<int>(std::min<int64_t>(cells_y, cells.cols() - y0));
-  // Rows are contiguous (x fastest): one copy per tile row.
-  for (int y = 0; y < ny; ++y) {
-    std::copy(data + static_cast<size_t>(y) * cells_x, data + static_cast<size_t>(y) * cells_x + nx,
-              &cells(x0, y0 + y));
-  }
-}
-
-template <typename TileMsg>
-LayerAssembler::LayerState* LayerAssembler::Admit(const TileMsg& tile, size_t size, uint32_t crc,
-                                                  bool* older) {
-  *older = false;
-  if (static_cast<uint32_t>(tile.checksum) != crc || tile.cells_x < 0 ||
-      size != static_cast<size_t>(tile.cells_x) * static_cast<size_t>(tile.cells_y) ||
-      tile.tile_size <= 0 || tile.cells_x > tile.tile_size || tile.cells_y > tile.tile_size) {
-    ++checksum_errors_;
-    return nullptr;
-  }
-  const common::GridGeometry geometry = GeometryOf(tile);
-  if (!(geometry.resolution_m > 0) || geometry.size_x < 0 || geometry.size_y < 0 ||
-      int64_t{geometry.size_x} * geometry.size_y > kMaxLayerCells) {
-    ++checksum_errors_;
-    return nullptr;
-  }
-  LayerState& state = StateFor(tile.layer, geometry, tile.tile_size);
-  state.robot = tile.robot;
-  state.map_name = tile.map_name;
-  auto held = state.tiles.find({tile.tile_ix, tile.tile_iy});
-  *older = held != state.tiles.end() && tile.tile_version < held->second.tile_version;
-  if (state.cells.size() == 0 && geometry.size_x > 0 && geometry.size_y > 0) {
-    // Not filled: every cell is written by its tile, or made unknown by Layer / TakeLayer.
-    state.cells.resize(geometry.size_x, geometry.size_y);
-  }
-  return &state;
-}
-
-template <typename TileMsg>
-bool LayerAssembler::OnTileImpl(const TileMsg& tile, const float* data, size_t size, uint32_t crc) {
-  bool older = false;
-  LayerState* state = Admit(tile, size, crc, &older);
-  if (state == nullptr) return false;
-  if (older) return true;  // older than what we hold
-  const std::pair<int, int> key{tile.tile_ix, tile.tile_iy};
-  Held& held = state->tiles[key];
-  held.tile_version = tile.tile_version;
-  held.checksum = crc;
-  held.cells_x = tile.cells_x;
-  held.cells_y = tile.cells_y;
-  Paste(state, key, tile.cells_x, tile.cells_y, data);
-  return true;
-}
-
-std::optional<LayerAssembler::TileSlot> LayerAssembler::BeginTile(
-    const cairn::lcmt_grid_tile& tile) {
-  bool older = false;
-  LayerState* state =
-      Admit(tile, static_cast<size_t>(std::max(0, tile.cells_x)) * std::max(0, tile.cells_y),
-            static_cast<uint32_t>(tile.checksum), &older);
-  if (state == nullptr) return std::nullopt;
-  TileSlot slot;
-  if (older) return slot;
-  common::Layer& cells = state->cells;
-  const int64_t x0 = int64_t{tile.tile_ix} * state->tile_size;
-  const int64_t y0 = int64_t{tile.tile_iy} * state->tile_size;
-  if (x0 < 0 || y0 < 0 || x0 >= cells.rows() || y0 >= cells.cols()) {
-    EndTile(tile, true);  // outside the layer: held, with nothing to write (as in OnTile)
-    return slot;
-  }
-  slot.first = &cells(x0, y0);
-  slot.row_stride = cells.rows();
-  slot.cells_x = static_cast<int>(std::min<int64_t>(tile.cells_x, cells.rows() - x0));
-  slot.cells_y = static_cast<int>(std::min<int64_t>(tile.cells_y, cells.cols() - y0));
-  // The place is being rewritten: no tile is held there until EndTile.
-  state->tiles.erase({tile.tile_ix, tile.tile_iy});
-  return slot;
-}
-
-void LayerAssembler::EndTile(const cairn::lcmt_grid_tile& tile, bool decoded) {
-  if (!decoded) return;  // BeginTile released the place: its cells read as unknown
-  auto it = layers_.find(tile.layer);
-  if (it == layers_.end()) return;
-  Held& held = it->second.tiles[{tile.tile_ix, tile.tile_iy}];
-  held.tile_version = tile.tile_version;
-  held.checksum = static_cast<uint32_t>(tile.checksum);
-  held.cells_x = tile.cells_x;
-  held.cells_y = tile.cells_y;
-}
-
-void LayerAssembler::FillUnheld(const LayerState& state, common::Layer* cells) {
-  if (cells->size() == 0 || state.tile_size <= 0) return;
-  const int nx = static_cast<int>((cells->rows() + state.tile_size - 1) / state.tile_size);
-  const int ny = static_cast<int>((cells->cols() + state.tile_size - 1) / state.tile_size);
-  for (int ty = 0; ty < ny; ++ty) {
-    for (int tx = 0; tx < nx; ++tx) {
-      const int64_t x0 = int64_t{tx} * state.tile_size;
-      const int64_t y0 = int64_t{ty} * state.tile_size;
-      const int64_t w = std::min<int64_t>(state.tile_size, cells->rows() - x0);
-      const int64_t h = std::min<int64_t>(state.tile_size, cells->cols() - y0);
-      auto held = state.tiles.find({tx, ty});
-      if (held == state.tiles.end()) {
-        cells->block(x0, y0, w, h).setConstant(common::kUnknown);
-        continue;
-      }
-      // A held tile smaller than its place leaves the rest of it unknown.
-      const int64_t hx = std::min<int64_t>(held->second.cells_x, w);
-      const int64_t hy = std::min<int64_t>(held->second.cells_y, h);
-      if (hx < w) cells->block(x0 + hx, y0, w - hx, h).setConstant(common::kUnknown);
-      if (hy < h) cells->block(x0, y0 + hy, hx, h - hy).setConstant(common::kUnknown);
-    }
-  }
-}
-
-bool LayerAssembler::OnTile(const cairn::lcmt_grid_tile& tile) {
-  // Compressed tiles are decoded by their receiver (the map store's client) before they get here.
-  if (tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 ||
-      tile.data.size() != static_cast<size_t>(std::max(0, tile.num_cells))) {
-    ++checksum_errors_;
-    return false;
-  }
-  const uint32_t crc = common::Crc32(tile.data.data(), tile.data.size() * sizeof(float));
-  return OnTileImpl(tile, tile.data.data(), tile.data.size(), crc);
-}
-
-bool LayerAssembler::OnDecodedTile(const cairn::lcmt_grid_tile& tile,
-                                   const std::vector<float>& cells) {
-  return OnTileImpl(tile, cells.data(), cells.size(), static_cast<uint32_t>(tile.checksum));
-}
-
-bool LayerAssembler::OnTile(const cairn::lcmt_occupancy_tile& tile) {
-  if (tile.data.size() != static_cast<size_t>(std::max(0, tile.num_cells))) {
-    ++checksum_errors_;
-    return false;
-  }
-  const uint32_t crc = common::Crc32(tile.data.data(), tile.data.size());
-  std::vector<float> data(tile.data.size());
-  for (size_t i = 0; i < data.size(); ++i) {
-    data[i] = tile.data[i] < 0 ? common::kUnknown : static_cast<float>(tile.data[i]);
-  }
-  return OnTileImpl(tile, data.data(), data.size(), crc);
-}
-
-void LayerAssembler::OnManifest(const cairn::lcmt_grid_manifest& m) {
-  const size_t n = static_cast<size_t>(std::max(0, m.num_tiles));
-  if (m.tile_ix.size() != n || m.tile_iy.size() != n || m.checksum.size() != n ||
-      m.tile_version.size() != n) {
-    return;
-  }
-  LayerState& state = StateFor(m.layer, GeometryOf(m), m.tile_size);
-  if (state.has_manifest && m.layer_version < state.manifest_version) return;
-  state.has_manifest = true;
-  state.manifest_version = m.layer_version;
-  state.robot = m.robot;
-  state.map_name = m.map_name;
-  state.expected.clear();
-  for (size_t i = 0; i < n; ++i) {
-    state.expected[{m.tile_ix[i], m.tile_iy[i]}] = static_cast<uint32_t>(m.checksum[i]);
-  }
-  // Tiles no longer in the manifest became all unknown.
-  for (auto it = state.tiles.begin(); it != state.tiles.end();) {
-    if (state.expected.count(it->first) == 0 && it->second.tile_version <= m.layer_version) {
-      it = state.tiles.erase(it);
-    } else {
-      ++it;
-    }
-  }
-}
-
-std::vector<std::string> LayerAssembler::layers() const {
-  std::vector<std::string> names;
-  for (const auto& [name, state] : layers_) names.push_back(name);
-  return names;
-}
-
-int64_t LayerAssembler::version(const std::string& layer) const {
-  auto it = layers_.find(layer);
-  return it == layers_.end() ? 0 : it->second.manifest_version;
-}
-
-std::vector<std::pair<int, int>> LayerAssembler::Missing(const std::string& layer) const {
-  std::vector<std::pair<int, int>> missing;
-  auto it = layers_.find(layer);
-  if (it == layers_.end() || !it->second.has_manifest) return missing;
-  for (const auto& [key, crc] : it->second.expected) {
-    auto held = it->second.tiles.find(key);
-    if (held == it->second.tiles.end() || held->second.checksum != crc) missing.push_back(key);
-  }
-  return missing;
-}
-
-bool LayerAssembler::Complete(const std::string& layer) const {
-  auto it = layers_.find(layer);
-  return it != layers_.end() && it->second.has_manifest && Missing(layer).empty();
-}
-
-std::optional<cairn::lcmt_tile_resend_request> LayerAssembler::MakeResendRequest(
-    const std::string& layer, const std::string& requester, int64_t utime) const {
-  auto it = layers_.find(layer);
-  if (it == layers_.end() || !it->second.has_manifest) return std::nullopt;
-  const auto missing = Missing(layer);
-  if (missing.empty()) return std::nullopt;
-  cairn::lcmt_tile_resend_request r{};
-  r.utime = utime;
-  r.requester = requester;
-  r.robot = it->second.robot;
-  r.map_name = it->second.map_name;
-  r.layer = layer;
-  r.layer_version = it->second.manifest_version;
-  for (const auto& [ix, iy] : missing) {
-    r.tile_ix.push_back(ix);
-    r.tile_iy.push_back(iy);
-  }
-  r.num_tiles = static_cast<int32_t>(r.tile_ix.size());
-  return r;
-}
-
-std::optional<uint32_t> LayerAssembler::HeldChecksum(const std::string& layer, int tile_ix,
-                                                     int tile_iy) const {
-  auto it = layers_.find(layer);
-  if (it == layers_.end()) return std::nullopt;
-  auto held = it->second.tiles.find({tile_ix, tile_iy});
-  if (held == it->second.tiles.end()) return std::nullopt;
-  return held->second.checksum;
-}
-
-std::optional<common::GridGeometry> LayerAssembler::Geometry(const std::string& layer) const {
-  auto it = layers_.find(layer);
-  if (it == layers_.end()) return std::nullopt;
-  return it->second.geometry;
-}
-
-std::optional<common::GridMap> LayerAssembler::Layer(const std::string& layer) const {
-  auto it = layers_.find(layer);
-  if (it == layers_.end()) return std::nullopt;
-  const LayerState& state = it->second;
-  common::GridMap map(state.geometry);
-  if (state.cells.size() == 0) {
-    map.AddLayer(layer, common::kUnknown);  // no tile arrived: all unknown
-  } else {
-    common::Layer cells = state.cells;
-    FillUnheld(state, &cells);
-    map.AddLayer(layer, std::move(cells));
-  }
-  return map;
-}
-
-std::optional<common::GridMap> LayerAssembler::TakeLayer(const std::string& layer) {
-  auto it = layers_.find(layer);
-  if (it == layers_.end()) return std::nullopt;
-  LayerState& state = it->second;
-  common::GridMap map(state.geometry);
-  if (state.cells.size() == 0) {
-    map.AddLayer(layer, common::kUnknown);
-  } else {
-    FillUnheld(state, &state.cells);
-    map.AddLayer(layer, std::move(state.cells));
-  }
-  layers_.erase(it);
-  return map;
 }
 
 }  // namespace cairn::runtime

@@ -21,8 +21,7 @@
 /// - LayerTiler splits a grid-map layer into tiles (100 x 100 cells = 40 KB of floats by
 ///   default), sends only the tiles whose content changed, and a manifest of every tile's
 ///   version and CRC-32. All-unknown tiles are left out of the manifest (absent = unknown).
-/// - LayerAssembler rebuilds a layer from tiles, checks each tile's checksum, compares its
-///   holdings with the newest manifest and names the tiles it must ask for again.
+/// - LayerAssembler (layer_assembler.h) rebuilds a layer from tiles on the receiving side.
 ///
 /// Lidar revolutions travel as slices: services/runtime/revolution_assembler.h.
 
@@ -112,108 +111,6 @@ class LayerTiler {
   int tile_size_;
   int64_t version_base_;
   std::map<std::string, LayerState> layers_;
-};
-
-/// Receiver side: rebuilds layers from tiles and manifests.
-class LayerAssembler {
- public:
-  /// Returns false (and counts a checksum error) when the tile's data do not match its CRC, or
-  /// when the tile is compressed (its receiver decodes it first: mapstore::DecompressTile).
-  bool OnTile(const cairn::lcmt_grid_tile& tile);
-  bool OnTile(const cairn::lcmt_occupancy_tile& tile);
-  /// A compressed tile its receiver decoded into `cells` with a codec that verified the bytes
-  /// against the sender's own checksum (mapstore::DecodeTileCells: zstd's content checksum, of
-  /// bytes whose CRC the sender declared): the tile's declared checksum stands for the cells,
-  /// without a second CRC pass. False (a checksum error counted) when the cells do not fit.
-  bool OnDecodedTile(const cairn::lcmt_grid_tile& tile, const std::vector<float>& cells);
-  /// Where a compressed tile's cells go in its layer, for a receiver that decodes the tile
-  /// straight into place: the tile's cell (0, 0) at `first`, rows `row_stride` floats apart,
-  /// `cells_x` × `cells_y` cells (the tile clipped to its layer). No `first`: nothing to write.
-  struct TileSlot {
-    float* first{nullptr};
-    int64_t row_stride{0};
-    int cells_x{0};
-    int cells_y{0};
-  };
-  /// Reserves the place of a compressed tile (allocating its layer at the layer's first tile).
-  /// nullopt (a checksum error counted) when the tile does not fit a layer; a slot without
-  /// cells, and no EndTile to call, when the tile is older than the one held there or lies
-  /// outside its layer (it counts as held, as in OnTile). Until EndTile, the cells of a
-  /// reserved place are undefined. A slot stays valid until a tile or manifest of another grid
-  /// arrives for the same layer.
-  std::optional<TileSlot> BeginTile(const cairn::lcmt_grid_tile& tile);
-  /// Ends BeginTile. `decoded`: the receiver wrote every cell of the slot with a codec that
-  /// verified them against the sender's checksum (as for OnDecodedTile), and the tile is held.
-  /// Otherwise its place becomes unknown and no tile is held there.
-  void EndTile(const cairn::lcmt_grid_tile& tile, bool decoded);
-  void OnManifest(const cairn::lcmt_grid_manifest& manifest);
-
-  /// Layers seen so far (from tiles or manifests).
-  std::vector<std::string> layers() const;
-  /// True when every tile of the newest manifest of `layer` is held with the same checksum.
-  bool Complete(const std::string& layer) const;
-  /// Version of the newest manifest of a layer (0 if none).
-  int64_t version(const std::string& layer) const;
-  /// Tiles of the newest manifest not held (or held stale), as (tile_ix, tile_iy).
-  std::vector<std::pair<int, int>> Missing(const std::string& layer) const;
-  /// A request for the missing tiles; nullopt when nothing is missing or no manifest arrived.
-  std::optional<cairn::lcmt_tile_resend_request> MakeResendRequest(const std::string& layer,
-                                                                   const std::string& requester,
-                                                                   int64_t utime) const;
-  /// The layer as a one-layer GridMap (cells of absent tiles are NaN); nullopt if the layer was
-  /// never seen. Occupancy -1 becomes NaN.
-  std::optional<common::GridMap> Layer(const std::string& layer) const;
-  /// Layer without a copy: the cells move out and the layer is forgotten.
-  std::optional<common::GridMap> TakeLayer(const std::string& layer);
-  /// The checksum of the tile held at (tile_ix, tile_iy) of a layer (its cells are that tile's
-  /// in Layer); nullopt when none is held.
-  std::optional<uint32_t> HeldChecksum(const std::string& layer, int tile_ix, int tile_iy) const;
-  /// The grid of a layer as Layer would return it, without assembling it.
-  std::optional<common::GridGeometry> Geometry(const std::string& layer) const;
-  /// Layers larger than this are refused (a tile declaring such a grid counts as an error).
-  static constexpr int64_t kMaxLayerCells = 64'000'000;
-
-  int64_t checksum_errors() const { return checksum_errors_; }
-  /// Forget a layer.
-  void Drop(const std::string& layer) { layers_.erase(layer); }
-
- private:
-  // Tiles are pasted into their layer's cells as they arrive; a Held records one.
-  struct Held {
-    int64_t tile_version{0};
-    uint32_t checksum{0};
-    int cells_x{0};
-    int cells_y{0};
-  };
-  struct LayerState {
-    common::GridGeometry geometry;
-    int tile_size{0};
-    bool has_manifest{false};
-    int64_t manifest_version{0};
-    std::string robot;
-    std::string map_name;
-    std::map<std::pair<int, int>, uint32_t> expected;  // from the newest manifest
-    std::map<std::pair<int, int>, Held> tiles;
-    // Geometry-sized, allocated with the first tile. Cells of held tiles are theirs; the others
-    // are undefined until Layer or TakeLayer makes them unknown.
-    common::Layer cells;
-  };
-  LayerState& StateFor(const std::string& layer, const common::GridGeometry& geometry,
-                       int tile_size);
-  /// The layer state a tile goes to, its canvas allocated; null (an error counted) when the
-  /// tile does not fit. `*older`: the tile is older than the one held there.
-  template <typename TileMsg>
-  LayerState* Admit(const TileMsg& tile, size_t size, uint32_t computed_crc, bool* older);
-  template <typename TileMsg>
-  bool OnTileImpl(const TileMsg& tile, const float* data, size_t size, uint32_t computed_crc);
-  /// Fills the cells of tile `key` (clipped to the layer) with `data` (x fastest).
-  static void Paste(LayerState* state, std::pair<int, int> key, int cells_x, int cells_y,
-                    const float* data);
-  /// Makes the cells of every place without a held tile unknown.
-  static void FillUnheld(const LayerState& state, common::Layer* cells);
-
-  std::map<std::string, LayerState> layers_;
-  int64_t checksum_errors_{0};
 };
 
 }  // namespace cairn::runtime

@@ -36,6 +36,7 @@
 #include "cairn/lcmt_velocity_command.hpp"
 
 #include "common/layers.h"
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 #include "tests/support/harness.h"
 #include "tests/support/registry.h"

@@ -43,6 +43,7 @@
 #include "common/robot_profile.h"
 #include "mapstore/lcm/mapstore_client.h"
 #include "services/launch/status.h"
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 #include "tests/support/geometry.h"
 #include "tests/support/harness.h"

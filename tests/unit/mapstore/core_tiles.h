@@ -6,7 +6,7 @@
 #include "common/crc32.h"
 #include "common/grid_map.h"
 #include "mapstore/blob_codec.h"
-#include "mapstore/tile_assembler.h"
+#include "mapstore/save_assembler.h"
 
 // Layers cut into core tiles and manifests, as a sender on the bus cuts them (runtime's
 // LayerTiler): for the save assembly's unit tests, which never see a bus.

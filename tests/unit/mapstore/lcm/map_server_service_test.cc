@@ -15,6 +15,7 @@
 
 #include "common/channels.h"
 #include "mapstore/in_memory_map_store.h"
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 #include "tests/unit/mapstore/fake_deriver.h"
 

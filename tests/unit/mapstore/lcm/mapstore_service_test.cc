@@ -16,6 +16,7 @@
 #include "mapstore/lcm/mapstore_conversions.h"
 #include "mapstore/lcm/tile_wire.h"
 #include "services/runtime/conversions.h"
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 #include "tests/unit/mapstore/fake_deriver.h"
 

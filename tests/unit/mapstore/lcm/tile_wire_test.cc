@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 
 namespace cairn::mapstore {

@@ -1,3 +1,4 @@
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 
 #include <cmath>

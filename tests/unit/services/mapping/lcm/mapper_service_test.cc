@@ -23,6 +23,7 @@
 #include "services/mapping/lcm/terrain_publisher.h"
 #include "services/runtime/conversions.h"
 #include "services/runtime/revolution_assembler.h"
+#include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 #include "tests/unit/services/mapping/synthetic_scan.h"
 #include "tests/unit/services/mapping/terrain_fixtures.h"

@@ -1,30 +1,34 @@
-#include "mapstore/tile_assembler.h"
+#include "common/tile_assembler.h"
 
 #include <algorithm>
 
-namespace cairn::mapstore {
+namespace cairn::common {
 
 namespace {
+
+// A tile header that fits a tile and a usable grid.
+bool Admissible(const TileHeader& h) {
+  if (h.cells_x < 0 || h.cells_y < 0 || h.tile_size <= 0 || h.cells_x > h.tile_size ||
+      h.cells_y > h.tile_size) {
+    return false;
+  }
+  const GridGeometry& g = h.geometry;
+  return g.resolution_m > 0 && g.size_x >= 0 && g.size_y >= 0 &&
+         int64_t{g.size_x} * g.size_y <= TileAssembler::kMaxLayerCells;
+}
 
 // A tile whose header and cells agree, in a usable grid.
 bool Admissible(const CheckedTile& tile) {
   const TileHeader& h = tile.header;
-  if (h.cells_x < 0 || h.cells_y < 0 || h.tile_size <= 0 || h.cells_x > h.tile_size ||
-      h.cells_y > h.tile_size ||
-      tile.num_cells != static_cast<size_t>(h.cells_x) * static_cast<size_t>(h.cells_y) ||
-      (tile.num_cells > 0 && tile.cells == nullptr)) {
-    return false;
-  }
-  const common::GridGeometry& g = h.geometry;
-  return g.resolution_m > 0 && g.size_x >= 0 && g.size_y >= 0 &&
-         int64_t{g.size_x} * g.size_y <= TileAssembler::kMaxLayerCells;
+  return Admissible(h) &&
+         tile.num_cells == static_cast<size_t>(h.cells_x) * static_cast<size_t>(h.cells_y) &&
+         (tile.num_cells == 0 || tile.cells != nullptr);
 }
 
 }  // namespace
 
 TileAssembler::LayerState& TileAssembler::StateFor(const std::string& layer,
-                                                   const common::GridGeometry& geometry,
-                                                   int tile_size) {
+                                                   const GridGeometry& geometry, int tile_size) {
   LayerState& state = layers_[layer];
   if (state.geometry != geometry || state.tile_size != tile_size) {
     state = LayerState();
@@ -49,31 +53,72 @@ void TileAssembler::Paste(LayerState* state, std::pair<int, int> key, int cells_
   }
 }
 
+TileAssembler::LayerState* TileAssembler::Admit(const TileHeader& h, bool* older) {
+  *older = false;
+  LayerState& state = StateFor(h.layer, h.geometry, h.tile_size);
+  state.robot = h.robot;
+  state.map_name = h.map_name;
+  auto held = state.tiles.find({h.tile_ix, h.tile_iy});
+  *older = held != state.tiles.end() && h.tile_version < held->second.tile_version;
+  if (state.cells.size() == 0 && h.geometry.size_x > 0 && h.geometry.size_y > 0) {
+    // Not filled: every cell is written by its tile, or made unknown by Layer / TakeLayer.
+    state.cells.resize(h.geometry.size_x, h.geometry.size_y);
+  }
+  return &state;
+}
+
+void TileAssembler::Hold(LayerState* state, const TileHeader& h) {
+  Held& held = state->tiles[{h.tile_ix, h.tile_iy}];
+  held.tile_version = h.tile_version;
+  held.checksum = h.checksum;
+  held.cells_x = h.cells_x;
+  held.cells_y = h.cells_y;
+}
+
 bool TileAssembler::OnTile(const CheckedTile& tile) {
   if (!Admissible(tile)) {
     ++refused_tiles_;
     return false;
   }
   const TileHeader& h = tile.header;
-  LayerState& state = StateFor(h.layer, h.geometry, h.tile_size);
-  state.robot = h.robot;
-  state.map_name = h.map_name;
-  const std::pair<int, int> key{h.tile_ix, h.tile_iy};
-  auto held = state.tiles.find(key);
-  if (held != state.tiles.end() && h.tile_version < held->second.tile_version) {
-    return true;  // older than what is held
-  }
-  if (state.cells.size() == 0 && h.geometry.size_x > 0 && h.geometry.size_y > 0) {
-    // Not filled: every cell is written by its tile, or made unknown by Layer / TakeLayer.
-    state.cells.resize(h.geometry.size_x, h.geometry.size_y);
-  }
-  Held& slot = state.tiles[key];
-  slot.tile_version = h.tile_version;
-  slot.checksum = h.checksum;
-  slot.cells_x = h.cells_x;
-  slot.cells_y = h.cells_y;
-  Paste(&state, key, h.cells_x, h.cells_y, tile.cells);
+  bool older = false;
+  LayerState* state = Admit(h, &older);
+  if (older) return true;  // older than what is held
+  Hold(state, h);
+  Paste(state, {h.tile_ix, h.tile_iy}, h.cells_x, h.cells_y, tile.cells);
   return true;
+}
+
+std::optional<TileAssembler::TileSlot> TileAssembler::BeginTile(const TileHeader& h) {
+  if (!Admissible(h)) {
+    ++refused_tiles_;
+    return std::nullopt;
+  }
+  bool older = false;
+  LayerState* state = Admit(h, &older);
+  TileSlot slot;
+  if (older) return slot;
+  common::Layer& cells = state->cells;
+  const int64_t x0 = int64_t{h.tile_ix} * state->tile_size;
+  const int64_t y0 = int64_t{h.tile_iy} * state->tile_size;
+  if (x0 < 0 || y0 < 0 || x0 >= cells.rows() || y0 >= cells.cols()) {
+    Hold(state, h);  // outside the layer: held, with nothing to write (as in OnTile)
+    return slot;
+  }
+  slot.first = &cells(x0, y0);
+  slot.row_stride = cells.rows();
+  slot.cells_x = static_cast<int>(std::min<int64_t>(h.cells_x, cells.rows() - x0));
+  slot.cells_y = static_cast<int>(std::min<int64_t>(h.cells_y, cells.cols() - y0));
+  // The place is being rewritten: no tile is held there until EndTile.
+  state->tiles.erase({h.tile_ix, h.tile_iy});
+  return slot;
+}
+
+void TileAssembler::EndTile(const TileHeader& h, bool decoded) {
+  if (!decoded) return;  // BeginTile released the place: its cells read as unknown
+  auto it = layers_.find(h.layer);
+  if (it == layers_.end()) return;
+  Hold(&it->second, h);
 }
 
 void TileAssembler::OnManifest(const TileManifest& m) {
@@ -145,7 +190,7 @@ std::optional<uint32_t> TileAssembler::HeldChecksum(const std::string& layer, in
   return held->second.checksum;
 }
 
-std::optional<common::GridGeometry> TileAssembler::Geometry(const std::string& layer) const {
+std::optional<GridGeometry> TileAssembler::Geometry(const std::string& layer) const {
   auto it = layers_.find(layer);
   if (it == layers_.end()) return std::nullopt;
   return it->second.geometry;
@@ -163,23 +208,23 @@ void TileAssembler::FillUnheld(const LayerState& state, common::Layer* cells) {
       const int64_t h = std::min<int64_t>(ts, cells->cols() - y0);
       auto held = state.tiles.find({tx, ty});
       if (held == state.tiles.end()) {
-        cells->block(x0, y0, w, h).setConstant(common::kUnknown);
+        cells->block(x0, y0, w, h).setConstant(kUnknown);
         continue;
       }
       // A held tile smaller than its place leaves the rest of it unknown.
       const int64_t hx = std::min<int64_t>(held->second.cells_x, w);
       const int64_t hy = std::min<int64_t>(held->second.cells_y, h);
-      if (hx < w) cells->block(x0 + hx, y0, w - hx, h).setConstant(common::kUnknown);
-      if (hy < h) cells->block(x0, y0 + hy, hx, h - hy).setConstant(common::kUnknown);
+      if (hx < w) cells->block(x0 + hx, y0, w - hx, h).setConstant(kUnknown);
+      if (hy < h) cells->block(x0, y0 + hy, hx, h - hy).setConstant(kUnknown);
     }
   }
 }
 
-common::GridMap TileAssembler::AsMap(const std::string& layer, const LayerState& state,
-                                     common::Layer cells) {
-  common::GridMap map(state.geometry);
+GridMap TileAssembler::AsMap(const std::string& layer, const LayerState& state,
+                             common::Layer cells) {
+  GridMap map(state.geometry);
   if (cells.size() == 0) {
-    map.AddLayer(layer, common::kUnknown);  // no tile arrived: all unknown
+    map.AddLayer(layer, kUnknown);  // no tile arrived: all unknown
   } else {
     FillUnheld(state, &cells);
     map.AddLayer(layer, std::move(cells));
@@ -187,18 +232,18 @@ common::GridMap TileAssembler::AsMap(const std::string& layer, const LayerState&
   return map;
 }
 
-std::optional<common::GridMap> TileAssembler::Layer(const std::string& layer) const {
+std::optional<GridMap> TileAssembler::Layer(const std::string& layer) const {
   auto it = layers_.find(layer);
   if (it == layers_.end()) return std::nullopt;
   return AsMap(layer, it->second, it->second.cells);
 }
 
-std::optional<common::GridMap> TileAssembler::TakeLayer(const std::string& layer) {
+std::optional<GridMap> TileAssembler::TakeLayer(const std::string& layer) {
   auto it = layers_.find(layer);
   if (it == layers_.end()) return std::nullopt;
-  common::GridMap map = AsMap(layer, it->second, std::move(it->second.cells));
+  GridMap map = AsMap(layer, it->second, std::move(it->second.cells));
   layers_.erase(it);
   return map;
 }
 
-}  // namespace cairn::mapstore
+}  // namespace cairn::common

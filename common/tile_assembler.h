@@ -10,18 +10,19 @@
 #include "common/grid_map.h"
 
 /// @file
-/// Layers rebuilt from tiles, in core terms (no LCM): what the map store's save assembly needs
-/// of a receiver of tiled layers. A sender cuts a layer into tiles of `tile_size` cells per side
+/// Layers rebuilt from tiles, in core terms (no LCM): the one receiver of tiled layers, under
+/// runtime::LayerAssembler (the bus's tiles and manifests) and the map store's save assembly. A
+/// sender cuts a layer into tiles of `tile_size` cells per side
 /// (tile (ix, iy) covers cells [ix * tile_size, + cells_x) x [iy * tile_size, + cells_y)) and
 /// announces, in a manifest, every tile it holds with its version and CRC-32; a tile absent from
 /// the manifest is all unknown. The receiver checks each tile's cells against its CRC before it
 /// hands the tile over (CheckedTile): the assembler never reads cells twice.
 ///
-/// The bus adapter (mapstore/lcm/mapstore_conversions.h) turns lcmt_grid_tile,
+/// The bus adapter (services/runtime/tile_conversions.h) turns lcmt_grid_tile,
 /// lcmt_occupancy_tile and lcmt_grid_manifest into these types and a TileRequest into an
-/// lcmt_tile_resend_request; runtime::LayerAssembler is the same receiver on wire types.
+/// lcmt_tile_resend_request.
 
-namespace cairn::mapstore {
+namespace cairn::common {
 
 /// Where a tile lies, in which grid, and what its sender declared about it.
 struct TileHeader {
@@ -78,8 +79,8 @@ struct TileRequest {
 class TileAssembler {
  public:
   TileAssembler() = default;
-  TileAssembler(const TileAssembler&) = delete;
-  TileAssembler& operator=(const TileAssembler&) = delete;
+  TileAssembler(const TileAssembler&) = default;
+  TileAssembler& operator=(const TileAssembler&) = default;
   TileAssembler(TileAssembler&&) = default;
   TileAssembler& operator=(TileAssembler&&) = default;
 
@@ -90,6 +91,25 @@ class TileAssembler {
   /// its header or its grid is unusable. A tile older than the one held at its place is ignored
   /// (true); a tile of another grid than its layer's restarts the layer.
   bool OnTile(const CheckedTile& tile);
+  /// Where a tile's cells go in its layer, for a receiver that decodes a compressed tile
+  /// straight into place: the tile's cell (0, 0) at `first`, rows `row_stride` floats apart,
+  /// `cells_x` × `cells_y` cells (the tile clipped to its layer). No `first`: nothing to write.
+  struct TileSlot {
+    float* first{nullptr};
+    int64_t row_stride{0};
+    int cells_x{0};
+    int cells_y{0};
+  };
+  /// Reserves the place of a tile (allocating its layer at the layer's first tile). nullopt (a
+  /// refusal counted) when the header does not fit a layer; a slot without cells, and no EndTile
+  /// to call, when the tile is older than the one held there or lies outside its layer (it counts
+  /// as held, as in OnTile). Until EndTile, the cells of a reserved place are undefined. A slot
+  /// stays valid until a tile or manifest of another grid arrives for the same layer.
+  std::optional<TileSlot> BeginTile(const TileHeader& header);
+  /// Ends BeginTile. `decoded`: the receiver wrote every cell of the slot and checked them
+  /// against the header's checksum, and the tile is held. Otherwise its place becomes unknown
+  /// and no tile is held there.
+  void EndTile(const TileHeader& header, bool decoded);
   /// Takes a manifest unless an older one than the layer's newest; tiles it no longer lists
   /// become unknown.
   void OnManifest(const TileManifest& manifest);
@@ -141,6 +161,11 @@ class TileAssembler {
   LayerState& StateFor(const std::string& layer, const common::GridGeometry& geometry,
                        int tile_size);
   /// Pastes `cells` (x fastest) into the place of tile `key`, clipped to the layer.
+  /// The layer a tile goes to, its canvas allocated; null (a refusal counted) when the header
+  /// does not fit a layer. `*older`: the tile is older than the one held at its place.
+  LayerState* Admit(const TileHeader& header, bool* older);
+  /// Records the tile of `header` as held at its place.
+  static void Hold(LayerState* state, const TileHeader& header);
   static void Paste(LayerState* state, std::pair<int, int> key, int cells_x, int cells_y,
                     const float* cells);
   /// Makes the cells of every place without a held tile unknown.
@@ -152,4 +177,4 @@ class TileAssembler {
   int64_t refused_tiles_{0};
 };
 
-}  // namespace cairn::mapstore
+}  // namespace cairn::common

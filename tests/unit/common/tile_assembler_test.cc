@@ -1,4 +1,4 @@
-#include "mapstore/tile_assembler.h"
+#include "common/tile_assembler.h"
 
 #include <gtest/gtest.h>
 
@@ -101,6 +101,38 @@ TEST_F(TileAssemblerTest, ATileOfAnotherGridRestartsItsLayer) {
   EXPECT_EQ(dut_.Geometry(layers::kElevation), other.geometry());
   EXPECT_FALSE(dut_.Complete(layers::kElevation));  // no manifest of the new grid yet
   EXPECT_EQ(dut_.layers(), std::vector<std::string>{layers::kElevation});
+}
+
+TEST_F(TileAssemblerTest, TilesWrittenInPlaceAreHeldAndFailedOnesStayUnknown) {
+  dut_.OnManifest(cut_.manifest);
+  for (const auto& t : cut_.tiles) {
+    auto slot = dut_.BeginTile(t.header);
+    ASSERT_TRUE(slot.has_value());
+    ASSERT_NE(slot->first, nullptr);
+    for (int y = 0; y < slot->cells_y; ++y) {
+      for (int x = 0; x < slot->cells_x; ++x) {
+        slot->first[y * slot->row_stride + x] =
+            t.cells[static_cast<size_t>(y) * t.header.cells_x + x];
+      }
+    }
+    dut_.EndTile(t.header, /*decoded=*/&t != &cut_.tiles.front());
+  }
+  const auto& first = cut_.tiles.front().header;
+  EXPECT_EQ(dut_.Missing(layers::kElevation),
+            (std::vector<std::pair<int, int>>{{first.tile_ix, first.tile_iy}}));
+  auto layer = dut_.Layer(layers::kElevation);
+  ASSERT_TRUE(layer.has_value());
+  EXPECT_TRUE(std::isnan(layer->at(layers::kElevation)(first.tile_ix * 10, first.tile_iy * 10)));
+  // The failed tile comes again, whole: the layer is the map's.
+  dut_.OnTile(cut_.tiles.front().As());
+  EXPECT_TRUE(dut_.Complete(layers::kElevation));
+  EXPECT_TRUE(SameLayer(dut_.Layer(layers::kElevation)->at(layers::kElevation),
+                        map_.at(layers::kElevation)));
+  // A header that fits no grid is refused and counted.
+  TileHeader bad = first;
+  bad.cells_x = bad.tile_size + 1;
+  EXPECT_FALSE(dut_.BeginTile(bad).has_value());
+  EXPECT_EQ(dut_.refused_tiles(), 1);
 }
 
 }  // namespace
