@@ -167,13 +167,13 @@ int Main(int argc, char** argv) {
   const double mean_points = revs.empty() ? 0.0 : double(points) / revs.size();
 
   mapping::MapperCoreParams params;
-  params.octomap_enabled = false;  // measured by bench_mapping_octomap
-  params.occupancy.resolution_m = 0.1;
+  params.SetListed(mapping::kOctomapLayerName, false);  // measured by bench_mapping_octomap
+  params.occupancy.grid.resolution_m = 0.1;
   params.band.sensor_height_m = 0.33;
-  params.terrain.self_filter_radius_m = 0.5;
+  params.terrain.map.self_filter_radius_m = 0.5;
   mapping::MapperCore core(params);
-  core.terrain().AddProfile(Profile("pioneer3at"));
-  core.terrain().AddProfile(Profile("rover"));
+  core.terrain()->AddProfile(Profile("pioneer3at"));
+  core.terrain()->AddProfile(Profile("rover"));
   mapping::ObstacleBand band(params.band);  // as MapperCore keeps one
   std::vector<double> total_ms, wall_ms, elevation_ms, derived_ms, registry_ms, occupancy_ms;
   size_t obstacles = 0;
@@ -184,11 +184,11 @@ int Main(int argc, char** argv) {
     robot.yaw_rad = sensor.yaw_rad();
     const auto w0 = Clock::now();
     const double c0 = CpuMs();
-    core.terrain().Integrate(rev, rev.slices.back().utime * 1e-6);
+    core.terrain()->Integrate(rev, rev.slices.back().utime * 1e-6);
     const double c1 = CpuMs();
-    core.terrain().UpdateDerived(robot);
+    core.terrain()->UpdateDerived(robot);
     const double c2 = CpuMs();
-    const common::ObstacleRegistry registry = core.terrain().BuildRegistry();
+    const common::ObstacleRegistry registry = core.terrain()->BuildRegistry();
     const double c3 = CpuMs();
     // The occupancy stage exactly as MapperCore runs it (band from the ground under the robot).
     const std::vector<mapping::PlanarRay>& rays =

@@ -510,4 +510,18 @@ common::Result<common::GridMap> LoadStaticMap(const std::string& yaml_path) {
   return map;
 }
 
+DynamicLayersParams ReadDynamicLayersParams(common::YamlMap& m) {
+  DynamicLayersParams p;
+  m.Get("cost_inc", &p.cost_inc);
+  m.Get("cost_dec", &p.cost_dec);
+  m.Get("min_length_m", &p.min_length_m);
+  m.Get("max_length_m", &p.max_length_m);
+  m.Get("update_hz", &p.update_hz);
+  m.Get("longterm_add_og", &p.longterm_add_og);
+  m.Get("longterm_free_og", &p.longterm_free_og);
+  m.Get("longterm_cost_dec", &p.longterm_cost_dec);
+  m.Get("static_wall_og", &p.static_wall_og);
+  return p;
+}
+
 }  // namespace cairn::mapping

@@ -12,6 +12,7 @@
 
 #include "common/check.h"
 #include "common/layers.h"
+#include "common/yaml_reader.h"
 #include "services/mapping/traversability.h"
 #include <Eigen/Eigenvalues>
 
@@ -853,6 +854,24 @@ void LabelObstacles(common::ObstacleRegistry* registry,
       vs.push_back(JudgeWithHash(o, profile, hashes[k]));
     }
   }
+}
+
+ObstacleParams LoadObstacleParams(common::YamlMap& m) {
+  ObstacleParams p;
+  m.Get("min_ramp_slope_rad", &p.min_ramp_slope_rad);
+  m.Get("min_step_height_m", &p.min_step_height_m);
+  m.Get("min_cells", &p.min_cells);
+  m.Get("step_contrast", &p.step_contrast);
+  m.Get("wall_min_height_m", &p.wall_min_height_m);
+  m.Get("min_drop_height_m", &p.min_drop_height_m);
+  m.Get("min_ramp_area_m2", &p.min_ramp_area_m2);
+  m.Get("small_step_height_m", &p.small_step_height_m);
+  m.Get("min_small_step_length_m", &p.min_small_step_length_m);
+  m.Get("min_small_step_elongation", &p.min_small_step_elongation);
+  m.Get("surface_continuity_m", &p.surface_continuity_m);
+  m.Get("outline_tolerance_cells", &p.outline_tolerance_cells);
+  m.Finish();
+  return p;
 }
 
 }  // namespace cairn::mapping

@@ -7,6 +7,7 @@
 
 #include "common/check.h"
 #include "common/layers.h"
+#include "common/yaml_reader.h"
 
 namespace cairn::mapping {
 namespace {
@@ -825,6 +826,36 @@ size_t TerrainMap::memory_bytes() const {
     bytes += tile->filter_height.size() * (5 * sizeof(float) + sizeof(uint32_t));
   }
   return bytes;
+}
+
+TerrainMapParams LoadTerrainMapParams(common::YamlMap& m) {
+  TerrainMapParams p;
+  m.Get("resolution_m", &p.resolution_m);
+  m.Get("tile_size_cells", &p.tile_size_cells);
+  m.Get("min_range_m", &p.min_range_m);
+  m.Get("max_range_m", &p.max_range_m);
+  m.Get("self_filter_radius_m", &p.self_filter_radius_m);
+  m.Get("max_height_above_sensor_m", &p.max_height_above_sensor_m);
+  m.Get("ray_bound_length_m", &p.ray_bound_length_m);
+  m.Get("ray_bound_max_range_m", &p.ray_bound_max_range_m);
+  m.Get("ray_bound_margin_m", &p.ray_bound_margin_m);
+  m.Get("commit_epsilon_m", &p.commit_epsilon_m);
+  m.Get("visibility_tolerance_m", &p.visibility_tolerance_m);
+  m.Get("max_visibility_conflict_m", &p.max_visibility_conflict_m);
+  if (m.Has("filter")) {
+    common::YamlMap filter = m.Child("filter");
+    p.filter = LoadElevationFilterParams(filter);
+  }
+  if (m.Has("traversability")) {
+    common::YamlMap traversability = m.Child("traversability");
+    p.traversability = LoadTraversabilityParams(traversability);
+  }
+  if (m.Has("obstacles")) {
+    common::YamlMap obstacles = m.Child("obstacles");
+    p.obstacles = LoadObstacleParams(obstacles);
+  }
+  m.Finish();
+  return p;
 }
 
 }  // namespace cairn::mapping

@@ -41,6 +41,10 @@
 ///
 /// Not thread-safe: one owner thread.
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 struct TerrainMapParams {
@@ -81,6 +85,11 @@ struct TerrainMapParams {
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
 };
+
+/// Reads a `terrain` section (every key optional, with the sub-sections filter, traversability
+/// and obstacles) over the defaults. @throws common::ConfigError naming the file and line of a
+/// bad or unknown key.
+TerrainMapParams LoadTerrainMapParams(common::YamlMap& map);
 
 /// What one Integrate() call did with its points.
 struct IntegrateStats {

@@ -8,6 +8,7 @@
 
 #include "common/check.h"
 #include "common/layers.h"
+#include "common/yaml_reader.h"
 #include <Eigen/Eigenvalues>
 
 namespace cairn::mapping {
@@ -696,6 +697,23 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
       cost.data()[i] = lethal ? layers::kCostLethal : graded(ratio);
     }
   }
+}
+
+TraversabilityParams LoadTraversabilityParams(common::YamlMap& m) {
+  TraversabilityParams p;
+  m.Get("normal_radius_m", &p.normal_radius_m);
+  m.Get("blind_zone_half_size_m", &p.blind_zone_half_size_m);
+  m.Get("imu_pitch_compensation", &p.imu_pitch_compensation);
+  m.Get("unknown_is_lethal", &p.unknown_is_lethal);
+  m.Get("graded_cost_max", &p.graded_cost_max);
+  m.Get("free_fraction", &p.free_fraction);
+  m.Get("min_ditch_depth_m", &p.min_ditch_depth_m);
+  m.Get("unseen_drop_m", &p.unseen_drop_m);
+  m.Get("max_ditch_search_m", &p.max_ditch_search_m);
+  m.Get("height_tolerance_m", &p.height_tolerance_m);
+  m.Get("min_step_edge_cells", &p.min_step_edge_cells);
+  m.Finish();
+  return p;
 }
 
 }  // namespace cairn::mapping
