@@ -156,6 +156,13 @@ class DynamicLayers {
   void AddReading(const common::Vector2& origin_m, const common::Vector2& direction, double range_m,
                   bool hit, DynamicUpdateStats* stats);
   DynamicUpdateStats Step(DynamicUpdateStats stats);
+  // The stages of a step: the end cells of the marking rays, the cells the rays cross, then
+  // the long-term layer from the short-term one.
+  void MarkEnds(DynamicUpdateStats* stats);
+  void ClearRays(DynamicUpdateStats* stats);
+  void UpdateLongTerm(DynamicUpdateStats* stats);
+  bool Inside(int ix, int iy) const;
+  size_t IndexOf(int ix, int iy) const;
 
   struct Ray {
     common::Vector2 origin;  // continuous cell coordinates
