@@ -111,7 +111,7 @@ int Main(int argc, char** argv) {
     runtime::NodeOptions options;
     options.process_name = "cairn-mapper";
     options.robot = f.robot;
-    options.lcm_url = f.replay.empty() ? f.lcm_url : "memq://";
+    options.lcm_url = f.replay.empty() ? MapperLcmUrl(f.lcm_url) : "memq://";
     options.follow_sim_clock = f.replay.empty();
     runtime::Node node(options);
     const std::string dir = f.profiles_dir;

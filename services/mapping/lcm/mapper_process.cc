@@ -10,6 +10,12 @@
 
 namespace cairn::mapping {
 
+std::string MapperLcmUrl(const std::string& flag_value) {
+  const std::string url = runtime::ResolveLcmUrl(flag_value);
+  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
+  return url + (url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=4194304";
+}
+
 bool RestoreLongTerm(runtime::Node& node, MapperParams* params) {
   const std::string& where = params->long_term_store;
   const auto slash = where.find('/');

@@ -12,6 +12,12 @@
 
 namespace cairn::mapping {
 
+/// The bus URL of a live mapper (runtime::ResolveLcmUrl of the flag) with a 4 MB receive buffer
+/// on udpm: the mapper's socket takes every message on the bus, its own tile bursts included, and
+/// with the kernel's default (about 208 KB) a busy host dropped datagrams there, a control request
+/// among them. An explicit recv_buf_size is kept; the kernel caps it at net.core.rmem_max.
+std::string MapperLcmUrl(const std::string& flag_value);
+
 /// Seed 001's memory across runs: loads the long-term layer last saved to
 /// params->long_term_store into params->core.dynamic.long_term_restore. NOT_FOUND (the first
 /// run) is fine: the layer starts as the static map. Returns false (after logging why) when the
