@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <set>
 #include <sstream>
 
 #include "common/check.h"
@@ -25,36 +24,6 @@ T* Cast(MapperLayer* layer) {
 }
 
 }  // namespace
-
-bool MapperCoreParams::Has(const std::string& layer) const {
-  return std::find(layers.begin(), layers.end(), layer) != layers.end();
-}
-
-void MapperCoreParams::SetListed(const std::string& layer, bool listed) {
-  if (!listed) {
-    layers.erase(std::remove(layers.begin(), layers.end(), layer), layers.end());
-    return;
-  }
-  if (Has(layer)) return;
-  // Registered layers keep the registry's order among themselves.
-  const std::vector<std::string>& order = RegisteredLayers();
-  const auto rank = [&](const std::string& name) {
-    return std::find(order.begin(), order.end(), name) - order.begin();
-  };
-  auto at = std::find_if(layers.begin(), layers.end(),
-                         [&](const std::string& other) { return rank(other) > rank(layer); });
-  layers.insert(at, layer);
-}
-
-void MapperCoreParams::Validate() const {
-  std::set<std::string> seen;
-  for (const std::string& name : layers) {
-    CAIRN_THROW_UNLESS(seen.insert(name).second,
-                       "the mapper layer '" << name << "' is listed twice");
-    ValidateMapperLayerParams(name, *this);
-  }
-  band.Validate();
-}
 
 MapperCore::MapperCore(const MapperCoreParams& params) : params_(params), band_(params.band) {
   params_.Validate();
@@ -126,6 +95,28 @@ void MapperCore::ProcessScan(const common::LaserScan& scan) {
     if (layer->inputs() & kPlanarScans) layer->OnScan(scan);
   }
   AdvanceTo(scan.utime);
+}
+
+void MapperCore::ProcessReading(const SensorReading& reading) {
+  for (const auto& layer : layers_) {
+    if ((layer->inputs() & kSensorReadings) == 0) continue;
+    const std::vector<std::string> streams = layer->ReadingStreams();
+    if (std::find(streams.begin(), streams.end(), reading.stream) != streams.end()) {
+      layer->OnReading(reading);
+    }
+  }
+  AdvanceTo(reading.utime);
+}
+
+std::vector<std::string> MapperCore::ReadingStreams() const {
+  std::vector<std::string> streams;
+  for (const auto& layer : layers_) {
+    if ((layer->inputs() & kSensorReadings) == 0) continue;
+    for (const std::string& s : layer->ReadingStreams()) {
+      if (std::find(streams.begin(), streams.end(), s) == streams.end()) streams.push_back(s);
+    }
+  }
+  return streams;
 }
 
 void MapperCore::AdvanceTo(int64_t utime) {

@@ -7,15 +7,13 @@
 
 #include "common/point_cloud.h"
 #include "common/status.h"
-#include "services/mapping/dynamic_mapper_layer.h"
 #include "services/mapping/mapper_layer.h"
+#include "services/mapping/mapper_layers.h"
 #include "services/mapping/occupancy_band.h"
-#include "services/mapping/occupancy_mapper_layer.h"
-#include "services/mapping/octomap_mapper_layer.h"
-#include "services/mapping/terrain_mapper_layer.h"
 
 /// @file
-/// MapperCore: the layers one robot's mapper keeps, fed with lidar revolutions and planar scans
+/// MapperCore: the layers one robot's mapper keeps (configured by MapperCoreParams,
+/// mapper_layers.h), fed with lidar revolutions and planar scans
 /// whose sensor poses are already resolved (MapperInputs). The core holds the configured layers
 /// in a list (MapperLayer, mapper_layer.h) and hands each input to the layers that take it, in
 /// list order; it computes the obstacle band once per revolution for the layers that take it.
@@ -23,33 +21,6 @@
 /// they build the same maps.
 
 namespace cairn::mapping {
-
-/// The built-in layers by name (mapper_layers.h builds them).
-inline constexpr char kTerrainLayerName[] = "terrain";
-inline constexpr char kOccupancyLayerName[] = "occupancy";
-inline constexpr char kOctomapLayerName[] = "octomap";
-inline constexpr char kDynamicLayerName[] = "dynamic";
-
-struct MapperCoreParams {
-  /// The configured layers, in the order they take each input (names of RegisteredLayers()).
-  std::vector<std::string> layers{kTerrainLayerName, kOccupancyLayerName, kOctomapLayerName};
-  /// The obstacle band computed for the layers that take kObstacleBand.
-  ObstacleBandParams band;
-  // Each built-in layer's params (used when the layer is listed).
-  TerrainMapperLayerParams terrain;
-  OccupancyMapperLayerParams occupancy;
-  OctomapMapperLayerParams octomap;
-  /// Seed 001's dynamic layers (static, short-term, long-term, final) from the planar laser
-  /// and the lidar's obstacle band, over the static map's grid or an extent.
-  DynamicMapperLayerParams dynamic;
-
-  /// Whether `layer` is listed.
-  bool Has(const std::string& layer) const;
-  /// Lists `layer` (at the end) unless it is; or removes it.
-  void SetListed(const std::string& layer, bool listed);
-  /// @throws std::invalid_argument naming a bad field, an unknown or a repeated layer.
-  void Validate() const;
-};
 
 class MapperCore {
  public:
@@ -70,8 +41,13 @@ class MapperCore {
                                      const RobotContext& robot, double time_s);
   /// A planar laser scan to the layers that take scans, then the sensor clock to its time.
   void ProcessScan(const common::LaserScan& scan);
+  /// A reading of another sensor stream to the layers that take its stream, then the sensor
+  /// clock to its time.
+  void ProcessReading(const SensorReading& reading);
   /// The sensor clock to the layers that take it.
   void AdvanceTo(int64_t utime);
+  /// Every stream whose readings a listed layer takes (the service subscribes to them).
+  std::vector<std::string> ReadingStreams() const;
 
   /// With true, layers that run on a thread of their own (LayerSchedule::own_thread) are not
   /// fed by ProcessRevolution but listed in RevolutionReport::deferred for the caller to feed

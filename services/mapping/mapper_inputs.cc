@@ -164,6 +164,13 @@ std::optional<common::LaserScan> MapperInputs::PrepareScan(common::LaserScan sca
   return scan;
 }
 
+bool MapperInputs::PrepareReading(SensorReading* reading) {
+  auto pose = SensorPose(reading->stream, reading->utime, reading->sensor_pose);
+  if (!pose) return false;
+  reading->sensor_pose = *pose;
+  return true;
+}
+
 std::vector<std::pair<std::string, common::Pose3>> MapperInputs::TakeNewMounts() {
   std::vector<std::pair<std::string, common::Pose3>> out;
   out.swap(new_mounts_);

@@ -9,6 +9,7 @@
 
 #include "common/point_cloud.h"
 #include "common/types.h"
+#include "services/mapping/mapper_layer.h"
 #include "services/mapping/pose_buffer.h"
 #include "services/mapping/traversability.h"
 
@@ -90,6 +91,9 @@ class MapperInputs {
                                                       RevolutionDrops* drops);
   /// Resolves a scan's pose ("scan"); nullopt without a pose near its time.
   std::optional<common::LaserScan> PrepareScan(common::LaserScan scan);
+  /// Resolves a reading's sensor pose (its stream keys the mount); false without a pose near
+  /// its time.
+  bool PrepareReading(SensorReading* reading);
 
   /// Mounts measured (or configured) since the last call, by sensor: for the process's log.
   std::vector<std::pair<std::string, common::Pose3>> TakeNewMounts();

@@ -9,6 +9,7 @@
 #include "common/grid_map.h"
 #include "common/point_cloud.h"
 #include "common/status.h"
+#include "common/types.h"
 #include "services/mapping/occupancy_band.h"
 #include "services/mapping/occupancy_grid.h"
 #include "services/mapping/terrain_map.h"
@@ -33,8 +34,25 @@ enum MapperInput : uint32_t {
   kObstacleBand = 1u << 1,
   /// OnScan: planar laser scans, sensor pose resolved.
   kPlanarScans = 1u << 2,
-  /// AdvanceTo: the sensor clock after every revolution and scan (to step at a rate).
+  /// AdvanceTo: the sensor clock after every revolution, scan and reading (to step at a rate).
   kSensorTime = 1u << 3,
+  /// OnReading: readings of the other sensor streams the layer names (ReadingStreams: a sonar's
+  /// pings, ...), sensor pose resolved; lcm/mapper_streams.cc converts their messages.
+  kSensorReadings = 1u << 4,
+};
+
+/// A reading of a sensor stream beyond the fixed inputs above, made from its message by the
+/// stream's converter (lcm/mapper_streams.cc): a layer that takes the stream casts it to the type
+/// that converter makes (declared in the layer's header).
+struct SensorReading {
+  SensorReading() = default;
+  virtual ~SensorReading() = default;
+  SensorReading(const SensorReading&) = default;
+  SensorReading& operator=(const SensorReading&) = default;
+
+  std::string stream;  ///< "SONAR": the reading came on <robot>.SONAR
+  int64_t utime{0};
+  common::Pose3 sensor_pose;  ///< as reported; MapperInputs resolves it per pose_source
 };
 
 /// What one revolution did, with the time each stage took (wall clock, seconds).
@@ -99,6 +117,9 @@ class MapperLayer {
                               RevolutionReport* /*report*/) {}
   virtual void OnScan(const common::LaserScan& /*scan*/) {}
   virtual void AdvanceTo(int64_t /*utime*/) {}
+  /// With kSensorReadings: the streams whose readings it takes, and each reading.
+  virtual std::vector<std::string> ReadingStreams() const { return {}; }
+  virtual void OnReading(const SensorReading& /*reading*/) {}
   /// World height of the ground under `xy_m`, for layers that map the ground; nullopt else.
   virtual std::optional<double> GroundHeightUnder(const common::Vector2& /*xy_m*/) const {
     return std::nullopt;

@@ -19,6 +19,14 @@ OccupancyMapperLayerParams LoadOccupancyMapperLayerParams(common::YamlMap& map) 
   return p;
 }
 
+void LoadOccupancySection(common::YamlMap& map, OccupancyParams* grid, ObstacleBandParams* band) {
+  if (map.Has("band")) {
+    common::YamlMap child = map.Child("band");
+    *band = LoadObstacleBandParams(child);
+  }
+  *grid = LoadOccupancyMapperLayerParams(map).grid;
+}
+
 OccupancyMapperLayer::OccupancyMapperLayer(const OccupancyMapperLayerParams& params)
     : params_((params.Validate(), params)), grid_(params.grid) {}
 

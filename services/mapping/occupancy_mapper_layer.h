@@ -26,6 +26,10 @@ struct OccupancyMapperLayerParams {
 /// @throws common::ConfigError naming the file and line of a bad or unknown key.
 OccupancyMapperLayerParams LoadOccupancyMapperLayerParams(common::YamlMap& map);
 
+/// Reads an `occupancy` section (`enabled` excepted): its `band` subsection into `band` (the
+/// mapper's obstacle band is configured there), the rest into `grid`.
+void LoadOccupancySection(common::YamlMap& map, OccupancyParams* grid, ObstacleBandParams* band);
+
 class OccupancyMapperLayer : public MapperLayer {
  public:
   /// @throws std::invalid_argument if the params are invalid.

@@ -1,6 +1,7 @@
 #include "services/mapping/lcm/mapper_service.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 
 #include "cairn/lcmt_mapstore_request.hpp"
@@ -34,7 +35,8 @@ Clock::duration Period(double s) {
 MapperService::MapperService(runtime::Node& node, MapperParams params,
                              const std::vector<common::RobotProfile>& profiles,
                              ProfileResolver resolver, Mode mode,
-                             std::vector<std::unique_ptr<MapperLayer>> extra_layers)
+                             std::vector<std::unique_ptr<MapperLayer>> extra_layers,
+                             std::vector<StreamConverter> extra_streams)
     : node_(node),
       params_((params.Validate(), std::move(params))),
       resolver_(std::move(resolver)),
@@ -43,6 +45,15 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
       inputs_(params_.inputs) {
   params_.core.dynamic.long_term_restore.reset();  // the core took it; do not keep a copy
   for (auto& layer : extra_layers) core_.AddLayer(std::move(layer));
+  // The converters of the sensor streams the layers take.
+  for (const std::string& stream : core_.ReadingStreams()) {
+    auto has = [&](const StreamConverter& c) { return c.stream == stream; };
+    auto extra = std::find_if(extra_streams.begin(), extra_streams.end(), has);
+    auto registered = std::find_if(RegisteredStreams().begin(), RegisteredStreams().end(), has);
+    CAIRN_THROW_UNLESS(extra != extra_streams.end() || registered != RegisteredStreams().end(),
+                       "a mapper layer takes the stream " << stream << ", which has no converter");
+    streams_.push_back(extra != extra_streams.end() ? *extra : *registered);
+  }
   if (!profiles.empty()) {
     CAIRN_THROW_UNLESS(core_.terrain() != nullptr, "profiles need the terrain layer");
     for (const auto& p : profiles) core_.terrain()->AddProfile(p);
@@ -137,6 +148,12 @@ void MapperService::Subscribe() {
     node_.Subscribe<cairn::lcmt_mapstore_reply>(channels::kMapstoreReply,
                                                 [this](const auto& m) { OnMapstoreReply(m); });
   }
+  for (const StreamConverter& c : streams_) {
+    node_.SubscribeRaw(Ch(r, c.stream.c_str()),
+                       [this, &c](const std::string&, const void* data, int size, int64_t) {
+                         OnStreamMessage(c, data, size);
+                       });
+  }
 }
 
 void MapperService::HandleLogged(const std::string& channel, const void* data, int size) {
@@ -166,6 +183,10 @@ void MapperService::HandleLogged(const std::string& channel, const void* data, i
   } else if (channel == Ch(r, channels::kMapControl)) {
     lcmt_map_control_request m{};
     if (decode(m)) OnControl(m);
+  } else {
+    for (const StreamConverter& c : streams_) {
+      if (channel == Ch(r, c.stream.c_str())) OnStreamMessage(c, data, size);
+    }
   }
 }
 
@@ -263,6 +284,33 @@ void MapperService::OnScan(const cairn::lcmt_laser_scan& msg) {
   Job j;
   j.kind = Job::Kind::kScan;
   j.scan = std::move(*prepared);
+  Enqueue(std::move(j));
+}
+
+void MapperService::OnStreamMessage(const StreamConverter& converter, const void* data, int size) {
+  std::string counter = converter.stream;
+  std::transform(counter.begin(), counter.end(), counter.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  auto reading = converter.convert(data, size);
+  if (!reading.ok()) {
+    node_.CountDropped("bad_" + counter);
+    node_.Warn("bad_" + counter,
+               "dropped a " + converter.stream + " message: " + reading.status().message());
+    return;
+  }
+  std::unique_ptr<SensorReading> r = std::move(reading.value());
+  r->stream = converter.stream;
+  const bool posed = inputs_.PrepareReading(r.get());
+  LogNewMounts();
+  if (!posed) {
+    node_.CountDropped(counter + "_without_pose");
+    node_.Warn("no_pose_" + counter,
+               "dropped a " + converter.stream + " reading with no pose near its time");
+    return;
+  }
+  Job j;
+  j.kind = Job::Kind::kReading;
+  j.reading = std::move(r);
   Enqueue(std::move(j));
 }
 
@@ -378,6 +426,9 @@ void MapperService::Process(Job& job) {
       break;
     case Job::Kind::kScan:
       core_.ProcessScan(job.scan);
+      break;
+    case Job::Kind::kReading:
+      core_.ProcessReading(*job.reading);
       break;
     case Job::Kind::kControl:
       ProcessControl(job.control);

@@ -27,6 +27,7 @@
 #include "common/robot_profile.h"
 #include "common/status.h"
 #include "services/mapping/lcm/map_publisher.h"
+#include "services/mapping/lcm/mapper_streams.h"
 #include "services/mapping/mapper_config.h"
 #include "services/mapping/mapper_core.h"
 #include "services/mapping/mapper_inputs.h"
@@ -65,13 +66,15 @@ class MapperService {
   enum class Mode { kLive, kReplay };
 
   /// Live mode subscribes on `node` and starts the worker threads; replay mode subscribes to
-  /// nothing (feed it with HandleLogged). `extra_layers` join the configured ones (after them).
-  /// `node` must outlive the service.
-  /// @throws std::invalid_argument for invalid params or profiles.
+  /// nothing (feed it with HandleLogged). `extra_layers` join the configured ones (after them);
+  /// `extra_streams` join RegisteredStreams(). `node` must outlive the service.
+  /// @throws std::invalid_argument for invalid params or profiles, or a stream a layer takes
+  /// with no converter.
   MapperService(runtime::Node& node, MapperParams params,
                 const std::vector<common::RobotProfile>& profiles, ProfileResolver resolver,
                 Mode mode = Mode::kLive,
-                std::vector<std::unique_ptr<MapperLayer>> extra_layers = {});
+                std::vector<std::unique_ptr<MapperLayer>> extra_layers = {},
+                std::vector<StreamConverter> extra_streams = {});
   ~MapperService();
   MapperService(const MapperService&) = delete;
   MapperService& operator=(const MapperService&) = delete;
@@ -89,9 +92,10 @@ class MapperService {
 
  private:
   struct Job {
-    enum class Kind { kRevolution, kScan, kControl, kResend } kind;
+    enum class Kind { kRevolution, kScan, kReading, kControl, kResend } kind;
     PreparedRevolution revolution;
     common::LaserScan scan;
+    std::unique_ptr<SensorReading> reading;
     cairn::lcmt_map_control_request control{};
     cairn::lcmt_tile_resend_request resend{};
   };
@@ -116,6 +120,7 @@ class MapperService {
   void OnResend(const cairn::lcmt_tile_resend_request& msg);
   void OnMapstoreReply(const cairn::lcmt_mapstore_reply& msg);
   void OnRevolution(common::LidarRevolution revolution);
+  void OnStreamMessage(const StreamConverter& converter, const void* data, int size);
   void LogNewMounts();
   void Enqueue(Job job);
 
@@ -151,6 +156,7 @@ class MapperService {
   // LCM-thread state.
   runtime::RevolutionAssembler assembler_;
   MapperInputs inputs_;
+  std::vector<StreamConverter> streams_;  // those of the streams the layers take
 
   // Work queue.
   std::mutex queue_mutex_;

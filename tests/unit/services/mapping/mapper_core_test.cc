@@ -159,6 +159,33 @@ TEST(MapperCoreTest, ALayerOnlyGetsTheInputsItTakes) {
   EXPECT_EQ(core.occupancy(), nullptr);
 }
 
+TEST(MapperCoreTest, ReadingsGoToTheLayersThatTakeTheirStream) {
+  class SonarLayer : public CountingLayer {
+   public:
+    SonarLayer() : CountingLayer(kSensorReadings | kSensorTime) {}
+    std::vector<std::string> ReadingStreams() const override { return {"SONAR"}; }
+    void OnReading(const SensorReading& reading) override {
+      log.push_back("reading " + reading.stream);
+    }
+  };
+  MapperCoreParams params;
+  params.layers = {};
+  MapperCore core(params);
+  auto owned = std::make_unique<SonarLayer>();
+  SonarLayer* layer = owned.get();
+  core.AddLayer(std::move(owned));
+  EXPECT_EQ(core.ReadingStreams(), (std::vector<std::string>{"SONAR"}));
+  SensorReading ping;
+  ping.stream = "SONAR";
+  ping.utime = 3'000'000;
+  core.ProcessReading(ping);
+  ping.stream = "OTHER";
+  ping.utime = 3'100'000;
+  core.ProcessReading(ping);
+  EXPECT_EQ(layer->log,
+            (std::vector<std::string>{"reading SONAR", "time 3000000", "time 3100000"}));
+}
+
 TEST(MapperCoreTest, OwnThreadLayersRunInlineOrAreDeferredOnTheirSchedule) {
   MapperCoreParams params;
   params.layers = {};

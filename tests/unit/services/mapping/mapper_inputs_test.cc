@@ -129,6 +129,18 @@ TEST(MapperInputsTest, AConfiguredMountAndTheImuAttitude) {
   EXPECT_NEAR(prepared->robot.pitch_rad, imu.pitch_rad(), 1e-9);
 }
 
+TEST(MapperInputsTest, AReadingGetsItsPoseLikeAScan) {
+  MapperInputs inputs({});
+  SensorReading reading;
+  reading.stream = "SONAR";
+  reading.utime = 1'000'000;
+  reading.sensor_pose = SensorAt(1.0, 2.0, 0.2);
+  EXPECT_FALSE(inputs.PrepareReading(&reading));  // no ground truth yet
+  ASSERT_TRUE(inputs.AddGroundTruth(1'000'000, SensorAt(1.0, 2.0, 0.0)));
+  ASSERT_TRUE(inputs.PrepareReading(&reading));
+  EXPECT_TRUE(reading.sensor_pose.position_m.isApprox(common::Vector3(1.0, 2.0, 0.2)));
+}
+
 TEST(MapperInputsTest, PoseSourcesAndMountsByName) {
   EXPECT_EQ(PoseSourceFromName("odometry"), PoseSource::kOdometry);
   EXPECT_STREQ(PoseSourceName(PoseSource::kGroundTruth), "ground_truth");

@@ -102,8 +102,32 @@ TEST(MapperServiceTest, MapsSlicesOverMemq) {
   EXPECT_EQ(node.counter("bad_points"), 0);
 }
 
-// A layer the service has never heard of, added through the seam: it counts the scans in a
-// float grid and an occupancy grid, and the service publishes both generically.
+// A reading of a stream the mapper has no fixed input for: here made from lcmt_pose messages
+// on r1.TEST_MARK (its x is what the layer keeps).
+struct MarkReading : SensorReading {
+  double x_m{0.0};
+};
+
+StreamConverter MarkConverter() {
+  StreamConverter c;
+  c.stream = "TEST_MARK";
+  c.convert = [](const void* data, int size) -> common::Result<std::unique_ptr<SensorReading>> {
+    cairn::lcmt_pose m;
+    if (m.decode(data, 0, size) < 0) return common::InvalidArgumentError("does not decode");
+    auto pose = runtime::FromLcm(m);
+    if (!pose.ok()) return pose.status();
+    auto reading = std::make_unique<MarkReading>();
+    reading->utime = m.utime;
+    reading->sensor_pose = *pose;
+    reading->x_m = m.position_m[0];
+    return std::unique_ptr<SensorReading>(std::move(reading));
+  };
+  return c;
+}
+
+// A layer the service has never heard of, added through the seam: it counts the scans and keeps
+// the last mark in a float grid and an occupancy grid, and the service publishes both
+// generically.
 class ScanCountLayer : public MapperLayer {
  public:
   ScanCountLayer() {
@@ -115,7 +139,7 @@ class ScanCountLayer : public MapperLayer {
     grid_.AddLayer("test/seen", NAN);
   }
   const std::string& name() const override { return name_; }
-  uint32_t inputs() const override { return kPlanarScans; }
+  uint32_t inputs() const override { return kPlanarScans | kSensorReadings; }
   LayerSchedule schedule() const override {
     LayerSchedule s;
     s.publish_period_s = 0.05;
@@ -125,6 +149,12 @@ class ScanCountLayer : public MapperLayer {
   void OnScan(const common::LaserScan&) override {
     grid_.at("test/scans")(1, 1) += 1.f;
     grid_.at("test/seen")(2, 2) = 100.f;
+    ++version_;
+  }
+  std::vector<std::string> ReadingStreams() const override { return {"TEST_MARK"}; }
+  void OnReading(const SensorReading& reading) override {
+    grid_.at("test/scans")(3, 3) =
+        static_cast<float>(dynamic_cast<const MarkReading&>(reading).x_m);
     ++version_;
   }
   void Reset() override {}
@@ -159,34 +189,49 @@ TEST(MapperServiceTest, PublishesALayerAddedThroughTheSeam) {
       "r1.MAP.OCCUPANCY", [&](const cairn::lcmt_occupancy_tile& t) { assembler.OnTile(t); });
   node.Subscribe<cairn::lcmt_grid_manifest>(
       "r1.MAP.MANIFEST", [&](const cairn::lcmt_grid_manifest& m) { assembler.OnManifest(m); });
+  // A layer taking a stream without a converter is refused.
+  {
+    std::vector<std::unique_ptr<MapperLayer>> extra;
+    extra.push_back(std::make_unique<ScanCountLayer>());
+    EXPECT_THROW(
+        MapperService(node, params, {}, nullptr, MapperService::Mode::kReplay, std::move(extra)),
+        std::invalid_argument);
+  }
   std::vector<std::unique_ptr<MapperLayer>> extra;
   extra.push_back(std::make_unique<ScanCountLayer>());
-  MapperService service(node, params, {}, nullptr, MapperService::Mode::kLive, std::move(extra));
+  MapperService service(node, params, {}, nullptr, MapperService::Mode::kLive, std::move(extra),
+                        {MarkConverter()});
   common::LaserScan scan;
   scan.range_min_m = 0.1;
   scan.range_max_m = 5.0;
   scan.angle_increment_rad = 0.1;
   scan.ranges_m.assign(5, 1.0f);
+  scan.robot = "r1";
   for (int k = 0; k < 3; ++k) {
     scan.utime = 1'000'000 + k * 100'000;
     node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(0.0, 0.0, 0.0), scan.utime, "r1", "world"));
-    scan.robot = "r1";
     node.Publish("r1.SCAN", runtime::ToLcm(scan));
   }
-  auto scans = [&]() -> float {
-    auto layer = assembler.Layer("test/scans");
-    return layer ? layer->at("test/scans")(1, 1) : NAN;
+  node.Publish("r1.TEST_MARK", runtime::ToLcmPose(SensorAt(1.5, 0.0, 0.0), 1'200'000, "r1", "w"));
+  const std::string garbage = "not a pose";
+  node.lcm().publish("r1.TEST_MARK", garbage.data(), static_cast<unsigned>(garbage.size()));
+  auto cell = [&](const char* layer, int x, int y) -> float {
+    auto grid = assembler.Layer(layer);
+    return grid ? grid->at(layer)(x, y) : NAN;
   };
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   while (std::chrono::steady_clock::now() < deadline &&
-         !(scans() == 3.f && assembler.Complete("test/seen"))) {
+         !(cell("test/scans", 1, 1) == 3.f && cell("test/scans", 3, 3) == 1.5f &&
+           assembler.Complete("test/seen"))) {
     node.SpinOnce(20);
   }
   service.Stop();
-  EXPECT_EQ(scans(), 3.f);
+  EXPECT_EQ(cell("test/scans", 1, 1), 3.f);
+  EXPECT_EQ(cell("test/scans", 3, 3), 1.5f);  // the reading came through its stream
+  EXPECT_EQ(node.counter("bad_test_mark"), 1);
   ASSERT_TRUE(assembler.Complete("test/seen"));
-  EXPECT_FLOAT_EQ(assembler.Layer("test/seen")->at("test/seen")(2, 2), 100.f);
-  EXPECT_TRUE(std::isnan(assembler.Layer("test/seen")->at("test/seen")(0, 0)));
+  EXPECT_FLOAT_EQ(cell("test/seen", 2, 2), 100.f);
+  EXPECT_TRUE(std::isnan(cell("test/seen", 0, 0)));
 }
 
 // The dynamic layers on a 4 x 3 m extent, with a remembered long-term layer.
