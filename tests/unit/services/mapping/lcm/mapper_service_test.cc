@@ -34,15 +34,20 @@ using testing::ShippedProfile;
 using testing::SyntheticLidar;
 using testing::SyntheticRevolution;
 
-// MapperService over memq: slices and poses in, tiles, manifests and the registry out.
-TEST(MapperServiceTest, MapsSlicesOverMemq) {
+// The mapper's node on memq:// (no network, no signal handlers, no simulator clock).
+runtime::NodeOptions MemqOptions() {
   runtime::NodeOptions options;
   options.process_name = "cairn-mapper";
   options.robot = "r1";
   options.lcm_url = "memq://";
   options.install_signal_handlers = false;
   options.follow_sim_clock = false;
-  runtime::Node node(options);
+  return options;
+}
+
+// MapperService over memq: slices and poses in, tiles, manifests and the registry out.
+TEST(MapperServiceTest, MapsSlicesOverMemq) {
+  runtime::Node node(MemqOptions());
   MapperParams params;
   params.robot = "r1";
   params.core.terrain.publish_period_s = 0.05;
@@ -172,13 +177,7 @@ class ScanCountLayer : public MapperLayer {
 };
 
 TEST(MapperServiceTest, PublishesALayerAddedThroughTheSeam) {
-  runtime::NodeOptions options;
-  options.process_name = "cairn-mapper";
-  options.robot = "r1";
-  options.lcm_url = "memq://";
-  options.install_signal_handlers = false;
-  options.follow_sim_clock = false;
-  runtime::Node node(options);
+  runtime::Node node(MemqOptions());
   MapperParams params;
   params.robot = "r1";
   params.core.layers = {kTerrainLayerName};
@@ -248,13 +247,7 @@ MapperParams DynamicParams() {
 }
 
 TEST(MapperServiceTest, PublishesTheRestoredLongTermLayerAndAsksTheStoreToSaveIt) {
-  runtime::NodeOptions options;
-  options.process_name = "cairn-mapper";
-  options.robot = "r1";
-  options.lcm_url = "memq://";
-  options.install_signal_handlers = false;
-  options.follow_sim_clock = false;
-  runtime::Node node(options);
+  runtime::Node node(MemqOptions());
   MapperParams params = DynamicParams();
   common::GridMap stored(params.core.dynamic.extent);
   stored.AddLayer(layers::kLongTerm, 0.f)(10, 20) = 98.f;
