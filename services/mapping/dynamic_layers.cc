@@ -223,28 +223,27 @@ DynamicUpdateStats DynamicLayers::Update(const std::vector<common::LaserScan>& s
   return Step(stats);
 }
 
-DynamicUpdateStats DynamicLayers::Step(DynamicUpdateStats stats) {
-  auto inside = [this](int ix, int iy) {
-    // `<` size: the seed's `<=` wrote one cell past the end of a row.
-    return ix >= 0 && iy >= 0 && ix < geometry_.size_x && iy < geometry_.size_y;
-  };
-  auto index = [this](int ix, int iy) {
-    return static_cast<size_t>(ix) +
-           static_cast<size_t>(iy) * static_cast<size_t>(geometry_.size_x);
-  };
-  step_touched_.clear();
+bool DynamicLayers::Inside(int ix, int iy) const {
+  // `<` size: the seed's `<=` wrote one cell past the end of a row.
+  return ix >= 0 && iy >= 0 && ix < geometry_.size_x && iy < geometry_.size_y;
+}
 
-  // 1. Marking: each end cell once per step (the seed's unique() on unsorted lists kept
-  //    duplicates, and every scan between two steps added its own increment).
+size_t DynamicLayers::IndexOf(int ix, int iy) const {
+  return static_cast<size_t>(ix) + static_cast<size_t>(iy) * static_cast<size_t>(geometry_.size_x);
+}
+
+void DynamicLayers::MarkEnds(DynamicUpdateStats* stats) {
+  // Each end cell once per step (the seed's unique() on unsorted lists kept duplicates, and
+  // every scan between two steps added its own increment).
   for (const Ray& ray : rays_) {
     if (!ray.mark) continue;
     const int ix = static_cast<int>(std::floor(ray.end.x()));
     const int iy = static_cast<int>(std::floor(ray.end.y()));
-    if (!inside(ix, iy)) {
-      ++stats.marks_outside;
+    if (!Inside(ix, iy)) {
+      ++stats->marks_outside;
       continue;
     }
-    const size_t i = index(ix, iy);
+    const size_t i = IndexOf(ix, iy);
     if (step_state_[i] != kUntouched) continue;
     step_state_[i] = kMarked;
     step_touched_.push_back(i);
@@ -256,19 +255,21 @@ DynamicUpdateStats DynamicLayers::Step(DynamicUpdateStats stats) {
     } else {
       c = kCostLethal;
     }
-    ++stats.cells_marked;
+    ++stats->cells_marked;
   }
+}
 
-  // 2. Clearing: the cells each ray crosses, from the sensor's cell up to (not including) its
-  //    end cell, once per step; cells marked in this step are left alone. The exact traversal
-  //    replaces the seed's staircase walk.
+void DynamicLayers::ClearRays(DynamicUpdateStats* stats) {
+  // The cells each ray crosses, from the sensor's cell up to (not including) its end cell, once
+  // per step; cells marked in this step are left alone. The exact traversal replaces the seed's
+  // staircase walk.
   for (const Ray& ray : rays_) {
     const int end_ix = static_cast<int>(std::floor(ray.end.x()));
     const int end_iy = static_cast<int>(std::floor(ray.end.y()));
     TraverseCells(ray.origin.x(), ray.origin.y(), ray.end.x(), ray.end.y(), [&](int ix, int iy) {
       if (ix == end_ix && iy == end_iy) return false;
-      if (!inside(ix, iy)) return true;
-      const size_t i = index(ix, iy);
+      if (!Inside(ix, iy)) return true;
+      const size_t i = IndexOf(ix, iy);
       if (step_state_[i] != kUntouched) return true;
       step_state_[i] = kCleared;
       step_touched_.push_back(i);
@@ -280,14 +281,15 @@ DynamicUpdateStats DynamicLayers::Step(DynamicUpdateStats stats) {
       } else {
         c = kCostFree;
       }
-      ++stats.cells_cleared;
+      ++stats->cells_cleared;
       return true;
     });
   }
-  for (const size_t i : step_touched_) step_state_[i] = kUntouched;
+}
 
-  // 3. Long term, every cell: adopt what is surely occupied now, forget what is seen free,
-  //    never below 0 and never on a wall of the static map.
+void DynamicLayers::UpdateLongTerm(DynamicUpdateStats* stats) {
+  // Every cell: adopt what is surely occupied now, forget what is seen free, never below 0 and
+  // never on a wall of the static map.
   const auto& table = OccupancyTable();
   const int8_t dec = static_cast<int8_t>(params_.longterm_cost_dec);
   for (size_t i = 0; i < long_og_.size(); ++i) {
@@ -301,8 +303,16 @@ DynamicUpdateStats DynamicLayers::Step(DynamicUpdateStats stats) {
     } else if (short_og >= 0 && short_og < params_.longterm_free_og && !wall && long_og >= dec) {
       long_og = static_cast<int8_t>(long_og - dec);
     }
-    if (long_og != before) ++stats.long_term_changed;
+    if (long_og != before) ++stats->long_term_changed;
   }
+}
+
+DynamicUpdateStats DynamicLayers::Step(DynamicUpdateStats stats) {
+  step_touched_.clear();
+  MarkEnds(&stats);
+  ClearRays(&stats);
+  for (const size_t i : step_touched_) step_state_[i] = kUntouched;
+  UpdateLongTerm(&stats);
   ++updates_;
   return stats;
 }
@@ -508,6 +518,20 @@ common::Result<common::GridMap> LoadStaticMap(const std::string& yaml_path) {
     }
   }
   return map;
+}
+
+DynamicLayersParams ReadDynamicLayersParams(common::YamlMap& m) {
+  DynamicLayersParams p;
+  m.Get("cost_inc", &p.cost_inc);
+  m.Get("cost_dec", &p.cost_dec);
+  m.Get("min_length_m", &p.min_length_m);
+  m.Get("max_length_m", &p.max_length_m);
+  m.Get("update_hz", &p.update_hz);
+  m.Get("longterm_add_og", &p.longterm_add_og);
+  m.Get("longterm_free_og", &p.longterm_free_og);
+  m.Get("longterm_cost_dec", &p.longterm_cost_dec);
+  m.Get("static_wall_og", &p.static_wall_og);
+  return p;
 }
 
 }  // namespace cairn::mapping

@@ -45,6 +45,10 @@
 /// loop assumed a symmetric scan); a cell marked in a step is not cleared by another ray of
 /// the same step; and adopting a short-term value never lowers a static wall.
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 inline constexpr uint8_t kCostFree = 0;
@@ -70,6 +74,10 @@ struct DynamicLayersParams {
   /// @throws std::invalid_argument naming the first bad field.
   void Validate() const;
 };
+
+/// Reads the seed 001 keys of a `dynamic` section over the defaults. Does not call Finish: the
+/// section also holds the mapper layer's keys. @throws common::ConfigError for a bad value.
+DynamicLayersParams ReadDynamicLayersParams(common::YamlMap& map);
 
 /// What one step did.
 struct DynamicUpdateStats {
@@ -148,6 +156,13 @@ class DynamicLayers {
   void AddReading(const common::Vector2& origin_m, const common::Vector2& direction, double range_m,
                   bool hit, DynamicUpdateStats* stats);
   DynamicUpdateStats Step(DynamicUpdateStats stats);
+  // The stages of a step: the end cells of the marking rays, the cells the rays cross, then
+  // the long-term layer from the short-term one.
+  void MarkEnds(DynamicUpdateStats* stats);
+  void ClearRays(DynamicUpdateStats* stats);
+  void UpdateLongTerm(DynamicUpdateStats* stats);
+  bool Inside(int ix, int iy) const;
+  size_t IndexOf(int ix, int iy) const;
 
   struct Ray {
     common::Vector2 origin;  // continuous cell coordinates

@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "common/check.h"
+#include "common/yaml_reader.h"
 
 namespace cairn::mapping {
 
@@ -32,6 +33,23 @@ double PointHeightVariance(const common::Vector3& sensor_m, const common::Vector
   const double range = beam.norm();
   if (!(range > 1e-9)) return params.range_noise_m * params.range_noise_m;
   return PointHeightVariance(range, beam.z() / range, params);
+}
+
+ElevationFilterParams LoadElevationFilterParams(common::YamlMap& m) {
+  ElevationFilterParams p;
+  m.Get("range_noise_m", &p.range_noise_m);
+  m.Get("beam_constant_m", &p.beam_constant_m);
+  m.Get("beam_angle_rad", &p.beam_angle_rad);
+  m.Get("mahalanobis_threshold", &p.mahalanobis_threshold);
+  m.Get("multi_height_noise_m2", &p.multi_height_noise_m2);
+  m.Get("min_variance_m2", &p.min_variance_m2);
+  m.Get("max_variance_m2", &p.max_variance_m2);
+  m.Get("increase_height_alpha", &p.increase_height_alpha);
+  double spread_deg = p.max_spread_slope_rad * 180.0 / M_PI;
+  if (m.Get("max_spread_slope_deg", &spread_deg))
+    p.max_spread_slope_rad = spread_deg * M_PI / 180.0;
+  m.Finish();
+  return p;
 }
 
 }  // namespace cairn::mapping

@@ -11,6 +11,10 @@
 /// elevation_mapping): each cell holds a Gaussian height estimate (height, variance) fused from
 /// point measurements with a 1-D Kalman update, Mahalanobis gating and variance limits.
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 /// Parameters of the height filter and of the laser noise model.
@@ -39,6 +43,10 @@ struct ElevationFilterParams {
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
 };
+
+/// Reads a `filter` section (every key optional; max_spread_slope_deg in degrees) over the
+/// defaults. @throws common::ConfigError naming the file and line of a bad or unknown key.
+ElevationFilterParams LoadElevationFilterParams(common::YamlMap& map);
 
 /// Height variance (m²) of a point measured from `sensor_m` at `point_m` (world frame):
 /// sigma_r² along the beam and sigma_lat² = (beam_constant + beam_angle·range)² across it,

@@ -1,11 +1,15 @@
 #include "services/mapping/mapper_core.h"
 
+#include <algorithm>
 #include <chrono>
-#include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
+#include <sstream>
 
 #include "common/check.h"
-#include "common/layers.h"
+#include "services/mapping/derive.h"
+#include "services/mapping/mapper_layers.h"
 
 namespace cairn::mapping {
 namespace {
@@ -14,148 +18,166 @@ double Seconds(std::chrono::steady_clock::time_point a, std::chrono::steady_cloc
   return std::chrono::duration<double>(b - a).count();
 }
 
-// Equal sizes, and resolution and origin equal within a micrometre (a grid that went through a
-// store and back).
-bool SameGrid(const common::GridGeometry& a, const common::GridGeometry& b) {
-  constexpr double kTolerance = 1e-6;
-  return a.size_x == b.size_x && a.size_y == b.size_y &&
-         std::abs(a.resolution_m - b.resolution_m) < kTolerance &&
-         std::abs(a.origin.x_m - b.origin.x_m) < kTolerance &&
-         std::abs(a.origin.y_m - b.origin.y_m) < kTolerance &&
-         std::abs(a.origin.yaw_rad - b.origin.yaw_rad) < kTolerance;
+template <typename T>
+T* Cast(MapperLayer* layer) {
+  return dynamic_cast<T*>(layer);
 }
 
 }  // namespace
 
-void MapperCoreParams::Validate() const {
-  terrain.Validate();
-  if (occupancy_enabled) {
-    occupancy.Validate();
-    band.Validate();
-  }
-  if (octomap_enabled) octomap.Validate();
-  if (dynamic_enabled) {
-    dynamic.Validate();
-    if (static_map_path.empty()) dynamic_extent.Validate();
-  }
+MapperCore::MapperCore(const MapperCoreParams& params) : params_(params), band_(params.band) {
+  params_.Validate();
+  for (const std::string& name : params_.layers) AddLayer(MakeMapperLayer(name, params_));
+  params_.dynamic.long_term_restore.reset();  // used once by the layer; do not keep a copy
 }
 
-MapperCore::MapperCore(const MapperCoreParams& params)
-    : params_(params), terrain_(params.terrain), band_(params.band) {
-  params_.Validate();
-  if (params_.occupancy_enabled) occupancy_ = std::make_unique<OccupancyGrid>(params_.occupancy);
-  if (params_.octomap_enabled) octomap_ = std::make_unique<OctomapLayer>(params_.octomap);
-  if (params_.dynamic_enabled) {
-    common::GridMap static_map;
-    if (!params_.static_map_path.empty()) {
-      auto loaded = LoadStaticMap(params_.static_map_path);
-      if (!loaded.ok()) throw std::invalid_argument(loaded.status().ToString());
-      static_map = std::move(loaded.value());
-    } else {
-      CAIRN_THROW_UNLESS(params_.dynamic_extent.size_x > 0 && params_.dynamic_extent.size_y > 0,
-                         "dynamic layers need a static map or an extent");
-      static_map = common::GridMap(params_.dynamic_extent);
-      static_map.AddLayer(layers::kStaticMap);
-    }
-    dynamic_ = std::make_unique<DynamicLayers>(static_map, params_.dynamic);
-    dynamic_initial_ = std::make_unique<DynamicLayers>(*dynamic_);
-    // The remembered long-term layer (OP_RESET goes back to the static map alone).
-    if (params_.long_term_restore) {
-      const common::GridMap& restore = *params_.long_term_restore;
-      if (!restore.HasLayer(layers::kLongTerm)) {
-        long_term_restore_status_ =
-            common::InvalidArgumentError("the stored map has no long_term layer");
-      } else if (!SameGrid(restore.geometry(), dynamic_->geometry())) {
-        long_term_restore_status_ = common::InvalidArgumentError(
-            "the stored long-term layer lies on another grid than the static map (was the "
-            "static map changed?)");
-      } else {
-        // The same grid up to the rounding of a store round trip: take the static map's.
-        common::GridMap same(dynamic_->geometry());
-        same.AddLayer(layers::kLongTerm) = restore.at(layers::kLongTerm);
-        dynamic_->SetLongTerm(same, layers::kLongTerm);
-      }
-      params_.long_term_restore.reset();  // used once; do not keep a copy
-    }
+void MapperCore::AddLayer(std::unique_ptr<MapperLayer> layer) {
+  CAIRN_THROW_UNLESS(layer != nullptr, "no layer");
+  CAIRN_THROW_UNLESS(FindLayer(layer->name()) == nullptr,
+                     "a mapper layer named '" << layer->name() << "' is listed already");
+  takes_band_ |= (layer->inputs() & kObstacleBand) != 0;
+  layers_.push_back(std::move(layer));
+}
+
+MapperLayer* MapperCore::FindLayer(const std::string& name) const {
+  for (const auto& layer : layers_) {
+    if (layer->name() == name) return layer.get();
   }
+  return nullptr;
 }
 
 RevolutionReport MapperCore::ProcessRevolution(const common::LidarRevolution& revolution,
                                                const RobotContext& robot, double time_s) {
-  using Clock = std::chrono::steady_clock;
   RevolutionReport report;
-  const auto t0 = Clock::now();
-  report.terrain = terrain_.Integrate(revolution, time_s);
-  const auto t1 = Clock::now();
-  report.derived = terrain_.UpdateDerived(robot);
-  const auto t2 = Clock::now();
-  if (occupancy_) {
-    // The obstacle band is measured from the ground under the robot when the terrain knows it.
+  const RevolutionInput input{revolution, robot, time_s};
+  const int64_t n = ++revolutions_seen_;
+  for (const auto& layer : layers_) {
+    if ((layer->inputs() & kLidarRevolutions) == 0) continue;
+    const LayerSchedule schedule = layer->schedule();
+    if (n % schedule.every_revolutions != 0) continue;
+    if (schedule.own_thread && defer_own_thread_) {
+      report.deferred.push_back(layer.get());
+    } else {
+      layer->OnRevolution(input, &report);
+    }
+  }
+  if (takes_band_) {
+    // The band is measured from the ground under the robot when a layer knows it.
+    const auto t0 = std::chrono::steady_clock::now();
     double ground_z = std::numeric_limits<double>::quiet_NaN();
     if (robot.xy_m) {
-      common::GridGeometry g;
-      g.resolution_m = params_.terrain.resolution_m;
-      g.size_x = g.size_y = 3;
-      g.origin = {std::floor(robot.xy_m->x() / g.resolution_m - 1) * g.resolution_m,
-                  std::floor(robot.xy_m->y() / g.resolution_m - 1) * g.resolution_m, 0.0};
-      const common::GridMap under = terrain_.Export({layers::kElevation}, g);
-      double sum = 0;
-      int n = 0;
-      for (int64_t i = 0; i < under.at(layers::kElevation).size(); ++i) {
-        const float h = under.at(layers::kElevation).data()[i];
-        if (!std::isnan(h)) {
-          sum += h;
-          ++n;
+      for (const auto& layer : layers_) {
+        if (auto z = layer->GroundHeightUnder(*robot.xy_m)) {
+          ground_z = *z;
+          break;
         }
       }
-      if (n > 0) ground_z = sum / n;
     }
     const std::vector<PlanarRay>& rays = band_.Project(revolution, ground_z, &report.band);
-    report.occupancy = occupancy_->InsertRays(rays);
-    if (dynamic_) pending_rays_.insert(pending_rays_.end(), rays.begin(), rays.end());
+    for (const auto& layer : layers_) {
+      if (layer->inputs() & kObstacleBand) layer->OnObstacleBand(rays, &report);
+    }
+    report.occupancy_s = Seconds(t0, std::chrono::steady_clock::now());
   }
-  const auto t3 = Clock::now();
-  report.elevation_s = Seconds(t0, t1);
-  report.derived_s = Seconds(t1, t2);
-  report.occupancy_s = Seconds(t2, t3);
   ++revolutions_;
+  if (!revolution.slices.empty()) AdvanceTo(revolution.slices.back().utime);
   return report;
 }
 
-OccupancyInsertStats MapperCore::ProcessScan(const common::LaserScan& scan) {
-  if (dynamic_) pending_scans_.push_back(scan);
-  if (!occupancy_) return {};
-  return occupancy_->InsertScan(scan);
+void MapperCore::FeedDeferred(MapperLayer* layer, const common::LidarRevolution& revolution,
+                              const RobotContext& robot, double time_s) {
+  RevolutionReport unused;
+  layer->OnRevolution({revolution, robot, time_s}, &unused);
 }
 
-DynamicUpdateStats MapperCore::StepDynamic() {
-  if (!dynamic_) return {};
-  const DynamicUpdateStats stats = dynamic_->Update(pending_scans_, pending_rays_);
-  pending_scans_.clear();
-  pending_rays_.clear();
-  return stats;
+void MapperCore::ProcessScan(const common::LaserScan& scan) {
+  for (const auto& layer : layers_) {
+    if (layer->inputs() & kPlanarScans) layer->OnScan(scan);
+  }
+  AdvanceTo(scan.utime);
 }
 
-void MapperCore::ClearShortTerm() {
-  if (!dynamic_) return;
-  const common::GridGeometry& g = dynamic_->geometry();
-  for (int iy = 0; iy < g.size_y; ++iy) {
-    for (int ix = 0; ix < g.size_x; ++ix) dynamic_->SetShortTermCost({ix, iy}, kCostUnknown);
+void MapperCore::ProcessReading(const SensorReading& reading) {
+  for (const auto& layer : layers_) {
+    if ((layer->inputs() & kSensorReadings) == 0) continue;
+    const std::vector<std::string> streams = layer->ReadingStreams();
+    if (std::find(streams.begin(), streams.end(), reading.stream) != streams.end()) {
+      layer->OnReading(reading);
+    }
+  }
+  AdvanceTo(reading.utime);
+}
+
+std::vector<std::string> MapperCore::ReadingStreams() const {
+  std::vector<std::string> streams;
+  for (const auto& layer : layers_) {
+    if ((layer->inputs() & kSensorReadings) == 0) continue;
+    for (const std::string& s : layer->ReadingStreams()) {
+      if (std::find(streams.begin(), streams.end(), s) == streams.end()) streams.push_back(s);
+    }
+  }
+  return streams;
+}
+
+void MapperCore::AdvanceTo(int64_t utime) {
+  for (const auto& layer : layers_) {
+    if (layer->inputs() & kSensorTime) layer->AdvanceTo(utime);
   }
 }
 
-OctomapInsertStats MapperCore::InsertOctomap(const common::LidarRevolution& revolution) {
-  if (!octomap_) return {};
-  return octomap_->InsertRevolution(revolution);
+TerrainMap* MapperCore::terrain() {
+  auto* layer = Cast<TerrainMapperLayer>(FindLayer(kTerrainLayerName));
+  return layer ? &layer->map() : nullptr;
+}
+const TerrainMap* MapperCore::terrain() const { return const_cast<MapperCore*>(this)->terrain(); }
+OccupancyGrid* MapperCore::occupancy() {
+  auto* layer = Cast<OccupancyMapperLayer>(FindLayer(kOccupancyLayerName));
+  return layer ? &layer->grid() : nullptr;
+}
+const OccupancyGrid* MapperCore::occupancy() const {
+  return const_cast<MapperCore*>(this)->occupancy();
+}
+OctomapLayer* MapperCore::octomap() {
+  auto* layer = Cast<OctomapMapperLayer>(FindLayer(kOctomapLayerName));
+  return layer ? &layer->tree() : nullptr;
+}
+const OctomapLayer* MapperCore::octomap() const { return const_cast<MapperCore*>(this)->octomap(); }
+DynamicLayers* MapperCore::dynamic() {
+  auto* layer = Cast<DynamicMapperLayer>(FindLayer(kDynamicLayerName));
+  return layer ? &layer->layers() : nullptr;
+}
+const DynamicLayers* MapperCore::dynamic() const {
+  return const_cast<MapperCore*>(this)->dynamic();
+}
+
+const common::Status& MapperCore::long_term_restore_status() const {
+  static const common::Status kOk;
+  const auto* layer = Cast<DynamicMapperLayer>(FindLayer(kDynamicLayerName));
+  return layer ? layer->long_term_restore_status() : kOk;
+}
+
+common::Status MapperCore::WriteOutputs(const std::string& dir, const std::string& robot,
+                                        int64_t revolutions) const {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return common::UnavailableError("cannot create " + dir + ": " + ec.message());
+  std::ostringstream yaml;
+  yaml << "# cairn-mapper layers: raw little-endian float32, x fastest from the minimum corner\n";
+  yaml << "robot: " << robot << "\n";
+  yaml << "code_version: " << kMappingCodeVersion << "\n";
+  yaml << "revolutions: " << revolutions << "\n";
+  for (const auto& layer : layers_) {
+    const common::Status s = layer->WriteOutputs(dir, yaml);
+    if (!s.ok()) return s;
+  }
+  std::ofstream out(dir + "/map.yaml", std::ios::trunc);
+  out << yaml.str();
+  if (!out) return common::UnavailableError("cannot write " + dir + "/map.yaml");
+  return common::Status::Ok();
 }
 
 void MapperCore::Reset() {
-  terrain_.Clear();
-  if (occupancy_) occupancy_->Clear();
-  if (octomap_) octomap_ = std::make_unique<OctomapLayer>(params_.octomap);
-  if (dynamic_) *dynamic_ = *dynamic_initial_;
-  pending_scans_.clear();
-  pending_rays_.clear();
+  for (const auto& layer : layers_) layer->Reset();
   revolutions_ = 0;
 }
 

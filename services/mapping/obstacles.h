@@ -27,6 +27,10 @@
 ///   (75th percentile of the interior cells, so a steep section is not averaged away) and the
 ///   slope of the plane fitted to its heights (robust where only part of it was seen).
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 struct ObstacleParams {
@@ -58,6 +62,10 @@ struct ObstacleParams {
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
 };
+
+/// Reads an `obstacles` section (every key optional) over the defaults.
+/// @throws common::ConfigError naming the file and line of a bad or unknown key.
+ObstacleParams LoadObstacleParams(common::YamlMap& map);
 
 /// Per-cell feature layers (internal to the mapping core; kept in the live map so the registry
 /// can be assembled without classifying every cell again).

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/check.h"
+#include "common/yaml_reader.h"
 
 namespace cairn::mapping {
 
@@ -175,6 +176,20 @@ std::vector<PlanarRay> ProjectObstacleBand(const common::LidarRevolution& revolu
                                            ObstacleBandStats* stats) {
   ObstacleBand band(params);
   return band.Project(revolution, ground_z_m, stats);
+}
+
+ObstacleBandParams LoadObstacleBandParams(common::YamlMap& b) {
+  ObstacleBandParams band;
+  b.Get("min_height_m", &band.min_height_m);
+  b.Get("max_height_m", &band.max_height_m);
+  b.Get("azimuth_bins", &band.azimuth_bins);
+  b.Get("min_range_m", &band.min_range_m);
+  b.Get("max_range_m", &band.max_range_m);
+  b.Get("ground_window_m", &band.ground_window_m);
+  b.Get("max_ground_slope_rad", &band.max_ground_slope_rad);
+  b.Get("sensor_height_m", &band.sensor_height_m);
+  b.Finish();
+  return band;
 }
 
 }  // namespace cairn::mapping

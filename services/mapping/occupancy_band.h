@@ -23,6 +23,10 @@
 /// rises less than `min_height_m` over `ground_window_m` (17 deg at the defaults), and a wall
 /// whose foot is hidden still stands out above its lowest visible point.
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 struct ObstacleBandParams {
@@ -39,6 +43,10 @@ struct ObstacleBandParams {
   /// @throws std::invalid_argument naming the first bad field.
   void Validate() const;
 };
+
+/// Reads a `band` section (every key optional) over the defaults.
+/// @throws common::ConfigError naming the file and line of a bad or unknown key.
+ObstacleBandParams LoadObstacleBandParams(common::YamlMap& map);
 
 struct ObstacleBandStats {
   int64_t points{0};

@@ -6,6 +6,7 @@
 
 #include "common/check.h"
 #include "common/layers.h"
+#include "common/yaml_reader.h"
 
 namespace cairn::mapping {
 
@@ -498,6 +499,30 @@ void OccupancyGrid::Import(const common::GridMap& map) {
     }
   }
   ++version_;
+}
+
+OccupancyParams ReadOccupancyParams(common::YamlMap& m) {
+  std::string preset = "octomap";
+  m.Get("preset", &preset);
+  OccupancyParams p;
+  if (preset == "seed003") {
+    p = OccupancyParams::Seed003();
+  } else if (preset != "octomap") {
+    m.Fail(m.Raw("preset"), "occupancy.preset must be 'octomap' or 'seed003'");
+  }
+  m.Get("hit_logodds", &p.hit_logodds);
+  m.Get("miss_logodds", &p.miss_logodds);
+  m.Get("clamp_min_logodds", &p.clamp_min_logodds);
+  m.Get("clamp_max_logodds", &p.clamp_max_logodds);
+  m.Get("resolution_m", &p.resolution_m);
+  m.Get("size_x_cells", &p.size_x_cells);
+  m.Get("size_y_cells", &p.size_y_cells);
+  m.Get("origin_x_m", &p.origin_x_m);
+  m.Get("origin_y_m", &p.origin_y_m);
+  m.Get("min_range_m", &p.min_range_m);
+  m.Get("max_range_m", &p.max_range_m);
+  m.Get("no_return_range_m", &p.no_return_range_m);
+  return p;
 }
 
 }  // namespace cairn::mapping

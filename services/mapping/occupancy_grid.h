@@ -33,6 +33,10 @@
 /// a fully observed square kilometre at 0.05 m (100 MB at 0.2 m). Cells outside the extent are
 /// never updated.
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 /// How a ray's cells are chosen.
@@ -83,6 +87,12 @@ struct OccupancyParams {
   /// @throws std::invalid_argument naming the first bad field.
   void Validate() const;
 };
+
+/// Reads the grid keys of an `occupancy` section over the defaults: `preset` (octomap, the
+/// default, or seed003: OccupancyParams::Seed003()) first, then the sensor model, beam and grid
+/// keys. Does not call Finish: the section also holds the mapper layer's keys.
+/// @throws common::ConfigError naming the file and line of a bad key.
+OccupancyParams ReadOccupancyParams(common::YamlMap& map);
 
 /// What one Insert call did.
 struct OccupancyInsertStats {

@@ -122,12 +122,7 @@ void OctomapBatchInserter::WalkFree(const octomap::OcTree& tree, const point3d& 
   int64_t slot_step[3];
   bool positive[3];
   for (unsigned i = 0; i < 3; ++i) {
-    int sign = 0;
-    if (direction(i) > 0.0) {
-      sign = 1;
-    } else if (direction(i) < 0.0) {
-      sign = -1;
-    }
+    const int sign = (direction(i) > 0.0) - (direction(i) < 0.0);
     positive[i] = sign > 0;
     key_step[i] = sign > 0 ? uint64_t{1} << (16 * i) : -(uint64_t{1} << (16 * i));
     slot_step[i] = sign * slot_stride[i];
@@ -179,6 +174,124 @@ void OctomapBatchInserter::WalkFree(const octomap::OcTree& tree, const point3d& 
   }
 }
 
+void OctomapBatchInserter::PrepareRays(const octomap::OcTree& tree, double max_range_m,
+                                       OctomapBatchStats* stats) {
+  // Per ray: the end the DDA walks to (truncated beyond max range, as insertPointCloud), the
+  // keys of both ends. (A member, so that its memory is reused: a large allocation per scan
+  // would make malloc consolidate the many small chunks the tree's nodes free.)
+  std::vector<Prepared>& prepared = prepared_;
+  prepared.clear();
+  for (const Ray& ray : rays_) {
+    Prepared p{ray.origin, ray.end, OcTreeKey(0, 0, 0), OcTreeKey(0, 0, 0), false, false};
+    ++stats->rays;
+    if (max_range_m < 0.0 || (ray.end - ray.origin).norm() <= max_range_m) {
+      p.hit = tree.coordToKeyChecked(ray.end, p.end_key);
+    } else {
+      const point3d direction = (ray.end - ray.origin).normalized();
+      p.end = ray.origin + direction * static_cast<float>(max_range_m);
+      ++stats->rays_truncated;
+    }
+    OcTreeKey walk_end(0, 0, 0);
+    p.walk =
+        tree.coordToKeyChecked(p.origin, p.origin_key) && tree.coordToKeyChecked(p.end, walk_end);
+    if (p.walk) {
+      p.end_key = walk_end;
+    } else if (!p.hit) {
+      ++stats->rays_outside;
+      continue;
+    }
+    prepared.push_back(p);
+  }
+  rays_.clear();
+}
+
+size_t OctomapBatchInserter::StartBatch(size_t first, OctomapBatchStats* stats) {
+  // The bounding box of every key the batch's rays can visit (a DDA stays inside its ends'
+  // box), as many rays from `first` on as one brick directory holds.
+  std::vector<Prepared>& prepared = prepared_;
+  unsigned lo[3] = {65535, 65535, 65535}, hi[3] = {0, 0, 0};
+  size_t last = first;
+  for (; last < prepared.size(); ++last) {
+    const Prepared& p = prepared[last];
+    unsigned nlo[3], nhi[3];
+    for (int a = 0; a < 3; ++a) {
+      unsigned kmin = p.end_key[a], kmax = p.end_key[a];
+      if (p.walk) {
+        kmin = std::min<unsigned>(kmin, p.origin_key[a]);
+        kmax = std::max<unsigned>(kmax, p.origin_key[a]);
+      }
+      nlo[a] = std::min(lo[a], kmin);
+      nhi[a] = std::max(hi[a], kmax);
+    }
+    size_t slots = 1;
+    for (int a = 0; a < 3; ++a) slots *= ((nhi[a] - nlo[a]) >> 3) + 2;
+    if (slots > kMaxDirectorySlots) {
+      if (last > first) break;
+      // A single ray longer than any directory (no maximum range): skipped.
+      prepared[last].walk = false;
+      prepared[last].hit = false;
+      ++stats->rays_outside;
+      continue;
+    }
+    std::copy(nlo, nlo + 3, lo);
+    std::copy(nhi, nhi + 3, hi);
+  }
+  // One voxel of margin: where an end point lies on a voxel border, the DDA's float border and
+  // coordToKey's floor may disagree, and the walk then visits the voxel next to the end voxel
+  // (as computeRayKeys does).
+  for (int a = 0; a < 3; ++a) {
+    const unsigned box_lo = lo[a] > 0 ? lo[a] - 1 : 0;
+    const unsigned box_hi = std::min(hi[a] + 1, 65535u);
+    box_min_[a] = box_lo & ~7u;  // brick aligned: a brick is an octree node at depth 13
+    box_bricks_[a] = ((box_hi - box_min_[a]) >> 3) + 1;
+  }
+  directory_.assign(static_cast<size_t>(box_bricks_[0]) * box_bricks_[1] * box_bricks_[2], -1);
+  bricks_.clear();
+  brick_order_.clear();
+  return last;
+}
+
+void OctomapBatchInserter::MarkVoxels(const octomap::OcTree& tree, size_t first, size_t last) {
+  // Occupied end voxels first, so that the free set can exclude them as it is built.
+  for (size_t i = first; i < last; ++i) {
+    const Prepared& p = prepared_[i];
+    if (!p.hit) continue;
+    const unsigned lx = p.end_key[0] - box_min_[0], ly = p.end_key[1] - box_min_[1],
+                   lz = p.end_key[2] - box_min_[2];
+    Brick* brick = BrickAt(SlotOf(lx, ly, lz));
+    const unsigned bit = BrickBit(lx, ly, lz);
+    brick->occupied_bits[bit >> 6] |= uint64_t{1} << (bit & 63);
+  }
+  // Free voxels: the DDA of every ray, each voxel once, occupied ones left out.
+  for (size_t i = first; i < last; ++i) {
+    const Prepared& p = prepared_[i];
+    if (p.walk) WalkFree(tree, p.origin, p.end, p.origin_key, p.end_key);
+  }
+}
+
+void OctomapBatchInserter::ListItems(OctomapBatchStats* stats) {
+  // Octree order: bricks sorted by their Morton code, the voxels of a brick in bit order; free
+  // voxels are those crossed and not occupied.
+  std::sort(brick_order_.begin(), brick_order_.end());
+  items_.clear();
+  for (const uint64_t entry : brick_order_) {
+    const Brick& brick = bricks_[static_cast<size_t>(entry & 0xFFFFFF)];
+    const uint64_t brick_code = (entry >> 24) << 9;
+    for (unsigned w = 0; w < 8; ++w) {
+      const uint64_t occupied = brick.occupied_bits[w];
+      uint64_t any = brick.free_bits[w] | occupied;
+      stats->occupied_voxels += __builtin_popcountll(occupied);
+      stats->free_voxels += __builtin_popcountll(brick.free_bits[w] & ~occupied);
+      while (any) {
+        const unsigned b = static_cast<unsigned>(__builtin_ctzll(any));
+        any &= any - 1;
+        const uint64_t code = brick_code | (w << 6) | b;
+        items_.push_back((code << 1) | ((occupied >> b) & 1u));
+      }
+    }
+  }
+}
+
 OctomapBatchStats OctomapBatchInserter::Insert(octomap::OcTree* tree, double max_range_m,
                                                bool prune) {
   OctomapBatchStats stats;
@@ -186,118 +299,17 @@ OctomapBatchStats OctomapBatchInserter::Insert(octomap::OcTree* tree, double max
   miss_logodds_ = tree->getProbMissLog();
   clamp_min_ = tree->getClampingThresMinLog();
   clamp_max_ = tree->getClampingThresMaxLog();
-
-  // 1. Per ray: the end the DDA walks to (truncated beyond max range, as insertPointCloud),
-  //    the keys of both ends, and the scan's bounding box in key space.
-  // (A member, so that its memory is reused: a large allocation per scan would make malloc
-  // consolidate the many small chunks the tree's nodes free.)
-  std::vector<Prepared>& prepared = prepared_;
-  prepared.clear();
-  for (const Ray& ray : rays_) {
-    Prepared p{ray.origin, ray.end, OcTreeKey(0, 0, 0), OcTreeKey(0, 0, 0), false, false};
-    ++stats.rays;
-    if (max_range_m < 0.0 || (ray.end - ray.origin).norm() <= max_range_m) {
-      p.hit = tree->coordToKeyChecked(ray.end, p.end_key);
-    } else {
-      const point3d direction = (ray.end - ray.origin).normalized();
-      p.end = ray.origin + direction * static_cast<float>(max_range_m);
-      ++stats.rays_truncated;
-    }
-    OcTreeKey walk_end(0, 0, 0);
-    p.walk =
-        tree->coordToKeyChecked(p.origin, p.origin_key) && tree->coordToKeyChecked(p.end, walk_end);
-    if (p.walk) {
-      p.end_key = walk_end;
-    } else if (!p.hit) {
-      ++stats.rays_outside;
-      continue;
-    }
-    prepared.push_back(p);
-  }
-  rays_.clear();
-
-  // 2. Bounding box of every key a ray can visit (a DDA stays inside its ends' box). When it
-  //    is too large for one brick directory, insert the rays in several batches.
+  PrepareRays(*tree, max_range_m, &stats);
+  // Batches of rays whose bounding box one brick directory holds (usually one batch).
   size_t first = 0;
-  while (first < prepared.size()) {
-    unsigned lo[3] = {65535, 65535, 65535}, hi[3] = {0, 0, 0};
-    size_t last = first;
-    for (; last < prepared.size(); ++last) {
-      const Prepared& p = prepared[last];
-      unsigned nlo[3], nhi[3];
-      for (int a = 0; a < 3; ++a) {
-        unsigned kmin = p.end_key[a], kmax = p.end_key[a];
-        if (p.walk) {
-          kmin = std::min<unsigned>(kmin, p.origin_key[a]);
-          kmax = std::max<unsigned>(kmax, p.origin_key[a]);
-        }
-        nlo[a] = std::min(lo[a], kmin);
-        nhi[a] = std::max(hi[a], kmax);
-      }
-      size_t slots = 1;
-      for (int a = 0; a < 3; ++a) slots *= ((nhi[a] - nlo[a]) >> 3) + 2;
-      if (slots > kMaxDirectorySlots) {
-        if (last > first) break;
-        // A single ray longer than any directory (no maximum range): skipped.
-        prepared[last].walk = false;
-        prepared[last].hit = false;
-        ++stats.rays_outside;
-        continue;
-      }
-      std::copy(nlo, nlo + 3, lo);
-      std::copy(nhi, nhi + 3, hi);
-    }
-    // One voxel of margin: where an end point lies on a voxel border, the DDA's float border
-    // and coordToKey's floor may disagree, and the walk then visits the voxel next to the end
-    // voxel (as computeRayKeys does).
-    for (int a = 0; a < 3; ++a) {
-      const unsigned box_lo = lo[a] > 0 ? lo[a] - 1 : 0;
-      const unsigned box_hi = std::min(hi[a] + 1, 65535u);
-      box_min_[a] = box_lo & ~7u;  // brick aligned: a brick is an octree node at depth 13
-      box_bricks_[a] = ((box_hi - box_min_[a]) >> 3) + 1;
-    }
-    directory_.assign(static_cast<size_t>(box_bricks_[0]) * box_bricks_[1] * box_bricks_[2], -1);
-    bricks_.clear();
-    brick_order_.clear();
-
+  while (first < prepared_.size()) {
+    const size_t last = StartBatch(first, &stats);
     const double t_voxels = ThreadCpuSeconds();
-    // 3. Occupied end voxels first, so that the free set can exclude them as it is built.
-    for (size_t i = first; i < last; ++i) {
-      const Prepared& p = prepared[i];
-      if (!p.hit) continue;
-      const unsigned lx = p.end_key[0] - box_min_[0], ly = p.end_key[1] - box_min_[1],
-                     lz = p.end_key[2] - box_min_[2];
-      Brick* brick = BrickAt(SlotOf(lx, ly, lz));
-      const unsigned bit = BrickBit(lx, ly, lz);
-      brick->occupied_bits[bit >> 6] |= uint64_t{1} << (bit & 63);
-    }
-    // 4. Free voxels: the DDA of every ray, each voxel once, occupied ones left out.
-    for (size_t i = first; i < last; ++i) {
-      const Prepared& p = prepared[i];
-      if (p.walk) WalkFree(*tree, p.origin, p.end, p.origin_key, p.end_key);
-    }
+    MarkVoxels(*tree, first, last);
     const double t_tree = ThreadCpuSeconds();
     stats.voxels_s += t_tree - t_voxels;
-    // 5. Octree order: bricks sorted by their Morton code, the voxels of a brick in bit order;
-    //    free voxels are those crossed and not occupied. Then one depth-first walk of the tree.
-    std::sort(brick_order_.begin(), brick_order_.end());
-    items_.clear();
-    for (const uint64_t entry : brick_order_) {
-      const Brick& brick = bricks_[static_cast<size_t>(entry & 0xFFFFFF)];
-      const uint64_t brick_code = (entry >> 24) << 9;
-      for (unsigned w = 0; w < 8; ++w) {
-        const uint64_t occupied = brick.occupied_bits[w];
-        uint64_t any = brick.free_bits[w] | occupied;
-        stats.occupied_voxels += __builtin_popcountll(occupied);
-        stats.free_voxels += __builtin_popcountll(brick.free_bits[w] & ~occupied);
-        while (any) {
-          const unsigned b = static_cast<unsigned>(__builtin_ctzll(any));
-          any &= any - 1;
-          const uint64_t code = brick_code | (w << 6) | b;
-          items_.push_back((code << 1) | ((occupied >> b) & 1u));
-        }
-      }
-    }
+    // The voxels in octree order, then one depth-first walk of the tree.
+    ListItems(&stats);
     ApplySorted(tree, prune);
     stats.tree_s += ThreadCpuSeconds() - t_tree;
     first = last;
@@ -317,6 +329,30 @@ void OctomapBatchInserter::ApplySorted(octomap::OcTree* tree, bool prune) {
     if (begin == end) return;
   }
   ApplyNode(tree, tree->getRoot(), /*just_created=*/false, 0, begin, end, prune);
+}
+
+// Once per inner node visited: inlined into ApplyNode (as when it was its last part).
+[[gnu::always_inline]] inline void OctomapBatchInserter::BackUp(octomap::OcTree* tree,
+                                                                octomap::OcTreeNode* node,
+                                                                bool prune) {
+  // Collapse eight equal leaves, else take the children's maximum (as the stock non-lazy update
+  // leaves inner nodes: pruneNode, else updateOccupancyChildren).
+  float max_child = -std::numeric_limits<float>::max();
+  bool collapsible = true;
+  float first_value = 0.f;
+  for (unsigned i = 0; i < 8; ++i) {
+    if (!tree->nodeChildExists(node, i)) {
+      collapsible = false;
+      continue;
+    }
+    const octomap::OcTreeNode* child = tree->getNodeChild(node, i);
+    const float v = child->getLogOdds();
+    max_child = std::max(max_child, v);
+    if (i == 0) first_value = v;
+    if (collapsible && (v != first_value || tree->nodeHasChildren(child))) collapsible = false;
+  }
+  if (prune && collapsible && tree->pruneNode(node)) return;
+  node->setLogOdds(max_child);
 }
 
 void OctomapBatchInserter::ApplyNode(octomap::OcTree* tree, octomap::OcTreeNode* node,
@@ -380,24 +416,7 @@ void OctomapBatchInserter::ApplyNode(octomap::OcTree* tree, octomap::OcTreeNode*
     ApplyNode(tree, tree->getNodeChild(node, child), created, depth + 1, run_begin[r],
               run_begin[r + 1], prune);
   }
-  // Back up: collapse eight equal leaves, else take the children's maximum (as the stock
-  // non-lazy update leaves inner nodes: pruneNode, else updateOccupancyChildren).
-  float max_child = -std::numeric_limits<float>::max();
-  bool collapsible = true;
-  float first_value = 0.f;
-  for (unsigned i = 0; i < 8; ++i) {
-    if (!tree->nodeChildExists(node, i)) {
-      collapsible = false;
-      continue;
-    }
-    const octomap::OcTreeNode* child = tree->getNodeChild(node, i);
-    const float v = child->getLogOdds();
-    max_child = std::max(max_child, v);
-    if (i == 0) first_value = v;
-    if (collapsible && (v != first_value || tree->nodeHasChildren(child))) collapsible = false;
-  }
-  if (prune && collapsible && tree->pruneNode(node)) return;
-  node->setLogOdds(max_child);
+  BackUp(tree, node, prune);
 }
 
 }  // namespace cairn::mapping::internal

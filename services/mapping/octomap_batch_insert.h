@@ -77,6 +77,12 @@ class OctomapBatchInserter {
     uint64_t free_bits[8];
     uint64_t occupied_bits[8];
   };
+  // The stages of Insert: rays with their keys; the next batch's box and directory (returns the
+  // end of the batch); its occupied and free voxels in the bitmap; the voxels in octree order.
+  void PrepareRays(const octomap::OcTree& tree, double max_range_m, OctomapBatchStats* stats);
+  size_t StartBatch(size_t first, OctomapBatchStats* stats);
+  void MarkVoxels(const octomap::OcTree& tree, size_t first, size_t last);
+  void ListItems(OctomapBatchStats* stats);
   // Scan-local voxel sets over the bounding box from box_min_, box_bricks_ bricks per axis.
   size_t SlotOf(unsigned lx, unsigned ly, unsigned lz) const;  // box-local voxel -> slot
   Brick* BrickAt(size_t slot);                                 // allocates on first use
@@ -86,6 +92,8 @@ class OctomapBatchInserter {
   void ApplySorted(octomap::OcTree* tree, bool prune);
   void ApplyNode(octomap::OcTree* tree, octomap::OcTreeNode* node, bool just_created,
                  unsigned depth, const uint64_t* begin, const uint64_t* end, bool prune);
+  // An inner node after its children were updated: pruned or set to their maximum.
+  static void BackUp(octomap::OcTree* tree, octomap::OcTreeNode* node, bool prune);
 
   std::vector<Ray> rays_;
   std::vector<Prepared> prepared_;

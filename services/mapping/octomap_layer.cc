@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "common/check.h"
+#include "common/yaml_reader.h"
 
 namespace cairn::mapping {
 
@@ -313,6 +314,18 @@ common::Status OctomapLayer::Load(const std::string& bytes, bool binary) {
 void OctomapLayer::Clear() {
   tree_->clear();
   ++version_;
+}
+
+OctomapLayerParams ReadOctomapLayerParams(common::YamlMap& m) {
+  OctomapLayerParams p;
+  m.Get("resolution_m", &p.resolution_m);
+  m.Get("prob_hit", &p.prob_hit);
+  m.Get("prob_miss", &p.prob_miss);
+  m.Get("clamp_min", &p.clamp_min);
+  m.Get("clamp_max", &p.clamp_max);
+  m.Get("max_range_m", &p.max_range_m);
+  m.Get("min_range_m", &p.min_range_m);
+  return p;
 }
 
 }  // namespace cairn::mapping

@@ -19,6 +19,10 @@
 /// the same scan (same voxels, same single update per voxel and scan, occupied wins over free)
 /// but is several times faster; see octomap_batch_insert.h for how.
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 struct OctomapLayerParams {
@@ -39,6 +43,10 @@ struct OctomapLayerParams {
   /// @throws std::invalid_argument naming the first bad field.
   void Validate() const;
 };
+
+/// Reads the tree keys of an `octomap` section over the defaults. Does not call Finish: the
+/// section also holds the mapper layer's keys. @throws common::ConfigError for a bad value.
+OctomapLayerParams ReadOctomapLayerParams(common::YamlMap& map);
 
 struct OctomapInsertStats {
   int64_t points{0};

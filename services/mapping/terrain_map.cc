@@ -7,13 +7,15 @@
 
 #include "common/check.h"
 #include "common/layers.h"
+#include "common/yaml_reader.h"
+#include "services/mapping/terrain_map_tile.h"
 
 namespace cairn::mapping {
 namespace {
 
-constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-
-int64_t FloorDiv(int64_t a, int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
+using internal::FloorDiv;
+using internal::GeometricLayers;
+constexpr float kNaN = internal::kTerrainNaN;
 
 // std::floor for a finite value well inside int64_t, without the libm call (no SSE4.1 here).
 inline int64_t FloorToInt(double v) {
@@ -21,46 +23,7 @@ inline int64_t FloorToInt(double v) {
   return t - (v < static_cast<double>(t) ? 1 : 0);
 }
 
-// Derived layers that are not cost layers.
-const std::vector<std::string>& GeometricLayers() {
-  static const std::vector<std::string> names{
-      layers::kSlope, layers::kStepMax,    layers::kRoughness, kNormalXLayer,
-      kNormalYLayer,  layers::kDitchDepth, layers::kDitchWidth};
-  return names;
-}
-const std::vector<std::string>& FeatureLayers() {
-  static const std::vector<std::string> names{kFeatureClassLayer, kFeatureEdgeLayer,
-                                              kFeatureLowLayer, kFeatureHighLayer};
-  return names;
-}
-
-CellRect Grow(const CellRect& r, int m) { return {r.x0 - m, r.y0 - m, r.x1 + m, r.y1 + m}; }
-
 }  // namespace
-
-// One tile: every layer as a GridMap over the tile, plus the filter state that is not
-// published (the unrounded filter height, the last scan per cell, the raw ground bound).
-struct TerrainMap::Tile {
-  common::GridMap layers;
-  std::vector<float> filter_height;
-  // Where the fused points lie in the cell, relative to its centre (weighted like the height):
-  // a lidar at rest samples each cell along a few ring lines, off its centre.
-  std::vector<float> hit_dx;
-  std::vector<float> hit_dy;
-  std::vector<float> raw_bound;
-  std::vector<float> conflict_bound;  // as raw_bound, from rays ending two or more cells on
-  std::vector<uint32_t> scan;         // low 32 bits of the scan id, 0 = none yet
-  float* elevation{nullptr};
-  float* variance{nullptr};
-  float* count{nullptr};
-  float* last_seen{nullptr};
-  float* bound{nullptr};
-  const float* slope{nullptr};  // the derived slope and normal, once UpdateDerived wrote them
-  const float* normal_x{nullptr};
-  const float* normal_y{nullptr};
-  int64_t base_version{0};
-  int64_t derived_version{0};
-};
 
 IntegrateStats& IntegrateStats::operator+=(const IntegrateStats& o) {
   points += o.points;
@@ -233,6 +196,96 @@ IntegrateStats TerrainMap::Integrate(const common::LidarRevolution& revolution, 
   return stats;
 }
 
+// One scan's constants for Integrate: the sensor's pose, the time stamp and the scan's tag.
+struct TerrainMap::ScanFrame {
+  Eigen::Matrix3d rotation;
+  common::Vector3 origin;
+  float time_f;
+  uint32_t scan_tag;
+};
+
+// PlacePoint and FusePoint run once per point: inlined into Integrate's loop, as when they were
+// its body (a call each costs 2 % of the mapping pipeline's instructions).
+[[gnu::always_inline]] inline bool TerrainMap::PlacePoint(const ScanFrame& scan,
+                                                          const common::LidarPoint& p,
+                                                          common::Vector3* pw, double* range,
+                                                          IntegrateStats* stats) const {
+  const common::Vector3 ps(p.x_m, p.y_m, p.z_m);
+  if (!ps.allFinite()) {
+    ++stats->nonfinite;
+    return false;
+  }
+  *range = ps.norm();
+  if (*range < std::max(params_.min_range_m, 1e-6) || *range > params_.max_range_m) {
+    ++stats->out_of_range;
+    return false;
+  }
+  *pw = scan.origin + scan.rotation * ps;
+  if (params_.self_filter_radius_m > 0 &&
+      (pw->head<2>() - scan.origin.head<2>()).squaredNorm() <
+          params_.self_filter_radius_m * params_.self_filter_radius_m) {
+    ++stats->self;
+    return false;
+  }
+  if (pw->z() > scan.origin.z() + params_.max_height_above_sensor_m) {
+    ++stats->overhang;
+    return false;
+  }
+  return true;
+}
+
+[[gnu::always_inline]] inline void TerrainMap::FusePoint(const ScanFrame& scan,
+                                                         const common::Vector3& pw, double range,
+                                                         int64_t cx, int64_t cy,
+                                                         SpreadCache* spread,
+                                                         IntegrateStats* stats) {
+  const double res = params_.resolution_m;
+  int lx, ly;
+  Tile* tile = TileForCell(cx, cy, &lx, &ly);
+  const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
+  double var_z = PointHeightVariance(range, (pw.z() - scan.origin.z()) / range, params_.filter);
+  if (tile->slope != nullptr) {
+    const float slope = tile->slope[i];
+    if (!(slope == spread->slope)) {
+      spread->slope = slope;
+      spread->variance = SlopeSpreadVariance(slope, res, params_.filter);
+    }
+    var_z += spread->variance;
+  }
+  const bool same_scan = tile->scan[i] == scan.scan_tag;
+  float h = tile->filter_height[i], var = tile->variance[i];
+  const float var_before = var;
+  const FuseOutcome outcome = FuseHeight(&h, &var, pw.z(), var_z, same_scan, params_.filter);
+  if (outcome == FuseOutcome::kIgnoredLower) {
+    ++stats->ignored_lower;
+    return;
+  }
+  ++stats->used;
+  // The point's place in the cell, blended into the cell's like its height.
+  const float px = static_cast<float>(pw.x() - (cx + 0.5) * res);
+  const float py = static_cast<float>(pw.y() - (cy + 0.5) * res);
+  float& mx = tile->hit_dx[i];
+  float& my = tile->hit_dy[i];
+  if (outcome == FuseOutcome::kInitialized || outcome == FuseOutcome::kRaised) {
+    const float a = outcome == FuseOutcome::kRaised
+                        ? static_cast<float>(params_.filter.increase_height_alpha)
+                        : 0.f;
+    mx = a * mx + (1.f - a) * px;
+    my = a * my + (1.f - a) * py;
+  } else if (outcome == FuseOutcome::kFused) {
+    const double w = var_before / (var_before + var_z);  // the Kalman gain
+    mx += static_cast<float>(w * (px - mx));
+    my += static_cast<float>(w * (py - my));
+  }
+  tile->filter_height[i] = h;
+  tile->variance[i] = var;
+  tile->scan[i] = scan.scan_tag;
+  tile->count[i] += 1.f;
+  tile->last_seen[i] = scan.time_f;
+  ++tile->base_version;
+  CommitHeight(tile, i, cx, cy);
+}
+
 IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& points,
                                      const common::Pose3& sensor_pose, int64_t scan_id,
                                      double time_s) {
@@ -242,89 +295,26 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
     stats.nonfinite = stats.points;
     return stats;
   }
-  const Eigen::Matrix3d rotation = sensor_pose.orientation.normalized().toRotationMatrix();
-  const common::Vector3& origin = sensor_pose.position_m;
-  const double res = params_.resolution_m;
-  const float time_f = static_cast<float>(time_s);
   // Scans are told apart by the low 32 bits of their id (never 0, which marks "no scan yet").
-  const uint32_t scan_tag =
-      static_cast<uint32_t>(scan_id) | (static_cast<uint32_t>(scan_id) == 0 ? 0x80000000u : 0u);
+  const ScanFrame scan{
+      sensor_pose.orientation.normalized().toRotationMatrix(), sensor_pose.position_m,
+      static_cast<float>(time_s),
+      static_cast<uint32_t>(scan_id) | (static_cast<uint32_t>(scan_id) == 0 ? 0x80000000u : 0u)};
+  const double res = params_.resolution_m;
   std::array<int64_t, 256> last_end;
   last_end.fill(std::numeric_limits<int64_t>::min());
   // Runs of points fall in one cell: the spread variance of the last slope is kept (a tangent
   // per point was a tenth of the fusion's time).
-  float spread_slope = kNaN;
-  double spread_var = 0.0;
+  SpreadCache spread{kNaN, 0.0};
   interpolates_tile_ = nullptr;
   for (const auto& p : points) {
-    const common::Vector3 ps(p.x_m, p.y_m, p.z_m);
-    if (!ps.allFinite()) {
-      ++stats.nonfinite;
-      continue;
-    }
-    const double range = ps.norm();
-    if (range < std::max(params_.min_range_m, 1e-6) || range > params_.max_range_m) {
-      ++stats.out_of_range;
-      continue;
-    }
-    const common::Vector3 pw = origin + rotation * ps;
-    if (params_.self_filter_radius_m > 0 &&
-        (pw.head<2>() - origin.head<2>()).squaredNorm() <
-            params_.self_filter_radius_m * params_.self_filter_radius_m) {
-      ++stats.self;
-      continue;
-    }
-    if (pw.z() > origin.z() + params_.max_height_above_sensor_m) {
-      ++stats.overhang;
-      continue;
-    }
+    common::Vector3 pw;
+    double range;
+    if (!PlacePoint(scan, p, &pw, &range, &stats)) continue;
     const int64_t cx = FloorToInt(pw.x() / res);
     const int64_t cy = FloorToInt(pw.y() / res);
-    int lx, ly;
-    Tile* tile = TileForCell(cx, cy, &lx, &ly);
-    const size_t i = lx + static_cast<size_t>(ly) * params_.tile_size_cells;
-    double var_z = PointHeightVariance(range, (pw.z() - origin.z()) / range, params_.filter);
-    if (tile->slope != nullptr) {
-      const float slope = tile->slope[i];
-      if (!(slope == spread_slope)) {
-        spread_slope = slope;
-        spread_var = SlopeSpreadVariance(slope, res, params_.filter);
-      }
-      var_z += spread_var;
-    }
-    const bool same_scan = tile->scan[i] == scan_tag;
-    float h = tile->filter_height[i], var = tile->variance[i];
-    const float var_before = var;
-    const FuseOutcome outcome = FuseHeight(&h, &var, pw.z(), var_z, same_scan, params_.filter);
-    if (outcome == FuseOutcome::kIgnoredLower) {
-      ++stats.ignored_lower;
-    } else {
-      ++stats.used;
-      // The point's place in the cell, blended into the cell's like its height.
-      const float px = static_cast<float>(pw.x() - (cx + 0.5) * res);
-      const float py = static_cast<float>(pw.y() - (cy + 0.5) * res);
-      float& mx = tile->hit_dx[i];
-      float& my = tile->hit_dy[i];
-      if (outcome == FuseOutcome::kInitialized || outcome == FuseOutcome::kRaised) {
-        const float a = outcome == FuseOutcome::kRaised
-                            ? static_cast<float>(params_.filter.increase_height_alpha)
-                            : 0.f;
-        mx = a * mx + (1.f - a) * px;
-        my = a * my + (1.f - a) * py;
-      } else if (outcome == FuseOutcome::kFused) {
-        const double w = var_before / (var_before + var_z);  // the Kalman gain
-        mx += static_cast<float>(w * (px - mx));
-        my += static_cast<float>(w * (py - my));
-      }
-      tile->filter_height[i] = h;
-      tile->variance[i] = var;
-      tile->scan[i] = scan_tag;
-      tile->count[i] += 1.f;
-      tile->last_seen[i] = time_f;
-      ++tile->base_version;
-      CommitHeight(tile, i, cx, cy);
-    }
-    if (params_.ray_bound_length_m > 0 && pw.z() < origin.z() &&
+    FusePoint(scan, pw, range, cx, cy, &spread, &stats);
+    if (params_.ray_bound_length_m > 0 && pw.z() < scan.origin.z() &&
         range <= params_.ray_bound_max_range_m) {
       // Neighbouring rays of one ring end in the same cell many times over (a dozen per cell
       // at 5 m): the first of a run records the bound for all of them.
@@ -333,9 +323,10 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
       if (last_end[ring] != end_key) {
         last_end[ring] = end_key;
         if (range > params_.ray_bound_margin_m) {
-          RecordBound(origin,
-                      origin + (pw - origin) * ((range - params_.ray_bound_margin_m) / range), cx,
-                      cy);
+          RecordBound(
+              scan.origin,
+              scan.origin + (pw - scan.origin) * ((range - params_.ray_bound_margin_m) / range), cx,
+              cy);
         }
       }
     }
@@ -530,254 +521,6 @@ common::GridGeometry TerrainMap::AllocatedBounds() const {
   return g;
 }
 
-common::GridMap TerrainMap::Window(const CellRect& r, const std::vector<std::string>& names) const {
-  common::GridGeometry g;
-  g.resolution_m = params_.resolution_m;
-  g.size_x = r.x1 - r.x0;
-  g.size_y = r.y1 - r.y0;
-  g.origin = {r.x0 * params_.resolution_m, r.y0 * params_.resolution_m, 0.0};
-  common::GridMap out;
-  WindowInto(r, names, g, &out);
-  return out;
-}
-
-common::GridMap& TerrainMap::Scratch(const CellRect& r, const std::vector<std::string>& names) {
-  // Windows of the recomputation share one buffer of a fixed size in local coordinates (cell
-  // (0, 0) is the window's first cell), so no memory is allocated per window.
-  const int side = params_.tile_size_cells +
-                   2 * (DependencyRadiusCells(params_.traversability, params_.resolution_m) + 1);
-  common::GridGeometry g;
-  g.resolution_m = params_.resolution_m;
-  g.size_x = std::max(side, r.x1 - r.x0);
-  g.size_y = std::max(side, r.y1 - r.y0);
-  WindowInto(r, names, g, &scratch_);
-  return scratch_;
-}
-
-void TerrainMap::WindowInto(const CellRect& r, const std::vector<std::string>& names,
-                            const common::GridGeometry& g, common::GridMap* out_map) const {
-  if (out_map->geometry() != g || out_map->size_x() == 0) *out_map = common::GridMap(g);
-  common::GridMap& out = *out_map;
-  for (const auto& name : names) {
-    if (out.HasLayer(name)) {
-      out.at(name).setConstant(kNaN);
-    } else {
-      out.AddLayer(name);
-    }
-  }
-  const int T = params_.tile_size_cells;
-  const int64_t tx0 = FloorDiv(r.x0, T), tx1 = FloorDiv(r.x1 - 1, T);
-  const int64_t ty0 = FloorDiv(r.y0, T), ty1 = FloorDiv(r.y1 - 1, T);
-  for (int64_t ty = ty0; ty <= ty1; ++ty) {
-    for (int64_t tx = tx0; tx <= tx1; ++tx) {
-      const Tile* tile = FindTile(static_cast<int>(tx), static_cast<int>(ty));
-      if (tile == nullptr) continue;
-      const int64_t x0 = std::max<int64_t>(r.x0, tx * T),
-                    x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
-      const int64_t y0 = std::max<int64_t>(r.y0, ty * T),
-                    y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
-      for (const auto& name : names) {
-        if (!tile->layers.HasLayer(name)) continue;
-        out.at(name).block(x0 - r.x0, y0 - r.y0, x1 - x0, y1 - y0) =
-            tile->layers.at(name).block(x0 - tx * T, y0 - ty * T, x1 - x0, y1 - y0);
-      }
-    }
-  }
-}
-
-void TerrainMap::WriteBack(const common::GridMap& window, int64_t ox, int64_t oy, const CellRect& r,
-                           const std::vector<std::string>& names) {
-  const int T = params_.tile_size_cells;
-  const int64_t tx0 = FloorDiv(r.x0, T), tx1 = FloorDiv(r.x1 - 1, T);
-  const int64_t ty0 = FloorDiv(r.y0, T), ty1 = FloorDiv(r.y1 - 1, T);
-  for (int64_t ty = ty0; ty <= ty1; ++ty) {
-    for (int64_t tx = tx0; tx <= tx1; ++tx) {
-      auto it = tiles_.find({static_cast<int>(tx), static_cast<int>(ty)});
-      if (it == tiles_.end()) continue;
-      Tile* tile = it->second.get();
-      const int64_t x0 = std::max<int64_t>(r.x0, tx * T),
-                    x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
-      const int64_t y0 = std::max<int64_t>(r.y0, ty * T),
-                    y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
-      for (const auto& name : names) {
-        if (!tile->layers.HasLayer(name)) {
-          tile->layers.AddLayer(name);
-          if (name == layers::kSlope) tile->slope = tile->layers.at(name).data();
-          if (name == kNormalXLayer) tile->normal_x = tile->layers.at(name).data();
-          if (name == kNormalYLayer) tile->normal_y = tile->layers.at(name).data();
-        }
-        tile->layers.at(name).block(x0 - tx * T, y0 - ty * T, x1 - x0, y1 - y0) =
-            window.at(name).block(x0 - ox, y0 - oy, x1 - x0, y1 - y0);
-      }
-      ++tile->derived_version;
-    }
-  }
-}
-
-std::vector<CellRect> TerrainMap::RectsOfBlocks(const std::set<Key>& blocks) const {
-  // One rectangle per tile: the bounding box of the tile's blocks in the set, restricted to
-  // allocated tiles (derived layers exist only there).
-  const int T = params_.tile_size_cells, B = block_cells_, per_tile = T / B;
-  std::map<Key, CellRect> per;  // ordered: deterministic processing order
-  for (const auto& [bx, by] : blocks) {
-    const int tx = static_cast<int>(FloorDiv(bx, per_tile));
-    const int ty = static_cast<int>(FloorDiv(by, per_tile));
-    if (FindTile(tx, ty) == nullptr) continue;
-    const CellRect b{bx * B, by * B, (bx + 1) * B, (by + 1) * B};
-    auto it = per.find({ty, tx});
-    if (it == per.end()) {
-      per.emplace(Key{ty, tx}, b);
-    } else {
-      it->second = {std::min(it->second.x0, b.x0), std::min(it->second.y0, b.y0),
-                    std::max(it->second.x1, b.x1), std::max(it->second.y1, b.y1)};
-    }
-  }
-  std::vector<CellRect> rects;
-  for (const auto& [key, r] : per) rects.push_back(r);
-  return rects;
-}
-
-void TerrainMap::RecomputeCosts(const std::vector<CellRect>& rects, const RobotContext& robot,
-                                const std::vector<const common::RobotProfile*>& which) {
-  if (which.empty()) return;
-  // The cost of a cell reads the geometric layers of its 4-neighbours and the elevation and
-  // ground bound around it.
-  std::vector<std::string> in{layers::kElevation, layers::kGroundBound};
-  for (const auto& n : GeometricLayers()) in.push_back(n);
-  std::vector<std::string> out;
-  for (const auto* p : which) out.push_back(layers::CostLayer(p->name));
-  constexpr int kMargin = 2;
-  for (const CellRect& r : rects) {
-    const CellRect w = Grow(r, kMargin);
-    common::GridMap& window = Scratch(w, in);
-    const CellRect local{kMargin, kMargin, kMargin + r.x1 - r.x0, kMargin + r.y1 - r.y0};
-    // The window is in local coordinates: so is the robot.
-    RobotContext local_robot = robot;
-    if (robot.xy_m) {
-      local_robot.xy_m = *robot.xy_m - common::Vector2(w.x0, w.y0) * params_.resolution_m;
-    }
-    for (const auto* p : which) {
-      ComputeCostLayer(&window, *p, params_.traversability, local_robot, local);
-    }
-    WriteBack(window, w.x0, w.y0, r, out);
-  }
-}
-
-DerivedStats TerrainMap::UpdateDerived(const RobotContext& robot) {
-  DerivedStats stats;
-  const int B = block_cells_;
-  const int geo_radius = DependencyRadiusCells(params_.traversability, params_.resolution_m);
-  const int dilate = (geo_radius + FeatureRadiusCells() + B - 1) / B;
-  std::set<Key> region;
-  for (const auto& [bx, by] : dirty_blocks_) {
-    for (int dy = -dilate; dy <= dilate; ++dy) {
-      for (int dx = -dilate; dx <= dilate; ++dx) region.insert({bx + dx, by + dy});
-    }
-  }
-  dirty_blocks_.clear();
-  has_last_dirty_ = false;
-  // Cost-only blocks: the blind zone at the robot's previous and current position, and with
-  // IMU compensation the robot's surroundings (the pitch changes every cell's slope there).
-  std::set<Key> cost_region = region;
-  auto add_around = [&](const common::Vector2& xy, double radius_m) {
-    const int64_t cx0 =
-        static_cast<int64_t>(std::floor((xy.x() - radius_m) / params_.resolution_m));
-    const int64_t cx1 =
-        static_cast<int64_t>(std::floor((xy.x() + radius_m) / params_.resolution_m));
-    const int64_t cy0 =
-        static_cast<int64_t>(std::floor((xy.y() - radius_m) / params_.resolution_m));
-    const int64_t cy1 =
-        static_cast<int64_t>(std::floor((xy.y() + radius_m) / params_.resolution_m));
-    for (int64_t by = FloorDiv(cy0, B); by <= FloorDiv(cy1, B); ++by) {
-      for (int64_t bx = FloorDiv(cx0, B); bx <= FloorDiv(cx1, B); ++bx) {
-        cost_region.insert({static_cast<int>(bx), static_cast<int>(by)});
-      }
-    }
-  };
-  const double zone = params_.traversability.blind_zone_half_size_m + params_.resolution_m;
-  if (last_robot_xy_) add_around(*last_robot_xy_, zone);
-  if (robot.xy_m && robot.xy_m->allFinite()) {
-    const bool compensating = params_.traversability.imu_pitch_compensation;
-    add_around(*robot.xy_m, compensating ? params_.max_range_m : zone);
-    last_robot_xy_ = robot.xy_m;
-  }
-
-  // Phase 1: geometric layers of the changed region (each rectangle reads its own margin).
-  const std::vector<CellRect> geo_rects = RectsOfBlocks(region);
-  std::vector<std::string> base_in{layers::kElevation, layers::kGroundBound};
-  for (const CellRect& r : geo_rects) {
-    const CellRect w = Grow(r, geo_radius);
-    common::GridMap& window = Scratch(w, base_in);
-    const CellRect local{geo_radius, geo_radius, geo_radius + r.x1 - r.x0,
-                         geo_radius + r.y1 - r.y0};
-    ComputeGeometricLayers(&window, params_.traversability, local);
-    WriteBack(window, w.x0, w.y0, r, GeometricLayers());
-    stats.geometric_cells += static_cast<int64_t>(r.x1 - r.x0) * (r.y1 - r.y0);
-  }
-  // Phase 2: feature layers of the changed region, from the updated geometric layers.
-  std::vector<std::string> feature_in{layers::kElevation, layers::kGroundBound};
-  for (const auto& n : GeometricLayers()) feature_in.push_back(n);
-  const int fm = FeatureRadiusCells() + 1;
-  for (const CellRect& r : geo_rects) {
-    const CellRect w = Grow(r, fm);
-    common::GridMap& window = Scratch(w, feature_in);
-    ComputeFeatureLayers(&window, params_.obstacles, {fm, fm, fm + r.x1 - r.x0, fm + r.y1 - r.y0});
-    WriteBack(window, w.x0, w.y0, r, FeatureLayers());
-  }
-  // Phase 3: cost layers of every profile.
-  std::vector<const common::RobotProfile*> all;
-  for (const auto& p : profiles_) all.push_back(&p);
-  const std::vector<CellRect> cost_rects = RectsOfBlocks(cost_region);
-  RecomputeCosts(cost_rects, robot, all);
-  for (const CellRect& r : cost_rects) {
-    stats.cost_cells += static_cast<int64_t>(r.x1 - r.x0) * (r.y1 - r.y0) * all.size();
-  }
-  return stats;
-}
-
-common::ObstacleRegistry TerrainMap::BuildRegistry() const {
-  if (tiles_.empty()) return {};
-  std::vector<std::string> names{layers::kElevation, layers::kGroundBound, layers::kSlope,
-                                 layers::kDitchDepth, layers::kDitchWidth};
-  for (const auto& n : FeatureLayers()) names.push_back(n);
-  const common::GridGeometry g = AllocatedBounds();
-  const int x0 = static_cast<int>(std::lround(g.origin.x_m / params_.resolution_m));
-  const int y0 = static_cast<int>(std::lround(g.origin.y_m / params_.resolution_m));
-  WindowInto({x0, y0, x0 + g.size_x, y0 + g.size_y}, names, g, &registry_scratch_);
-  common::ObstacleRegistry registry = AssembleObstacles(registry_scratch_, params_.obstacles);
-  LabelObstacles(&registry, profiles_);
-  return registry;
-}
-
-common::GridMap TerrainMap::Export(const std::vector<std::string>& names) const {
-  return Export(names, Bounds());
-}
-
-common::GridMap TerrainMap::Export(const std::vector<std::string>& names,
-                                   const common::GridGeometry& window) const {
-  const double res = params_.resolution_m;
-  CAIRN_THROW_UNLESS(window.resolution_m == res && window.origin.yaw_rad == 0.0,
-                     "export window must share the map's resolution and axes");
-  const double fx = window.origin.x_m / res, fy = window.origin.y_m / res;
-  CAIRN_THROW_UNLESS(std::fabs(fx - std::round(fx)) < 1e-6 && std::fabs(fy - std::round(fy)) < 1e-6,
-                     "export window must be aligned with the map's cells");
-  const std::vector<std::string> known_derived = DerivedLayers();
-  for (const auto& n : names) {
-    const bool ok =
-        std::find(known_derived.begin(), known_derived.end(), n) != known_derived.end() ||
-        n == layers::kElevation || n == layers::kElevationVariance ||
-        n == layers::kObservationCount || n == layers::kLastSeen || n == layers::kGroundBound ||
-        std::find(FeatureLayers().begin(), FeatureLayers().end(), n) != FeatureLayers().end();
-    CAIRN_THROW_UNLESS(ok, "the terrain map has no layer '" << n << "'");
-  }
-  const int64_t x0 = std::llround(fx), y0 = std::llround(fy);
-  common::GridMap out =
-      Window({static_cast<int>(x0), static_cast<int>(y0), static_cast<int>(x0 + window.size_x),
-              static_cast<int>(y0 + window.size_y)},
-             names);
-  return out;
-}
-
 std::vector<std::pair<int, int>> TerrainMap::Tiles() const {
   std::vector<std::pair<int, int>> keys;
   for (const auto& [key, tile] : tiles_) keys.push_back(key);
@@ -825,6 +568,36 @@ size_t TerrainMap::memory_bytes() const {
     bytes += tile->filter_height.size() * (5 * sizeof(float) + sizeof(uint32_t));
   }
   return bytes;
+}
+
+TerrainMapParams LoadTerrainMapParams(common::YamlMap& m) {
+  TerrainMapParams p;
+  m.Get("resolution_m", &p.resolution_m);
+  m.Get("tile_size_cells", &p.tile_size_cells);
+  m.Get("min_range_m", &p.min_range_m);
+  m.Get("max_range_m", &p.max_range_m);
+  m.Get("self_filter_radius_m", &p.self_filter_radius_m);
+  m.Get("max_height_above_sensor_m", &p.max_height_above_sensor_m);
+  m.Get("ray_bound_length_m", &p.ray_bound_length_m);
+  m.Get("ray_bound_max_range_m", &p.ray_bound_max_range_m);
+  m.Get("ray_bound_margin_m", &p.ray_bound_margin_m);
+  m.Get("commit_epsilon_m", &p.commit_epsilon_m);
+  m.Get("visibility_tolerance_m", &p.visibility_tolerance_m);
+  m.Get("max_visibility_conflict_m", &p.max_visibility_conflict_m);
+  if (m.Has("filter")) {
+    common::YamlMap filter = m.Child("filter");
+    p.filter = LoadElevationFilterParams(filter);
+  }
+  if (m.Has("traversability")) {
+    common::YamlMap traversability = m.Child("traversability");
+    p.traversability = LoadTraversabilityParams(traversability);
+  }
+  if (m.Has("obstacles")) {
+    common::YamlMap obstacles = m.Child("obstacles");
+    p.obstacles = LoadObstacleParams(obstacles);
+  }
+  m.Finish();
+  return p;
 }
 
 }  // namespace cairn::mapping

@@ -41,6 +41,10 @@
 ///
 /// Not thread-safe: one owner thread.
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 struct TerrainMapParams {
@@ -81,6 +85,11 @@ struct TerrainMapParams {
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
 };
+
+/// Reads a `terrain` section (every key optional, with the sub-sections filter, traversability
+/// and obstacles) over the defaults. @throws common::ConfigError naming the file and line of a
+/// bad or unknown key.
+TerrainMapParams LoadTerrainMapParams(common::YamlMap& map);
 
 /// What one Integrate() call did with its points.
 struct IntegrateStats {
@@ -172,6 +181,13 @@ class TerrainMap {
 
  private:
   struct Tile;
+  struct ScanFrame;
+  /// The slope of the last cell a point fell in and its spread variance (runs of points fall
+  /// in one cell).
+  struct SpreadCache {
+    float slope;
+    double variance;
+  };
   using Key = std::pair<int, int>;
   struct KeyHash {
     size_t operator()(const Key& k) const {
@@ -183,6 +199,14 @@ class TerrainMap {
   Tile* GetTile(int tx, int ty);
   const Tile* FindTile(int tx, int ty) const;
   Tile* TileForCell(int64_t cx, int64_t cy, int* lx, int* ly);
+  /// A sensor-frame point in the world; false (counted in `stats`) when it is filtered out
+  /// (not finite, out of range, the robot itself, an overhang).
+  bool PlacePoint(const ScanFrame& scan, const common::LidarPoint& point, common::Vector3* pw,
+                  double* range, IntegrateStats* stats) const;
+  /// Fuses a world point (at `range` from the sensor) into its cell (cx, cy): the height
+  /// filter, where the points lie in the cell, the counters, then the committed height.
+  void FusePoint(const ScanFrame& scan, const common::Vector3& pw, double range, int64_t cx,
+                 int64_t cy, SpreadCache* spread, IntegrateStats* stats);
   void MarkDirty(int64_t cx, int64_t cy);
   /// Records the ground bound along the last ray_bound_length_m of the segment from -> to; the
   /// cell (return_x, return_y) holds the return and gets none.
@@ -206,6 +230,12 @@ class TerrainMap {
                  const CellRect& rect, const std::vector<std::string>& layers);
   void RecomputeCosts(const std::vector<CellRect>& rects, const RobotContext& robot,
                       const std::vector<const common::RobotProfile*>& which);
+  /// The blocks whose derived values can depend on a block changed since the last call.
+  std::set<Key> TakeChangedRegion();
+  /// Adds the blocks within `radius_m` of `xy` (world) to `region`.
+  void AddBlocksAround(const common::Vector2& xy, double radius_m, std::set<Key>* region) const;
+  /// The geometric, then the feature layers of `rects`; returns the cells recomputed.
+  int64_t RecomputeGeometry(const std::vector<CellRect>& rects);
   std::vector<CellRect> RectsOfBlocks(const std::set<Key>& blocks) const;
 
   TerrainMapParams params_;

@@ -36,6 +36,10 @@
 ///      cost in [1, graded_cost_max] growing with the most used limit, rounded to a whole number
 ///      (a ROS occupancy grid's values; the map store packs such a layer into bytes).
 
+namespace cairn::common {
+class YamlMap;
+}  // namespace cairn::common
+
 namespace cairn::mapping {
 
 /// Layer names local to the terrain layers (the shared ones are in common/layers.h).
@@ -75,6 +79,10 @@ struct TraversabilityParams {
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
 };
+
+/// Reads a `traversability` section (every key optional) over the defaults.
+/// @throws common::ConfigError naming the file and line of a bad or unknown key.
+TraversabilityParams LoadTraversabilityParams(common::YamlMap& map);
 
 /// A half-open rectangle of cells [x0, x1) x [y0, y1).
 struct CellRect {

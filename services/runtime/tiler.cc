@@ -169,6 +169,91 @@ LayerTiler::Batch LayerTiler::Adopt(const std::string& layer, const common::Grid
   return batch;
 }
 
+LayerTiler::Batch LayerTiler::UpdateTiles(const std::string& layer,
+                                          const common::GridGeometry& geometry,
+                                          const std::vector<SourceTile>& tiles, int64_t utime,
+                                          bool force_all) {
+  LayerState& state = layers_[layer];
+  const bool reset =
+      state.version == 0 || state.geometry != geometry || state.encoding != TileEncoding::kFloat;
+  if (reset) {
+    state.tiles.clear();
+    state.geometry = geometry;
+    state.encoding = TileEncoding::kFloat;
+  }
+  const int nx = (geometry.size_x + tile_size_ - 1) / tile_size_;
+  const int ny = (geometry.size_y + tile_size_ - 1) / tile_size_;
+  const size_t n = static_cast<size_t>(tile_size_) * tile_size_;
+  bool changed = false;
+  std::map<std::pair<int, int>, TileState> next_tiles;
+  for (const SourceTile& source : tiles) {
+    if (source.tile_ix < 0 || source.tile_iy < 0 || source.tile_ix >= nx || source.tile_iy >= ny) {
+      throw std::invalid_argument("tile (" + std::to_string(source.tile_ix) + ", " +
+                                  std::to_string(source.tile_iy) + ") of layer '" + layer +
+                                  "' lies outside its grid");
+    }
+    const std::pair<int, int> key{source.tile_ix, source.tile_iy};
+    auto old = state.tiles.find(key);
+    if (!force_all && old != state.tiles.end() &&
+        old->second.source_version == source.source_version) {
+      next_tiles.emplace(key, std::move(old->second));  // untouched since last read
+      continue;
+    }
+    if (source.cells == nullptr) continue;
+    bool any_known = false;
+    for (size_t i = 0; i < n && !any_known; ++i) any_known = !std::isnan(source.cells[i]);
+    if (!any_known) {
+      changed |= old != state.tiles.end();  // became all unknown: leaves the manifest
+      continue;
+    }
+    TileState tile;
+    tile.source_version = source.source_version;
+    tile.cells_x = tile.cells_y = tile_size_;
+    tile.data.assign(source.cells, source.cells + n);
+    tile.checksum = common::Crc32(tile.data.data(), n * sizeof(float));
+    if (force_all || old == state.tiles.end() || old->second.checksum != tile.checksum) {
+      tile.tile_version = -1;  // set below, once the layer version is known
+      changed = true;
+    } else {
+      tile.tile_version = old->second.tile_version;
+    }
+    next_tiles.emplace(key, std::move(tile));
+  }
+  // Tiles that went (not listed any more).
+  for (const auto& [key, tile] : state.tiles) changed |= next_tiles.count(key) == 0;
+  state.tiles = std::move(next_tiles);
+  Batch batch;
+  batch.changed = changed || reset || force_all;
+  if (batch.changed) {
+    state.version = (state.version == 0 ? version_base_ : state.version) + 1;
+    state.utime = utime;
+    for (auto& [key, tile] : state.tiles) {
+      if (tile.tile_version != -1) continue;
+      tile.tile_version = state.version;
+      AppendTile(layer, state, key.first, key.second, tile, &batch);
+    }
+  }
+  batch.manifest = MakeManifest(layer, state);
+  return batch;
+}
+
+std::vector<cairn::lcmt_grid_manifest> LayerTiler::ClearAll(int64_t utime) {
+  std::vector<cairn::lcmt_grid_manifest> manifests;
+  for (auto& [name, state] : layers_) {
+    state.tiles.clear();
+    state.version = (state.version == 0 ? version_base_ : state.version) + 1;
+    state.utime = utime;
+    manifests.push_back(MakeManifest(name, state));
+  }
+  return manifests;
+}
+
+std::optional<cairn::lcmt_grid_manifest> LayerTiler::Manifest(const std::string& layer) const {
+  auto it = layers_.find(layer);
+  if (it == layers_.end()) return std::nullopt;
+  return MakeManifest(layer, it->second);
+}
+
 namespace {
 
 // The fields every tile message shares: where the tile sits, its versions and checksum.

@@ -77,6 +77,31 @@ class LayerTiler {
   Batch Adopt(const std::string& layer, const common::GridGeometry& geometry,
               std::vector<EncodedTile> tiles, int64_t utime);
 
+  /// One tile of a float layer its owner keeps tile by tile (a map growing in tiles), for
+  /// UpdateTiles: its place in the layer's grid, a counter the owner bumps whenever the tile's
+  /// cells may have changed, and the cells (tile_size x tile_size floats, x fastest), or null
+  /// when the owner has no cells of this layer there (all unknown).
+  struct SourceTile {
+    int tile_ix{0};
+    int tile_iy{0};
+    int64_t source_version{0};
+    const float* cells{nullptr};
+  };
+  /// Tiles a float layer of `geometry` (a whole number of tiles) from its owner's tiles, reading
+  /// only those whose source_version moved since the last call (all of them with force_all).
+  /// Tiles not listed or all unknown are absent. The layer version bumps, and batch.changed is
+  /// true, when a tile changed, appeared or went, on the layer's first call, on a new geometry or
+  /// with force_all; only then do the manifest's utime and the changed tiles carry `utime`.
+  /// @throws std::invalid_argument for a tile outside the grid.
+  Batch UpdateTiles(const std::string& layer, const common::GridGeometry& geometry,
+                    const std::vector<SourceTile>& tiles, int64_t utime, bool force_all = false);
+  /// Every layer gets a new version and no tiles (their owner was cleared): their manifests.
+  std::vector<cairn::lcmt_grid_manifest> ClearAll(int64_t utime);
+  /// The manifest of a layer as last published; nullopt for a layer never published.
+  std::optional<cairn::lcmt_grid_manifest> Manifest(const std::string& layer) const;
+  /// Whether the layer was ever published.
+  bool Has(const std::string& layer) const { return layers_.count(layer) > 0; }
+
   /// Tiles named by a resend request (all current tiles when it names none), from the last
   /// Update; an unknown layer gives an empty batch.
   Batch Resend(const cairn::lcmt_tile_resend_request& request) const;
@@ -94,6 +119,7 @@ class LayerTiler {
     std::vector<int8_t> occupancy;  // kOccupancy
     int8_t encoding{0};             // kFloat adopted: its wire encoding ...
     std::vector<uint8_t> bytes;     // ... and bytes (data stays empty)
+    int64_t source_version{-1};     // UpdateTiles: the owner's counter when last read
   };
   struct LayerState {
     common::GridGeometry geometry;

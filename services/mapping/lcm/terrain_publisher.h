@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -13,13 +14,14 @@
 
 #include "common/grid_map.h"
 #include "services/mapping/terrain_map.h"
+#include "services/runtime/tiler.h"
 
 /// @file
 /// TerrainPublisher: the terrain layers of a growing TerrainMap as lcmt_grid_tile messages,
-/// with the wire semantics of runtime::LayerTiler (layer versions, tile versions, CRC-32,
-/// manifests without all-unknown tiles, resend), but fed tile by tile from the map's sparse
-/// store: a tile whose change counter did not move is not even read, so the cost of a publish
-/// follows what changed, not the size of the map.
+/// through runtime::LayerTiler (layer versions, tile versions, CRC-32, manifests without
+/// all-unknown tiles, resend), fed tile by tile from the map's sparse store
+/// (LayerTiler::UpdateTiles): a tile whose change counter did not move is not even read, so the
+/// cost of a publish follows what changed, not the size of the map.
 ///
 /// The published grid ("layer geometry") is the map's bounding box rounded out to blocks of
 /// `extent_tiles` tiles. It only grows; when it does, every tile is sent again (receivers reset
@@ -60,25 +62,12 @@ class TerrainPublisher {
   int64_t version(const std::string& layer) const;
   const common::GridGeometry& geometry() const { return geometry_; }
   /// Whether this publisher handles `layer` (it has published it).
-  bool Has(const std::string& layer) const { return layers_.count(layer) > 0; }
+  bool Has(const std::string& layer) const { return tiler_ != nullptr && tiler_->Has(layer); }
 
  private:
-  struct TileState {
-    int64_t tile_version{0};
-    uint32_t checksum{0};
-    int64_t source_version{-1};  // the map tile's change counter when last read
-    std::vector<float> data;
-  };
-  struct LayerState {
-    int64_t version{0};
-    int64_t utime{0};
-    bool present{true};
-    std::map<std::pair<int, int>, TileState> tiles;  // by published tile index, non-empty only
-  };
-  cairn::lcmt_grid_tile MakeTile(const std::string& layer, const LayerState& state,
-                                 const std::pair<int, int>& key, const TileState& tile) const;
-  cairn::lcmt_grid_manifest MakeManifest(const std::string& layer, const LayerState& state) const;
   common::GridGeometry Extent(const TerrainMap& map) const;
+  /// A manifest with the published grid (none between a Reset and the next Update).
+  void WithPublishedGrid(cairn::lcmt_grid_manifest* manifest) const;
 
   std::string robot_;
   std::string map_name_;
@@ -88,7 +77,8 @@ class TerrainPublisher {
   common::GridGeometry geometry_;
   int origin_tx_{0};
   int origin_ty_{0};
-  std::map<std::string, LayerState> layers_;
+  std::unique_ptr<runtime::LayerTiler> tiler_;  // made at the first Update (the map's tile size)
+  std::map<std::string, bool> present_;         // per layer: the map held it at the last Update
 };
 
 }  // namespace cairn::mapping

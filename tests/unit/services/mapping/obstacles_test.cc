@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include "common/layers.h"
-#include "services/mapping/derive.h"
 #include "services/mapping/traversability.h"
 #include "tests/unit/services/mapping/terrain_fixtures.h"
 
@@ -16,6 +15,7 @@ namespace {
 using common::GridMap;
 using common::Obstacle;
 using common::ObstacleKind;
+using testing::Corridor;
 using testing::kDeg;
 using testing::MakeTerrain;
 using testing::ShippedProfile;
@@ -54,11 +54,6 @@ bool Inside(const std::vector<common::Vector2>& poly, const common::Vector2& p) 
     }
   }
   return in;
-}
-
-// A corridor 4 m wide (y in [0, 4)) along x; `feature` gives the floor height at x.
-GridMap Corridor(const std::function<double(double)>& feature, int nx = 80) {
-  return MakeTerrain(nx, 20, kRes, [feature](double x, double) { return feature(x); });
 }
 
 // Seed 000 scenario 13: a 10 deg ramp (3 m long, then a platform) is a ramp; not crossable for
@@ -245,71 +240,6 @@ TEST(JudgeObstacleTest, LabelReplacesOnlyTheGivenProfiles) {
   EXPECT_FALSE(r.obstacles[0].VerdictFor("pioneer3at")->crossable);
   EXPECT_TRUE(r.obstacles[0].VerdictFor("rover")->crossable);
   EXPECT_FALSE(r.obstacles[0].VerdictFor("kobuki")->crossable);  // kept as it was
-}
-
-// Seed 000 scenario 17: deriving never touches the stored base layers, and two profiles differ
-// only where the terrain matters to them.
-TEST(DeriveTest, BaseMapUntouchedAndProfilesDifferOnlyOnTheRamp) {
-  const double t = std::tan(10 * kDeg);
-  const GridMap base =
-      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); });
-  const GridMap before = base;
-  const DerivedLayers a = DeriveProfileLayers(base, ShippedProfile("pioneer3at"));
-  const DerivedLayers b = DeriveProfileLayers(base, ShippedProfile("rover"));
-  EXPECT_TRUE(base == before);
-  EXPECT_EQ(base.layer_names(), before.layer_names());
-  ASSERT_TRUE(a.layers.HasLayer(layers::CostLayer("pioneer3at")));
-  ASSERT_TRUE(b.layers.HasLayer(layers::CostLayer("rover")));
-  for (const char* name : {layers::kSlope, layers::kStepMax, layers::kRoughness}) {
-    EXPECT_TRUE(a.layers.HasLayer(name)) << name;
-  }
-  EXPECT_EQ(a.layers.geometry(), base.geometry());
-  const common::Layer& ca = a.layers.at(layers::CostLayer("pioneer3at"));
-  const common::Layer& cb = b.layers.at(layers::CostLayer("rover"));
-  int differ = 0;
-  for (int iy = 1; iy < base.size_y() - 1; ++iy) {
-    for (int ix = 1; ix < base.size_x() - 1; ++ix) {
-      const bool a_lethal = ca(ix, iy) == layers::kCostLethal;
-      const bool b_lethal = cb(ix, iy) == layers::kCostLethal;
-      if (a_lethal != b_lethal) {
-        ++differ;
-        const double x = base.CenterOf({ix, iy}).x();
-        EXPECT_GT(x, 3.7) << ix;  // on the ramp (with its foot and top)
-        EXPECT_LT(x, 7.3) << ix;
-      }
-    }
-  }
-  EXPECT_GT(differ, 100);
-  ASSERT_EQ(a.registry.obstacles.size(), 1u);
-  EXPECT_FALSE(a.registry.obstacles[0].VerdictFor("pioneer3at")->crossable);
-  EXPECT_TRUE(b.registry.obstacles[0].VerdictFor("rover")->crossable);
-  EXPECT_EQ(a.registry.obstacles[0].VerdictFor("rover"), nullptr);
-  // The same input gives the same output, bit for bit.
-  const DerivedLayers again = DeriveProfileLayers(base, ShippedProfile("pioneer3at"));
-  EXPECT_TRUE(again.layers == a.layers);
-  EXPECT_STRNE(kMappingCodeVersion, "");
-}
-
-TEST(DeriveTest, ProfileChangeChangesTheVerdict) {
-  // Seed 000 scenario 18: the rover edited to 9 deg no longer crosses the 10 deg ramp.
-  const double t = std::tan(10 * kDeg);
-  const GridMap base =
-      Corridor([t](double x) { return x < 4.0 ? 0.0 : (x < 7.0 ? (x - 4.0) * t : 3.0 * t); });
-  common::RobotProfile rover = ShippedProfile("rover");
-  const std::string hash_before = rover.ContentHash();
-  rover.max_slope_up_rad = 9 * kDeg;
-  EXPECT_NE(rover.ContentHash(), hash_before);
-  const DerivedLayers d = DeriveProfileLayers(base, rover);
-  ASSERT_EQ(d.registry.obstacles.size(), 1u);
-  EXPECT_FALSE(d.registry.obstacles[0].VerdictFor("rover")->crossable);
-  EXPECT_EQ(d.registry.obstacles[0].VerdictFor("rover")->profile_hash, rover.ContentHash());
-}
-
-TEST(DeriveTest, MissingElevationThrows) {
-  common::GridGeometry g;
-  g.size_x = 3;
-  g.size_y = 3;
-  EXPECT_THROW(DeriveProfileLayers(GridMap(g), ShippedProfile("rover")), std::invalid_argument);
 }
 
 }  // namespace

@@ -58,6 +58,12 @@ inline common::RobotProfile LenientProfile(const std::string& name = "test") {
   return p;
 }
 
+/// A corridor 4 m wide (y in [0, 4)) of 0.2 m cells along x; `feature` gives the floor height
+/// at x.
+inline common::GridMap Corridor(const std::function<double(double)>& feature, int nx = 80) {
+  return MakeTerrain(nx, 20, 0.2, [feature](double x, double) { return feature(x); });
+}
+
 /// The shipped profiles.
 inline common::RobotProfile ShippedProfile(const std::string& name) {
   return common::LoadRobotProfileFile(std::string(CAIRN_SOURCE_DIR) + "/config/profiles/" + name +

@@ -1,5 +1,6 @@
-// The service layer of the mapper over memq:// (no network): the tile publisher's wire
-// semantics against runtime::LayerAssembler, the pose buffer, and MapperService end to end.
+// MapperService over memq:// (no network): slices and poses in, tiles, manifests, the registry
+// and the dynamic layers out; the long-term store's saves; a layer added through the seam is
+// published without the service knowing it.
 
 #include "services/mapping/lcm/mapper_service.h"
 
@@ -19,8 +20,6 @@
 
 #include "common/channels.h"
 #include "common/layers.h"
-#include "services/mapping/pose_buffer.h"
-#include "services/mapping/lcm/terrain_publisher.h"
 #include "services/runtime/conversions.h"
 #include "services/runtime/revolution_assembler.h"
 #include "services/runtime/layer_assembler.h"
@@ -36,162 +35,26 @@ using testing::ShippedProfile;
 using testing::SyntheticLidar;
 using testing::SyntheticRevolution;
 
-common::Pose3 At(double x, double y, double yaw = 0.0) { return SensorAt(x, y, 0.0, yaw); }
-
-TEST(PoseBufferTest, InterpolatesWithinTheGapOnly) {
-  PoseBuffer buffer;
-  EXPECT_FALSE(buffer.At(0, 1.0).has_value());
-  ASSERT_TRUE(buffer.Add(1'000'000, At(0.0, 0.0, 0.0)));
-  ASSERT_TRUE(buffer.Add(1'200'000, At(2.0, 0.0, 0.4)));
-  const auto mid = buffer.At(1'050'000, 0.2);
-  ASSERT_TRUE(mid.has_value());
-  EXPECT_NEAR(mid->position_m.x(), 0.5, 1e-9);
-  EXPECT_NEAR(mid->yaw_rad(), 0.1, 1e-9);
-  // Outside both samples but near one: that sample.
-  EXPECT_NEAR(buffer.At(1'250'000, 0.1)->position_m.x(), 2.0, 1e-12);
-  // Between samples farther apart than the gap: the nearer one if it is close enough.
-  EXPECT_NEAR(buffer.At(1'090'000, 0.1)->position_m.x(), 0.0, 1e-12);
-  EXPECT_FALSE(buffer.At(2'000'000, 0.1).has_value());
-  // Out of order, and a non-finite pose refused.
-  ASSERT_TRUE(buffer.Add(1'100'000, At(1.0, 1.0)));
-  EXPECT_NEAR(buffer.At(1'100'000, 0.01)->position_m.y(), 1.0, 1e-12);
-  common::Pose3 bad = At(0, 0);
-  bad.position_m.x() = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_FALSE(buffer.Add(1'300'000, bad));
-  EXPECT_EQ(buffer.size(), 3u);
-}
-
-// A terrain map with some flat ground observed around (x, y).
-void Observe(TerrainMap* map, double x, double y, int64_t scan) {
-  SyntheticLidar lidar;
-  lidar.rings = 8;
-  lidar.azimuths = 180;
-  lidar.max_range_m = 8.0;
-  const common::LidarSlice s = SyntheticRevolution(
-      SensorAt(x, y, 0.5), [](double, double) { return 0.0; }, lidar, scan);
-  map->Integrate(s.points, s.sensor_pose, scan, scan * 0.1);
-  map->UpdateDerived({});
-}
-
-// What a receiver rebuilds from the publisher's tiles and manifests equals the map's export.
-TEST(TerrainPublisherTest, ReceiverRebuildsTheLayersAndOnlyChangesAreSent) {
-  TerrainMap map;
-  map.AddProfile(ShippedProfile("rover"));
-  Observe(&map, 1.0, 1.0, 0);
-  TerrainPublisher publisher("r1", "live");
-  const std::vector<std::string> names{layers::kElevation, layers::CostLayer("rover")};
-  auto first = publisher.Update(map, names, 10);
-  EXPECT_TRUE(first.geometry_changed);
-  ASSERT_EQ(first.manifests.size(), 2u);
-  EXPECT_GT(first.tiles.size(), 0u);
-
-  runtime::LayerAssembler receiver;
-  for (const auto& t : first.tiles) ASSERT_TRUE(receiver.OnTile(t));
-  for (const auto& m : first.manifests) receiver.OnManifest(m);
-  for (const auto& name : names) {
-    ASSERT_TRUE(receiver.Complete(name)) << name;
-    const common::GridMap got = *receiver.Layer(name);
-    const common::GridMap expected = map.Export({name}, got.geometry());
-    const common::Layer& a = got.at(name);
-    const common::Layer& b = expected.at(name);
-    for (int64_t i = 0; i < a.size(); ++i) {
-      ASSERT_TRUE((std::isnan(a.data()[i]) && std::isnan(b.data()[i])) ||
-                  a.data()[i] == b.data()[i])
-          << name << " cell " << i;
-    }
-  }
-  // Nothing changed: nothing sent.
-  auto idle = publisher.Update(map, names, 20);
-  EXPECT_TRUE(idle.tiles.empty());
-  EXPECT_TRUE(idle.manifests.empty());
-  // The same ground seen again changes next to nothing; new ground elsewhere in the same tiles
-  // sends only those tiles, with a new layer version.
-  Observe(&map, 3.0, 1.0, 1);
-  auto second = publisher.Update(map, names, 30);
-  EXPECT_FALSE(second.geometry_changed);
-  EXPECT_LE(second.tiles.size(), first.tiles.size());
-  for (const auto& m : second.manifests) EXPECT_GT(m.layer_version, 1);
-  // Growing past the published extent resends everything (receivers reset on new geometry).
-  Observe(&map, 100.0, 1.0, 2);
-  auto grown = publisher.Update(map, names, 40);
-  EXPECT_TRUE(grown.geometry_changed);
-  EXPECT_GT(grown.tiles.size(), first.tiles.size());
-  // A resend of everything, and of one named tile.
-  cairn::lcmt_tile_resend_request all{};
-  all.layer = layers::kElevation;
-  const auto resent = publisher.Resend(all);
-  EXPECT_FALSE(resent.tiles.empty());
-  cairn::lcmt_tile_resend_request one{};
-  one.layer = layers::kElevation;
-  one.num_tiles = 1;
-  one.tile_ix = {resent.tiles[0].tile_ix};
-  one.tile_iy = {resent.tiles[0].tile_iy};
-  EXPECT_EQ(publisher.Resend(one).tiles.size(), 1u);
-  cairn::lcmt_tile_resend_request unknown{};
-  unknown.layer = "no_such_layer";
-  EXPECT_TRUE(publisher.Resend(unknown).tiles.empty());
-  // A reset announces empty layers with newer versions.
-  const auto reset = publisher.Reset(50);
-  ASSERT_EQ(reset.manifests.size(), 2u);
-  for (const auto& m : reset.manifests) {
-    EXPECT_EQ(m.num_tiles, 0);
-    EXPECT_GT(m.layer_version, grown.manifests[0].layer_version - 1);
-  }
-}
-
-// A restarted mapper (a new publisher with a larger version base) mapping the same ground into
-// the same grid replaces what a receiver holds from its predecessor, tile by tile; without the
-// base its first versions would be older and ignored.
-TEST(TerrainPublisherTest, ASuccessorWithALargerVersionBaseSupersedesItsPredecessor) {
-  const std::vector<std::string> names{layers::kElevation};
-  TerrainMap before;
-  Observe(&before, 1.0, 1.0, 0);
-  Observe(&before, 3.0, 1.0, 1);  // several versions on the predecessor's side
-  TerrainPublisher predecessor("r1", "live", 4, /*version_base=*/1000);
-  runtime::LayerAssembler receiver;
-  for (int64_t scan = 0; scan < 3; ++scan) {
-    Observe(&before, 1.0 + scan, 2.0, 2 + scan);
-    auto batch = predecessor.Update(before, names, 10 + scan);
-    for (const auto& t : batch.tiles) ASSERT_TRUE(receiver.OnTile(t));
-    for (const auto& m : batch.manifests) receiver.OnManifest(m);
-  }
-  const int64_t held = receiver.version(layers::kElevation);
-  ASSERT_GT(held, 1000);
-
-  TerrainMap after;  // the successor starts from nothing and sees the same first ground
-  Observe(&after, 1.0, 1.0, 0);
-  TerrainPublisher successor("r1", "live", 4, /*version_base=*/2000);
-  auto first = successor.Update(after, names, 100);
-  ASSERT_EQ(first.manifests.size(), 1u);
-  EXPECT_GT(first.manifests[0].layer_version, held);
-  for (const auto& t : first.tiles) ASSERT_TRUE(receiver.OnTile(t));
-  for (const auto& m : first.manifests) receiver.OnManifest(m);
-  EXPECT_EQ(receiver.version(layers::kElevation), first.manifests[0].layer_version);
-  ASSERT_TRUE(receiver.Complete(layers::kElevation));
-  const common::GridMap got = *receiver.Layer(layers::kElevation);
-  const common::GridMap expected = after.Export({layers::kElevation}, got.geometry());
-  const common::Layer& a = got.at(layers::kElevation);
-  const common::Layer& b = expected.at(layers::kElevation);
-  for (int64_t i = 0; i < a.size(); ++i) {
-    ASSERT_TRUE((std::isnan(a.data()[i]) && std::isnan(b.data()[i])) || a.data()[i] == b.data()[i])
-        << "cell " << i;
-  }
-}
-// MapperService over memq: slices and poses in, tiles, manifests and the registry out.
-TEST(MapperServiceTest, MapsSlicesOverMemq) {
+// The mapper's node on memq:// (no network, no signal handlers, no simulator clock).
+runtime::NodeOptions MemqOptions() {
   runtime::NodeOptions options;
   options.process_name = "cairn-mapper";
   options.robot = "r1";
   options.lcm_url = "memq://";
   options.install_signal_handlers = false;
   options.follow_sim_clock = false;
-  runtime::Node node(options);
+  return options;
+}
+
+// MapperService over memq: slices and poses in, tiles, manifests and the registry out.
+TEST(MapperServiceTest, MapsSlicesOverMemq) {
+  runtime::Node node(MemqOptions());
   MapperParams params;
   params.robot = "r1";
-  params.publish_period_s = 0.05;
-  params.registry_period_s = 0.05;
-  params.core.octomap_enabled = false;
-  params.core.occupancy.resolution_m = 0.1;
+  params.core.terrain.publish_period_s = 0.05;
+  params.core.terrain.registry_period_s = 0.05;
+  params.core.SetListed(kOctomapLayerName, false);
+  params.core.occupancy.grid.resolution_m = 0.1;
   std::map<std::string, int> received;
   std::optional<cairn::lcmt_obstacle_registry> registry;
   node.SubscribeRaw("r1\\.MAP\\..*",
@@ -245,56 +108,151 @@ TEST(MapperServiceTest, MapsSlicesOverMemq) {
   EXPECT_EQ(node.counter("bad_points"), 0);
 }
 
+// A reading of a stream the mapper has no fixed input for: here made from lcmt_pose messages
+// on r1.TEST_MARK (its x is what the layer keeps).
+struct MarkReading : SensorReading {
+  double x_m{0.0};
+};
+
+StreamConverter MarkConverter() {
+  StreamConverter c;
+  c.stream = "TEST_MARK";
+  c.convert = [](const void* data, int size) -> common::Result<std::unique_ptr<SensorReading>> {
+    cairn::lcmt_pose m;
+    if (m.decode(data, 0, size) < 0) return common::InvalidArgumentError("does not decode");
+    auto pose = runtime::FromLcm(m);
+    if (!pose.ok()) return pose.status();
+    auto reading = std::make_unique<MarkReading>();
+    reading->utime = m.utime;
+    reading->sensor_pose = *pose;
+    reading->x_m = m.position_m[0];
+    return std::unique_ptr<SensorReading>(std::move(reading));
+  };
+  return c;
+}
+
+// A layer the service has never heard of, added through the seam: it counts the scans and keeps
+// the last mark in a float grid and an occupancy grid, and the service publishes both
+// generically.
+class ScanCountLayer : public MapperLayer {
+ public:
+  ScanCountLayer() {
+    common::GridGeometry g;
+    g.resolution_m = 0.5;
+    g.size_x = g.size_y = 4;
+    grid_ = common::GridMap(g);
+    grid_.AddLayer("test/scans", 0.f);
+    grid_.AddLayer("test/seen", NAN);
+  }
+  const std::string& name() const override { return name_; }
+  uint32_t inputs() const override { return kPlanarScans | kSensorReadings; }
+  LayerSchedule schedule() const override {
+    LayerSchedule s;
+    s.publish_period_s = 0.05;
+    return s;
+  }
+  std::vector<std::string> OwnedLayers() const override { return {"test/scans", "test/seen"}; }
+  void OnScan(const common::LaserScan&) override {
+    grid_.at("test/scans")(1, 1) += 1.f;
+    grid_.at("test/seen")(2, 2) = 100.f;
+    ++version_;
+  }
+  std::vector<std::string> ReadingStreams() const override { return {"TEST_MARK"}; }
+  void OnReading(const SensorReading& reading) override {
+    grid_.at("test/scans")(3, 3) =
+        static_cast<float>(dynamic_cast<const MarkReading&>(reading).x_m);
+    ++version_;
+  }
+  void Reset() override {}
+  std::vector<GridOutput> GridOutputs() const override {
+    return {{"test/scans", GridEncoding::kFloat, true, true},
+            {"test/seen", GridEncoding::kOccupancy, true, true}};
+  }
+  std::optional<common::GridMap> ExportGrids() const override { return grid_; }
+  int64_t version() const override { return version_; }
+
+ private:
+  std::string name_ = "scan_count";
+  common::GridMap grid_;
+  int64_t version_{0};
+};
+
+TEST(MapperServiceTest, PublishesALayerAddedThroughTheSeam) {
+  runtime::Node node(MemqOptions());
+  MapperParams params;
+  params.robot = "r1";
+  params.core.layers = {kTerrainLayerName};
+  runtime::LayerAssembler assembler;
+  node.Subscribe<cairn::lcmt_grid_tile>(
+      "r1.MAP.TILES", [&](const cairn::lcmt_grid_tile& t) { assembler.OnTile(t); });
+  node.Subscribe<cairn::lcmt_occupancy_tile>(
+      "r1.MAP.OCCUPANCY", [&](const cairn::lcmt_occupancy_tile& t) { assembler.OnTile(t); });
+  node.Subscribe<cairn::lcmt_grid_manifest>(
+      "r1.MAP.MANIFEST", [&](const cairn::lcmt_grid_manifest& m) { assembler.OnManifest(m); });
+  // A layer taking a stream without a converter is refused.
+  {
+    std::vector<std::unique_ptr<MapperLayer>> extra;
+    extra.push_back(std::make_unique<ScanCountLayer>());
+    EXPECT_THROW(
+        MapperService(node, params, {}, nullptr, MapperService::Mode::kReplay, std::move(extra)),
+        std::invalid_argument);
+  }
+  std::vector<std::unique_ptr<MapperLayer>> extra;
+  extra.push_back(std::make_unique<ScanCountLayer>());
+  MapperService service(node, params, {}, nullptr, MapperService::Mode::kLive, std::move(extra),
+                        {MarkConverter()});
+  common::LaserScan scan;
+  scan.range_min_m = 0.1;
+  scan.range_max_m = 5.0;
+  scan.angle_increment_rad = 0.1;
+  scan.ranges_m.assign(5, 1.0f);
+  scan.robot = "r1";
+  for (int k = 0; k < 3; ++k) {
+    scan.utime = 1'000'000 + k * 100'000;
+    node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(0.0, 0.0, 0.0), scan.utime, "r1", "world"));
+    node.Publish("r1.SCAN", runtime::ToLcm(scan));
+  }
+  node.Publish("r1.TEST_MARK", runtime::ToLcmPose(SensorAt(1.5, 0.0, 0.0), 1'200'000, "r1", "w"));
+  const std::string garbage = "not a pose";
+  node.lcm().publish("r1.TEST_MARK", garbage.data(), static_cast<unsigned>(garbage.size()));
+  auto cell = [&](const char* layer, int x, int y) -> float {
+    auto grid = assembler.Layer(layer);
+    return grid ? grid->at(layer)(x, y) : NAN;
+  };
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (std::chrono::steady_clock::now() < deadline &&
+         !(cell("test/scans", 1, 1) == 3.f && cell("test/scans", 3, 3) == 1.5f &&
+           assembler.Complete("test/seen"))) {
+    node.SpinOnce(20);
+  }
+  service.Stop();
+  EXPECT_EQ(cell("test/scans", 1, 1), 3.f);
+  EXPECT_EQ(cell("test/scans", 3, 3), 1.5f);  // the reading came through its stream
+  EXPECT_EQ(node.counter("bad_test_mark"), 1);
+  ASSERT_TRUE(assembler.Complete("test/seen"));
+  EXPECT_FLOAT_EQ(cell("test/seen", 2, 2), 100.f);
+  EXPECT_TRUE(std::isnan(cell("test/seen", 0, 0)));
+}
+
 // The dynamic layers on a 4 x 3 m extent, with a remembered long-term layer.
 MapperParams DynamicParams() {
   MapperParams params;
   params.robot = "r1";
-  params.occupancy_period_s = 0.05;
-  params.core.occupancy_enabled = false;
-  params.core.octomap_enabled = false;
-  params.core.dynamic_enabled = true;
-  params.core.dynamic_extent.resolution_m = 0.05;
-  params.core.dynamic_extent.size_x = 80;
-  params.core.dynamic_extent.size_y = 60;
-  params.core.dynamic_extent.origin = {-1.0, -1.0, 0.0};
+  params.core.occupancy.publish_period_s = params.core.dynamic.publish_period_s = 0.05;
+  params.core.layers = {kTerrainLayerName, kDynamicLayerName};
+  params.core.dynamic.extent.resolution_m = 0.05;
+  params.core.dynamic.extent.size_x = 80;
+  params.core.dynamic.extent.size_y = 60;
+  params.core.dynamic.extent.origin = {-1.0, -1.0, 0.0};
   return params;
 }
 
-TEST(MapperCoreTest, RestoresTheLongTermLayerOnlyOnTheSameGrid) {
-  MapperCoreParams params = DynamicParams().core;
-  common::GridMap stored(params.dynamic_extent);
-  stored.AddLayer(layers::kLongTerm, 0.f)(10, 20) = 98.f;
-  params.long_term_restore = stored;
-  MapperCore restored(params);
-  EXPECT_TRUE(restored.long_term_restore_status().ok());
-  EXPECT_EQ(restored.dynamic()->LongTermOccupancy({10, 20}), 98);
-  // OP_RESET forgets the memory too: back to the static map alone.
-  restored.Reset();
-  EXPECT_EQ(restored.dynamic()->LongTermOccupancy({10, 20}), -1);
-
-  common::GridGeometry other = params.dynamic_extent;
-  other.size_x += 1;
-  common::GridMap elsewhere(other);
-  elsewhere.AddLayer(layers::kLongTerm, 0.f);
-  params.long_term_restore = elsewhere;
-  MapperCore ignored(params);
-  EXPECT_EQ(ignored.long_term_restore_status().code(), common::StatusCode::kInvalidArgument);
-  EXPECT_NE(ignored.long_term_restore_status().message().find("another grid"), std::string::npos);
-  EXPECT_EQ(ignored.dynamic()->LongTermOccupancy({10, 20}), -1);
-}
-
 TEST(MapperServiceTest, PublishesTheRestoredLongTermLayerAndAsksTheStoreToSaveIt) {
-  runtime::NodeOptions options;
-  options.process_name = "cairn-mapper";
-  options.robot = "r1";
-  options.lcm_url = "memq://";
-  options.install_signal_handlers = false;
-  options.follow_sim_clock = false;
-  runtime::Node node(options);
+  runtime::Node node(MemqOptions());
   MapperParams params = DynamicParams();
-  common::GridMap stored(params.core.dynamic_extent);
+  common::GridMap stored(params.core.dynamic.extent);
   stored.AddLayer(layers::kLongTerm, 0.f)(10, 20) = 98.f;
-  params.core.long_term_restore = stored;
+  params.core.dynamic.long_term_restore = stored;
   params.long_term_store = "flat/long_term";
   params.long_term_save_period_s = 0.05;
   runtime::LayerAssembler assembler;
@@ -352,7 +310,7 @@ TEST(MapperServiceTest, RefusesABadLongTermStore) {
   EXPECT_THROW(params.Validate(), std::invalid_argument);
   params.long_term_store = "site/map";
   params.Validate();
-  params.core.dynamic_enabled = false;
+  params.core.SetListed(kDynamicLayerName, false);
   EXPECT_THROW(params.Validate(), std::invalid_argument);
 }
 

@@ -1,3 +1,5 @@
+#include "services/mapping/raytrace.h"
+
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -6,8 +8,6 @@
 #include <vector>
 
 #include <gtest/gtest.h>
-
-#include "services/mapping/raytrace.h"
 
 namespace cairn::mapping {
 namespace {

@@ -1,0 +1,35 @@
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "common/grid_map.h"
+#include "common/obstacle.h"
+#include "services/mapping/obstacles.h"
+
+/// @file
+/// Shape measurements of the obstacle registry's features (internal to the mapping core):
+/// statistics of a feature's values, the plane through its heights, its outline.
+
+namespace cairn::mapping::internal {
+
+/// Median (the mean of the two middle values for an even count); NaN for none.
+double Median(std::vector<double> v);
+/// Linear-interpolated percentile (q in [0, 1]); NaN for none.
+double Percentile(std::vector<double> v, double q);
+
+/// Slope (rad) of the least-squares plane z = a·x + b·y + c through the known heights of
+/// `cells` (indices into `map`, x fastest); 0 when the fit is degenerate.
+double PlaneSlope(const common::GridMap& map, const std::vector<int64_t>& cells);
+
+/// The outer boundary of a set of cells (indices into a grid `sx` cells wide) along the cell
+/// edges, counter-clockwise, in cell corner coordinates, simplified to `tol` cells (Douglas-
+/// Peucker). Cells touching at a corner stay one outline.
+std::vector<common::Vector2> TraceOutline(const std::vector<int64_t>& cells, int sx, double tol);
+
+/// Measurements shared by every kind: centroid, outline, extents along the principal axes
+/// (length, width), area and cell count.
+void MeasureShape(const common::GridMap& map, const std::vector<int64_t>& cells,
+                  const ObstacleParams& params, common::Obstacle* obstacle);
+
+}  // namespace cairn::mapping::internal
