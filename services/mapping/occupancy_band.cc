@@ -57,6 +57,16 @@ const std::vector<PlanarRay>& ObstacleBand::Project(const common::LidarRevolutio
                                                     double ground_z_m,
                                                     ObstacleBandStats* stats_out) {
   ObstacleBandStats stats;
+  TransformPoints(revolution, ground_z_m, &stats);
+  SortByBinAndRange();
+  ChooseRays(&stats);
+  if (stats_out) *stats_out = stats;
+  return rays_;
+}
+
+void ObstacleBand::TransformPoints(const common::LidarRevolution& revolution, double ground_z_m,
+                                   ObstacleBandStats* stats_out) {
+  ObstacleBandStats& stats = *stats_out;
   const int bins = params_.azimuth_bins;
   const double tan_slope = std::tan(params_.max_ground_slope_rad);
   const double bins_per_rad = bins / (2.0 * M_PI);
@@ -107,7 +117,10 @@ const std::vector<PlanarRay>& ObstacleBand::Project(const common::LidarRevolutio
     }
   }
   points_.resize(kept);
+}
 
+void ObstacleBand::SortByBinAndRange() {
+  const int bins = params_.azimuth_bins;
   // 2. Counting sort by bin into compact records, then by range inside each bin (insertion
   //    sort: a bin holds a few dozen points; ties keep input order).
   start_.assign(static_cast<size_t>(bins) + 1, 0);
@@ -134,7 +147,11 @@ const std::vector<PlanarRay>& ObstacleBand::Project(const common::LidarRevolutio
       sorted_[j] = item;
     }
   }
+}
 
+void ObstacleBand::ChooseRays(ObstacleBandStats* stats_out) {
+  ObstacleBandStats& stats = *stats_out;
+  const int bins = params_.azimuth_bins;
   // 3. Per bin: local ground by a sliding-window minimum over range, then the nearest band
   //    point (hit) or the farthest ground point (free).
   rays_.clear();
@@ -167,8 +184,6 @@ const std::vector<PlanarRay>& ObstacleBand::Project(const common::LidarRevolutio
     (ray.hit ? stats.hit_rays : stats.free_rays) += 1;
     rays_.push_back(ray);
   }
-  if (stats_out) *stats_out = stats;
-  return rays_;
 }
 
 std::vector<PlanarRay> ProjectObstacleBand(const common::LidarRevolution& revolution,

@@ -93,6 +93,13 @@ class ObstacleBand {
     float ground_cap_m;
     int32_t point;  // index into points_
   };
+  // The stages of Project: points in world with their bin and range (points_, origins_),
+  // sorted by bin and range (start_, sorted_), then one ray per bin (rays_).
+  void TransformPoints(const common::LidarRevolution& revolution, double ground_z_m,
+                       ObstacleBandStats* stats);
+  void SortByBinAndRange();
+  void ChooseRays(ObstacleBandStats* stats);
+
   ObstacleBandParams params_;
   std::vector<Point> points_;
   std::vector<int32_t> start_;
