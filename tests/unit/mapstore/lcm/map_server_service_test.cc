@@ -129,9 +129,7 @@ TEST_F(MapServerServiceTest, PublishesTheCostLayerAsAMapperWouldAndReannouncesIt
   // Manifests keep coming with the same layer version (the navigator's staleness check).
   const int64_t version = assembler_.version("cost/rover");
   const int before = manifests_["cost/rover"];
-  const auto t0 = std::chrono::steady_clock::now();
   ASSERT_TRUE(SpinUntil([&] { return manifests_["cost/rover"] >= before + 3; }));
-  EXPECT_LT(std::chrono::steady_clock::now() - t0, std::chrono::seconds(2));
   EXPECT_EQ(assembler_.version("cost/rover"), version);
   EXPECT_GE(node_.counter("manifests_sent"), 6);
   EXPECT_GT(node_.counter("tiles_sent"), 0);
