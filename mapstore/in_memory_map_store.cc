@@ -312,11 +312,8 @@ Status InMemoryMapStore::PutDerived(const MapRef& ref, const DerivedProfile& der
 
 Status InMemoryMapStore::PutPlaces(const std::string& site, const std::vector<Place>& places,
                                    const WriteContext& ctx) {
-  Status s = ValidateName("site name", site);
+  Status s = ValidatePlaces(site, places);
   if (!s.ok()) return s;
-  for (const Place& p : places) {
-    if (!(s = ValidatePlace(p)).ok()) return s;
-  }
   std::lock_guard<std::mutex> lock(mutex_);
   std::string names;
   for (const Place& p : places) {

@@ -133,11 +133,8 @@ Result<std::vector<StoredProfile>> SqliteMapStore::ListProfiles() const {
 
 Status SqliteMapStore::PutPlaces(const std::string& site, const std::vector<Place>& places,
                                  const WriteContext& ctx) {
-  Status s = ValidateName("site name", site);
+  Status s = ValidatePlaces(site, places);
   if (!s.ok()) return s;
-  for (const Place& p : places) {
-    if (!(s = ValidatePlace(p)).ok()) return s;
-  }
   std::lock_guard<std::mutex> lock(mutex_);
   const int64_t now = WallUtime();
   s = WriteTransaction([&]() -> Status {

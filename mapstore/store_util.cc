@@ -132,6 +132,15 @@ Status ValidatePlace(const Place& place) {
   return Status::Ok();
 }
 
+Status ValidatePlaces(const std::string& site, const std::vector<Place>& places) {
+  Status s = ValidateName("site name", site);
+  if (!s.ok()) return s;
+  for (const Place& p : places) {
+    if (!(s = ValidatePlace(p)).ok()) return s;
+  }
+  return Status::Ok();
+}
+
 std::string LayerNotFoundMessage(const MapRef& ref, int64_t version, const std::string& layer,
                                  const std::map<std::string, int64_t>& layers) {
   std::string known;

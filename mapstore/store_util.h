@@ -25,6 +25,8 @@ common::Status ValidateProfile(const common::RobotProfile& profile);
 common::Status ValidateDerived(const DerivedProfile& derived);
 /// Name, at least three finite vertices.
 common::Status ValidatePlace(const Place& place);
+/// The site's name and every place (what PutPlaces checks before it writes anything).
+common::Status ValidatePlaces(const std::string& site, const std::vector<Place>& places);
 
 /// "map 'site/name' version 3 has no layer 'x' (layers: a, b)".
 std::string LayerNotFoundMessage(const MapRef& ref, int64_t version, const std::string& layer,

@@ -18,6 +18,7 @@
 #include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 #include "tests/unit/mapstore/fake_deriver.h"
+#include "tests/support/memq_node.h"
 
 namespace cairn::mapstore {
 namespace {
@@ -27,13 +28,7 @@ using testing::Profile;
 using testing::SampleSnapshot;
 
 runtime::NodeOptions MemqOptions() {
-  runtime::NodeOptions o;
-  o.process_name = "cairn-map-server";
-  o.robot = "rb";
-  o.lcm_url = "memq://";
-  o.install_signal_handlers = false;
-  o.follow_sim_clock = false;
-  return o;
+  return cairn::testing::MemqNodeOptions("cairn-map-server", "rb");
 }
 
 class MapServerServiceTest : public ::testing::Test {

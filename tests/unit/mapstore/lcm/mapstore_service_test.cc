@@ -19,6 +19,7 @@
 #include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 #include "tests/unit/mapstore/fake_deriver.h"
+#include "tests/support/memq_node.h"
 
 namespace cairn::mapstore {
 namespace {
@@ -31,12 +32,7 @@ constexpr int8_t kInvalid = Reply::STATUS_INVALID;
 constexpr int8_t kBusy = Reply::STATUS_BUSY;
 
 runtime::NodeOptions MemqOptions() {
-  runtime::NodeOptions o;
-  o.process_name = "cairn-mapstore";
-  o.lcm_url = "memq://";
-  o.install_signal_handlers = false;
-  o.follow_sim_clock = false;
-  return o;
+  return cairn::testing::MemqNodeOptions("cairn-mapstore");
 }
 
 Request MakeRequest(int8_t op, const std::string& map = "") {

@@ -13,18 +13,13 @@
 #include "common/layers.h"
 #include "services/runtime/tiler.h"
 #include "tests/unit/planner/test_maps.h"
+#include "tests/support/memq_node.h"
 
 namespace cairn::planner {
 namespace {
 
 runtime::NodeOptions Options() {
-  runtime::NodeOptions o;
-  o.process_name = "cairn-navigator";
-  o.robot = "r1";
-  o.lcm_url = "memq://";
-  o.install_signal_handlers = false;
-  o.follow_sim_clock = false;
-  return o;
+  return cairn::testing::MemqNodeOptions("cairn-navigator", "r1");
 }
 
 LcmMapClientParams OccupancyParams() {

@@ -13,6 +13,7 @@
 #include "services/runtime/conversions.h"
 #include "services/runtime/tiler.h"
 #include "tests/unit/planner/test_maps.h"
+#include "tests/support/memq_node.h"
 
 namespace cairn::planner {
 namespace {
@@ -32,12 +33,7 @@ constexpr int kStateReached = cairn::lcmt_nav_status::STATE_REACHED;
 constexpr int kStateStopped = cairn::lcmt_nav_status::STATE_STOPPED;
 
 runtime::NodeOptions Options() {
-  runtime::NodeOptions o;
-  o.process_name = "cairn-navigator";
-  o.robot = "r1";
-  o.lcm_url = "memq://";
-  o.install_signal_handlers = false;
-  return o;
+  return cairn::testing::MemqNodeOptions("cairn-navigator", "r1", /*follow_sim_clock=*/true);
 }
 
 // The service on an in-process bus, with the test playing simulator (clock and pose), mapper

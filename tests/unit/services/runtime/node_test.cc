@@ -7,17 +7,13 @@
 #include "cairn/lcmt_goal.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
 #include "common/channels.h"
+#include "tests/support/memq_node.h"
 
 namespace cairn::runtime {
 namespace {
 
 NodeOptions MemqOptions() {
-  NodeOptions o;
-  o.process_name = "node-test";
-  o.robot = "r1";
-  o.lcm_url = "memq://";
-  o.install_signal_handlers = false;
-  return o;
+  return cairn::testing::MemqNodeOptions("node-test", "r1", /*follow_sim_clock=*/true);
 }
 
 void SpinFor(Node& node, int rounds) {

@@ -26,6 +26,7 @@
 #include "services/runtime/tiler.h"
 #include "tests/unit/services/mapping/synthetic_scan.h"
 #include "tests/unit/services/mapping/terrain_fixtures.h"
+#include "tests/support/memq_node.h"
 
 namespace cairn::mapping {
 namespace {
@@ -37,13 +38,7 @@ using testing::SyntheticRevolution;
 
 // The mapper's node on memq:// (no network, no signal handlers, no simulator clock).
 runtime::NodeOptions MemqOptions() {
-  runtime::NodeOptions options;
-  options.process_name = "cairn-mapper";
-  options.robot = "r1";
-  options.lcm_url = "memq://";
-  options.install_signal_handlers = false;
-  options.follow_sim_clock = false;
-  return options;
+  return cairn::testing::MemqNodeOptions("cairn-mapper", "r1");
 }
 
 // MapperService over memq: slices and poses in, tiles, manifests and the registry out.

@@ -11,17 +11,13 @@
 #include "cairn/lcmt_pose.hpp"
 
 #include "common/channels.h"
+#include "tests/support/memq_node.h"
 
 namespace cairn::mission {
 namespace {
 
 runtime::NodeOptions MemqOptions() {
-  runtime::NodeOptions options;
-  options.process_name = "cairn-mission";
-  options.robot = "p3at";
-  options.lcm_url = "memq://";
-  options.install_signal_handlers = false;
-  return options;
+  return cairn::testing::MemqNodeOptions("cairn-mission", "p3at", /*follow_sim_clock=*/true);
 }
 
 // `ready_timeout_s`: how long the mission waits for the graph (it waits that long whenever a
