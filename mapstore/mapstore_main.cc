@@ -20,12 +20,8 @@ namespace ms = cairn::mapstore;
 // Maps arrive as bursts of tiles: a large receive buffer unless the URL names one (the kernel
 // caps it at net.core.rmem_max; resend requests cover what a small one drops).
 std::string BusUrl(const std::string& flag_url, int recv_buffer_bytes) {
-  std::string url = cairn::runtime::ResolveLcmUrl(flag_url);
-  if (url.rfind("udpm://", 0) == 0 && url.find("recv_buf_size=") == std::string::npos) {
-    url += (url.find('?') == std::string::npos ? "?" : "&") + std::string("recv_buf_size=") +
-           std::to_string(recv_buffer_bytes);
-  }
-  return url;
+  return cairn::runtime::WithReceiveBuffer(cairn::runtime::ResolveLcmUrl(flag_url),
+                                           recv_buffer_bytes);
 }
 
 int Serve(const std::string& db, ms::SqliteMapStore& store, const ms::MapstoreParams& params,

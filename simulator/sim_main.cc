@@ -117,7 +117,9 @@ int main(int argc, char** argv) {
     failure = "cannot open the bus";
     cairn::runtime::NodeOptions options;
     options.process_name = "cairn-sim";
-    options.lcm_url = f.lcm_url;
+    // Commands and control requests arrive beside the simulator's own lidar traffic.
+    options.lcm_url = cairn::runtime::WithReceiveBuffer(cairn::runtime::ResolveLcmUrl(f.lcm_url),
+                                                        cairn::runtime::kLargeReceiveBufferBytes);
     node = std::make_unique<cairn::runtime::Node>(options);
     failure = "cannot start";
     cairn::sim::SimServiceParams params;

@@ -60,6 +60,12 @@ std::string ResolveLcmUrl(const std::string& flag_value) {
   return url;
 }
 
+std::string WithReceiveBuffer(const std::string& url, int64_t bytes) {
+  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
+  return url + (url.find('?') == std::string::npos ? "?" : "&") +
+         "recv_buf_size=" + std::to_string(bytes);
+}
+
 Node::Node(NodeOptions options) : options_(std::move(options)) {
   options_.lcm_url = ResolveLcmUrl(options_.lcm_url);
   start_ = std::chrono::steady_clock::now();

@@ -32,6 +32,14 @@ namespace cairn::runtime {
 
 inline constexpr char kDefaultLcmUrl[] = "udpm://239.255.76.67:7667?ttl=0";
 
+/// `url` with a receive buffer of `bytes` when it is udpm:// and names none (a recv_buf_size it
+/// names is kept); the kernel caps it at net.core.rmem_max. Processes that take bursts (a
+/// mapper's tiles, the map store's saves, the simulator beside its own lidar) ask for one: with
+/// the kernel's default (about 208 KB) a busy host drops datagrams, a request among them.
+std::string WithReceiveBuffer(const std::string& url, int64_t bytes);
+/// The receive buffer those processes ask for.
+inline constexpr int64_t kLargeReceiveBufferBytes = 4 * 1024 * 1024;
+
 /// Resolves the bus URL from a flag value and the environment, and enforces ttl=0 on udpm URLs
 /// that do not state a ttl. @throws std::invalid_argument for an unsupported provider.
 std::string ResolveLcmUrl(const std::string& flag_value);

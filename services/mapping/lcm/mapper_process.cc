@@ -11,9 +11,8 @@
 namespace cairn::mapping {
 
 std::string MapperLcmUrl(const std::string& flag_value) {
-  const std::string url = runtime::ResolveLcmUrl(flag_value);
-  if (url.rfind("udpm://", 0) != 0 || url.find("recv_buf_size=") != std::string::npos) return url;
-  return url + (url.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=4194304";
+  return runtime::WithReceiveBuffer(runtime::ResolveLcmUrl(flag_value),
+                                    runtime::kLargeReceiveBufferBytes);
 }
 
 bool RestoreLongTerm(runtime::Node& node, MapperParams* params) {

@@ -117,5 +117,15 @@ TEST(NodeTest, TimersRunAndStopEndsSpin) {
   EXPECT_EQ(ticks, 3);
 }
 
+TEST(WithReceiveBufferTest, OnlyUdpmUrlsWithoutOneGetIt) {
+  EXPECT_EQ(WithReceiveBuffer("udpm://239.255.76.67:7667?ttl=0", 4096),
+            "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4096");
+  EXPECT_EQ(WithReceiveBuffer("udpm://239.255.76.67:7667", 4096),
+            "udpm://239.255.76.67:7667?recv_buf_size=4096");
+  EXPECT_EQ(WithReceiveBuffer("udpm://239.255.76.67:7667?recv_buf_size=100", 4096),
+            "udpm://239.255.76.67:7667?recv_buf_size=100");
+  EXPECT_EQ(WithReceiveBuffer("memq://", 4096), "memq://");
+}
+
 }  // namespace
 }  // namespace cairn::runtime
