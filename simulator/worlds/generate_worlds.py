@@ -8,6 +8,7 @@ Outputs (all in this folder):
   apartment.xml, apartment_places.yaml   the rooms of seed 001 and their polygons
   arena.xml                        rooms and clutter for 2-D occupancy mapping (seed 003)
   outdoor.xml, outdoor_terrain.bin heightfield terrain with slopes, rocks and structures
+  terraces.xml, terraces_lanes.yaml  one-way drops and ditches in walled lanes (directed terrain)
 
 Everything is deterministic (the outdoor terrain uses a fixed seed), so running it again
 reproduces the committed files byte for byte.
@@ -605,6 +606,132 @@ def outdoor():
     write("outdoor.xml", "\n".join(lines))
 
 
+# --------------------------------------------------------------------------------------------
+# terraces
+
+def terraces():
+    """Directed terrain in walled lanes: one-way drops, a drop refused both ways, ditches of two
+    widths, and a one-way drop with a ramp beside it. Same lane layout as the tunnel."""
+    lanes = []
+    geoms = []
+    n_lanes = 5
+    y_max = n_lanes * LANE_WIDTH
+    geoms.append('    <geom name="ground" type="plane" size="40 40 0.1" pos="12 10 -0.3" '
+                 f'rgba="{FLOOR_RGBA}"/>')
+
+    def inner(k):
+        return k * LANE_WIDTH + WALL_T / 2, (k + 1) * LANE_WIDTH - WALL_T / 2
+
+    # Decks (top z = 0) everywhere but the ditches, which cut lanes 2 and 3 wall to wall.
+    narrow = (10.0, 10.2, 0.10)   # x0, x1, depth: lane 2
+    wide = (10.0, 10.6, 0.25)     # lane 3
+    cuts = {2: narrow, 3: wide}
+    geoms.append(aabb("deck_start", -1, LANE_X0, -1, y_max + 1, -0.3, 0.0, FLOOR_RGBA))
+    for k in range(n_lanes):
+        y0, y1 = k * LANE_WIDTH, (k + 1) * LANE_WIDTH
+        if k in cuts:
+            x0, x1, depth = cuts[k]
+            geoms.append(aabb(f"deck_{k}_near", LANE_X0, x0, y0, y1, -0.3, 0.0, FLOOR_RGBA))
+            geoms.append(aabb(f"deck_{k}_far", x1, 25, y0, y1, -0.3, 0.0, FLOOR_RGBA))
+            geoms.append(aabb(f"ditch_{k}_bottom", x0, x1, y0, y1, -0.3, -depth, FLOOR_RGBA))
+        else:
+            geoms.append(aabb(f"deck_{k}", LANE_X0, 25, y0, y1, -0.3, 0.0, FLOOR_RGBA))
+    geoms.append(aabb("wall_start", -WALL_T, 0.0, -WALL_T / 2, y_max + WALL_T / 2, -0.3, WALL_H))
+    geoms.append(aabb("wall_end", LANE_X1, LANE_X1 + WALL_T, -WALL_T / 2, y_max + WALL_T / 2,
+                      -0.3, WALL_H))
+    geoms.append(aabb("wall_south", -WALL_T, LANE_X1 + WALL_T, -WALL_T / 2, WALL_T / 2, -0.3,
+                      WALL_H))
+    geoms.append(aabb("wall_north", -WALL_T, LANE_X1 + WALL_T, y_max - WALL_T / 2,
+                      y_max + WALL_T / 2, -0.3, WALL_H))
+    for k in range(1, n_lanes):
+        y = k * LANE_WIDTH
+        geoms.append(aabb(f"wall_lane_{k}", LANE_X0, LANE_X1, y - WALL_T / 2, y + WALL_T / 2,
+                          -0.3, WALL_H))
+
+    def terrace(k, name, rise, y0, y1, platform_x1):
+        """A 5 deg ramp from x 8 up to `rise`, then a platform that ends in a drop."""
+        xml, length = ramp(f"{name}_ramp", FEATURE_X, 0.0, 5.0, rise, y0, y1)
+        geoms.append(xml)
+        geoms.append(aabb(f"{name}_platform", FEATURE_X + length, platform_x1, y0, y1, 0.0, rise,
+                          FEATURE_RGBA))
+        return FEATURE_X + length
+
+    # Lane 0: 8 cm one-way drop.
+    k, yc = 0, lane_y(0)
+    y0, y1 = inner(k)
+    px0 = terrace(k, "oneway8", 0.08, y0, y1, 12.0)
+    lanes.append(dict(
+        lane=k, name="oneway_drop_8cm",
+        feature="5 deg ramp x 8.0..%s (0 -> 0.08 m), platform to x 12.0, 8 cm drop at x 12.0, "
+                "wall to wall" % f(px0),
+        start=(START_X, yc, 0.0), goal=(15.0, yc, 0.0),
+        pioneer3at="forward only: up the ramp and off the drop (8 cm <= 10 cm down); never "
+                   "back (8 cm > 3 cm up), and there is no other way"))
+    # Lane 1: 12 cm drop.
+    k, yc = 1, lane_y(1)
+    y0, y1 = inner(k)
+    px0 = terrace(k, "drop12", 0.12, y0, y1, 12.0)
+    lanes.append(dict(
+        lane=k, name="drop_12cm",
+        feature="5 deg ramp x 8.0..%s (0 -> 0.12 m), platform to x 12.0, 12 cm drop at x 12.0, "
+                "wall to wall" % f(px0),
+        start=(START_X, yc, 0.0), goal=(15.0, yc, 0.0),
+        pioneer3at="neither way (12 cm > 10 cm down and > 3 cm up)"))
+    # Lanes 2 and 3: ditches.
+    for k, (x0, x1, depth), name in ((2, narrow, "ditch_narrow"), (3, wide, "ditch_wide")):
+        yc = lane_y(k)
+        lanes.append(dict(
+            lane=k, name=name,
+            feature="ditch x %s..%s (%s m wide), %s m deep, wall to wall"
+                    % (f(x0), f(x1), f(x1 - x0), f(depth)),
+            start=(START_X, yc, 0.0), goal=(15.0, yc, 0.0),
+            pioneer3at="no (its ditch width is 0.10 m); rover (0.30 m): %s"
+                       % ("yes" if x1 - x0 <= 0.30 else "no")))
+    # Lane 4: 8 cm one-way drop on the south half, a 5 deg ramp down on the north half.
+    k, yc = 4, lane_y(4)
+    y0, y1 = inner(k)
+    ymid = (y0 + y1) / 2
+    px0 = terrace(k, "bypass", 0.08, y0, y1, 12.0)
+    xml, length = ramp("bypass_ramp_down", 12.0, 0.08, 5.0, 0.08, ymid, y1, FEATURE_RGBA,
+                       down=True)
+    geoms.append(xml)
+    lanes.append(dict(
+        lane=k, name="oneway_drop_with_ramp",
+        feature="5 deg ramp x 8.0..%s (0 -> 0.08 m), platform to x 12.0; at x 12.0 an 8 cm drop "
+                "on y %s..%s and a 5 deg ramp down x 12.0..%s on y %s..%s"
+                % (f(px0), f(y0), f(ymid), f(12.0 + length), f(ymid), f(y1)),
+        start=(15.0, yc, math.pi), goal=(START_X, yc, math.pi),
+        pioneer3at="yes, but only up the ramp on the north half (the drop is a step up this "
+                   "way)"))
+
+    lines = header("terraces", "terraces: one-way drops, a 12 cm drop, two ditches and a one-way "
+                   "drop beside a ramp, in walled lanes")
+    lines += [
+        "<!--",
+        "  Generated by generate_worlds.py; the lane contract is in terraces_lanes.yaml and",
+        "  README.md. Same layout as the tunnel: lanes along +x, 4 m apart, from a cross",
+        "  corridor (x 0..3) to the end wall at x = 24. Decks have their top at z = 0.",
+        "-->",
+        "  <worldbody>",
+        '    <light name="sun" directional="true" pos="12 10 30" dir="0 0 -1"/>',
+    ]
+    lines += geoms + ["  </worldbody>", "</mujoco>", ""]
+    write("terraces.xml", "\n".join(lines))
+    y = ["# Lanes of the terraces world (generated by generate_worlds.py with terraces.xml).",
+         "# Poses are world frame: x_m, y_m, yaw_rad of the robot base.",
+         "lanes:"]
+    for lane in lanes:
+        sx, sy, syaw = lane["start"]
+        gx, gy, gyaw = lane["goal"]
+        y += [f"  - lane: {lane['lane']}",
+              f"    name: {lane['name']}",
+              f"    feature: \"{lane['feature']}\"",
+              f"    start: {{x_m: {f(sx)}, y_m: {f(sy)}, yaw_rad: {f(syaw)}}}",
+              f"    goal: {{x_m: {f(gx)}, y_m: {f(gy)}, yaw_rad: {f(gyaw)}}}",
+              f"    pioneer3at: \"{lane['pioneer3at']}\""]
+    write("terraces_lanes.yaml", "\n".join(y) + "\n")
+
+
 def terrain_at(heights, n, half, x, y, lo):
     """Terrain height (relative to the lowest point) at (x, y), bilinear."""
     cx = (x + half) / (2 * half) * (n - 1)
@@ -627,3 +754,4 @@ if __name__ == "__main__":
     apartment()
     arena()
     outdoor()
+    terraces()

@@ -41,8 +41,9 @@ TEST_F(WorldsTest, EveryShippedWorldHostsEveryRobot) {
     Scenario s = WorldOnly(world);
     SpawnPose at;
     // Free floor in each world (the apartment's living room, the arena's hall).
-    at.x_m = world == "tunnel" ? 4.0 : world == "apartment" ? 1.5 : world == "arena" ? 5.0 : 0.0;
-    at.y_m = world == "tunnel" ? 6.0 : world == "apartment" ? 3.0 : world == "arena" ? 3.0 : 0.0;
+    const bool lanes = world == "tunnel" || world == "terraces";
+    at.x_m = lanes ? 4.0 : world == "apartment" ? 1.5 : world == "arena" ? 5.0 : 0.0;
+    at.y_m = lanes ? 6.0 : world == "apartment" ? 3.0 : world == "arena" ? 3.0 : 0.0;
     int k = 0;
     for (const std::string& model : paths.ShippedRobots()) {
       SpawnPose p = at;
@@ -101,6 +102,43 @@ TEST_F(WorldsTest, TunnelLanesMatchTheirContract) {
   EXPECT_GT(SurfaceZ(sim, 23.0, 8.0), 1.4);
   EXPECT_GT(SurfaceZ(sim, 23.0, 12.0), 1.4);
   EXPECT_GT(SurfaceZ(sim, 24.05, 10.0), 1.4);
+}
+
+TEST_F(WorldsTest, TerracesLanesMatchTheirContract) {
+  Scenario s = WorldOnly("terraces");
+  MujocoSim sim(s);
+  common::YamlMap doc =
+      common::YamlMap::LoadFile(testing::TestPaths().data_dir + "/worlds/terraces_lanes.yaml");
+  YAML::Node lanes = doc.Raw("lanes");
+  ASSERT_EQ(lanes.size(), 5u);
+  for (const auto& lane : lanes) {
+    SCOPED_TRACE(lane["name"].as<std::string>());
+    const double sx = lane["start"]["x_m"].as<double>(), sy = lane["start"]["y_m"].as<double>();
+    const double gx = lane["goal"]["x_m"].as<double>(), gy = lane["goal"]["y_m"].as<double>();
+    EXPECT_NEAR(SurfaceZ(sim, sx, sy), 0.0, 1e-9);  // start and goal on the floor
+    EXPECT_NEAR(SurfaceZ(sim, gx, gy), 0.0, 1e-9);
+    const int k = lane["lane"].as<int>();
+    EXPECT_NEAR(sy, 4.0 * k + 2.0, 1e-9);
+    EXPECT_GT(SurfaceZ(sim, 12.0, 4.0 * k), 1.4);  // walls on both sides
+    EXPECT_GT(SurfaceZ(sim, 12.0, 4.0 * k + 4.0), 1.4);
+  }
+  const double tan5 = std::tan(5.0 * M_PI / 180.0);
+  // Lane 0: a 5 deg ramp to an 8 cm platform that ends in a drop at x = 12.
+  EXPECT_NEAR(SurfaceZ(sim, 8.5, 2.0), 0.5 * tan5, 1e-5);
+  EXPECT_NEAR(SurfaceZ(sim, 11.9, 2.0), 0.08, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 12.1, 2.0), 0.0, 1e-9);
+  // Lane 1: the same with 12 cm.
+  EXPECT_NEAR(SurfaceZ(sim, 11.9, 6.0), 0.12, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 12.1, 6.0), 0.0, 1e-9);
+  // Lanes 2 and 3: ditches 0.2 m wide and 0.1 m deep, 0.6 m wide and 0.25 m deep.
+  EXPECT_NEAR(SurfaceZ(sim, 10.1, 10.0), -0.10, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 9.95, 10.0), 0.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 10.25, 10.0), 0.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 10.3, 14.0), -0.25, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 10.65, 14.0), 0.0, 1e-9);
+  // Lane 4: the drop on the south half, a 5 deg ramp down on the north half.
+  EXPECT_NEAR(SurfaceZ(sim, 12.1, 17.0), 0.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 12.5, 19.0), 0.08 - 0.5 * tan5, 1e-5);
 }
 
 TEST_F(WorldsTest, ApartmentRoomsDoorsAndPlaces) {
