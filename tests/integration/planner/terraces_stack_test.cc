@@ -1,0 +1,96 @@
+// Directed terrain closed loop: cairn-sim in the terraces world (one Pioneer 3-AT: step up 3 cm,
+// step down 10 cm, ditches up to 0.10 m), cairn-mapper and cairn-navigator under cairn-launch.
+// Lanes, starts and goals: simulator/worlds/terraces_lanes.yaml. The verdicts depend on the
+// direction of travel: an 8 cm drop may be driven down, never up.
+
+#include <gtest/gtest.h>
+
+#include "tests/integration/planner/navigator_stack_fixture.h"
+
+namespace cairn::planner {
+namespace {
+
+using namespace testing_stack;  // NOLINT: the fixture and its helpers
+
+class TerracesStackTest : public NavigatorStackTest {
+ protected:
+  TerracesStackTest() : NavigatorStackTest("terraces") {}
+
+  // The footprint never touched the lane walls at y = 4k and 4k + 4 (0.2 m thick).
+  void ExpectClearOfTheWalls(int lane) {
+    const double y0 = 4.0 * lane, y1 = y0 + 4.0;
+    for (const auto& p : Poses()) {
+      const auto fp = FootprintAt(ToPose2(p));
+      ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, y0 - 0.1, 24.0, y0 + 0.1), 0.0))
+          << "touched the south wall at x " << p.position_m[0];
+      ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, y1 - 0.1, 24.0, y1 + 0.1), 0.0))
+          << "touched the north wall at x " << p.position_m[0];
+    }
+  }
+};
+
+TEST_F(TerracesStackTest, DrivesUpTheRampAndOffTheEightCentimetreDrop) {
+  // Lane 0: a 5 deg ramp up to an 8 cm platform that ends in an 8 cm drop at x = 12, wall to
+  // wall. Down the drop is the only way to the goal, and 8 cm is within the 10 cm step down.
+  // The 12 m horizon keeps the robot from looking for another way through the unexplored lanes.
+  StartStack(4.0, 2.0, 0.0, HorizonNavigatorConfig());
+  ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
+  SendGoal(11, 15.0, 2.0);
+  ASSERT_TRUE(WaitState(kStateReached, 150.0)) << StatusText();
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  const double start_z = poses.front().position_m[2];
+  double top_z = start_z;
+  for (const auto& p : poses) top_z = std::max(top_z, p.position_m[2]);
+  EXPECT_GT(top_z - start_z, 0.06) << "it never drove over the platform";
+  const auto& last = poses.back();
+  EXPECT_LT(std::hypot(last.position_m[0] - 15.0, last.position_m[1] - 2.0), 0.5);
+  EXPECT_NEAR(last.position_m[2] - start_z, 0.0, 0.02) << "not back on the floor";
+  ExpectClearOfTheWalls(0);
+}
+
+TEST_F(TerracesStackTest, NeverClimbsTheEightCentimetreDropFromBelow) {
+  // Lane 0 the other way: from the floor past the drop back to the start. Climbing 8 cm exceeds
+  // the 3 cm step up, and the lane walls leave no other way: no path, and the footprint never
+  // reaches the platform (x 8.9..12).
+  ExpectNoPathNeverEntering(15.0, 2.0, 12, 4.0, Box(8.9, 0.1, 12.0, 3.9), 110.0, true, 180.0);
+}
+
+TEST_F(TerracesStackTest, NeverDrivesOffTheTwelveCentimetreDrop) {
+  // Lane 1: the same terrace with a 12 cm drop (over the 10 cm step down). The robot may climb
+  // the ramp to look, but never crosses the edge at x = 12.
+  ExpectNoPathNeverEntering(4.0, 6.0, 13, 15.0, Box(12.0, 4.1, 24.0, 7.9), 150.0, false);
+}
+
+TEST_F(TerracesStackTest, NeverClimbsTheTwelveCentimetreDropFromBelow) {
+  ExpectNoPathNeverEntering(15.0, 6.0, 14, 4.0, Box(9.4, 4.1, 12.0, 7.9), 110.0, true, 180.0);
+}
+
+TEST_F(TerracesStackTest, ClimbsTheRampBesideTheOneWayDropInsteadOfTheDrop) {
+  // Lane 4 from the far end: at x = 12 the platform drops 8 cm on the south half (y < 18) and
+  // falls along a 5 deg ramp on the north half. The robot must go round to the ramp.
+  StartStack(15.0, 18.0, 180.0, HorizonNavigatorConfig());
+  ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
+  SendGoal(15, 4.0, 18.0);
+  ASSERT_TRUE(WaitState(kStateReached, 150.0)) << StatusText();
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  const auto& last = poses.back();
+  EXPECT_LT(std::hypot(last.position_m[0] - 4.0, last.position_m[1] - 18.0), 0.5);
+  // The drop's face: the footprint never straddled it.
+  const auto face = Box(11.95, 16.1, 12.05, 17.95);
+  for (const auto& p : poses) {
+    ASSERT_FALSE(ConvexOverlap(FootprintAt(ToPose2(p)), face, 0.0))
+        << "climbed the drop at x " << p.position_m[0] << ", y " << p.position_m[1];
+  }
+  ExpectClearOfTheWalls(4);
+}
+
+TEST_F(TerracesStackTest, NeverEntersADitchWiderThanItsProfileAllows) {
+  // Lane 2: a 0.2 m wide, 0.1 m deep ditch at x 10.0..10.2, wall to wall; the pioneer3at
+  // bridges ditches up to 0.10 m only.
+  ExpectNoPathNeverEntering(4.0, 10.0, 16, 15.0, Box(10.0, 8.1, 10.2, 11.9), 110.0, true);
+}
+
+}  // namespace
+}  // namespace cairn::planner
