@@ -11,6 +11,9 @@
 #include <optional>
 #include <regex>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -69,7 +72,7 @@ class NavigatorStackTest : public ::testing::Test {
   }
 
   // The mapper's shipped configuration with the cost layer published every 0.2 s (more often
-  // than the navigator's 0.5 s age limit) and only the pioneer3at profile.
+  // than the navigator's 0.5 s age limit) and only the test's profile.
   std::string MapperConfig() {
     std::ifstream in(testing::SourcePath("config/mapping/mapper.yaml"));
     std::stringstream text;
@@ -78,7 +81,7 @@ class NavigatorStackTest : public ::testing::Test {
     yaml = std::regex_replace(yaml, std::regex("\\npublish_period_s: [0-9.]+"),
                               "\npublish_period_s: 0.2");
     yaml = std::regex_replace(yaml, std::regex("\\nprofiles: \\[[^\\]]*\\]"),
-                              "\nprofiles: [pioneer3at]");
+                              "\nprofiles: [" + profile_arg_ + "]");
     const std::string path = procs_.dir() + "/mapper.yaml";
     std::ofstream(path) << yaml;
     return path;
@@ -141,7 +144,7 @@ class NavigatorStackTest : public ::testing::Test {
           << "    required: false\n"  // one test kills it and watches the navigator stop
           << "  navigator:\n"
           << "    command: " << testing::BinPath("cairn-navigator") << "\n"
-          << "    args: [--robot, " << kRobot << ", --profile, pioneer3at"
+          << "    args: [--robot, " << kRobot << ", --profile, " << profile_arg_
           << (nav_config.empty() ? std::string() : ", --config, " + nav_config) << "]\n"
           << "    robot: " << kRobot << "\n"
           << "    depends_on: [mapper]\n"
@@ -176,7 +179,7 @@ class NavigatorStackTest : public ::testing::Test {
     for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kMapManifest))) {
       cairn::lcmt_grid_manifest m;
       if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) >= 0 &&
-          m.layer == "cost/pioneer3at" && m.num_tiles > 0) {
+          m.layer == "cost/" + profile_ && m.num_tiles > 0) {
         return true;
       }
     }
@@ -189,7 +192,7 @@ class NavigatorStackTest : public ::testing::Test {
     for (const auto& bytes : bus_.Kept(ch::ForRobot(kRobot, ch::kMapManifest))) {
       cairn::lcmt_grid_manifest m;
       if (m.decode(bytes.data(), 0, static_cast<int>(bytes.size())) >= 0 &&
-          m.layer == "cost/pioneer3at") {
+          m.layer == "cost/" + profile_) {
         v = std::max(v, m.layer_version);
       }
     }
@@ -288,6 +291,28 @@ class NavigatorStackTest : public ::testing::Test {
     }
   }
 
+  // Mapper and navigator serve the profile `name`: config/profiles/<base>.yaml with its name and
+  // the `overrides` ("key" -> "value") changed, written to the test's folder. Call before
+  // StartStack. The simulated robot stays a Pioneer 3-AT.
+  void UseProfile(const std::string& name, const std::string& base,
+                  const std::vector<std::pair<std::string, std::string>>& overrides) {
+    std::ifstream in(testing::SourcePath("config/profiles/" + base + ".yaml"));
+    std::stringstream text;
+    text << in.rdbuf();
+    std::string yaml =
+        std::regex_replace(text.str(), std::regex("\nname: [a-z0-9_]+"), "\nname: " + name);
+    for (const auto& [key, value] : overrides) {
+      const std::string before = yaml;
+      yaml =
+          std::regex_replace(yaml, std::regex("\n" + key + ": [^\n]*"), "\n" + key + ": " + value);
+      EXPECT_NE(yaml, before) << base << ".yaml no longer names " << key;
+    }
+    profile_ = name;
+    profile_arg_ = procs_.dir() + "/" + name + ".yaml";
+    std::ofstream(profile_arg_) << yaml;
+    footprint_ = common::LoadRobotProfileFile(profile_arg_).footprint_m;
+  }
+
   // The footprint polygon at a pose.
   std::vector<Vector2> FootprintAt(const Pose2& pose) const {
     std::vector<Vector2> out;
@@ -310,6 +335,8 @@ class NavigatorStackTest : public ::testing::Test {
   }
 
   std::string world_;
+  std::string profile_{"pioneer3at"};      // served and driven
+  std::string profile_arg_{"pioneer3at"};  // its name or YAML path, as the processes take it
   std::string url_;
   ProcessSet procs_;
   Bus bus_;

@@ -87,9 +87,37 @@ TEST_F(TerracesStackTest, ClimbsTheRampBesideTheOneWayDropInsteadOfTheDrop) {
 }
 
 TEST_F(TerracesStackTest, NeverEntersADitchWiderThanItsProfileAllows) {
-  // Lane 2: a 0.2 m wide, 0.1 m deep ditch at x 10.0..10.2, wall to wall; the pioneer3at
-  // bridges ditches up to 0.10 m only.
-  ExpectNoPathNeverEntering(4.0, 10.0, 16, 15.0, Box(10.0, 8.1, 10.2, 11.9), 110.0, true);
+  // Lane 3: a 0.6 m wide, 0.25 m deep ditch at x 10.0..10.6, wall to wall; the rover's profile
+  // bridges 0.30 m (it crosses the 0.15 m ditch of lane 2, below).
+  UseProfile("rover", "rover", {});
+  ExpectNoPathNeverEntering(4.0, 14.0, 16, 15.0, Box(10.0, 12.1, 10.6, 15.9), 110.0, true);
+}
+
+TEST_F(TerracesStackTest, AProfileThatStepsUpTwelveCentimetresClimbsTheEightCentimetreDrop) {
+  // Lane 0 from the floor past the drop, with the pioneer3at's profile allowed 12 cm steps up:
+  // the drop is now the way back.
+  UseProfile("climber", "pioneer3at", {{"max_step_up_m", "0.12"}});
+  StartStack(15.0, 2.0, 180.0, HorizonNavigatorConfig());
+  ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
+  SendGoal(17, 4.0, 2.0);
+  ASSERT_TRUE(WaitState(kStateReached, 150.0)) << StatusText();
+  const auto poses = Poses();
+  ASSERT_FALSE(poses.empty());
+  const auto& last = poses.back();
+  EXPECT_LT(std::hypot(last.position_m[0] - 4.0, last.position_m[1] - 2.0), 0.5);
+  ExpectClearOfTheWalls(0);
+}
+
+TEST_F(TerracesStackTest, TheRoverBridgesADitchNarrowerThanItsProfileAllows) {
+  // Lane 2: the 0.15 m ditch that stops the pioneer3at; the rover's profile bridges 0.30 m.
+  UseProfile("rover", "rover", {});
+  StartStack(4.0, 10.0, 0.0, HorizonNavigatorConfig());
+  ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
+  SendGoal(18, 15.0, 10.0);
+  ASSERT_TRUE(WaitState(kStateReached, 150.0)) << StatusText();
+  const auto& last = Poses().back();
+  EXPECT_LT(std::hypot(last.position_m[0] - 15.0, last.position_m[1] - 10.0), 0.5);
+  ExpectClearOfTheWalls(2);
 }
 
 }  // namespace
