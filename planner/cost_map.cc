@@ -34,9 +34,8 @@ void CostMapParams::Validate() const {
   CAIRN_THROW_UNLESS(
       std::isfinite(unknown_cost) && unknown_cost >= 0.0f && unknown_cost < lethal_cost,
       "unknown_cost must lie in [0, lethal_cost), got " << unknown_cost);
-  CAIRN_THROW_UNLESS(
-      std::isfinite(one_way_cost) && one_way_cost >= 0.0f && one_way_cost < lethal_cost,
-      "one_way_cost must lie in [0, lethal_cost), got " << one_way_cost);
+  CAIRN_THROW_UNLESS(std::isfinite(one_way_cost) && one_way_cost >= 0.0f,
+                     "one_way_cost must be finite and >= 0, got " << one_way_cost);
 }
 
 int HeadingClass(double heading_grid_rad) {
@@ -129,6 +128,8 @@ CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
 // one-way masks.
 void CostMap::ReadDirected(const common::Layer& directed) {
   has_directed_ = true;
+  // Graded: never as high as the lethal cost.
+  const float one_way = std::min(params_.one_way_cost, std::nextafter(params_.lethal_cost, 0.0f));
   const int64_t n = geometry_.num_cells();
   const float* d = directed.data();
   float* c = cost_.data();
@@ -145,8 +146,7 @@ void CostMap::ReadDirected(const common::Layer& directed) {
     one_way_mask_[i] = static_cast<uint8_t>(mask);
     ++one_way_cells_;
     if (!std::isnan(c[i])) {
-      c[i] = c[i] >= params_.lethal_cost ? params_.one_way_cost
-                                         : std::max(c[i], params_.one_way_cost);
+      c[i] = c[i] >= params_.lethal_cost ? one_way : std::max(c[i], one_way);
     }
   }
 }

@@ -52,8 +52,9 @@ struct CostMapParams {
   /// Margin around the footprint for FootprintKind::kPadded (the global planner's states), so
   /// that poses between the states it checked keep clear too.
   double planning_padding_m{0.05};
-  /// Cost of a one-way cell (only with a directed layer, see the file comment), in
-  /// [0, lethal_cost): graded high, so paths cross steps where they must and not along them.
+  /// Cost of a one-way cell (only with a directed layer, see the file comment), >= 0: graded
+  /// high, so paths cross steps where they must and not along them. At or above lethal_cost it
+  /// reads as the highest graded cost below it.
   float one_way_cost{90.0f};
 
   /// @throws std::invalid_argument naming the bad field.

@@ -403,12 +403,16 @@ bool PlanRun::Finish() {
   for (const ob::State* s : chosen.getStates()) poses.push_back(internal::ToPose(s));
   if (params_.state_space == StateSpaceKind::kSE2) {
     // A wheeled robot drives along the path: headings follow the direction of travel where
-    // the footprint fits that way (OMPL's validated heading is kept elsewhere).
+    // the footprint fits that way, and one-way cells allow the motions to and from it (OMPL's
+    // validated heading is kept elsewhere).
     for (size_t i = 0; i + 1 < poses.size(); ++i) {
       const Vector2 d = poses[i + 1].position() - poses[i].position();
       if (d.norm() < 1e-6) continue;
       const Pose2 along{poses[i].x_m, poses[i].y_m, std::atan2(d.y(), d.x())};
-      if (map_.IsValid(along)) poses[i] = along;
+      if (map_.IsValid(along) && (i == 0 || map_.MotionAllowed(poses[i - 1], along)) &&
+          map_.MotionAllowed(along, poses[i + 1])) {
+        poses[i] = along;
+      }
     }
   }
   result_.length_m = internal::PositionLength(poses);
