@@ -288,10 +288,16 @@ bool PlanRun::Solve() {
 // Shortcutting passes until they stop helping (or the time cap): deterministic for a seed.
 void PlanRun::Simplify(og::PathSimplifier& simplifier, og::PathGeometric* path) const {
   const auto t_start = Clock::now();
+  // OMPL's shortcutPath checks some shortcuts backwards (from the later point to the earlier
+  // one): on a map with one-way cells a pass whose result drives the wrong way is undone.
+  const bool directed = map_.one_way_cells() > 0;
   for (int pass = 0; pass < 8; ++pass) {
     const double before = path->length();
     simplifier.reduceVertices(*path, 0, 0, 0.33);
+    const std::optional<og::PathGeometric> kept =
+        directed ? std::optional<og::PathGeometric>(*path) : std::nullopt;
     simplifier.shortcutPath(*path, kShortcutSteps, kShortcutSteps / 4, 0.33, 0.005);
+    if (kept && !path->check()) *path = *kept;
     simplifier.collapseCloseVertices(*path);
     if (path->length() > before - 1e-3 || SecondsSince(t_start) > params_.simplify_time_s) break;
   }
@@ -349,7 +355,9 @@ bool PlanRun::Improve(og::PathSimplifier& simplifier) {
     if (const auto& hybrid = hybridization.getHybridPath()) {
       og::PathGeometric merged = *hybrid;
       if (params_.simplify_time_s > 0.0) Simplify(simplifier, &merged);
-      if (objective->isCostBetterThan(merged.cost(objective), best_->cost(objective))) {
+      // The hybridization graph is undirected: on a map with one-way cells check the result.
+      if ((map_.one_way_cells() == 0 || merged.check()) &&
+          objective->isCostBetterThan(merged.cost(objective), best_->cost(objective))) {
         best_ = merged;
       }
     }
