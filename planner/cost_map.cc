@@ -80,11 +80,10 @@ CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
                                       << " cells but the grid is " << geometry_.size_x << " x "
                                       << geometry_.size_y);
   if (directed) {
-    CAIRN_THROW_UNLESS(
-        directed->rows() == geometry_.size_x && directed->cols() == geometry_.size_y,
-        "directed layer is " << directed->rows() << " x " << directed->cols()
-                             << " cells but the grid is " << geometry_.size_x << " x "
-                             << geometry_.size_y);
+    CAIRN_THROW_UNLESS(directed->rows() == geometry_.size_x && directed->cols() == geometry_.size_y,
+                       "directed layer is " << directed->rows() << " x " << directed->cols()
+                                            << " cells but the grid is " << geometry_.size_x
+                                            << " x " << geometry_.size_y);
     ReadDirected(*directed);
   }
   cos_origin_ = std::cos(geometry_.origin.yaw_rad);

@@ -6,9 +6,9 @@
 #include <mutex>
 #include <string>
 
+#include <ompl/base/DiscreteMotionValidator.h>
 #include <ompl/base/Goal.h>
 #include <ompl/base/ScopedState.h>
-#include <ompl/base/DiscreteMotionValidator.h>
 #include <ompl/base/StateValidityChecker.h>
 #include <ompl/base/goals/GoalSampleableRegion.h>
 #include <ompl/base/objectives/PathLengthOptimizationObjective.h>

@@ -52,9 +52,9 @@ struct OmplProblem {
 /// space of params.state_space bounded by the known cells, start and goal grown by
 /// bounds_margin_m within the grid, sampling ridge cells and aligned headings; states checked
 /// with the padded footprint away from the ends; on a map with one-way cells, motions also
-/// checked for their direction of travel (CostMap::MotionAllowed); the goal a state (`goal_has_yaw`) or the goal
-/// position with any of `goal_yaws`; the objective length plus traversal cost; the named
-/// planner with its range.
+/// checked for their direction of travel (CostMap::MotionAllowed); the goal a state
+/// (`goal_has_yaw`) or the goal position with any of `goal_yaws`; the objective length plus
+/// traversal cost; the named planner with its range.
 OmplProblem SetUpProblem(const CostMap& map, const GlobalPlannerParams& params,
                          const common::Pose2& start, const common::Pose2& goal, bool goal_has_yaw,
                          const std::vector<double>& goal_yaws);

@@ -130,8 +130,7 @@ void LcmMapClient::AttachDirected(AssembledLayer* assembled) {
 // A directed version that changed, or completed, under the cost version in use: that cost
 // version again with it.
 void LcmMapClient::RefreshDirected() {
-  if (params_.directed_layer.empty() || policy_.built_version() < 0 ||
-      policy_.built_incomplete() ||
+  if (params_.directed_layer.empty() || policy_.built_version() < 0 || policy_.built_incomplete() ||
       assembler_.version(params_.layer) != policy_.built_version()) {
     return;
   }

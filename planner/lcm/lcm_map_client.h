@@ -13,8 +13,8 @@
 #include "planner/cost_map.h"
 #include "planner/map_snapshot_policy.h"
 #include "planner/map_source.h"
-#include "services/runtime/node.h"
 #include "services/runtime/layer_assembler.h"
+#include "services/runtime/node.h"
 #include "services/runtime/tiler.h"
 
 /// @file
@@ -36,7 +36,7 @@ namespace cairn::planner {
 
 struct LcmMapClientParams {
   std::string robot;
-  std::string layer;     ///< "cost/<profile>" (kCost), or "final", "long_term"... (kOccupancy)
+  std::string layer;  ///< "cost/<profile>" (kCost), or "final", "long_term"... (kOccupancy)
   /// "directed/<profile>" to read beside a cost layer; "" (default): none.
   std::string directed_layer;
   std::string map_name;  ///< accept only this map name ("" = any)

@@ -114,8 +114,8 @@ bool BruteForceAllowed(const CostMap& map, const Pose2& from, const Pose2& to) {
   if (d.norm() < 1e-9) return true;
   const uint8_t bits = HeadingClassBits(HeadingClass(std::atan2(d.y(), d.x())));
   const double turn = common::WrapAngle(to.yaw_rad - from.yaw_rad);
-  const double sweep = d.norm() + map.footprint().circumscribed_radius_m() /
-                                      map.resolution_m() * std::abs(turn);
+  const double sweep =
+      d.norm() + map.footprint().circumscribed_radius_m() / map.resolution_m() * std::abs(turn);
   const int n = std::max(1, static_cast<int>(std::ceil(sweep / 0.5)));
   std::vector<RowSpan> spans;
   for (int k = 0; k <= n; ++k) {
@@ -191,9 +191,9 @@ TEST(CostMapDirectedTest, OneWayCellsCostAndTheOtherMaskValues) {
   EXPECT_LT(high.cost()(9, 9), 100.0f);
   EXPECT_TRUE(high.IsValid({0.95, 0.95, 0.0}));
   // Another size is refused; no directed layer reads the cost layer alone.
-  EXPECT_THROW(CostMap(layer.geometry, layer.cost, common::Layer::Zero(3, 3),
-                       testing::SmallFootprint()),
-               std::invalid_argument);
+  EXPECT_THROW(
+      CostMap(layer.geometry, layer.cost, common::Layer::Zero(3, 3), testing::SmallFootprint()),
+      std::invalid_argument);
   const CostMap plain(layer.geometry, layer.cost, std::nullopt, testing::SmallFootprint());
   EXPECT_FALSE(plain.has_directed());
   EXPECT_EQ(plain.one_way_cells(), 0);

@@ -137,8 +137,7 @@ struct DirectedTestLayer {
   }
   std::shared_ptr<const CostMap> Build(const std::vector<common::Vector2>& footprint,
                                        CostMapParams params = {}) const {
-    return std::make_shared<const CostMap>(layer.geometry, layer.cost, directed, footprint,
-                                           params);
+    return std::make_shared<const CostMap>(layer.geometry, layer.cost, directed, footprint, params);
   }
 };
 

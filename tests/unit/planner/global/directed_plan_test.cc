@@ -33,8 +33,8 @@ void ExpectDrivable(const CostMap& map, const PlanResult& r) {
     if (i > 0) {
       EXPECT_TRUE(map.MotionAllowed(r.poses[i - 1], r.poses[i]))
           << i << ": (" << r.poses[i - 1].x_m << ", " << r.poses[i - 1].y_m << ", "
-          << r.poses[i - 1].yaw_rad << ") to (" << r.poses[i].x_m << ", " << r.poses[i].y_m
-          << ", " << r.poses[i].yaw_rad << ")";
+          << r.poses[i - 1].yaw_rad << ") to (" << r.poses[i].x_m << ", " << r.poses[i].y_m << ", "
+          << r.poses[i].yaw_rad << ")";
     }
   }
 }

@@ -12,15 +12,13 @@
 #include "common/channels.h"
 #include "common/layers.h"
 #include "services/runtime/tiler.h"
-#include "tests/unit/planner/test_maps.h"
 #include "tests/support/memq_node.h"
+#include "tests/unit/planner/test_maps.h"
 
 namespace cairn::planner {
 namespace {
 
-runtime::NodeOptions Options() {
-  return cairn::testing::MemqNodeOptions("cairn-navigator", "r1");
-}
+runtime::NodeOptions Options() { return cairn::testing::MemqNodeOptions("cairn-navigator", "r1"); }
 
 LcmMapClientParams OccupancyParams() {
   LcmMapClientParams p;
@@ -180,8 +178,8 @@ LcmMapClientParams DirectedParams() {
 TEST_F(LcmMapClientTest, ReadsTheDirectedLayerBesideTheCostLayer) {
   auto dut = Client(DirectedParams());
   const common::GridMap map = CostAndDirected();
-  const auto cost = tiler_.Update(map, layers::CostLayer("pioneer3at"),
-                                  runtime::TileEncoding::kFloat, ++utime_);
+  const auto cost =
+      tiler_.Update(map, layers::CostLayer("pioneer3at"), runtime::TileEncoding::kFloat, ++utime_);
   for (const auto& t : cost.tiles) dut->OnTile(t);
   dut->OnManifest(cost.manifest);
   // No directed tiles yet (an older mapper): the cost layer alone.
@@ -217,8 +215,8 @@ TEST_F(LcmMapClientTest, MissingDirectedTilesBlockEveryHeadingAndAreAskedFor) {
       channels::ForRobot("r1", channels::kMapTileResend),
       [&](const cairn::lcmt_tile_resend_request& r) { resends.push_back(r); });
   const common::GridMap map = CostAndDirected();
-  const auto cost = tiler_.Update(map, layers::CostLayer("pioneer3at"),
-                                  runtime::TileEncoding::kFloat, ++utime_);
+  const auto cost =
+      tiler_.Update(map, layers::CostLayer("pioneer3at"), runtime::TileEncoding::kFloat, ++utime_);
   const auto directed = tiler_.Update(map, layers::DirectedLayer("pioneer3at"),
                                       runtime::TileEncoding::kFloat, ++utime_);
   for (const auto& t : directed.tiles) {
