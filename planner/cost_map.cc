@@ -158,14 +158,46 @@ uint8_t CostMap::OneWayMask(const CellIndex& cell) const {
 const Eigen::MatrixXf& CostMap::heading_block_distance_cells(int heading_class) const {
   CAIRN_DEMAND(heading_class >= 0 && heading_class < 8);
   std::call_once(class_once_[heading_class], [this, heading_class] {
-    GridMask refusing(geometry_.size_x, geometry_.size_y);
-    refusing.setZero();
+    // The transform runs over the refusing cells' bounding box grown by a margin; farther out
+    // the field holds the margin, a lower bound of the distance.
+    const int sx = geometry_.size_x, sy = geometry_.size_y;
     const uint8_t bits = HeadingClassBits(heading_class);
-    uint8_t* r = refusing.data();
-    for (size_t i = 0; i < one_way_mask_.size(); ++i) r[i] = (one_way_mask_[i] & bits) ? 1 : 0;
-    class_distance_[heading_class] = DistanceTransform(refusing);
+    int x0 = sx, y0 = sy, x1 = -1, y1 = -1;
+    for (size_t i = 0; i < one_way_mask_.size(); ++i) {
+      if (!(one_way_mask_[i] & bits)) continue;
+      const int ix = static_cast<int>(i % sx), iy = static_cast<int>(i / sx);
+      x0 = std::min(x0, ix);
+      x1 = std::max(x1, ix);
+      y0 = std::min(y0, iy);
+      y1 = std::max(y1, iy);
+    }
+    Eigen::MatrixXf& field = class_distance_[heading_class];
+    if (x1 < 0) {
+      field.setConstant(sx, sy, std::numeric_limits<float>::infinity());
+      return;
+    }
+    const int margin = ClassFieldMarginCells();
+    x0 = std::max(0, x0 - margin);
+    y0 = std::max(0, y0 - margin);
+    x1 = std::min(sx - 1, x1 + margin);
+    y1 = std::min(sy - 1, y1 + margin);
+    GridMask refusing(x1 - x0 + 1, y1 - y0 + 1);
+    for (int iy = y0; iy <= y1; ++iy) {
+      for (int ix = x0; ix <= x1; ++ix) {
+        refusing(ix - x0, iy - y0) =
+            (one_way_mask_[ix + static_cast<int64_t>(iy) * sx] & bits) ? 1 : 0;
+      }
+    }
+    field.setConstant(sx, sy, static_cast<float>(margin));
+    field.block(x0, y0, x1 - x0 + 1, y1 - y0 + 1) = DistanceTransform(refusing);
   });
   return class_distance_[heading_class];
+}
+
+int CostMap::ClassFieldMarginCells() const {
+  // Beyond every distance the fields are compared with: the padded footprint's reach (twice
+  // over, for the skipping along a motion) and any grid planner's clearance disc.
+  return std::max(64, static_cast<int>(std::ceil(4.0 * shapes_[1].circumscribed_cells)) + 8);
 }
 
 // True when a cell under the footprint at the pose has one of `bits`.

@@ -171,8 +171,9 @@ class CostMap {
   bool MotionAllowed(const common::Pose2& from, const common::Pose2& to,
                      FootprintKind kind = FootprintKind::kRobot) const;
   /// Distance in cells from every cell centre to the nearest one-way cell that refuses motions
-  /// of heading class `heading_class` (+infinity everywhere when none does). Computed once per
-  /// class, on first use.
+  /// of heading class `heading_class` (+infinity everywhere when none does), exact up to
+  /// ClassFieldMarginCells() (at least 64 cells; farther cells hold that margin, a lower bound).
+  /// Computed once per class, on first use, over the refusing cells' bounding box.
   const Eigen::MatrixXf& heading_block_distance_cells(int heading_class) const;
 
   /// Distance (m) from the cell holding the point to the nearest blocking cell, between cell
@@ -234,6 +235,7 @@ class CostMap {
   void ComputeComponents() const;
   void ReadDirected(const common::Layer& directed);
   bool DirectedReachable(const common::Vector2& a_world_m, const common::Vector2& b_world_m) const;
+  int ClassFieldMarginCells() const;
   bool FootprintCrosses(double x_cells, double y_cells, double yaw_grid_rad, const Shape& shape,
                         uint8_t bits) const;
 
