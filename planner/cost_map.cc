@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "common/check.h"
+#include "common/layers.h"
 
 namespace cairn::planner {
 
@@ -33,10 +34,44 @@ void CostMapParams::Validate() const {
   CAIRN_THROW_UNLESS(
       std::isfinite(unknown_cost) && unknown_cost >= 0.0f && unknown_cost < lethal_cost,
       "unknown_cost must lie in [0, lethal_cost), got " << unknown_cost);
+  CAIRN_THROW_UNLESS(std::isfinite(one_way_cost) && one_way_cost >= 0.0f,
+                     "one_way_cost must be finite and >= 0, got " << one_way_cost);
+}
+
+int HeadingClass(double heading_grid_rad) {
+  constexpr double kQuarter = M_PI / 2;
+  constexpr double kAxisTolerance = 1e-6;  // rad
+  double h = std::fmod(heading_grid_rad, 2.0 * M_PI);
+  if (h < 0.0) h += 2.0 * M_PI;
+  const double axes = h / kQuarter;
+  const double nearest = std::round(axes);
+  if (std::abs(axes - nearest) * kQuarter <= kAxisTolerance) {
+    return (2 * static_cast<int>(nearest)) % 8;
+  }
+  return (2 * static_cast<int>(std::floor(axes)) + 1) % 8;
+}
+
+uint8_t HeadingClassBits(int heading_class) {
+  CAIRN_DEMAND(heading_class >= 0 && heading_class < 8);
+  if (heading_class % 2 == 0) return static_cast<uint8_t>(1u << heading_class);
+  return static_cast<uint8_t>((1u << ((heading_class + 7) % 8)) | (1u << heading_class) |
+                              (1u << ((heading_class + 1) % 8)));
+}
+
+CellIndex HeadingStep(int bin) {
+  static const int kDx[8] = {1, 1, 0, -1, -1, -1, 0, 1};
+  static const int kDy[8] = {0, 1, 1, 1, 0, -1, -1, -1};
+  CAIRN_DEMAND(bin >= 0 && bin < 8);
+  return {kDx[bin], kDy[bin]};
 }
 
 CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
                  const std::vector<Vector2>& footprint_m, const CostMapParams& params)
+    : CostMap(geometry, std::move(cost), std::nullopt, footprint_m, params) {}
+
+CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
+                 std::optional<common::Layer> directed, const std::vector<Vector2>& footprint_m,
+                 const CostMapParams& params)
     : geometry_(geometry), cost_(std::move(cost)), params_(params) {
   geometry_.Validate();
   params_.Validate();
@@ -44,6 +79,13 @@ CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
                      "cost layer is " << cost_.rows() << " x " << cost_.cols()
                                       << " cells but the grid is " << geometry_.size_x << " x "
                                       << geometry_.size_y);
+  if (directed) {
+    CAIRN_THROW_UNLESS(directed->rows() == geometry_.size_x && directed->cols() == geometry_.size_y,
+                       "directed layer is " << directed->rows() << " x " << directed->cols()
+                                            << " cells but the grid is " << geometry_.size_x
+                                            << " x " << geometry_.size_y);
+    ReadDirected(*directed);
+  }
   cos_origin_ = std::cos(geometry_.origin.yaw_rad);
   sin_origin_ = std::sin(geometry_.origin.yaw_rad);
   // The robot's footprint and the padded one the global planner checks its states with.
@@ -79,6 +121,136 @@ CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
   if (max_x >= 0) known_cells_ = std::make_pair(CellIndex{min_x, min_y}, CellIndex{max_x, max_y});
   blocked_distance_ = DistanceTransform(blocked);
   nonfree_distance_ = DistanceTransform(nonfree);
+}
+
+// The directed masks into the cost layer (255: lethal; 1..254: one-way, not blocking) and the
+// one-way masks.
+void CostMap::ReadDirected(const common::Layer& directed) {
+  has_directed_ = true;
+  // Graded: never as high as the lethal cost.
+  const float one_way = std::min(params_.one_way_cost, std::nextafter(params_.lethal_cost, 0.0f));
+  const int64_t n = geometry_.num_cells();
+  const float* d = directed.data();
+  float* c = cost_.data();
+  for (int64_t i = 0; i < n; ++i) {
+    const float v = d[i];
+    if (std::isnan(v) || v == 0.0f) continue;
+    const bool whole = v >= 0.0f && v <= layers::kAllHeadingsBlocked && v == std::floor(v);
+    const int mask = whole ? static_cast<int>(v) : static_cast<int>(layers::kAllHeadingsBlocked);
+    if (mask == static_cast<int>(layers::kAllHeadingsBlocked)) {
+      c[i] = params_.lethal_cost;
+      continue;
+    }
+    if (one_way_mask_.empty()) one_way_mask_.assign(static_cast<size_t>(n), 0);
+    one_way_mask_[i] = static_cast<uint8_t>(mask);
+    ++one_way_cells_;
+    if (!std::isnan(c[i])) {
+      c[i] = c[i] >= params_.lethal_cost ? one_way : std::max(c[i], one_way);
+    }
+  }
+}
+
+uint8_t CostMap::OneWayMask(const CellIndex& cell) const {
+  if (one_way_mask_.empty() || !geometry_.Contains(cell)) return 0;
+  return one_way_mask_[geometry_.LinearIndex(cell)];
+}
+
+const Eigen::MatrixXf& CostMap::heading_block_distance_cells(int heading_class) const {
+  CAIRN_DEMAND(heading_class >= 0 && heading_class < 8);
+  std::call_once(class_once_[heading_class], [this, heading_class] {
+    // The transform runs over the refusing cells' bounding box grown by a margin; farther out
+    // the field holds the margin, a lower bound of the distance.
+    const int sx = geometry_.size_x, sy = geometry_.size_y;
+    const uint8_t bits = HeadingClassBits(heading_class);
+    int x0 = sx, y0 = sy, x1 = -1, y1 = -1;
+    for (size_t i = 0; i < one_way_mask_.size(); ++i) {
+      if (!(one_way_mask_[i] & bits)) continue;
+      const int ix = static_cast<int>(i % sx), iy = static_cast<int>(i / sx);
+      x0 = std::min(x0, ix);
+      x1 = std::max(x1, ix);
+      y0 = std::min(y0, iy);
+      y1 = std::max(y1, iy);
+    }
+    Eigen::MatrixXf& field = class_distance_[heading_class];
+    if (x1 < 0) {
+      field.setConstant(sx, sy, std::numeric_limits<float>::infinity());
+      return;
+    }
+    const int margin = ClassFieldMarginCells();
+    x0 = std::max(0, x0 - margin);
+    y0 = std::max(0, y0 - margin);
+    x1 = std::min(sx - 1, x1 + margin);
+    y1 = std::min(sy - 1, y1 + margin);
+    GridMask refusing(x1 - x0 + 1, y1 - y0 + 1);
+    for (int iy = y0; iy <= y1; ++iy) {
+      for (int ix = x0; ix <= x1; ++ix) {
+        refusing(ix - x0, iy - y0) =
+            (one_way_mask_[ix + static_cast<int64_t>(iy) * sx] & bits) ? 1 : 0;
+      }
+    }
+    field.setConstant(sx, sy, static_cast<float>(margin));
+    field.block(x0, y0, x1 - x0 + 1, y1 - y0 + 1) = DistanceTransform(refusing);
+  });
+  return class_distance_[heading_class];
+}
+
+int CostMap::ClassFieldMarginCells() const {
+  // Beyond every distance the fields are compared with: the padded footprint's reach (twice
+  // over, for the skipping along a motion) and any grid planner's clearance disc.
+  return std::max(64, static_cast<int>(std::ceil(4.0 * shapes_[1].circumscribed_cells)) + 8);
+}
+
+// True when a cell under the footprint at the pose has one of `bits`.
+bool CostMap::FootprintCrosses(double x_cells, double y_cells, double yaw_grid_rad,
+                               const Shape& shape, uint8_t bits) const {
+  thread_local std::vector<RowSpan> spans;
+  shape.rasterizer.Rasterize(x_cells, y_cells, yaw_grid_rad, geometry_.resolution_m, &spans);
+  const int sx = geometry_.size_x;
+  for (const RowSpan& span : spans) {
+    if (span.iy < 0 || span.iy >= geometry_.size_y) continue;
+    const uint8_t* row = one_way_mask_.data() + static_cast<int64_t>(span.iy) * sx;
+    for (int ix = std::max(0, span.ix_min); ix <= std::min(span.ix_max, sx - 1); ++ix) {
+      if (row[ix] & bits) return true;
+    }
+  }
+  return false;
+}
+
+bool CostMap::MotionAllowed(const Pose2& from, const Pose2& to, FootprintKind kind) const {
+  if (one_way_cells_ == 0) return true;
+  const Vector2 a = ToGridCells(from.position());
+  const Vector2 d = ToGridCells(to.position()) - a;
+  const double length = d.norm();
+  if (length < 1e-9) return true;  // a pure rotation crosses nothing
+  const int heading_class = HeadingClass(std::atan2(d.y(), d.x()));
+  const uint8_t bits = HeadingClassBits(heading_class);
+  const Eigen::MatrixXf& field = heading_block_distance_cells(heading_class);
+  const Shape& shape = shapes_[static_cast<int>(kind)];
+  const double yaw0 = ToGridYaw(from.yaw_rad);
+  const double turn = common::WrapAngle(to.yaw_rad - from.yaw_rad);
+  // Poses at most half a cell apart for every point of the footprint.
+  const double sweep = length + shape.circumscribed_cells * std::abs(turn);
+  const int n = std::max(1, static_cast<int>(std::ceil(sweep / 0.5)));
+  const double sample_cells = length / n;
+  // A cell the footprint touches at a position p has its centre within `reach` of the centre
+  // of p's cell; at a position s cells further on, within reach + s.
+  const double reach = shape.circumscribed_cells + 2.0 * kHalfDiagonal + kEps;
+  for (int k = 0; k <= n;) {
+    const double t = static_cast<double>(k) / n;
+    const Vector2 p = a + d * t;
+    double free_cells = -1.0;
+    if (p.x() >= 0.0 && p.y() >= 0.0 && p.x() < geometry_.size_x && p.y() < geometry_.size_y) {
+      free_cells = field(static_cast<int>(p.x()), static_cast<int>(p.y())) - reach;
+    }
+    if (free_cells > 0.0) {
+      if (std::isinf(free_cells)) return true;
+      k += std::max(1, static_cast<int>(std::ceil(free_cells / sample_cells)) - 1);
+      continue;
+    }
+    if (FootprintCrosses(p.x(), p.y(), yaw0 + t * turn, shape, bits)) return false;
+    ++k;
+  }
+  return true;
 }
 
 Vector2 CostMap::ToGridCells(const Vector2& world_m) const {
@@ -409,7 +581,50 @@ int CostMap::ComponentOf(const Vector2& world_m) const {
 
 bool CostMap::MaybeConnected(const Vector2& a_world_m, const Vector2& b_world_m) const {
   const int a = ComponentOf(a_world_m);
-  return a >= 0 && a == ComponentOf(b_world_m);
+  if (a < 0 || a != ComponentOf(b_world_m)) return false;
+  return one_way_cells_ == 0 || DirectedReachable(a_world_m, b_world_m);
+}
+
+// Breadth-first search from a's cell over the passable cells (those of the components) by the
+// steps the one-way cells allow. A step towards heading bin k is refused when a one-way cell
+// refusing heading class k lies within the passability threshold (the inscribed radius less
+// kInnerSlack) of either cell's centre: such a cell lies under the inscribed disc wherever the
+// robot is in that cell, and a robot crossing from one cell into the other moves with a
+// displacement of that class or of a neighbouring open quadrant, which that cell's bits refuse
+// too. So a drivable path makes a route, and "unreachable" proves that none exists.
+bool CostMap::DirectedReachable(const Vector2& a_world_m, const Vector2& b_world_m) const {
+  const double inscribed = shapes_[0].inscribed_cells;
+  if (inscribed <= 0.0) return true;  // with the origin outside the footprint: no proof
+  const auto a = geometry_.IndexOf(a_world_m);
+  const auto b = geometry_.IndexOf(b_world_m);
+  if (!a || !b) return false;
+  const int sx = geometry_.size_x;
+  const int sy = geometry_.size_y;
+  const float threshold = static_cast<float>(std::max(0.0, inscribed - kInnerSlack - 1e-3));
+  std::array<const float*, 8> refused;
+  for (int k = 0; k < 8; ++k) refused[k] = heading_block_distance_cells(k).data();
+  const int64_t target = geometry_.LinearIndex(*b);
+  std::vector<uint8_t> seen(static_cast<size_t>(geometry_.num_cells()), 0);
+  std::vector<int64_t> stack = {geometry_.LinearIndex(*a)};
+  seen[stack.back()] = 1;
+  while (!stack.empty()) {
+    const int64_t i = stack.back();
+    stack.pop_back();
+    if (i == target) return true;
+    const int ix = static_cast<int>(i % sx);
+    const int iy = static_cast<int>(i / sx);
+    for (int k = 0; k < 8; ++k) {
+      const CellIndex step = HeadingStep(k);
+      const int nx = ix + step.ix, ny = iy + step.iy;
+      if (nx < 0 || ny < 0 || nx >= sx || ny >= sy) continue;
+      const int64_t j = nx + static_cast<int64_t>(ny) * sx;
+      if (seen[j] || components_[j] < 0) continue;
+      if (refused[k][i] <= threshold || refused[k][j] <= threshold) continue;
+      seen[j] = 1;
+      stack.push_back(j);
+    }
+  }
+  return false;
 }
 
 }  // namespace cairn::planner

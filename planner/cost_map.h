@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -17,6 +18,25 @@
 /// 100 lethal, NaN unknown) with the robot's footprint, answering the questions both planners
 /// ask: is this pose valid, what does the footprint cost, how far is the nearest obstacle, and
 /// can two points possibly be connected.
+///
+/// With the profile's directed layer ("directed/<profile>", common/layers.h) beside the cost
+/// layer, steps and slopes may be one-way: a cell the directed layer lets the robot leave in some
+/// headings but not others (a mask in 1..254) is a one-way cell. It does not block poses (the
+/// cost layer has it lethal; here it costs CostMapParams::one_way_cost) and MotionAllowed()
+/// refuses the motions that drive over it in a heading it blocks. A mask of 255 blocks like a
+/// lethal cell. Without a directed layer everything reads the cost layer alone.
+///
+/// The crossing rule (conservative): a motion whose displacement has grid-frame heading theta
+/// crosses bit k of a cell under the footprint when a point moving at theta can leave the cell
+/// into its neighbour k: into an edge neighbour (even k) whenever the displacement has a
+/// positive component towards it, |theta - k*45 deg| < 90 deg; into a diagonal neighbour (odd
+/// k), which touches the cell at one corner only, when theta lies strictly between the two axes
+/// around k, |theta - k*45 deg| < 45 deg. So a motion along +x exactly is refused by bit 0 only,
+/// one at 30 deg by bits 0, 1 and 2; a robot driving along the foot of a step (parallel to it) is
+/// not refused by the step's "up" bits, one turning into it is. Every cell under the footprint
+/// anywhere along the motion counts, also cells whose neighbour the footprint never reaches (the
+/// conservative part). Pure rotation crosses nothing. The direction of travel is that of the
+/// displacement, so a reversing robot is checked against the heading behind it.
 
 namespace cairn::planner {
 
@@ -32,10 +52,24 @@ struct CostMapParams {
   /// Margin around the footprint for FootprintKind::kPadded (the global planner's states), so
   /// that poses between the states it checked keep clear too.
   double planning_padding_m{0.05};
+  /// Cost of a one-way cell (only with a directed layer, see the file comment), >= 0: graded
+  /// high, so paths cross steps where they must and not along them. At or above lethal_cost it
+  /// reads as the highest graded cost below it.
+  float one_way_cost{90.0f};
 
   /// @throws std::invalid_argument naming the bad field.
   void Validate() const;
 };
+
+/// Heading classes of motions on a directed layer: class k (0..7) holds the headings that the
+/// same bits of the directed layer refuse. An even class is the axis heading k * 45 deg exactly
+/// (within 1e-6 rad), refused by bit k alone; an odd class is the open quadrant around the
+/// diagonal k * 45 deg, refused by bits k - 1, k and k + 1 (mod 8).
+int HeadingClass(double heading_grid_rad);
+/// The directed-layer bits that refuse a motion of heading class `heading_class`.
+uint8_t HeadingClassBits(int heading_class);
+/// Grid step of heading bin k (0..7): (+1, 0), (+1, +1), (0, +1), (-1, +1), ... counter-clockwise.
+common::CellIndex HeadingStep(int bin);
 
 /// Which footprint a check uses: the robot's own, or the robot's grown by planning_padding_m.
 enum class FootprintKind { kRobot = 0, kPadded = 1 };
@@ -59,10 +93,21 @@ class CostMap {
   /// footprint or bad params.
   CostMap(const common::GridGeometry& geometry, common::Layer cost,
           const std::vector<common::Vector2>& footprint_m, const CostMapParams& params = {});
+  /// The same with the profile's directed layer of the same geometry (common/layers.h), or
+  /// without one (nullopt: exactly the constructor above). Its cells are read as: NaN or 0, no
+  /// restriction (the cost layer alone); 255, blocking (lethal, whatever the cost layer says);
+  /// 1..254, a one-way cell (cost one_way_cost, or the cost layer's where that is graded and
+  /// higher; NaN stays unknown). A value that is not a whole number in [0, 255] reads as 255.
+  /// @throws std::invalid_argument as above, or for a directed layer of another size.
+  CostMap(const common::GridGeometry& geometry, common::Layer cost,
+          std::optional<common::Layer> directed, const std::vector<common::Vector2>& footprint_m,
+          const CostMapParams& params = {});
   CostMap(const CostMap&) = delete;
   CostMap& operator=(const CostMap&) = delete;
 
   const common::GridGeometry& geometry() const { return geometry_; }
+  /// The cost layer as the planners read it: with a directed layer, its one-way cells carry
+  /// one_way_cost and its 255 cells the lethal cost.
   const common::Layer& cost() const { return cost_; }
   const CostMapParams& params() const { return params_; }
   const FootprintRasterizer& footprint(FootprintKind kind = FootprintKind::kRobot) const {
@@ -111,6 +156,26 @@ class CostMap {
   FootprintCost CheckFootprintIgnoring(const common::Pose2& pose_world,
                                        const std::vector<int64_t>& ignored_cells) const;
 
+  /// True when the snapshot was built with a directed layer.
+  bool has_directed() const { return has_directed_; }
+  /// One-way cells (directed mask in 1..254); 0 without a directed layer.
+  int64_t one_way_cells() const { return one_way_cells_; }
+  /// The directed mask of a one-way cell (1..254); 0 for every other cell and outside the grid.
+  uint8_t OneWayMask(const common::CellIndex& cell) const;
+  /// False when the robot may not drive from `from` to `to` over the one-way cells (see the file
+  /// comment): the displacement's heading (in the grid frame) and the footprint of `kind` at
+  /// poses along the straight motion (position and yaw interpolated, at most half a cell
+  /// apart). Only the directions: blocking cells are IsValid's business. True without one-way
+  /// cells, for a pure rotation, and whenever no one-way cell of the motion's heading class
+  /// lies within reach of the motion (one distance-field lookup per stretch of free space).
+  bool MotionAllowed(const common::Pose2& from, const common::Pose2& to,
+                     FootprintKind kind = FootprintKind::kRobot) const;
+  /// Distance in cells from every cell centre to the nearest one-way cell that refuses motions
+  /// of heading class `heading_class` (+infinity everywhere when none does), exact up to
+  /// ClassFieldMarginCells() (at least 64 cells; farther cells hold that margin, a lower bound).
+  /// Computed once per class, on first use, over the refusing cells' bounding box.
+  const Eigen::MatrixXf& heading_block_distance_cells(int heading_class) const;
+
   /// Distance (m) from the cell holding the point to the nearest blocking cell, between cell
   /// centres; 0 outside the grid, +infinity when nothing blocks.
   double ClearanceAt(const common::Vector2& world_m) const;
@@ -124,7 +189,10 @@ class CostMap {
   /// False only when no collision-free path can join the two points: the footprint's inscribed
   /// disc must clear every blocking cell, and the cells where that is possible for some position
   /// inside them are grouped into 8-connected components (computed once, on first use). A true
-  /// answer does not promise a path.
+  /// answer does not promise a path. With one-way cells it also answers "from a to b": false
+  /// when no grid route of such cells leads from a to b whose every step (towards heading bin
+  /// k) keeps the inscribed disc, at both cells, off the one-way cells refusing heading class k
+  /// (a breadth-first search; any path the robot could drive makes such a route).
   bool MaybeConnected(const common::Vector2& a_world_m, const common::Vector2& b_world_m) const;
   /// The smallest cell rectangle holding every known (non-NaN) cell, as [min, max] indices;
   /// nullopt when every cell is unknown.
@@ -165,6 +233,11 @@ class CostMap {
   enum class Quick { kValidFree, kValid, kInvalid, kUnknown };
   Quick QuickCheck(double x_cells, double y_cells, const Shape& shape) const;
   void ComputeComponents() const;
+  void ReadDirected(const common::Layer& directed);
+  bool DirectedReachable(const common::Vector2& a_world_m, const common::Vector2& b_world_m) const;
+  int ClassFieldMarginCells() const;
+  bool FootprintCrosses(double x_cells, double y_cells, double yaw_grid_rad, const Shape& shape,
+                        uint8_t bits) const;
 
   common::GridGeometry geometry_;
   common::Layer cost_;
@@ -178,6 +251,13 @@ class CostMap {
   std::optional<std::pair<common::CellIndex, common::CellIndex>> known_cells_;
   Eigen::MatrixXf blocked_distance_;  // cells
   Eigen::MatrixXf nonfree_distance_;  // cells
+  // Directed layer: the masks of the one-way cells (empty when there are none), and per heading
+  // class the distance to the nearest one-way cell refusing it (lazily).
+  bool has_directed_{false};
+  int64_t one_way_cells_{0};
+  std::vector<uint8_t> one_way_mask_;
+  mutable std::array<std::once_flag, 8> class_once_;
+  mutable std::array<Eigen::MatrixXf, 8> class_distance_;
   // Connectivity labels, built lazily (only the global planner needs them).
   mutable std::once_flag components_once_;
   mutable std::vector<int32_t> components_;

@@ -4,6 +4,7 @@
 #include <exception>
 
 #include "common/check.h"
+#include "common/layers.h"
 #include "planner/footprint.h"
 
 namespace cairn::planner {
@@ -89,9 +90,15 @@ common::Result<std::shared_ptr<const CostMap>> MapSnapshotPolicy::Build(Assemble
   // unexplored (which the planners may be allowed to cross).
   FillTiles(layer.missing_tiles, layer.tile_size_cells, params_.cost.lethal_cost, &cells);
   const int missing = static_cast<int>(layer.missing_tiles.size());
+  std::optional<common::Layer> directed;
+  if (params_.encoding == MapEncoding::kCost && layer.directed) {
+    directed = std::move(layer.directed);
+    FillTiles(layer.directed_missing_tiles, layer.tile_size_cells, layers::kAllHeadingsBlocked,
+              &*directed);
+  }
   try {
-    auto map =
-        std::make_shared<CostMap>(layer.geometry, std::move(cells), footprint_m_, params_.cost);
+    auto map = std::make_shared<CostMap>(layer.geometry, std::move(cells), std::move(directed),
+                                         footprint_m_, params_.cost);
     map->set_stamp(layer.version, now_utime);
     map->set_missing_tiles(missing);
     Record(layer.version, missing > 0);

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -22,7 +23,9 @@
 ///   not unexplored, and the planners may be allowed to cross unexplored cells;
 /// - a version taken with holes is taken again once its tiles came, never again with holes;
 /// - a version the CostMap refuses (a bad geometry) is not tried again;
-/// - an occupancy layer (MapEncoding::kOccupancy) is converted to cost (occupancy_cost.h).
+/// - an occupancy layer (MapEncoding::kOccupancy) is converted to cost (occupancy_cost.h);
+/// - a directed layer handed in beside a cost layer goes into the snapshot (CostMap's one-way
+///   cells), its missing tiles blocking every heading.
 
 namespace cairn::planner {
 
@@ -48,6 +51,12 @@ struct AssembledLayer {
   int tile_size_cells{0};  ///< tile edge of the version's manifest; 0: unknown
   /// Tiles the version announced that are not held, as (tile_ix, tile_iy).
   std::vector<std::pair<int, int>> missing_tiles;
+  /// The profile's directed layer ("directed/<profile>") on the same grid, when the transport
+  /// holds one (cost encoding only); nullopt: the snapshot reads the cost layer alone.
+  std::optional<common::Layer> directed;
+  /// Tiles of the directed layer's newest version not held: they read as 255 (every heading
+  /// blocked, which is what the cost layer says there on its own).
+  std::vector<std::pair<int, int>> directed_missing_tiles;
 };
 
 /// What the transport should do about the newest version.

@@ -31,12 +31,14 @@ void LoadCostMap(YamlMap map, CostMapParams* p) {
   map.Get("unknown_is_traversable", &p->unknown_is_traversable);
   map.Get("unknown_cost", &p->unknown_cost);
   map.Get("lethal_cost", &p->lethal_cost);
+  map.Get("one_way_cost", &p->one_way_cost);
   map.Finish();
 }
 
 void LoadMapLayer(YamlMap map, MapLayerConfig* p) {
   map.Get("layer", &p->layer);
   GetNamed(map, "encoding", &p->encoding, MapEncodingFromName);
+  map.Get("directed", &p->directed);
   map.Get("occupied_threshold_og", &p->occupancy.occupied_threshold_og);
   map.Get("free_threshold_og", &p->occupancy.free_threshold_og);
   map.Finish();
@@ -198,6 +200,12 @@ std::string MapLayerConfig::LayerFor(const std::string& profile) const {
   if (!layer.empty()) return layer;
   return encoding == MapEncoding::kOccupancy ? std::string(layers::kFinal)
                                              : layers::CostLayer(profile);
+}
+
+std::string MapLayerConfig::DirectedLayerFor(const std::string& profile) const {
+  const std::string cost = LayerFor(profile);
+  if (!directed || encoding != MapEncoding::kCost || !layers::IsCostLayer(cost)) return "";
+  return layers::DirectedLayer(cost.substr(std::string("cost/").size()));
 }
 
 void NavigatorConfig::Finalize() {

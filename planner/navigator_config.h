@@ -25,9 +25,16 @@ struct MapLayerConfig {
   MapEncoding encoding{MapEncoding::kCost};
   /// Occupancy encoding only: how occupancy becomes cost.
   OccupancyCostParams occupancy;
+  /// Cost encoding only: also read the profile's directed layer ("directed/<profile>" beside
+  /// "cost/<profile>") when the mapper publishes it, so one-way steps and slopes can be driven
+  /// the way they allow (CostMap). Without it, or without directed tiles, the cost layer alone.
+  bool directed{true};
 
   /// The layer name to subscribe to for a robot profile.
   std::string LayerFor(const std::string& profile) const;
+  /// The directed layer read beside it: "directed/<p>" for a cost layer "cost/<p>" when
+  /// `directed` is on; "" otherwise.
+  std::string DirectedLayerFor(const std::string& profile) const;
 };
 
 struct NavigatorConfig {

@@ -68,6 +68,7 @@ bool MotionClear(const CostMap* map, const Pose2& pose, const Velocity& v, doubl
   const std::vector<int64_t> escaping =
       map->IsValid(pose) ? std::vector<int64_t>{} : map->BlockingCellsUnder(pose);
   const double step = 0.1;
+  Pose2 previous = pose;  // one-way cells: each step's direction of travel too
   for (double t = step; t <= lookahead_s + 1e-9; t += step) {
     const double yaw = pose.yaw_rad + v.angular_radps * t;
     Pose2 p = pose;
@@ -82,7 +83,8 @@ bool MotionClear(const CostMap* map, const Pose2& pose, const Velocity& v, doubl
     p.yaw_rad = common::WrapAngle(yaw);
     const bool valid =
         escaping.empty() ? map->IsValid(p) : map->CheckFootprintIgnoring(p, escaping).valid;
-    if (!valid) return false;
+    if (!valid || !map->MotionAllowed(previous, p)) return false;
+    previous = p;
   }
   return true;
 }

@@ -72,7 +72,9 @@ class RecoveryBehaviour {
 
 /// True when driving at constant `velocity` from `pose` keeps the footprint valid for
 /// `lookahead_s` (checked every 0.1 s). When the footprint at `pose` already touches blocking
-/// cells, those count as free (the robot may move away from them). False without a map.
+/// cells, those count as free (the robot may move away from them). On a map with one-way cells
+/// each 0.1 s step must also be a motion they allow (CostMap::MotionAllowed): backing up a step
+/// the robot may only drive down is not clear. False without a map.
 bool MotionClear(const CostMap* map, const common::Pose2& pose, const Velocity& velocity,
                  double lookahead_s);
 

@@ -288,10 +288,16 @@ bool PlanRun::Solve() {
 // Shortcutting passes until they stop helping (or the time cap): deterministic for a seed.
 void PlanRun::Simplify(og::PathSimplifier& simplifier, og::PathGeometric* path) const {
   const auto t_start = Clock::now();
+  // OMPL's shortcutPath checks some shortcuts backwards (from the later point to the earlier
+  // one): on a map with one-way cells a pass whose result drives the wrong way is undone.
+  const bool directed = map_.one_way_cells() > 0;
   for (int pass = 0; pass < 8; ++pass) {
     const double before = path->length();
     simplifier.reduceVertices(*path, 0, 0, 0.33);
+    const std::optional<og::PathGeometric> kept =
+        directed ? std::optional<og::PathGeometric>(*path) : std::nullopt;
     simplifier.shortcutPath(*path, kShortcutSteps, kShortcutSteps / 4, 0.33, 0.005);
+    if (kept && !path->check()) *path = *kept;
     simplifier.collapseCloseVertices(*path);
     if (path->length() > before - 1e-3 || SecondsSince(t_start) > params_.simplify_time_s) break;
   }
@@ -349,7 +355,9 @@ bool PlanRun::Improve(og::PathSimplifier& simplifier) {
     if (const auto& hybrid = hybridization.getHybridPath()) {
       og::PathGeometric merged = *hybrid;
       if (params_.simplify_time_s > 0.0) Simplify(simplifier, &merged);
-      if (objective->isCostBetterThan(merged.cost(objective), best_->cost(objective))) {
+      // The hybridization graph is undirected: on a map with one-way cells check the result.
+      if ((map_.one_way_cells() == 0 || merged.check()) &&
+          objective->isCostBetterThan(merged.cost(objective), best_->cost(objective))) {
         best_ = merged;
       }
     }
@@ -403,12 +411,16 @@ bool PlanRun::Finish() {
   for (const ob::State* s : chosen.getStates()) poses.push_back(internal::ToPose(s));
   if (params_.state_space == StateSpaceKind::kSE2) {
     // A wheeled robot drives along the path: headings follow the direction of travel where
-    // the footprint fits that way (OMPL's validated heading is kept elsewhere).
+    // the footprint fits that way, and one-way cells allow the motions to and from it (OMPL's
+    // validated heading is kept elsewhere).
     for (size_t i = 0; i + 1 < poses.size(); ++i) {
       const Vector2 d = poses[i + 1].position() - poses[i].position();
       if (d.norm() < 1e-6) continue;
       const Pose2 along{poses[i].x_m, poses[i].y_m, std::atan2(d.y(), d.x())};
-      if (map_.IsValid(along)) poses[i] = along;
+      if (map_.IsValid(along) && (i == 0 || map_.MotionAllowed(poses[i - 1], along)) &&
+          map_.MotionAllowed(along, poses[i + 1])) {
+        poses[i] = along;
+      }
     }
   }
   result_.length_m = internal::PositionLength(poses);

@@ -27,6 +27,9 @@
 ///   paths close to the shortest.
 /// - The simplified and interpolated path is checked again, pose by pose with the robot's own
 ///   footprint; if it fails, the unsimplified path is used instead.
+/// - On a map with one-way cells (a directed layer, cost_map.h) motions are checked for their
+///   direction of travel too (CostMap::MotionAllowed), and the connectivity proof follows the
+///   one-way steps: up a step the profile may only drive down is kNoPath.
 
 namespace cairn::planner {
 

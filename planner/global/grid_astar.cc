@@ -1,6 +1,7 @@
 #include "planner/global/grid_astar.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -32,6 +33,19 @@ class SearchGrid {
                            ? params.clearance_m / res_
                            : std::max(0.0, map.footprint().inscribed_radius_m() / res_ -
                                                (0.70710678 - 0.5) - 1e-3);
+    if (map.one_way_cells() > 0) {
+      for (int k = 0; k < 8; ++k) refused_[k] = map.heading_block_distance_cells(k).data();
+    }
+  }
+
+  bool directed() const { return refused_[0] != nullptr; }
+  // A step between neighbouring cells in heading bin k: refused when a one-way cell refusing
+  // heading class k lies within the clearance disc of either cell (CostMap::MaybeConnected's
+  // rule).
+  bool StepAllowed(int64_t from, int64_t to, int bin) const {
+    if (!directed()) return true;
+    const float* d = refused_[bin];
+    return d[from] > clearance_cells_ && d[to] > clearance_cells_;
   }
 
   int size_x() const { return sx_; }
@@ -58,18 +72,28 @@ class SearchGrid {
   // is passable. Samples whose cell is passable for certain are skipped: the distance field is
   // 1-Lipschitz between cell centres, so from a sample in a cell `clearance + 1.5 + s` cells
   // from blocking, every cell within s cells along the segment is passable (sphere tracing).
+  // On a directed map, the segment's heading class must also keep its clearance disc off the
+  // one-way cells refusing it, at the two ends as well.
   bool LineOfSight(int64_t a, int64_t b) const {
     const double ax = static_cast<double>(a % sx_), ay = static_cast<double>(a / sx_);
     const double dx = static_cast<double>(b % sx_) - ax, dy = static_cast<double>(b / sx_) - ay;
     const double length = std::hypot(dx, dy);
     const int n = std::max(1, static_cast<int>(std::ceil(4.0 * length)));
     const double sample_cells = length / n;
+    const float* refused = directed() ? refused_[HeadingClass(std::atan2(dy, dx))] : nullptr;
+    if (refused != nullptr && (refused[a] <= clearance_cells_ || refused[b] <= clearance_cells_)) {
+      return false;
+    }
     for (int k = 1; k < n;) {
       const double t = static_cast<double>(k) / n;
       const int64_t cell = Index(static_cast<int>(std::floor(ax + t * dx + 0.5)),
                                  static_cast<int>(std::floor(ay + t * dy + 0.5)));
       if (!Passable(cell)) return false;
-      const double free_cells = dist_[cell] - clearance_cells_ - 1.5;
+      double free_cells = dist_[cell] - clearance_cells_ - 1.5;
+      if (refused != nullptr) {
+        if (refused[cell] <= clearance_cells_) return false;
+        free_cells = std::min(free_cells, refused[cell] - clearance_cells_ - 1.5);
+      }
       if (free_cells >= length) return true;  // nothing blocks within the segment's reach
       k += free_cells > sample_cells ? static_cast<int>(free_cells / sample_cells) : 1;
     }
@@ -131,6 +155,7 @@ class SearchGrid {
   double inscribed_cells_;
   double inflation_cells_;
   double clearance_cells_{0.0};
+  std::array<const float*, 8> refused_{};  // per heading class, on a directed map
 };
 
 // The best-first search over the grid (A*, or Theta* with params.any_angle).
@@ -191,8 +216,10 @@ class Search {
   }
 
   void Expand(int64_t i) {
+    // Heading bins 0, 4, 2, 6 (the axes), then the diagonals 1, 7, 3, 5.
     static const int kDx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
     static const int kDy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
+    static const int kBin[8] = {0, 4, 2, 6, 1, 7, 3, 5};
     const int sx = grid_.size_x();
     const int ix = static_cast<int>(i % sx);
     const int iy = static_cast<int>(i / sx);
@@ -203,7 +230,7 @@ class Search {
       const int ny = iy + kDy[k];
       if (nx < 0 || ny < 0 || nx >= sx || ny >= grid_.size_y()) continue;
       const int64_t j = grid_.Index(nx, ny);
-      if (closed_[j] || !grid_.Passable(j)) continue;
+      if (closed_[j] || !grid_.Passable(j) || !grid_.StepAllowed(i, j, kBin[k])) continue;
       // Theta*: straight from the parent when it sees the neighbour.
       if (grandparent >= 0 && grid_.LineOfSight(grandparent, j)) {
         Relax(j, grandparent,

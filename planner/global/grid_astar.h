@@ -12,7 +12,9 @@
 /// whose path segments join any two cells in line of sight instead of the 8 grid directions.
 /// They are the benchmark baselines of the OMPL planner (and A* its grid route candidate), with
 /// the same cost: length times (1 + weight · mean cell cost / 100 + clearance weight · mean
-/// proximity).
+/// proximity). On a map with one-way cells (a directed layer) a step towards heading bin k, and
+/// a Theta* segment of heading class k, is taken only when no one-way cell refusing that class
+/// lies within the clearance disc of its cells (CostMap::MaybeConnected's rule).
 
 namespace cairn::planner {
 

@@ -6,6 +6,7 @@
 #include <mutex>
 #include <string>
 
+#include <ompl/base/DiscreteMotionValidator.h>
 #include <ompl/base/Goal.h>
 #include <ompl/base/ScopedState.h>
 #include <ompl/base/StateValidityChecker.h>
@@ -73,6 +74,56 @@ class FootprintValidityChecker : public ob::StateValidityChecker {
   Vector2 start_;
   Vector2 goal_;
   double escape2_;
+};
+
+// On a map with one-way cells (CostMap::MotionAllowed): OMPL's discrete check of the states
+// along a motion, then the direction of travel between consecutive states at the same
+// resolution (for Dubins and Reeds-Shepp curves, whose direction turns along the motion; a
+// reversing stretch is checked against the heading it drives to).
+class DirectedMotionValidator : public ob::DiscreteMotionValidator {
+ public:
+  DirectedMotionValidator(const ob::SpaceInformationPtr& si, const CostMap& map)
+      : ob::DiscreteMotionValidator(si), map_(map) {}
+  bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
+    return ob::DiscreteMotionValidator::checkMotion(s1, s2) && FirstRefused(s1, s2) < 0;
+  }
+  bool checkMotion(const ob::State* s1, const ob::State* s2,
+                   std::pair<ob::State*, double>& last_valid) const override {
+    if (!ob::DiscreteMotionValidator::checkMotion(s1, s2, last_valid)) return false;
+    const int refused = FirstRefused(s1, s2);
+    if (refused < 0) return true;
+    // The motion is good up to the start of the refused segment.
+    const double t = static_cast<double>(refused) / Segments(s1, s2);
+    if (last_valid.first != nullptr) si_->getStateSpace()->interpolate(s1, s2, t, last_valid.first);
+    last_valid.second = t;
+    return false;
+  }
+
+ private:
+  int Segments(const ob::State* s1, const ob::State* s2) const {
+    return std::max(1u, si_->getStateSpace()->validSegmentCount(s1, s2));
+  }
+  // Index of the first segment whose direction the one-way cells refuse, or -1.
+  int FirstRefused(const ob::State* s1, const ob::State* s2) const {
+    const int n = Segments(s1, s2);
+    ob::State* tmp = si_->allocState();
+    Pose2 previous = ToPose(s1);
+    int refused = -1;
+    for (int k = 1; k <= n && refused < 0; ++k) {
+      const ob::State* s = s2;
+      if (k < n) {
+        si_->getStateSpace()->interpolate(s1, s2, static_cast<double>(k) / n, tmp);
+        s = tmp;
+      }
+      const Pose2 pose = ToPose(s);
+      if (!map_.MotionAllowed(previous, pose)) refused = k - 1;
+      previous = pose;
+    }
+    si_->freeState(tmp);
+    return refused;
+  }
+
+  const CostMap& map_;
 };
 
 // SE(2) samples for narrow passages. A share of the positions comes from the ridge cells of
@@ -342,9 +393,11 @@ double PositionLength(const std::vector<Pose2>& poses) {
 }
 
 bool PathStillValid(const CostMap& map, og::PathGeometric& path) {
-  for (const ob::State* s : path.getStates()) {
-    const Pose2 p = ToPose(s);
+  const std::vector<ob::State*>& states = path.getStates();
+  for (size_t i = 0; i < states.size(); ++i) {
+    const Pose2 p = ToPose(states[i]);
     if (!map.Contains(p.position()) || !map.IsValid(p)) return false;
+    if (i > 0 && !map.MotionAllowed(ToPose(states[i - 1]), p)) return false;
   }
   return true;
 }
@@ -370,6 +423,9 @@ OmplProblem SetUpProblem(const CostMap& map, const GlobalPlannerParams& params, 
       p.si, map, start.position(), goal.position(), params.escape_radius_m));
   p.si->setStateValidityCheckingResolution(
       std::min(0.5, params.validity_resolution_m / p.space->getMaximumExtent()));
+  if (map.one_way_cells() > 0) {
+    p.si->setMotionValidator(std::make_shared<DirectedMotionValidator>(p.si, map));
+  }
 
   ob::ScopedState<ob::SE2StateSpace> start_state(p.space);
   start_state->setXY(start.x_m, start.y_m);

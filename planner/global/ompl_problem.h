@@ -35,7 +35,8 @@ common::Pose2 ToPose(const ob::State* state);
 /// Length of the polyline through the poses' positions (m).
 double PositionLength(const std::vector<common::Pose2>& poses);
 /// Every pose of an interpolated path with the robot's own footprint (the padding used while
-/// planning covers the space between these poses).
+/// planning covers the space between these poses), and on a map with one-way cells every
+/// motion between consecutive poses (CostMap::MotionAllowed).
 bool PathStillValid(const CostMap& map, og::PathGeometric& path);
 
 /// One plan's OMPL problem, set up (SimpleSetup::setup() called) and ready to solve.
@@ -50,9 +51,10 @@ struct OmplProblem {
 /// The problem of planning from `start` to `goal` on `map` (which must outlive it): the state
 /// space of params.state_space bounded by the known cells, start and goal grown by
 /// bounds_margin_m within the grid, sampling ridge cells and aligned headings; states checked
-/// with the padded footprint away from the ends; the goal a state (`goal_has_yaw`) or the goal
-/// position with any of `goal_yaws`; the objective length plus traversal cost; the named
-/// planner with its range.
+/// with the padded footprint away from the ends; on a map with one-way cells, motions also
+/// checked for their direction of travel (CostMap::MotionAllowed); the goal a state
+/// (`goal_has_yaw`) or the goal position with any of `goal_yaws`; the objective length plus
+/// traversal cost; the named planner with its range.
 OmplProblem SetUpProblem(const CostMap& map, const GlobalPlannerParams& params,
                          const common::Pose2& start, const common::Pose2& goal, bool goal_has_yaw,
                          const std::vector<double>& goal_yaws);

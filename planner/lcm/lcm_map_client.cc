@@ -34,7 +34,10 @@ int64_t LcmMapClient::last_heard_utime() const {
 
 bool LcmMapClient::Accepts(const std::string& robot, const std::string& map_name,
                            const std::string& layer) const {
-  if (layer != params_.layer) return false;
+  if (layer != params_.layer &&
+      (params_.directed_layer.empty() || layer != params_.directed_layer)) {
+    return false;
+  }
   if (!params_.map_name.empty() && map_name != params_.map_name) return false;
   return robot.empty() || robot == params_.robot;
 }
@@ -73,7 +76,7 @@ void LcmMapClient::OnManifest(const cairn::lcmt_grid_manifest& manifest) {
     return;
   }
   assembler_.OnManifest(manifest);
-  tile_size_ = manifest.tile_size;
+  if (manifest.layer == params_.layer) tile_size_ = manifest.tile_size;
   Heard();
 }
 
@@ -84,21 +87,58 @@ void LcmMapClient::Heard() {
   }
   Carry(policy_.OnLayerChanged(assembler_.version(params_.layer),
                                assembler_.Complete(params_.layer), node_.NowUtime()));
+  RefreshDirected();
 }
 
 void LcmMapClient::Poll() {
   const int64_t now = node_.NowUtime();
   const int64_t version = assembler_.version(params_.layer);
   const bool complete = assembler_.Complete(params_.layer);
-  if (policy_.WantsMissingTiles(version, complete) &&
-      now - last_resend_utime_ >= static_cast<int64_t>(params_.resend_interval_s * 1e6)) {
-    if (auto request = assembler_.MakeResendRequest(params_.layer, params_.requester, now)) {
-      node_.Publish(channels::ForRobot(params_.robot, channels::kMapTileResend), *request);
-      node_.Count("tile_resend_requests");
-      last_resend_utime_ = now;
+  if (now - last_resend_utime_ >= static_cast<int64_t>(params_.resend_interval_s * 1e6)) {
+    if (policy_.WantsMissingTiles(version, complete)) AskForMissing(params_.layer, now);
+    if (!params_.directed_layer.empty() && assembler_.version(params_.directed_layer) > 0 &&
+        !assembler_.Complete(params_.directed_layer)) {
+      AskForMissing(params_.directed_layer, now);
     }
   }
   Carry(policy_.OnPoll(version, complete, now));
+  RefreshDirected();
+}
+
+void LcmMapClient::AskForMissing(const std::string& layer, int64_t now) {
+  if (auto request = assembler_.MakeResendRequest(layer, params_.requester, now)) {
+    node_.Publish(channels::ForRobot(params_.robot, channels::kMapTileResend), *request);
+    node_.Count("tile_resend_requests");
+    last_resend_utime_ = now;
+  }
+}
+
+// The directed layer held now, when it has the cost layer's grid.
+void LcmMapClient::AttachDirected(AssembledLayer* assembled) {
+  if (params_.directed_layer.empty()) return;
+  // What was considered (attached or not), so RefreshDirected does not try it again.
+  built_directed_version_ = assembler_.version(params_.directed_layer);
+  built_directed_complete_ = assembler_.Complete(params_.directed_layer);
+  const auto geometry = assembler_.Geometry(params_.directed_layer);
+  if (!geometry || *geometry != assembled->geometry) return;
+  auto directed = assembler_.Layer(params_.directed_layer);
+  if (!directed) return;
+  assembled->directed = std::move(directed->at(params_.directed_layer));
+  assembled->directed_missing_tiles = assembler_.Missing(params_.directed_layer);
+}
+
+// A directed version that changed, or completed, under the cost version in use: that cost
+// version again with it.
+void LcmMapClient::RefreshDirected() {
+  if (params_.directed_layer.empty() || policy_.built_version() < 0 || policy_.built_incomplete() ||
+      assembler_.version(params_.layer) != policy_.built_version()) {
+    return;
+  }
+  const int64_t version = assembler_.version(params_.directed_layer);
+  if (version == 0) return;
+  const bool complete = assembler_.Complete(params_.directed_layer);
+  if (version == built_directed_version_ && (built_directed_complete_ || !complete)) return;
+  Carry(SnapshotAction::kBuild);
 }
 
 // Hands the assembled layer to the policy when it asks for a snapshot.
@@ -114,6 +154,7 @@ void LcmMapClient::Carry(SnapshotAction action) {
   if (action == SnapshotAction::kBuildIncomplete) {
     assembled.missing_tiles = assembler_.Missing(params_.layer);
   }
+  AttachDirected(&assembled);
   const size_t missing = assembled.missing_tiles.size();
   auto map = policy_.Build(std::move(assembled), node_.NowUtime());
   if (map.ok()) {

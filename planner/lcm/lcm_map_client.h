@@ -13,8 +13,8 @@
 #include "planner/cost_map.h"
 #include "planner/map_snapshot_policy.h"
 #include "planner/map_source.h"
-#include "services/runtime/node.h"
 #include "services/runtime/layer_assembler.h"
+#include "services/runtime/node.h"
 #include "services/runtime/tiler.h"
 
 /// @file
@@ -24,12 +24,21 @@
 /// layer (the dynamic map server's "final", int8 tiles on <robot>.MAP.OCCUPANCY). When and how
 /// an assembled version becomes a CostMap (occupancy converted to cost, missing tiles lethal,
 /// the wait for them) is the core's MapSnapshotPolicy: this class only moves tiles.
+///
+/// Beside a cost layer it also reads the profile's directed layer ("directed/<profile>", float
+/// tiles on the same channels) when `directed_layer` names it and the mapper publishes it: each
+/// snapshot carries the directed layer held when it is built, if it has the cost layer's grid
+/// (its missing tiles block every heading), and a directed version that changes or completes
+/// while the cost version stays makes a new snapshot of that cost version. Without directed
+/// tiles (an older mapper) the snapshots are the cost layer's alone.
 
 namespace cairn::planner {
 
 struct LcmMapClientParams {
   std::string robot;
-  std::string layer;     ///< "cost/<profile>" (kCost), or "final", "long_term"... (kOccupancy)
+  std::string layer;  ///< "cost/<profile>" (kCost), or "final", "long_term"... (kOccupancy)
+  /// "directed/<profile>" to read beside a cost layer; "" (default): none.
+  std::string directed_layer;
   std::string map_name;  ///< accept only this map name ("" = any)
   std::string requester{"cairn-navigator"};
   double resend_interval_s{0.5};
@@ -65,6 +74,9 @@ class LcmMapClient : public MapSource {
   void OnTileImpl(const TileMsg& tile);
   void Heard();
   void Carry(SnapshotAction action);
+  void AttachDirected(AssembledLayer* assembled);
+  void RefreshDirected();
+  void AskForMissing(const std::string& layer, int64_t now);
 
   runtime::Node& node_;
   LcmMapClientParams params_;
@@ -76,6 +88,9 @@ class LcmMapClient : public MapSource {
   int64_t last_resend_utime_{0};
   int64_t snapshots_{0};
   int tile_size_{0};  // of the newest manifest
+  // The directed layer in the snapshot in use: its version (-1: none) and whether it was whole.
+  int64_t built_directed_version_{-1};
+  bool built_directed_complete_{false};
 };
 
 }  // namespace cairn::planner

@@ -26,6 +26,7 @@ LcmMapClientParams MapClientParams(const std::string& robot, const common::Robot
   LcmMapClientParams p;
   p.robot = robot;
   p.layer = config.map.LayerFor(profile.name);
+  p.directed_layer = config.map.DirectedLayerFor(profile.name);
   p.map_name = config.map_name;
   p.requester = kProcess;
   p.resend_interval_s = config.resend_interval_s;

@@ -83,13 +83,23 @@ Score ClearanceCritic::Evaluate(const Trajectory& trajectory) const {
     // can cover it there and at neither end (a slow arc grazing an obstacle).
     const int between =
         std::max(k == 0 ? 1 : 0, static_cast<int>(std::ceil(step_m / max_step_m)) - 1);
-    for (int j = 1; j <= between && c.valid; ++j) {
+    // On a map with one-way cells, the direction of travel between the poses too: a step the
+    // robot may only drive down blocks the climb like a lethal cell.
+    Pose2 from = previous;
+    for (int j = 1; j <= between + 1 && c.valid; ++j) {
       const double f = static_cast<double>(j) / (between + 1);
-      const Pose2 p{previous.x_m + f * (pose.x_m - previous.x_m),
-                    previous.y_m + f * (pose.y_m - previous.y_m),
-                    previous.yaw_rad + f * common::WrapAngle(pose.yaw_rad - previous.yaw_rad)};
-      const FootprintCost mid = check(p);
-      if (!mid.valid) c = mid;
+      const Pose2 p =
+          j > between
+              ? pose
+              : Pose2{previous.x_m + f * (pose.x_m - previous.x_m),
+                      previous.y_m + f * (pose.y_m - previous.y_m),
+                      previous.yaw_rad + f * common::WrapAngle(pose.yaw_rad - previous.yaw_rad)};
+      if (j <= between) {
+        const FootprintCost mid = check(p);
+        if (!mid.valid) c = mid;
+      }
+      if (c.valid && !map.MotionAllowed(from, p)) c = {false, map.params().lethal_cost, false};
+      from = p;
     }
     if (k > 0) {
       travelled_m += (trajectory.poses[k].position() - trajectory.poses[k - 1].position()).norm();

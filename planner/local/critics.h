@@ -75,7 +75,9 @@ class TrajectoryCritic {
 /// linearly to 0 at `inflation_m` beyond it. The cost layer carries no inflation, so (b) is what
 /// keeps the robot off walls and corners (0..1 in all).
 ///
-/// One that reaches a lethal (or blocking unknown) cell is rejected unless the robot could still
+/// One that reaches a lethal (or blocking unknown) cell, or on a map with one-way cells drives
+/// over one in a heading it refuses (CostMap::MotionAllowed, between consecutive poses), is
+/// rejected unless the robot could still
 /// brake before that pose (the admissible velocities of Fox, Burgard and Thrun's dynamic window
 /// approach): braking both axes at their acceleration limits covers the arc of half the stopping
 /// time at constant speed, so the trajectory is admissible when its first blocked pose comes later

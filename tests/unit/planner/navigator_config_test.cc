@@ -106,6 +106,19 @@ TEST(NavigatorMapConfigTest, DefaultIsTheProfileCostLayer) {
   const NavigatorConfig c = LoadNavigatorConfig(root);
   EXPECT_EQ(c.map.encoding, MapEncoding::kCost);
   EXPECT_EQ(c.map.LayerFor("kobuki"), "cost/kobuki");
+  // The directed companion of the cost layer is read by default; not with occupancy or off.
+  EXPECT_EQ(c.map.DirectedLayerFor("kobuki"), "directed/kobuki");
+  common::YamlMap off = common::YamlMap::FromString(
+      "map:\n  directed: false\ncost_map:\n  one_way_cost: 70\n", "nav.yaml");
+  const NavigatorConfig no = LoadNavigatorConfig(off);
+  EXPECT_EQ(no.map.DirectedLayerFor("kobuki"), "");
+  EXPECT_FLOAT_EQ(no.cost_map.one_way_cost, 70.f);
+  MapLayerConfig occupancy;
+  occupancy.encoding = MapEncoding::kOccupancy;
+  EXPECT_EQ(occupancy.DirectedLayerFor("kobuki"), "");
+  MapLayerConfig named;
+  named.layer = "cost/robauco";
+  EXPECT_EQ(named.DirectedLayerFor("kobuki"), "directed/robauco");
 }
 
 TEST(NavigatorMapConfigTest, OccupancySectionAndErrors) {

@@ -12,15 +12,13 @@
 #include "common/channels.h"
 #include "common/layers.h"
 #include "services/runtime/tiler.h"
-#include "tests/unit/planner/test_maps.h"
 #include "tests/support/memq_node.h"
+#include "tests/unit/planner/test_maps.h"
 
 namespace cairn::planner {
 namespace {
 
-runtime::NodeOptions Options() {
-  return cairn::testing::MemqNodeOptions("cairn-navigator", "r1");
-}
+runtime::NodeOptions Options() { return cairn::testing::MemqNodeOptions("cairn-navigator", "r1"); }
 
 LcmMapClientParams OccupancyParams() {
   LcmMapClientParams p;
@@ -149,6 +147,112 @@ TEST_F(LcmMapClientTest, MissingTilesAreLethalAndAskedFor) {
   EXPECT_EQ(complete->version(), map->version());
   EXPECT_EQ(complete->missing_tiles(), 0);
   EXPECT_FLOAT_EQ(complete->cost()(25, 5), 0.f);
+}
+
+// A cost layer and its directed companion for the Pioneer, 60 x 40 cells at 0.05 m (tiles of
+// 20): a column of one-way cells (mask 1: not towards +x; cost lethal) at ix = 30.
+common::GridMap CostAndDirected() {
+  common::GridGeometry g;
+  g.resolution_m = 0.05;
+  g.size_x = 60;
+  g.size_y = 40;
+  common::GridMap map(g);
+  common::Layer& cost = map.AddLayer(layers::CostLayer("pioneer3at"), 0.f);
+  common::Layer& directed = map.AddLayer(layers::DirectedLayer("pioneer3at"), 0.f);
+  for (int iy = 0; iy < 40; ++iy) {
+    cost(30, iy) = 100.f;
+    directed(30, iy) = 1.f;
+  }
+  return map;
+}
+
+LcmMapClientParams DirectedParams() {
+  LcmMapClientParams p;
+  p.robot = "r1";
+  p.layer = layers::CostLayer("pioneer3at");
+  p.directed_layer = layers::DirectedLayer("pioneer3at");
+  p.snapshot.incomplete_timeout_s = 0.0;
+  return p;
+}
+
+TEST_F(LcmMapClientTest, ReadsTheDirectedLayerBesideTheCostLayer) {
+  auto dut = Client(DirectedParams());
+  const common::GridMap map = CostAndDirected();
+  const auto cost =
+      tiler_.Update(map, layers::CostLayer("pioneer3at"), runtime::TileEncoding::kFloat, ++utime_);
+  for (const auto& t : cost.tiles) dut->OnTile(t);
+  dut->OnManifest(cost.manifest);
+  // No directed tiles yet (an older mapper): the cost layer alone.
+  const auto plain = dut->Latest();
+  ASSERT_NE(plain, nullptr);
+  EXPECT_FALSE(plain->has_directed());
+  EXPECT_FLOAT_EQ(plain->cost()(30, 5), 100.f);
+  // The directed layer comes: the same cost version again, with its one-way cells.
+  const auto directed = tiler_.Update(map, layers::DirectedLayer("pioneer3at"),
+                                      runtime::TileEncoding::kFloat, ++utime_);
+  for (const auto& t : directed.tiles) dut->OnTile(t);
+  EXPECT_EQ(dut->Latest(), plain) << "waits for the directed manifest";
+  dut->OnManifest(directed.manifest);
+  const auto both = dut->Latest();
+  ASSERT_NE(both, plain);
+  EXPECT_EQ(both->version(), plain->version());
+  EXPECT_TRUE(both->has_directed());
+  EXPECT_EQ(both->one_way_cells(), 40);
+  EXPECT_LT(both->cost()(30, 5), 100.f);
+  EXPECT_FALSE(both->MotionAllowed({1.45, 0.5, 0.0}, {1.6, 0.5, 0.0}));
+  EXPECT_TRUE(both->MotionAllowed({1.6, 0.5, M_PI}, {1.45, 0.5, M_PI}));
+  // Re-announcing the same versions builds nothing new.
+  dut->OnManifest(directed.manifest);
+  dut->OnManifest(cost.manifest);
+  dut->Poll();
+  EXPECT_EQ(dut->Latest(), both);
+}
+
+TEST_F(LcmMapClientTest, MissingDirectedTilesBlockEveryHeadingAndAreAskedFor) {
+  auto dut = Client(DirectedParams());
+  std::vector<cairn::lcmt_tile_resend_request> resends;
+  node_.Subscribe<cairn::lcmt_tile_resend_request>(
+      channels::ForRobot("r1", channels::kMapTileResend),
+      [&](const cairn::lcmt_tile_resend_request& r) { resends.push_back(r); });
+  const common::GridMap map = CostAndDirected();
+  const auto cost =
+      tiler_.Update(map, layers::CostLayer("pioneer3at"), runtime::TileEncoding::kFloat, ++utime_);
+  const auto directed = tiler_.Update(map, layers::DirectedLayer("pioneer3at"),
+                                      runtime::TileEncoding::kFloat, ++utime_);
+  for (const auto& t : directed.tiles) {
+    if (!(t.tile_ix == 1 && t.tile_iy == 0)) dut->OnTile(t);  // tile (1, 0): cells 20..39
+  }
+  dut->OnManifest(directed.manifest);
+  for (const auto& t : cost.tiles) dut->OnTile(t);
+  dut->OnManifest(cost.manifest);
+  const auto holes = dut->Latest();
+  ASSERT_NE(holes, nullptr);
+  ASSERT_TRUE(holes->has_directed());
+  EXPECT_EQ(holes->missing_tiles(), 0) << "the cost layer is whole";
+  EXPECT_FLOAT_EQ(holes->cost()(30, 5), 100.f) << "a missing directed tile blocks";
+  EXPECT_LT(holes->cost()(30, 25), 100.f);
+  dut->Poll();
+  while (node_.lcm().handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(resends.size(), 1u);
+  EXPECT_EQ(resends[0].layer, layers::DirectedLayer("pioneer3at"));
+  // The resent tile completes the directed layer: rebuilt with it.
+  for (const auto& t : directed.tiles) {
+    if (t.tile_ix == 1 && t.tile_iy == 0) dut->OnTile(t);
+  }
+  const auto whole = dut->Latest();
+  ASSERT_NE(whole, holes);
+  EXPECT_LT(whole->cost()(30, 5), 100.f);
+  // A client not asked for the directed layer ignores it.
+  LcmMapClientParams params = DirectedParams();
+  params.directed_layer.clear();
+  auto plain = Client(params);
+  for (const auto& t : directed.tiles) plain->OnTile(t);
+  plain->OnManifest(directed.manifest);
+  for (const auto& t : cost.tiles) plain->OnTile(t);
+  plain->OnManifest(cost.manifest);
+  ASSERT_NE(plain->Latest(), nullptr);
+  EXPECT_FALSE(plain->Latest()->has_directed());
 }
 
 TEST_F(LcmMapClientTest, RefusesBadThresholds) {

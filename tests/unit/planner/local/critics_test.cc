@@ -238,3 +238,50 @@ TEST_F(CriticTest, OscillationRejectsASecondReversalUntilTheRobotMoves) {
 
 }  // namespace
 }  // namespace cairn::planner
+
+namespace cairn::planner {
+namespace {
+
+// The Pioneer below an 8 cm step at x = 6 (up towards +x, testing::OneWayStepCorridor): it may
+// drive down the step, forwards or reversing, and never up it.
+TEST(ClearanceCriticTest, RefusesTrajectoriesClimbingAOneWayStep) {
+  const auto map = testing::OneWayStepCorridor().Build(PioneerFootprint());
+  const TrajectoryGenerator gen(Limits(), {});
+  ClearanceCritic::Params strict;
+  strict.admissible_braking = false;
+  ClearanceCritic dut(1.0, strict);
+  CriticContext ctx;
+  ctx.map = map.get();
+  auto score = [&](const Pose2& start, const Velocity& v) {
+    ctx.pose = start;
+    dut.Prepare(ctx);
+    Trajectory t;
+    gen.Simulate(start, v, &t);
+    return dut.Evaluate(t);
+  };
+  // Up: forwards from below, or reversing from below facing away.
+  EXPECT_FALSE(score({5.4, 2.0, 0.0}, {0.3, 0.0}).valid);
+  EXPECT_FALSE(score({5.4, 2.0, M_PI}, {-0.2, 0.0}).valid);
+  EXPECT_FALSE(score({5.4, 2.0, 0.3}, {0.3, 0.1}).valid);  // an arc up it
+  // Down: forwards, reversing, and on an arc.
+  const Score down = score({6.6, 2.0, M_PI}, {0.3, 0.0});
+  EXPECT_TRUE(down.valid);
+  EXPECT_LT(down.value, 2.0);
+  EXPECT_TRUE(score({6.6, 2.0, 0.0}, {-0.2, 0.0}).valid);
+  EXPECT_TRUE(score({6.6, 2.0, M_PI}, {0.3, 0.2}).valid);
+  // Turning on the spot astride the step, and driving away from it below.
+  EXPECT_TRUE(score({6.0, 2.0, 0.0}, {0.0, 0.5}).valid);
+  EXPECT_TRUE(score({5.9, 2.0, M_PI}, {0.3, 0.0}).valid);
+  // With admissible braking a slow climb far enough ahead scores as blocked (2..3), not clear.
+  ClearanceCritic braking(1.0, {});
+  ctx.pose = {5.0, 2.0, 0.0};
+  braking.Prepare(ctx);
+  Trajectory slow;
+  gen.Simulate(ctx.pose, {0.4, 0.0}, &slow);
+  const Score s = braking.Evaluate(slow);
+  EXPECT_TRUE(s.valid);
+  EXPECT_GE(s.value, 2.0);
+}
+
+}  // namespace
+}  // namespace cairn::planner

@@ -356,3 +356,62 @@ TEST(DwaPlannerTest, CommandsNeverExceedTheLimitsInRandomSituations) {
 
 }  // namespace
 }  // namespace cairn::planner
+
+namespace cairn::planner {
+namespace {
+
+// Driving along a path up an 8 cm step the Pioneer may only drive down
+// (testing::OneWayStepCorridor, step at x = 6): the DWA closes in and stops short of it, never
+// choosing a trajectory that climbs, and the clearance critic counts the rejections. Down the
+// same step it drives on.
+TEST(DwaPlannerTest, NeverClimbsAOneWayStep) {
+  const auto map = testing::OneWayStepCorridor().Build(testing::PioneerFootprint());
+  const VelocityLimits limits = VelocityLimits::FromProfile(testing::PioneerProfile());
+  for (const bool up : {true, false}) {
+    SCOPED_TRACE(up ? "up" : "down");
+    const double dir = up ? 1.0 : -1.0;
+    const Path path(
+        {{6.0 - 1.5 * dir, 2.0, up ? 0.0 : M_PI}, {6.0 + 3.0 * dir, 2.0, up ? 0.0 : M_PI}});
+    DwaPlanner dut(limits, {});
+    common::Pose2 pose = path.poses().front();
+    common::Velocity last;
+    for (int k = 0; k < 120; ++k) {
+      DwaInput in;
+      in.map = map.get();
+      in.pose = pose;
+      in.last_command = last;
+      in.path = &path;
+      in.segment_end = path.size();
+      in.local_goal = {pose.x_m + 1.2 * dir, 2.0};
+      const DwaResult r = dut.Compute(in);
+      if (!r.found) break;
+      common::Pose2 previous = pose;
+      for (const common::Pose2& p : r.best.poses) {
+        ASSERT_TRUE(map->MotionAllowed(previous, p)) << "cycle " << k;
+        previous = p;
+      }
+      dut.Commit(r.command, pose);
+      last = r.command;
+      // Drive the command for one control period (50 ms).
+      const double dt = 0.05;
+      pose.yaw_rad += 0.5 * r.command.angular_radps * dt;
+      pose.x_m += r.command.linear_mps * dt * std::cos(pose.yaw_rad);
+      pose.y_m += r.command.linear_mps * dt * std::sin(pose.yaw_rad);
+      pose.yaw_rad += 0.5 * r.command.angular_radps * dt;
+    }
+    const auto clearance =
+        std::find(dut.critic_names().begin(), dut.critic_names().end(), std::string("clearance"));
+    ASSERT_NE(clearance, dut.critic_names().end());
+    const int64_t rejected = dut.rejection_counts()[clearance - dut.critic_names().begin()];
+    if (up) {
+      EXPECT_LT(pose.x_m + 0.315, 6.0) << "stopped below the step";
+      EXPECT_GT(pose.x_m, 5.0) << "after closing in";
+      EXPECT_GT(rejected, 0);
+    } else {
+      EXPECT_LT(pose.x_m, 5.0) << "drove down the step";
+    }
+  }
+}
+
+}  // namespace
+}  // namespace cairn::planner
