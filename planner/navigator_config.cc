@@ -60,6 +60,7 @@ void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
   map.Get("ridge_sample_fraction", &p->ridge_sample_fraction);
   map.Get("improvement_rounds", &p->improvement_rounds);
   map.Get("grid_route_candidate", &p->grid_route_candidate);
+  map.Get("grid_route_cell_m", &p->grid_route_cell_m);
   map.Get("improvement_time_s", &p->improvement_time_s);
   map.Get("escape_radius_m", &p->escape_radius_m);
   map.Get("simplify_time_s", &p->simplify_time_s);

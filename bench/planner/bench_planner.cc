@@ -3,8 +3,8 @@
 // 1. One DWA cycle (20 x 20 samples simulated over 1.7 s, five critics, footprint on a 0.05 m
 //    cost layer around clutter). Anchor: Nav2 DWB, about 3 ms per cycle (published).
 // 2. The whole global plan (planner.plan.*, the headline): GlobalPlanner::Plan as the navigator
-//    runs it (its default params: grid pre-check, first solution, improvement rounds, the grid
-//    route candidate, simplification, re-validation) on a 100 m x 100 m cost layer at 0.1 m with
+//    runs it (its default params: grid pre-check, first solution, simplification, the coarse
+//    grid route candidate, improvement rounds without one, re-validation) on a 100 m x 100 m cost layer at 0.1 m with
 //    obstacles and a 10 degree ramp band the pioneer3at profile may not climb, derived from an
 //    elevation map by the mapper's own traversability code. 100 seeded queries drawn wherever the
 //    footprint fits, solvable or not: every one counts, failures included. Baselines in the same

@@ -16,7 +16,7 @@
 #include <ompl/util/RandomNumbers.h>
 
 #include "common/check.h"
-#include "planner/global/grid_astar.h"
+#include "planner/global/coarse_route.h"
 #include "planner/global/ompl_problem.h"
 
 namespace cairn::planner {
@@ -92,8 +92,9 @@ std::mutex& PlanMutex() {
 
 // One plan, stage by stage, the way OMPL's SimpleSetup reads: the cheap outcomes first (a bad
 // request, an occupied start or goal, no connection on the grid), then the OMPL problem is set
-// up and solved to a first exact solution, refined (simplified, more solutions merged, the grid
-// route offered) and checked again pose by pose. Each stage returns false when it ended the
+// up and solved to a first exact solution, refined (simplified, the coarse grid route offered,
+// more solutions merged without one) and checked again pose by pose. The time budget bounds
+// every stage together. Each stage returns false when it ended the
 // plan (End() set the status).
 class PlanRun {
  public:
@@ -104,6 +105,7 @@ class PlanRun {
         request_(request),
         cancel_(cancel),
         t0_(Clock::now()),
+        budget_s_(request.time_budget_s > 0.0 ? request.time_budget_s : params.time_budget_s),
         start_(request.start),
         goal_(request.goal) {}
 
@@ -130,6 +132,8 @@ class PlanRun {
     return false;
   }
   bool Cancelled() const { return cancel_ != nullptr && cancel_->load(); }
+  // What is left of the plan's time budget (every stage shares it).
+  double TimeLeft() const { return budget_s_ - SecondsSince(t0_); }
   ob::PlannerTerminationCondition CancelCondition() const {
     const std::atomic<bool>* cancel = cancel_;
     return ob::PlannerTerminationCondition([cancel] { return cancel->load(); });
@@ -144,7 +148,7 @@ class PlanRun {
   bool Refine();
   bool Improve(og::PathSimplifier& simplifier);
   std::shared_ptr<og::PathGeometric> SolveAgain(double time_left_s);
-  void OfferGridRoute(og::PathSimplifier& simplifier);
+  bool OfferGridRoute(og::PathSimplifier& simplifier);
   void Simplify(og::PathSimplifier& simplifier, og::PathGeometric* path) const;
   bool Finish();
 
@@ -153,6 +157,7 @@ class PlanRun {
   const PlanRequest& request_;
   const std::atomic<bool>* cancel_;
   const Clock::time_point t0_;
+  const double budget_s_;
   PlanResult result_;
   Pose2 start_;  // the request's, or the nearest valid pose to it
   Pose2 goal_;   // the request's, or shifted off a blocked footprint
@@ -246,9 +251,13 @@ bool PlanRun::ProveConnected() {
 // Solve within the budget; stop early on cancel or, if asked, at the first exact solution.
 bool PlanRun::Solve() {
   og::SimpleSetup& setup = *problem_.setup;
-  const double budget =
-      request_.time_budget_s > 0.0 ? request_.time_budget_s : params_.time_budget_s;
-  ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(budget);
+  const double budget = budget_s_;
+  if (TimeLeft() <= 0.0) {
+    std::ostringstream m;
+    m << "no solution within " << budget << " s (the budget ran out before the search)";
+    return End(PlanStatus::kTimedOut, m.str());
+  }
+  ob::PlannerTerminationCondition ptc = ob::timedPlannerTerminationCondition(TimeLeft());
   if (cancel_ != nullptr) ptc = ob::plannerOrTerminationCondition(ptc, CancelCondition());
   if (params_.stop_at_first_solution) {
     ptc = ob::plannerOrTerminationCondition(
@@ -285,13 +294,14 @@ bool PlanRun::Solve() {
   return true;
 }
 
-// Shortcutting passes until they stop helping (or the time cap): deterministic for a seed.
+// Shortcutting passes until they stop helping (or the time cap, or the plan's budget):
+// deterministic for a seed when the caps are far away.
 void PlanRun::Simplify(og::PathSimplifier& simplifier, og::PathGeometric* path) const {
   const auto t_start = Clock::now();
   // OMPL's shortcutPath checks some shortcuts backwards (from the later point to the earlier
   // one): on a map with one-way cells a pass whose result drives the wrong way is undone.
   const bool directed = map_.one_way_cells() > 0;
-  for (int pass = 0; pass < 8; ++pass) {
+  for (int pass = 0; pass < 8 && TimeLeft() > 0.0; ++pass) {
     const double before = path->length();
     simplifier.reduceVertices(*path, 0, 0, 0.33);
     const std::optional<og::PathGeometric> kept =
@@ -303,14 +313,19 @@ void PlanRun::Simplify(og::PathSimplifier& simplifier, og::PathGeometric* path) 
   }
 }
 
-// The first solution simplified, improved by more solutions and offered the grid route.
+// The first solution simplified and offered the grid route (or, without one, improved by more
+// solutions).
 bool PlanRun::Refine() {
   og::PathSimplifier simplifier(problem_.si, problem_.setup->getProblemDefinition()->getGoal(),
                                 problem_.objective);
   best_ = *raw_;
   if (params_.simplify_time_s > 0.0) Simplify(simplifier, &*best_);
-  if (params_.improvement_rounds > 0 && !Improve(simplifier)) return false;
-  OfferGridRoute(simplifier);
+  // The grid route settles the homotopy class at a fraction of the cost of more sampled
+  // solutions; those are planned only when it offers no valid path.
+  const bool have_route = OfferGridRoute(simplifier);
+  if (Cancelled()) return End(PlanStatus::kCancelled, "cancelled");
+  if (!have_route && params_.improvement_rounds > 0 && !Improve(simplifier)) return false;
+  result_.budget_exhausted = TimeLeft() <= 0.0;
   return true;
 }
 
@@ -330,7 +345,8 @@ std::shared_ptr<og::PathGeometric> PlanRun::SolveAgain(double time_left_s) {
   return std::make_shared<og::PathGeometric>(*pdef->getSolutionPath()->as<og::PathGeometric>());
 }
 
-// A few more exact solutions within improvement_time_s, merged with the first by
+// When the grid route gave nothing: a few more exact solutions within improvement_time_s (and
+// the plan's budget), merged with the first by
 // PathHybridization; the best of them and of the merged path is kept.
 bool PlanRun::Improve(og::PathSimplifier& simplifier) {
   const ob::OptimizationObjectivePtr& objective = problem_.objective;
@@ -338,7 +354,7 @@ bool PlanRun::Improve(og::PathSimplifier& simplifier) {
   hybridization.recordPath(std::make_shared<og::PathGeometric>(*best_), false);
   const auto improve_t0 = Clock::now();
   for (int round = 0; round < params_.improvement_rounds; ++round) {
-    const double left = params_.improvement_time_s - SecondsSince(improve_t0);
+    const double left = std::min(params_.improvement_time_s - SecondsSince(improve_t0), TimeLeft());
     if (left <= 0.0 || Cancelled()) break;
     const auto path = SolveAgain(left);
     if (path == nullptr) continue;
@@ -350,7 +366,7 @@ bool PlanRun::Improve(og::PathSimplifier& simplifier) {
     }
   }
   if (Cancelled()) return End(PlanStatus::kCancelled, "cancelled");
-  if (hybridization.pathCount() > 1) {
+  if (hybridization.pathCount() > 1 && TimeLeft() > 0.0) {
     hybridization.computeHybridPath();
     if (const auto& hybrid = hybridization.getHybridPath()) {
       og::PathGeometric merged = *hybrid;
@@ -365,24 +381,30 @@ bool PlanRun::Improve(og::PathSimplifier& simplifier) {
   return true;
 }
 
-// The grid route as one more candidate (see GlobalPlannerParams::grid_route_candidate).
-void PlanRun::OfferGridRoute(og::PathSimplifier& simplifier) {
-  if (!params_.grid_route_candidate || Cancelled()) return;
-  GridAStarParams gp;
-  gp.traversal_cost_weight = params_.traversal_cost_weight;
-  gp.clearance_weight = params_.clearance_weight;
-  gp.clearance_inflation_m = params_.clearance_inflation_m;
-  const GridPath grid_path = GridAStar(map_, start_.position(), goal_.position(), gp);
-  if (!grid_path.found || grid_path.points_m.size() < 2) return;
+// The coarse grid route as one more candidate (see GlobalPlannerParams::grid_route_candidate);
+// true when it gave a valid path (chosen or not).
+bool PlanRun::OfferGridRoute(og::PathSimplifier& simplifier) {
+  if (!params_.grid_route_candidate || Cancelled() || TimeLeft() <= 0.0) return false;
+  CoarseRouteParams cp;
+  cp.stride_cells =
+      std::max(1, static_cast<int>(std::lround(params_.grid_route_cell_m / map_.resolution_m())));
+  cp.traversal_cost_weight = params_.traversal_cost_weight;
+  cp.clearance_weight = params_.clearance_weight;
+  cp.clearance_inflation_m = params_.clearance_inflation_m;
+  const GridPath grid_path = CoarseGridRoute(map_, start_.position(), goal_.position(), cp,
+                                             [this] { return Cancelled() || TimeLeft() <= 0.0; });
+  if (!grid_path.found || grid_path.points_m.size() < 2) return false;
   // End on a goal state the planner accepts (the goal position with an allowed heading).
   og::PathGeometric route = internal::RouteAsPath(problem_, grid_path.points_m, start_,
                                                   best_->getState(best_->getStateCount() - 1));
   if (params_.simplify_time_s > 0.0) Simplify(simplifier, &route);
   const ob::OptimizationObjectivePtr& objective = problem_.objective;
-  if (route.check() && objective->isCostBetterThan(route.cost(objective), best_->cost(objective))) {
+  if (!route.check()) return false;
+  if (objective->isCostBetterThan(route.cost(objective), best_->cost(objective))) {
     best_ = route;
     result_.grid_route_chosen = true;
   }
+  return true;
 }
 
 // Interpolate and check again, pose by pose with the robot's own footprint; fall back to the
@@ -490,6 +512,7 @@ void GlobalPlannerParams::Validate() const {
   CAIRN_THROW_UNLESS(simplify_time_s >= 0.0, "simplify_time_s must not be negative");
   CAIRN_THROW_UNLESS(improvement_rounds >= 0, "improvement_rounds must not be negative");
   CAIRN_THROW_UNLESS(improvement_time_s >= 0.0, "improvement_time_s must not be negative");
+  CAIRN_THROW_UNLESS(grid_route_cell_m > 0.0, "grid_route_cell_m must be positive");
   CAIRN_THROW_UNLESS(escape_radius_m >= 0.0, "escape_radius_m must not be negative");
   CAIRN_THROW_UNLESS(interpolation_step_m > 0.0, "interpolation_step_m must be positive");
   CAIRN_THROW_UNLESS(goal_tolerance_m > 0.0, "goal_tolerance_m must be positive");

@@ -22,9 +22,13 @@
 ///   not counted on for that check.
 /// - States are checked with the footprint grown by CostMapParams::planning_padding_m (except
 ///   near the start and the goal), so poses between checked states keep clear as well.
-/// - After the first exact solution, a few more are planned within a small budget and merged
-///   with OMPL's PathHybridization, then shortcut; this trades a few tens of milliseconds for
-///   paths close to the shortest.
+/// - After the first exact solution (shortcut), a route searched on a coarse grid of the same
+///   cost (CoarseGridRoute) is shortcut and offered as a candidate: it anchors the path to the
+///   cheapest homotopy class in a few milliseconds. Only when it offers no valid path are a few
+///   more solutions planned within a small budget and merged with OMPL's PathHybridization.
+/// - The time budget bounds the whole call: the first solution, the refinement and the checks
+///   share it. No exact solution within it: kTimedOut; a solution found but refinement cut
+///   short: kSuccess with the best path so far (PlanResult::budget_exhausted).
 /// - The simplified and interpolated path is checked again, pose by pose with the robot's own
 ///   footprint; if it fails, the unsimplified path is used instead.
 /// - On a map with one-way cells (a directed layer, cost_map.h) motions are checked for their
@@ -46,7 +50,7 @@ struct GlobalPlannerParams {
   StateSpaceKind state_space{StateSpaceKind::kSE2};
   /// Dubins and Reeds-Shepp turning radius.
   double turning_radius_m{0.5};
-  /// Default time budget of one plan.
+  /// Default time budget of one whole plan (every stage; see PlanRequest::time_budget_s).
   double time_budget_s{1.0};
   /// Optimising planners stop at their first exact solution instead of using the whole budget.
   bool stop_at_first_solution{true};
@@ -73,16 +77,21 @@ struct GlobalPlannerParams {
   double range_m{0.0};
   /// Time cap of the path simplification passes.
   double simplify_time_s{0.05};
-  /// More exact solutions planned after the first, merged by PathHybridization (0: none) ...
+  /// When the grid route candidate offers no valid path (or is off): more exact solutions
+  /// planned after the first, merged by PathHybridization (0: none) ...
   int improvement_rounds{12};
   /// ... within this time after the first solution.
   double improvement_time_s{0.25};
-  /// Also offer the grid A* route on the same cost layer (headings along it, shortcut by OMPL's
-  /// simplifier, re-checked with the footprint) as one more candidate: a sampling planner that
-  /// stops at its first solutions may take any homotopy class, such as a long detour through
-  /// unexplored space, and the grid route anchors the choice to the cheapest class. The
-  /// candidate counts only if it is valid and cheaper under the objective.
+  /// Also offer the grid route on the same cost layer (CoarseGridRoute) (headings along it,
+  /// shortcut by OMPL's simplifier, re-checked with the footprint) as one more candidate: a
+  /// sampling planner that stops at its first solutions may take any homotopy class, such as a long
+  /// detour through unexplored space, and the grid route anchors the choice to the cheapest class.
+  /// The candidate counts only if it is valid and cheaper under the objective.
   bool grid_route_candidate{true};
+  /// The grid route is searched over blocks of about this size (CoarseGridRoute: 16 times
+  /// fewer nodes than the cost layer's 0.1 m cells at 0.4 m); the layer's resolution or less
+  /// searches every cell.
+  double grid_route_cell_m{0.4};
   /// States closer than this to the start or the goal are checked without the padding, so a
   /// robot standing close to an obstacle can still leave (or reach) its spot.
   double escape_radius_m{0.6};
@@ -132,9 +141,12 @@ struct PlanResult {
   int solutions{0};                  ///< exact solutions found (first plus improvements)
   double total_time_s{0.0};          ///< checks, solve, simplification and re-validation
   bool simplified{false};            ///< the simplified path passed re-validation
-  bool grid_route_chosen{false};     ///< the grid A* candidate beat the sampled paths
-  double start_moved_m{0.0};         ///< how far an occupied start was moved to free space
-  double goal_moved_m{0.0};          ///< how far an occupied goal was moved (goal_shift_radius_m)
+  bool grid_route_chosen{false};     ///< the grid route candidate beat the sampled paths
+  /// The time budget ran out after the first exact solution: `poses` is the best path so far
+  /// (still checked pose by pose), the refinement was cut short.
+  bool budget_exhausted{false};
+  double start_moved_m{0.0};  ///< how far an occupied start was moved to free space
+  double goal_moved_m{0.0};   ///< how far an occupied goal was moved (goal_shift_radius_m)
 
   bool ok() const { return status == PlanStatus::kSuccess; }
 };

@@ -3,6 +3,8 @@
 #include <atomic>
 #include <chrono>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -62,9 +64,16 @@ TEST(GlobalPlannerTest, FindsAnExactPathThroughTheGap) {
     EXPECT_FALSE(p.x_m > 9.8 && p.x_m < 10.2 && (p.y_m < 6.0 || p.y_m > 7.2));
   }
   EXPECT_TRUE(through_gap);
-  // The first solution and the improvement rounds, merged.
-  EXPECT_GT(r.solutions, 1);
+  // The grid route offered a valid path, so no improvement rounds were planned; without the
+  // grid route they are (the first solution and the rounds, merged).
+  EXPECT_EQ(r.solutions, 1);
   EXPECT_GE(r.total_time_s, r.solve_time_s);
+  GlobalPlannerParams no_route = Params();
+  no_route.grid_route_candidate = false;
+  const PlanResult merged = GlobalPlanner(no_route).Plan(*map, {start, goal, false});
+  ASSERT_EQ(merged.status, PlanStatus::kSuccess) << merged.message;
+  EXPECT_GT(merged.solutions, 1);
+  EXPECT_FALSE(merged.grid_route_chosen);
   // Every pose keeps the robot's own footprint clear of the wall.
   for (const Pose2& p : r.poses) EXPECT_TRUE(map->IsValid(p));
   // Simplification made it no longer than the detour through the gap needs, far below the raw one.
@@ -264,24 +273,82 @@ TEST(GlobalPlannerTest, GridRouteCandidateAvoidsALongDetour) {
   EXPECT_FALSE(GlobalPlanner(off).Plan(*map, req).grid_route_chosen);
 }
 
-TEST(GlobalPlannerTest, TimedOutWhenTheBudgetIsTooSmall) {
-  // A long maze of narrow passages: connected, but not in a tenth of a millisecond.
+// A long maze of narrow passages: connected, but not in a tenth of a millisecond.
+TestLayer Maze() {
   TestLayer layer(300, 300, 0.1);
   for (int k = 0; k < 7; ++k) {
     const double x = 3.0 + 3.8 * k;
     const bool gap_low = k % 2 == 0;
     layer.Rect(x, gap_low ? 0.8 : 0.0, x + 0.3, gap_low ? 30.0 : 29.2, 100.0f);
   }
-  const auto map = layer.Build(SmallFootprint());
+  return layer;
+}
+
+// Wall-clock seconds of one plan (steady clock).
+double TimedPlan(const GlobalPlanner& planner, const CostMap& map, const PlanRequest& req,
+                 PlanResult* result) {
+  const auto t0 = std::chrono::steady_clock::now();
+  *result = planner.Plan(map, req);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+TEST(GlobalPlannerTest, TimedOutWhenTheBudgetIsTooSmall) {
+  const auto map = Maze().Build(SmallFootprint());
   GlobalPlannerParams p = Params();
   p.time_budget_s = 1e-4;
-  const PlanResult r = GlobalPlanner(p).Plan(*map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false});
+  PlanResult r;
+  const double elapsed_s =
+      TimedPlan(GlobalPlanner(p), *map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false}, &r);
   EXPECT_EQ(r.status, PlanStatus::kTimedOut) << r.message;
+  EXPECT_TRUE(r.poses.empty());
+  // The budget bounds the whole call (a generous allowance: no timing flakes).
+  EXPECT_LT(elapsed_s, p.time_budget_s + 0.1);
   // The same problem is solvable with time (the first solution is enough to show it).
   p.time_budget_s = 60.0;
   p.improvement_rounds = 0;
   EXPECT_EQ(GlobalPlanner(p).Plan(*map, {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false}).status,
             PlanStatus::kSuccess);
+}
+
+TEST(GlobalPlannerTest, TheBudgetBoundsTheWholePlanAndKeepsTheBestPathSoFar) {
+  // Refinement stages with caps far beyond the budget (60 s of improvement rounds, 60 s of
+  // simplification, a million rounds, no grid route to stop them): the budget alone ends them.
+  // Either the first solution came within the budget (then the best path so far is returned,
+  // valid, flagged) or it did not (kTimedOut, no path); both within the budget plus a generous
+  // allowance.
+  // The maze (the first solution may not come within the budget) and the wall with a gap (it
+  // comes in milliseconds, then the rounds run into the budget).
+  const auto maze = Maze().Build(SmallFootprint());
+  const auto wall = WallWithGap().Build(PioneerFootprint());
+  const std::vector<std::pair<const CostMap*, PlanRequest>> cases = {
+      {maze.get(), {{1.0, 15.0, 0.0}, {29.0, 15.0, 0.0}, false}},
+      {wall.get(), {{2.0, 2.0, 0.0}, {18.0, 2.0, 0.0}, false}}};
+  GlobalPlannerParams p = Params();
+  p.time_budget_s = 0.3;
+  p.improvement_rounds = 1000000;
+  p.grid_route_candidate = false;
+  for (const auto& [map, req] : cases) {
+    PlanResult r;
+    const double elapsed_s = TimedPlan(GlobalPlanner(p), *map, req, &r);
+    EXPECT_LT(elapsed_s, p.time_budget_s + 0.1);
+    EXPECT_LE(r.total_time_s, elapsed_s);
+    if (r.ok()) {
+      EXPECT_TRUE(r.budget_exhausted) << "a million rounds cannot end within 0.3 s";
+      ExpectPathValid(*map, r, req.start, req.goal);
+      for (const Pose2& pose : r.poses) ASSERT_TRUE(map->IsValid(pose));
+    } else {
+      // No exact solution within the budget (RRTConnect may end on an approximate one).
+      EXPECT_TRUE(r.status == PlanStatus::kTimedOut || r.status == PlanStatus::kApproximate)
+          << PlanStatusName(r.status) << ": " << r.message;
+      EXPECT_TRUE(r.poses.empty());
+    }
+  }
+  // With time to spare the flag stays down.
+  GlobalPlannerParams roomy = Params();
+  roomy.improvement_rounds = 0;
+  const PlanResult r = GlobalPlanner(roomy).Plan(*maze, cases[0].second);
+  ASSERT_TRUE(r.ok()) << r.message;
+  EXPECT_FALSE(r.budget_exhausted);
 }
 
 TEST(GlobalPlannerTest, CancelledBeforeAndDuringTheSolve) {
