@@ -88,6 +88,23 @@ def lane_y(k):
     return k * LANE_WIDTH + LANE_WIDTH / 2
 
 
+def lane_walls(n_lanes):
+    """The outer walls of `n_lanes` lanes and the walls between them (from the cross corridor to
+    the end wall), shared by the lane worlds."""
+    y_max = n_lanes * LANE_WIDTH
+    walls = [
+        aabb("wall_start", -WALL_T, 0.0, -WALL_T / 2, y_max + WALL_T / 2, -0.3, WALL_H),
+        aabb("wall_end", LANE_X1, LANE_X1 + WALL_T, -WALL_T / 2, y_max + WALL_T / 2, -0.3, WALL_H),
+        aabb("wall_south", -WALL_T, LANE_X1 + WALL_T, -WALL_T / 2, WALL_T / 2, -0.3, WALL_H),
+        aabb("wall_north", -WALL_T, LANE_X1 + WALL_T, y_max - WALL_T / 2, y_max + WALL_T / 2,
+             -0.3, WALL_H)]
+    for k in range(1, n_lanes):
+        y = k * LANE_WIDTH
+        walls.append(aabb(f"wall_lane_{k}", LANE_X0, LANE_X1, y - WALL_T / 2, y + WALL_T / 2,
+                          -0.3, WALL_H))
+    return walls
+
+
 def tunnel():
     lanes = []   # (name, description, feature lines, start, goal, notes)
     geoms = []
@@ -104,17 +121,7 @@ def tunnel():
     geoms.append(aabb("deck_trench_far", trench_x1, 25, ty0, ty1, -0.3, 0.0, FLOOR_RGBA))
     geoms.append(aabb("deck_north", -1, 25, ty1, y_max + 1, -0.3, 0.0, FLOOR_RGBA))
     # Walls: outer box and the walls between lanes (from the cross corridor to the end wall).
-    geoms.append(aabb("wall_start", -WALL_T, 0.0, -WALL_T / 2, y_max + WALL_T / 2, -0.3, WALL_H))
-    geoms.append(aabb("wall_end", LANE_X1, LANE_X1 + WALL_T, -WALL_T / 2, y_max + WALL_T / 2,
-                      -0.3, WALL_H))
-    geoms.append(aabb("wall_south", -WALL_T, LANE_X1 + WALL_T, -WALL_T / 2, WALL_T / 2, -0.3,
-                      WALL_H))
-    geoms.append(aabb("wall_north", -WALL_T, LANE_X1 + WALL_T, y_max - WALL_T / 2,
-                      y_max + WALL_T / 2, -0.3, WALL_H))
-    for k in range(1, n_lanes):
-        y = k * LANE_WIDTH
-        geoms.append(aabb(f"wall_lane_{k}", LANE_X0, LANE_X1, y - WALL_T / 2, y + WALL_T / 2,
-                          -0.3, WALL_H))
+    geoms += lane_walls(n_lanes)
 
     def inner(k):
         return k * LANE_WIDTH + WALL_T / 2, (k + 1) * LANE_WIDTH - WALL_T / 2
@@ -636,17 +643,7 @@ def terraces():
             geoms.append(aabb(f"ditch_{k}_bottom", x0, x1, y0, y1, -0.3, -depth, FLOOR_RGBA))
         else:
             geoms.append(aabb(f"deck_{k}", LANE_X0, 25, y0, y1, -0.3, 0.0, FLOOR_RGBA))
-    geoms.append(aabb("wall_start", -WALL_T, 0.0, -WALL_T / 2, y_max + WALL_T / 2, -0.3, WALL_H))
-    geoms.append(aabb("wall_end", LANE_X1, LANE_X1 + WALL_T, -WALL_T / 2, y_max + WALL_T / 2,
-                      -0.3, WALL_H))
-    geoms.append(aabb("wall_south", -WALL_T, LANE_X1 + WALL_T, -WALL_T / 2, WALL_T / 2, -0.3,
-                      WALL_H))
-    geoms.append(aabb("wall_north", -WALL_T, LANE_X1 + WALL_T, y_max - WALL_T / 2,
-                      y_max + WALL_T / 2, -0.3, WALL_H))
-    for k in range(1, n_lanes):
-        y = k * LANE_WIDTH
-        geoms.append(aabb(f"wall_lane_{k}", LANE_X0, LANE_X1, y - WALL_T / 2, y + WALL_T / 2,
-                          -0.3, WALL_H))
+    geoms += lane_walls(n_lanes)
 
     def terrace(k, name, rise, y0, y1, platform_x1):
         """A 5 deg ramp from x 8 up to `rise`, then a platform that ends in a drop."""
