@@ -8,6 +8,7 @@
 #include <mutex>
 #include <optional>
 #include <sstream>
+#include <vector>
 
 #include <ompl/base/PlannerTerminationCondition.h>
 #include <ompl/base/ProblemDefinition.h>
@@ -149,6 +150,7 @@ class PlanRun {
   bool Improve(og::PathSimplifier& simplifier);
   std::shared_ptr<og::PathGeometric> SolveAgain(double time_left_s);
   bool OfferGridRoute(og::PathSimplifier& simplifier);
+  std::optional<og::PathGeometric> GridRouteAsPath(og::PathSimplifier& simplifier, int stride);
   void Simplify(og::PathSimplifier& simplifier, og::PathGeometric* path) const;
   bool Finish();
 
@@ -382,29 +384,48 @@ bool PlanRun::Improve(og::PathSimplifier& simplifier) {
 }
 
 // The coarse grid route as one more candidate (see GlobalPlannerParams::grid_route_candidate);
-// true when it gave a valid path (chosen or not).
+// true when it gave a valid path (chosen or not). The coarse route keeps only the footprint's
+// inscribed disc off blocking cells; where the padded footprint does not fit along it (a
+// passage about as wide as the robot, taken off centre), the full-resolution route, which
+// the proximity cost keeps in the middle of such a passage, is tried before giving up.
 bool PlanRun::OfferGridRoute(og::PathSimplifier& simplifier) {
-  if (!params_.grid_route_candidate || Cancelled() || TimeLeft() <= 0.0) return false;
-  CoarseRouteParams cp;
-  cp.stride_cells =
+  if (!params_.grid_route_candidate) return false;
+  const int coarse_stride =
       std::max(1, static_cast<int>(std::lround(params_.grid_route_cell_m / map_.resolution_m())));
+  std::vector<int> strides{coarse_stride};
+  if (coarse_stride > 1) strides.push_back(1);
+  for (const int stride : strides) {
+    if (Cancelled() || TimeLeft() <= 0.0) return false;
+    const std::optional<og::PathGeometric> route = GridRouteAsPath(simplifier, stride);
+    if (!route) continue;
+    const ob::OptimizationObjectivePtr& objective = problem_.objective;
+    if (objective->isCostBetterThan(route->cost(objective), best_->cost(objective))) {
+      best_ = *route;
+      result_.grid_route_chosen = true;
+    }
+    return true;
+  }
+  return false;
+}
+
+// The grid route over blocks of `stride` cells as a simplified, checked OMPL path, or nullopt
+// when there is no route or it does not check.
+std::optional<og::PathGeometric> PlanRun::GridRouteAsPath(og::PathSimplifier& simplifier,
+                                                          int stride) {
+  CoarseRouteParams cp;
+  cp.stride_cells = stride;
   cp.traversal_cost_weight = params_.traversal_cost_weight;
   cp.clearance_weight = params_.clearance_weight;
   cp.clearance_inflation_m = params_.clearance_inflation_m;
   const GridPath grid_path = CoarseGridRoute(map_, start_.position(), goal_.position(), cp,
                                              [this] { return Cancelled() || TimeLeft() <= 0.0; });
-  if (!grid_path.found || grid_path.points_m.size() < 2) return false;
+  if (!grid_path.found || grid_path.points_m.size() < 2) return std::nullopt;
   // End on a goal state the planner accepts (the goal position with an allowed heading).
   og::PathGeometric route = internal::RouteAsPath(problem_, grid_path.points_m, start_,
                                                   best_->getState(best_->getStateCount() - 1));
   if (params_.simplify_time_s > 0.0) Simplify(simplifier, &route);
-  const ob::OptimizationObjectivePtr& objective = problem_.objective;
-  if (!route.check()) return false;
-  if (objective->isCostBetterThan(route.cost(objective), best_->cost(objective))) {
-    best_ = route;
-    result_.grid_route_chosen = true;
-  }
-  return true;
+  if (!route.check()) return std::nullopt;
+  return route;
 }
 
 // Interpolate and check again, pose by pose with the robot's own footprint; fall back to the

@@ -90,7 +90,9 @@ struct GlobalPlannerParams {
   bool grid_route_candidate{true};
   /// The grid route is searched over blocks of about this size (CoarseGridRoute: 16 times
   /// fewer nodes than the cost layer's 0.1 m cells at 0.4 m); the layer's resolution or less
-  /// searches every cell.
+  /// searches every cell. When the blocks' route does not fit the padded footprint (it keeps
+  /// only the inscribed disc clear, and may pass a tight gap off centre), the route over every
+  /// cell is tried before the candidate is dropped.
   double grid_route_cell_m{0.4};
   /// States closer than this to the start or the goal are checked without the padding, so a
   /// robot standing close to an obstacle can still leave (or reach) its spot.
