@@ -380,9 +380,9 @@ TestLayer ReadRecordedLayer(const std::string& name) {
 // navigator planned on it. Beside the crate, where its cells smear, a gap is barely wider than
 // the padded footprint: the coarse grid route (0.4 m blocks, only the inscribed disc kept clear)
 // passed there off centre, the padded footprint did not fit, the route was dropped, and with the
-// navigator's settings four seeds in ten went round through lane 3 (34 m instead of 8 m), which is how the navigator
-// once drove away from its goal for 100 s. The full-resolution route, kept in the middle by
-// the proximity cost, fits.
+// navigator's settings four seeds in ten went round through lane 3 (34 m instead of 8 m), which is
+// how the navigator once drove away from its goal for 100 s. The full-resolution route, kept in the
+// middle by the proximity cost, fits.
 TEST(GlobalPlannerTest, AGapTheCoarseRouteTakesOffCentreIsStillTakenByTheGridRoute) {
   CostMapParams cp;  // the navigator's
   cp.unknown_is_traversable = true;
