@@ -120,6 +120,11 @@ DitchCell TestUnseenCell(const TerrainView& v, int x, int y, const Traversabilit
     // a crest) the ground may lie well below both rims without any ditch. The gap must lie
     // min_depth below both flanks continued at their slopes too.
     if (line.continued_m - u + p.height_tolerance_m < p.min_ditch_depth_m) continue;
+    // ... nor is a depression whose walls, on average, are gentler than min_ditch_wall_slope
+    // (5 cm over a 2.4 m wide dip: 2.4 deg): ground to drive, judged by its slopes once seen.
+    if (depth + p.height_tolerance_m < std::tan(p.min_ditch_wall_slope_rad) * 0.5 * line.width_m) {
+      continue;
+    }
     cell.lines[k] = line;
     if (!cell.ditch || line.width_m < cell.width_m) {
       cell.width_m = line.width_m;

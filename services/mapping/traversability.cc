@@ -46,6 +46,7 @@ struct NormalResult {
   // Standard error of the fitted gradient in its least constrained direction, from the scatter
   // of the heights about the plane (0 for a line or fewer than 4 cells).
   double gradient_error{0.0};
+  double noise_m{0.0};  // the heights' scatter about the plane (n - 3 degrees of freedom)
 };
 
 NormalResult FitNormal(const float* h, int sx, int sy, int x, int y,
@@ -120,7 +121,9 @@ NormalResult FitNormal(const float* h, int sx, int sy, int x, int y,
   // var(gradient) = sigma² / (n · spread) along the least spread direction, sigma² estimated
   // from the residual (n - 3 degrees of freedom).
   if (n > 3 && minor_xy > 0) {
-    r.gradient_error = std::sqrt(std::max(0.0, ev(0)) * n / (n - 3) / (n * minor_xy));
+    const double noise2 = std::max(0.0, ev(0)) * n / (n - 3);
+    r.noise_m = std::sqrt(noise2);
+    r.gradient_error = std::sqrt(noise2 / (n * minor_xy));
   }
   return r;
 }
@@ -149,6 +152,7 @@ struct NormalWindows {
   std::vector<std::array<int, 2>> wide;    // wide_normal_radius_m
   int min_cells{6};
   double max_gradient_error{0.0};
+  double max_fit_noise_m{0.0};
 };
 
 // The layers of the first stage of ComputeGeometricLayers.
@@ -170,8 +174,11 @@ struct NormalLayers {
 NormalResult FitSupported(const internal::TerrainView& view, const NormalWindows& windows,
                           double res, int x, int y) {
   const NormalResult narrow = FitNormal(view.h, view.sx, view.sy, x, y, windows.narrow, res);
-  const bool supported = narrow.cells >= windows.min_cells && !narrow.line &&
-                         narrow.gradient_error <= windows.max_gradient_error;
+  // Scatter above the sensor's noise is structure (a step, a block, a wall's foot), which the
+  // narrow window must keep sharp; scatter at the noise level over a narrow span is noise.
+  const bool noisy = narrow.gradient_error > windows.max_gradient_error &&
+                     narrow.noise_m <= windows.max_fit_noise_m;
+  const bool supported = narrow.cells >= windows.min_cells && !narrow.line && !noisy;
   if (supported || windows.wide.size() <= windows.narrow.size()) return narrow;
   const NormalResult wide = FitNormal(view.h, view.sx, view.sy, x, y, windows.wide, res);
   if (wide.cells < windows.min_cells || wide.line || wide.cells <= narrow.cells) return narrow;
@@ -462,6 +469,8 @@ void TraversabilityParams::Validate() const {
                      "wide_normal_radius_m must be >= 0, got " << wide_normal_radius_m);
   CAIRN_THROW_UNLESS(min_normal_cells >= 3,
                      "min_normal_cells must be at least 3, got " << min_normal_cells);
+  CAIRN_THROW_UNLESS(std::isfinite(max_fit_noise_m) && max_fit_noise_m >= 0,
+                     "max_fit_noise_m must be >= 0, got " << max_fit_noise_m);
   CAIRN_THROW_UNLESS(max_slope_error_rad > 0 && max_slope_error_rad < 0.5,
                      "max_slope_error_rad must be in (0, 0.5), got " << max_slope_error_rad);
   CAIRN_THROW_UNLESS(std::isfinite(blind_zone_half_size_m) && blind_zone_half_size_m >= 0,
@@ -472,6 +481,8 @@ void TraversabilityParams::Validate() const {
                      "free_fraction must be in [0, 1), got " << free_fraction);
   CAIRN_THROW_UNLESS(std::isfinite(min_ditch_depth_m) && min_ditch_depth_m > 0,
                      "min_ditch_depth_m must be positive, got " << min_ditch_depth_m);
+  CAIRN_THROW_UNLESS(min_ditch_wall_slope_rad >= 0 && min_ditch_wall_slope_rad < 1.5,
+                     "min_ditch_wall_slope_rad must be in [0, 1.5), got " << min_ditch_wall_slope_rad);
   CAIRN_THROW_UNLESS(std::isfinite(max_ditch_search_m) && max_ditch_search_m > 0,
                      "max_ditch_search_m must be positive, got " << max_ditch_search_m);
   CAIRN_THROW_UNLESS(std::isfinite(unseen_drop_m) && unseen_drop_m >= 0,
@@ -523,6 +534,7 @@ void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params,
   windows.wide = NormalOffsets(std::max(params.normal_radius_m, params.wide_normal_radius_m), res);
   windows.min_cells = std::min(params.min_normal_cells, static_cast<int>(windows.narrow.size()));
   windows.max_gradient_error = std::tan(params.max_slope_error_rad);
+  windows.max_fit_noise_m = params.max_fit_noise_m;
   ComputeNormalLayers(view, windows, res, rect, out);
   internal::ComputeDitchLayers(view, params, res, rect, ditch_depth, ditch_width);
 }
@@ -575,6 +587,7 @@ TraversabilityParams LoadTraversabilityParams(common::YamlMap& m) {
   m.Get("wide_normal_radius_m", &p.wide_normal_radius_m);
   m.Get("min_normal_cells", &p.min_normal_cells);
   m.Get("max_slope_error_rad", &p.max_slope_error_rad);
+  m.Get("max_fit_noise_m", &p.max_fit_noise_m);
   m.Get("blind_zone_half_size_m", &p.blind_zone_half_size_m);
   m.Get("imu_pitch_compensation", &p.imu_pitch_compensation);
   m.Get("unknown_is_lethal", &p.unknown_is_lethal);
@@ -583,6 +596,7 @@ TraversabilityParams LoadTraversabilityParams(common::YamlMap& m) {
   m.Get("min_ditch_depth_m", &p.min_ditch_depth_m);
   m.Get("unseen_drop_m", &p.unseen_drop_m);
   m.Get("max_ditch_search_m", &p.max_ditch_search_m);
+  m.Get("min_ditch_wall_slope_rad", &p.min_ditch_wall_slope_rad);
   m.Get("height_tolerance_m", &p.height_tolerance_m);
   m.Get("min_step_edge_cells", &p.min_step_edge_cells);
   m.Finish();

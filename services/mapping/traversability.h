@@ -56,6 +56,9 @@ struct TraversabilityParams {
   double wide_normal_radius_m{0.5};
   int min_normal_cells{6};
   double max_slope_error_rad{0.0087};  ///< 0.5 deg
+  /// ... counting only scatter up to this (m) as noise: more is structure (a step, a block),
+  /// which the normal window keeps sharp.
+  double max_fit_noise_m{0.008};
   double blind_zone_half_size_m{0.5};  ///< cells within this of the robot count as free
   bool imu_pitch_compensation{false};  ///< add the robot's pitch to the map slope
   bool unknown_is_lethal{false};       ///< else unknown stays NaN in the cost layer
@@ -64,6 +67,10 @@ struct TraversabilityParams {
   double free_fraction{0.3};
   /// A gap is a ditch when the terrain in it lies at least this far below both rims (m).
   double min_ditch_depth_m{0.05};
+  /// A gap is a ditch only when its depth below the rims, over half its width, is at least the
+  /// tangent of this (its walls are steeper than this on average): a wide gentle dip seen only
+  /// partly (a valley's shadow behind a crest) is natural ground, not a negative obstacle.
+  double min_ditch_wall_slope_rad{0.087};
   /// How far (m) the ditch analysis looks for the rims on both sides of a gap; wider gaps are
   /// not recognised as ditches (they stay unknown).
   double max_ditch_search_m{1.8};

@@ -342,6 +342,22 @@ void ExpectTerrainJudgedRight(const Evaluation& e) {
 TEST_F(OutdoorTerrainTest, TheDemoRouteIsJudgedAsTerrain) {
   DriveAndMap({{0.0, 0.0, std::atan2(-2.0, 8.0), 0.4, 20.0}});
   ComputeTruth();
+  if (const char* patch = getenv("OT_PATCH")) {
+    double x0, y0, x1, y1;
+    if (std::sscanf(patch, "%lf,%lf,%lf,%lf", &x0, &y0, &x1, &y1) == 4) {
+      const auto& g = *grid_;
+      for (double y = y1; y >= y0; y -= 0.2) {
+        for (double x = x0; x <= x1; x += 0.2) {
+          const auto c = g.IndexOf({x, y});
+          if (!c) continue;
+          const int64_t i = c->ix + static_cast<int64_t>(c->iy) * g.size_x();
+          std::printf("%6.3f/%6.3f/%6.3f ", g.at(layers::kElevation).data()[i],
+                      g.at(layers::kGroundBound).data()[i], truth_[i].z_m);
+        }
+        std::printf("  y=%.1f\n", y);
+      }
+    }
+  }
   ExpectTerrainJudgedRight(Evaluate(*grid_, truth_, objects_, profile_, map_->BuildRegistry()));
 }
 
