@@ -367,6 +367,19 @@ TEST_F(OutdoorTerrainTest, TheDemoRoutesCostLayerMatchesTheTruth) {
   EXPECT_TRUE(e.object_failures.empty());
 }
 
+// Northwards towards (3, 9), between the shed and the garden wall (the goal itself stands on
+// 8-10 deg ground: lethal for the Pioneer, rightly).
+TEST_F(OutdoorTerrainTest, TheRouteNorthCostLayerMatchesTheTruth) {
+  DriveAndMap({{0.0, 0.0, std::atan2(9.0, 3.0), 0.4, 22.0}});
+  ComputeTruth();
+  const Evaluation e = Evaluate();
+  SCOPED_TRACE(Describe(e));
+  std::printf("%s\n", Describe(e).c_str());
+  ASSERT_GT(e.mapped, 10000);
+  EXPECT_LT(e.false_lethal, 0.01 * e.mapped);
+  EXPECT_TRUE(e.object_failures.empty());
+}
+
 // Left (issue 17): the registry of the same drive still lists about a hundred steps and ramps
 // on the hills (noise along lidar rings on inclines); run with --gtest_also_run_disabled_tests.
 TEST_F(OutdoorTerrainTest, DISABLED_TheDemoRoutesRegistryListsEachObjectOnce) {
