@@ -29,6 +29,9 @@ struct GapLine {
   int k_neg{0};         // steps to the rim along -(dx, dy)
   double rim_m{0.0};    // the lower of the two rims
   double width_m{0.0};  // distance between the rims minus one cell
+  // The ground on each side continued into the gap at its own slope, at the cell: the higher
+  // of the two is the lowest a smooth valley between the rims could lie there.
+  double continued_m{0.0};
 };
 
 // Walks from (x, y) along ±(dx, dy) through the gap: unknown cells and known cells lower than
@@ -42,6 +45,7 @@ GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double rim_
   GapLine line;
   int k_side[2] = {0, 0};
   double rim_side[2] = {0.0, 0.0};
+  double continued_side[2] = {0.0, 0.0};
   for (int side = 0; side < 2; ++side) {
     const int sdx = side == 0 ? dx : -dx, sdy = side == 0 ? dy : -dy;
     for (int k = 1; k <= max_cells; ++k) {
@@ -68,6 +72,10 @@ GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double rim_
         }
         k_side[side] = k;
         rim_side[side] = hc;
+        // The ground beyond the rim falling towards the gap (per cell, over the two cells
+        // beyond it), continued to the cell: a valley's flank, not a ditch's wall.
+        const double fall = std::max(0.0, 0.5 * (double(v.H(cx + 2 * sdx, cy + 2 * sdy)) - hc));
+        continued_side[side] = hc - fall * k;
         break;
       }
     }
@@ -78,6 +86,7 @@ GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double rim_
   line.k_neg = k_side[1];
   line.rim_m = std::min(rim_side[0], rim_side[1]);
   line.width_m = (k_side[0] + k_side[1] - 1) * step_m;
+  line.continued_m = std::max(continued_side[0], continued_side[1]);
   return line;
 }
 
@@ -107,6 +116,15 @@ DitchCell TestUnseenCell(const TerrainView& v, int x, int y, const Traversabilit
     if (!line.found) continue;
     const double depth = line.rim_m - u;
     if (depth + p.height_tolerance_m < p.min_ditch_depth_m) continue;
+    // Natural ground: between two flanks falling towards each other (a valley, a shadow behind
+    // a crest) the ground may lie well below both rims without any ditch. The gap must lie
+    // min_depth below both flanks continued at their slopes too.
+    if (line.continued_m - u + p.height_tolerance_m < p.min_ditch_depth_m) continue;
+    // ... nor is a depression whose walls, on average, are gentler than min_ditch_wall_slope
+    // (5 cm over a 2.4 m wide dip: 2.4 deg): ground to drive, judged by its slopes once seen.
+    if (depth + p.height_tolerance_m < std::tan(p.min_ditch_wall_slope_rad) * 0.5 * line.width_m) {
+      continue;
+    }
     cell.lines[k] = line;
     if (!cell.ditch || line.width_m < cell.width_m) {
       cell.width_m = line.width_m;

@@ -41,6 +41,12 @@ CellRect Clip(const CellRect& r, int sx, int sy) {
 struct NormalResult {
   Eigen::Vector3d normal{0.0, 0.0, 1.0};
   double roughness_m{0.0};
+  int cells{0};       // known cells in the window
+  bool line{false};   // on one line of the grid: the slope along it only
+  // Standard error of the fitted gradient in its least constrained direction, from the scatter
+  // of the heights about the plane (0 for a line or fewer than 4 cells).
+  double gradient_error{0.0};
+  double noise_m{0.0};  // the heights' scatter about the plane (n - 3 degrees of freedom)
 };
 
 NormalResult FitNormal(const float* h, int sx, int sy, int x, int y,
@@ -51,7 +57,8 @@ NormalResult FitNormal(const float* h, int sx, int sy, int x, int y,
   for (const auto& o : offsets) {
     const int cx = x + o[0], cy = y + o[1];
     if (cx < 0 || cy < 0 || cx >= sx || cy >= sy) continue;
-    const float hc = h[cx + static_cast<int64_t>(cy) * sx];
+    const int64_t j = cx + static_cast<int64_t>(cy) * sx;
+    const float hc = h[j];
     if (std::isnan(hc)) continue;
     const double px = o[0] * res, py = o[1] * res, pz = hc - h0;
     n += 1;
@@ -65,6 +72,7 @@ NormalResult FitNormal(const float* h, int sx, int sy, int x, int y,
     sxz += px * pz;
     syz += py * pz;
   }
+  r.cells = static_cast<int>(n);
   if (n < 3) return r;
   mx /= n;
   my /= n;
@@ -86,6 +94,7 @@ NormalResult FitNormal(const float* h, int sx, int sy, int x, int y,
   const double minor_xy = half_trace - spread, major_xy = half_trace + spread;
   const double line_spread = 0.05 * res;  // m, across the line
   if (major_xy > 0 && minor_xy < line_spread * line_spread) {
+    r.line = true;
     // Direction of the line: the major axis of the cells' horizontal spread.
     const double angle = 0.5 * std::atan2(2.0 * cxy, cxx - cyy);
     const double ux = std::cos(angle), uy = std::sin(angle);
@@ -109,6 +118,13 @@ NormalResult FitNormal(const float* h, int sx, int sy, int x, int y,
   if (!normal.allFinite() || normal.norm() < 0.5) return r;
   r.normal = normal.normalized();
   r.roughness_m = std::sqrt(std::max(0.0, ev(0)));
+  // var(gradient) = sigma² / (n · spread) along the least spread direction, sigma² estimated
+  // from the residual (n - 3 degrees of freedom).
+  if (n > 3 && minor_xy > 0) {
+    const double noise2 = std::max(0.0, ev(0)) * n / (n - 3);
+    r.noise_m = std::sqrt(noise2);
+    r.gradient_error = std::sqrt(noise2 / (n * minor_xy));
+  }
   return r;
 }
 
@@ -118,10 +134,10 @@ Layer& EnsureLayer(GridMap* map, const char* name) {
 }
 
 // Offsets of the normal window: every cell centre within the radius.
-std::vector<std::array<int, 2>> NormalOffsets(const TraversabilityParams& params, double res) {
-  const int rc = static_cast<int>(std::floor(params.normal_radius_m / res + 1e-9));
+std::vector<std::array<int, 2>> NormalOffsets(double radius_m, double res) {
+  const int rc = static_cast<int>(std::floor(radius_m / res + 1e-9));
   std::vector<std::array<int, 2>> offsets;
-  const double r2 = params.normal_radius_m * params.normal_radius_m + 1e-12;
+  const double r2 = radius_m * radius_m + 1e-12;
   for (int dy = -rc; dy <= rc; ++dy) {
     for (int dx = -rc; dx <= rc; ++dx) {
       if ((dx * dx + dy * dy) * res * res <= r2) offsets.push_back({dx, dy});
@@ -129,6 +145,15 @@ std::vector<std::array<int, 2>> NormalOffsets(const TraversabilityParams& params
   }
   return offsets;
 }
+
+// The windows of the plane fits.
+struct NormalWindows {
+  std::vector<std::array<int, 2>> narrow;  // normal_radius_m
+  std::vector<std::array<int, 2>> wide;    // wide_normal_radius_m
+  int min_cells{6};
+  double max_gradient_error{0.0};
+  double max_fit_noise_m{0.0};
+};
 
 // The layers of the first stage of ComputeGeometricLayers.
 struct NormalLayers {
@@ -140,10 +165,29 @@ struct NormalLayers {
 };
 
 // Normals, slope, roughness and the step layer of the cells of `rect`.
-void ComputeNormalLayers(const internal::TerrainView& view,
-                         const std::vector<std::array<int, 2>>& offsets, double res,
-                         const CellRect& rect, const NormalLayers& out) {
-  const int sx = view.sx, sy = view.sy;
+// The fit over the normal window, or over the wide window where that one cannot support a
+// slope: too few cells, cells on one line, or heights too uncertain for the window's span
+// (far or grazing ground seen by a few noisy rays; a 3 x 3 plane through cells with 1 cm of
+// noise is off by about 1.2 deg, and a slope limit of 8 deg is crossed by noise alone). The
+// scatter about the plane measures the noise: the published elevation is all the derived layers
+// read, so the live map and a re-derivation from the stored base layers agree.
+NormalResult FitSupported(const internal::TerrainView& view, const NormalWindows& windows,
+                          double res, int x, int y) {
+  const NormalResult narrow = FitNormal(view.h, view.sx, view.sy, x, y, windows.narrow, res);
+  // Scatter above the sensor's noise is structure (a step, a block, a wall's foot), which the
+  // narrow window must keep sharp; scatter at the noise level over a narrow span is noise.
+  const bool noisy = narrow.gradient_error > windows.max_gradient_error &&
+                     narrow.noise_m <= windows.max_fit_noise_m;
+  const bool supported = narrow.cells >= windows.min_cells && !narrow.line && !noisy;
+  if (supported || windows.wide.size() <= windows.narrow.size()) return narrow;
+  const NormalResult wide = FitNormal(view.h, view.sx, view.sy, x, y, windows.wide, res);
+  if (wide.cells < windows.min_cells || wide.line || wide.cells <= narrow.cells) return narrow;
+  return wide;
+}
+
+void ComputeNormalLayers(const internal::TerrainView& view, const NormalWindows& windows, double res, const CellRect& rect,
+                         const NormalLayers& out) {
+  const int sx = view.sx;
   for (int y = rect.y0; y < rect.y1; ++y) {
     for (int x = rect.x0; x < rect.x1; ++x) {
       const int64_t i = x + static_cast<int64_t>(y) * sx;
@@ -153,7 +197,7 @@ void ComputeNormalLayers(const internal::TerrainView& view,
         out.normal_x[i] = out.normal_y[i] = kNaN;
         continue;
       }
-      const NormalResult nr = FitNormal(view.h, sx, sy, x, y, offsets, res);
+      const NormalResult nr = FitSupported(view, windows, res, x, y);
       out.slope[i] = static_cast<float>(std::acos(std::clamp(nr.normal.z(), -1.0, 1.0)));
       out.roughness[i] = static_cast<float>(nr.roughness_m);
       out.normal_x[i] = static_cast<float>(nr.normal.x());
@@ -421,6 +465,14 @@ float CostRules::Cost(int x, int y, bool near_ditch) const {
 void TraversabilityParams::Validate() const {
   CAIRN_THROW_UNLESS(std::isfinite(normal_radius_m) && normal_radius_m > 0,
                      "normal_radius_m must be positive, got " << normal_radius_m);
+  CAIRN_THROW_UNLESS(std::isfinite(wide_normal_radius_m) && wide_normal_radius_m >= 0,
+                     "wide_normal_radius_m must be >= 0, got " << wide_normal_radius_m);
+  CAIRN_THROW_UNLESS(min_normal_cells >= 3,
+                     "min_normal_cells must be at least 3, got " << min_normal_cells);
+  CAIRN_THROW_UNLESS(std::isfinite(max_fit_noise_m) && max_fit_noise_m >= 0,
+                     "max_fit_noise_m must be >= 0, got " << max_fit_noise_m);
+  CAIRN_THROW_UNLESS(max_slope_error_rad > 0 && max_slope_error_rad < 0.5,
+                     "max_slope_error_rad must be in (0, 0.5), got " << max_slope_error_rad);
   CAIRN_THROW_UNLESS(std::isfinite(blind_zone_half_size_m) && blind_zone_half_size_m >= 0,
                      "blind_zone_half_size_m must be >= 0, got " << blind_zone_half_size_m);
   CAIRN_THROW_UNLESS(graded_cost_max > 0 && graded_cost_max < 100,
@@ -429,6 +481,8 @@ void TraversabilityParams::Validate() const {
                      "free_fraction must be in [0, 1), got " << free_fraction);
   CAIRN_THROW_UNLESS(std::isfinite(min_ditch_depth_m) && min_ditch_depth_m > 0,
                      "min_ditch_depth_m must be positive, got " << min_ditch_depth_m);
+  CAIRN_THROW_UNLESS(min_ditch_wall_slope_rad >= 0 && min_ditch_wall_slope_rad < 1.5,
+                     "min_ditch_wall_slope_rad must be in [0, 1.5), got " << min_ditch_wall_slope_rad);
   CAIRN_THROW_UNLESS(std::isfinite(max_ditch_search_m) && max_ditch_search_m > 0,
                      "max_ditch_search_m must be positive, got " << max_ditch_search_m);
   CAIRN_THROW_UNLESS(std::isfinite(unseen_drop_m) && unseen_drop_m >= 0,
@@ -440,7 +494,8 @@ void TraversabilityParams::Validate() const {
 }
 
 int DependencyRadiusCells(const TraversabilityParams& params, double resolution_m) {
-  const int normal = static_cast<int>(std::ceil(params.normal_radius_m / resolution_m));
+  const int normal = static_cast<int>(
+      std::ceil(std::max(params.normal_radius_m, params.wide_normal_radius_m) / resolution_m));
   // Known ditch bottoms look up to K cells for an unseen ditch cell, which looks K further for
   // its rims and two beyond them; the cost layer reads the 4-neighbours of each cell and the
   // unknown cells beyond them (UnseenDropReachCells).
@@ -474,7 +529,13 @@ void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params,
   const float* bound =
       map->HasLayer(layers::kGroundBound) ? map->at(layers::kGroundBound).data() : nullptr;
   const internal::TerrainView view{map->at(layers::kElevation).data(), bound, sx, sy};
-  ComputeNormalLayers(view, NormalOffsets(params, res), res, rect, out);
+  NormalWindows windows;
+  windows.narrow = NormalOffsets(params.normal_radius_m, res);
+  windows.wide = NormalOffsets(std::max(params.normal_radius_m, params.wide_normal_radius_m), res);
+  windows.min_cells = std::min(params.min_normal_cells, static_cast<int>(windows.narrow.size()));
+  windows.max_gradient_error = std::tan(params.max_slope_error_rad);
+  windows.max_fit_noise_m = params.max_fit_noise_m;
+  ComputeNormalLayers(view, windows, res, rect, out);
   internal::ComputeDitchLayers(view, params, res, rect, ditch_depth, ditch_width);
 }
 
@@ -523,6 +584,10 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
 TraversabilityParams LoadTraversabilityParams(common::YamlMap& m) {
   TraversabilityParams p;
   m.Get("normal_radius_m", &p.normal_radius_m);
+  m.Get("wide_normal_radius_m", &p.wide_normal_radius_m);
+  m.Get("min_normal_cells", &p.min_normal_cells);
+  m.Get("max_slope_error_rad", &p.max_slope_error_rad);
+  m.Get("max_fit_noise_m", &p.max_fit_noise_m);
   m.Get("blind_zone_half_size_m", &p.blind_zone_half_size_m);
   m.Get("imu_pitch_compensation", &p.imu_pitch_compensation);
   m.Get("unknown_is_lethal", &p.unknown_is_lethal);
@@ -531,6 +596,7 @@ TraversabilityParams LoadTraversabilityParams(common::YamlMap& m) {
   m.Get("min_ditch_depth_m", &p.min_ditch_depth_m);
   m.Get("unseen_drop_m", &p.unseen_drop_m);
   m.Get("max_ditch_search_m", &p.max_ditch_search_m);
+  m.Get("min_ditch_wall_slope_rad", &p.min_ditch_wall_slope_rad);
   m.Get("height_tolerance_m", &p.height_tolerance_m);
   m.Get("min_step_edge_cells", &p.min_step_edge_cells);
   m.Finish();

@@ -48,6 +48,20 @@ inline constexpr char kNormalYLayer[] = "normal_y";  ///< y component (n_z = sqr
 
 struct TraversabilityParams {
   double normal_radius_m{0.3};         ///< PCA window for normals (3 x 3 cells at 0.2 m)
+  /// Where the normal window cannot support a slope (fewer than min_normal_cells known cells,
+  /// cells on one line, or a gradient standard error above max_slope_error_rad, estimated from
+  /// the heights' scatter about the plane), the plane is fitted over this wider window instead (0.5 m: 21 cells
+  /// at 0.2 m), when it holds more cells. Far or grazing ground seen by a few noisy rays: a
+  /// 3 x 3 fit through heights with 1 cm of noise is off by about 1.2 deg.
+  double wide_normal_radius_m{0.5};
+  int min_normal_cells{6};
+  /// 0.49: off. At 0.5 deg (0.0087) the outdoor world's far hills read better, but the cost
+  /// beside the tunnel's cube flickered as scatter crossed the bounds, and the navigator
+  /// replanned for ever (navigator_stack_test).
+  double max_slope_error_rad{0.49};
+  /// ... counting only scatter up to this (m) as noise: more is structure (a step, a block),
+  /// which the normal window keeps sharp.
+  double max_fit_noise_m{0.008};
   double blind_zone_half_size_m{0.5};  ///< cells within this of the robot count as free
   bool imu_pitch_compensation{false};  ///< add the robot's pitch to the map slope
   bool unknown_is_lethal{false};       ///< else unknown stays NaN in the cost layer
@@ -56,6 +70,10 @@ struct TraversabilityParams {
   double free_fraction{0.3};
   /// A gap is a ditch when the terrain in it lies at least this far below both rims (m).
   double min_ditch_depth_m{0.05};
+  /// A gap is a ditch only when its depth below the rims, over half its width, is at least the
+  /// tangent of this (its walls are steeper than this on average): a wide gentle dip seen only
+  /// partly (a valley's shadow behind a crest) is natural ground, not a negative obstacle.
+  double min_ditch_wall_slope_rad{0.087};
   /// How far (m) the ditch analysis looks for the rims on both sides of a gap; wider gaps are
   /// not recognised as ditches (they stay unknown).
   double max_ditch_search_m{1.8};

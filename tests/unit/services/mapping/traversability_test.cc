@@ -431,6 +431,63 @@ TEST(TraversabilityTest, UnseenTrenchIsADitch) {
   EXPECT_LT(Cost(map, "rover", 8, 6), layers::kCostLethal);
 }
 
+// Issue 17: a shadow behind a crest in a valley between two 5 deg flanks. The rays over the
+// shadow passed just above its bottom, more than 5 cm below both rims (the valley is real), but
+// the flanks continued at their own slopes meet above the rays, and its walls are gentle: natural
+// ground, no ditch. The same gap between level rims is one.
+TEST(TraversabilityTest, AShadowInAValleyIsNoDitch) {
+  const double t = std::tan(5 * kDeg);
+  auto ground = [t](double x) { return std::fabs(x - 3.8) * t; };
+  GridMap map = MakeTerrain(40, 12, kRes, [&](double x, double) {
+    return (x > 3.0 && x < 4.6) ? std::nan("") : ground(x);  // the shadow
+  });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  const Layer& h = map.at(layers::kElevation);
+  for (int iy = 0; iy < map.size_y(); ++iy) {
+    for (int ix = 0; ix < map.size_x(); ++ix) {
+      if (std::isnan(h(ix, iy))) b(ix, iy) = static_cast<float>(ground((ix + 0.5) * kRes) + 0.005);
+    }
+  }
+  ASSERT_GT(h(14, 6) - b(18, 6), 0.05);  // the old rule's ditch
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  for (int ix = 15; ix < 23; ++ix) {
+    EXPECT_TRUE(std::isnan(map.at(layers::kDitchDepth)(ix, 6))) << ix;
+    EXPECT_TRUE(std::isnan(Cost(map, "pioneer3at", ix, 6))) << ix;
+  }
+  GridMap level = TrenchMap(1.2, -0.06);
+  ComputeCostLayer(&level, ShippedProfile("pioneer3at"), {});
+  EXPECT_FALSE(std::isnan(level.at(layers::kDitchDepth)(12, 6)));
+}
+
+// Issue 17: a 6 deg slope seen as sparse noisy rings (every other row of cells known, heights
+// off by up to 6 mm). The 3 x 3 window holds one line of cells; the fit takes the wider window
+// and reads the slope within 1 deg.
+TEST(TraversabilityTest, SparseNoisyGroundIsFittedOverTheWiderWindow) {
+  const double t = std::tan(6 * kDeg);
+  const float noise[5] = {0.006f, -0.005f, 0.002f, -0.006f, 0.004f};
+  GridMap map = MakeTerrain(30, 30, kRes, [&](double x, double y) {
+    const int iy = static_cast<int>(std::floor(y / kRes));
+    const int ix = static_cast<int>(std::floor(x / kRes));
+    if (iy % 2) return std::nan("");
+    return x * t + noise[(ix * 3 + iy) % 5];
+  });
+  TraversabilityParams narrow_only;
+  narrow_only.wide_normal_radius_m = 0.0;
+  GridMap narrow = map;
+  ComputeGeometricLayers(&narrow, narrow_only);
+  ComputeGeometricLayers(&map, {});
+  double worst = 0, worst_narrow = 0;
+  for (int iy = 4; iy < 26; iy += 2) {
+    for (int ix = 4; ix < 26; ++ix) {
+      worst = std::max(worst, std::fabs(map.at(layers::kSlope)(ix, iy) - 6 * kDeg));
+      worst_narrow =
+          std::max(worst_narrow, std::fabs(narrow.at(layers::kSlope)(ix, iy) - 6 * kDeg));
+    }
+  }
+  EXPECT_GT(worst_narrow, 1.5 * kDeg);
+  EXPECT_LT(worst, 1 * kDeg);
+}
+
 TEST(TraversabilityTest, NarrowDitchIsBridgedByAWideEnoughRobot) {
   GridMap map = TrenchMap(0.2, -0.2);                                 // one cell
   const common::RobotProfile pioneer = ShippedProfile("pioneer3at");  // 0.10 m
