@@ -41,8 +41,8 @@ CellRect Clip(const CellRect& r, int sx, int sy) {
 struct NormalResult {
   Eigen::Vector3d normal{0.0, 0.0, 1.0};
   double roughness_m{0.0};
-  int cells{0};       // known cells in the window
-  bool line{false};   // on one line of the grid: the slope along it only
+  int cells{0};      // known cells in the window
+  bool line{false};  // on one line of the grid: the slope along it only
   // Standard error of the fitted gradient in its least constrained direction, from the scatter
   // of the heights about the plane (0 for a line or fewer than 4 cells).
   double gradient_error{0.0};
@@ -185,8 +185,8 @@ NormalResult FitSupported(const internal::TerrainView& view, const NormalWindows
   return wide;
 }
 
-void ComputeNormalLayers(const internal::TerrainView& view, const NormalWindows& windows, double res, const CellRect& rect,
-                         const NormalLayers& out) {
+void ComputeNormalLayers(const internal::TerrainView& view, const NormalWindows& windows,
+                         double res, const CellRect& rect, const NormalLayers& out) {
   const int sx = view.sx;
   for (int y = rect.y0; y < rect.y1; ++y) {
     for (int x = rect.x0; x < rect.x1; ++x) {
@@ -481,8 +481,9 @@ void TraversabilityParams::Validate() const {
                      "free_fraction must be in [0, 1), got " << free_fraction);
   CAIRN_THROW_UNLESS(std::isfinite(min_ditch_depth_m) && min_ditch_depth_m > 0,
                      "min_ditch_depth_m must be positive, got " << min_ditch_depth_m);
-  CAIRN_THROW_UNLESS(min_ditch_wall_slope_rad >= 0 && min_ditch_wall_slope_rad < 1.5,
-                     "min_ditch_wall_slope_rad must be in [0, 1.5), got " << min_ditch_wall_slope_rad);
+  CAIRN_THROW_UNLESS(
+      min_ditch_wall_slope_rad >= 0 && min_ditch_wall_slope_rad < 1.5,
+      "min_ditch_wall_slope_rad must be in [0, 1.5), got " << min_ditch_wall_slope_rad);
   CAIRN_THROW_UNLESS(std::isfinite(max_ditch_search_m) && max_ditch_search_m > 0,
                      "max_ditch_search_m must be positive, got " << max_ditch_search_m);
   CAIRN_THROW_UNLESS(std::isfinite(unseen_drop_m) && unseen_drop_m >= 0,

@@ -47,12 +47,12 @@ inline constexpr char kNormalXLayer[] = "normal_x";  ///< x component of the uni
 inline constexpr char kNormalYLayer[] = "normal_y";  ///< y component (n_z = sqrt(1 - x² - y²))
 
 struct TraversabilityParams {
-  double normal_radius_m{0.3};         ///< PCA window for normals (3 x 3 cells at 0.2 m)
+  double normal_radius_m{0.3};  ///< PCA window for normals (3 x 3 cells at 0.2 m)
   /// Where the normal window cannot support a slope (fewer than min_normal_cells known cells,
   /// cells on one line, or a gradient standard error above max_slope_error_rad, estimated from
-  /// the heights' scatter about the plane), the plane is fitted over this wider window instead (0.5 m: 21 cells
-  /// at 0.2 m), when it holds more cells. Far or grazing ground seen by a few noisy rays: a
-  /// 3 x 3 fit through heights with 1 cm of noise is off by about 1.2 deg.
+  /// the heights' scatter about the plane), the plane is fitted over this wider window instead
+  /// (0.5 m: 21 cells at 0.2 m), when it holds more cells. Far or grazing ground seen by a few
+  /// noisy rays: a 3 x 3 fit through heights with 1 cm of noise is off by about 1.2 deg.
   double wide_normal_radius_m{0.5};
   int min_normal_cells{6};
   /// 0.49: off. At 0.5 deg (0.0087) the outdoor world's far hills read better, but the cost
