@@ -27,12 +27,27 @@ struct ObstacleVerdict {
   std::string profile;
   std::string profile_hash;
   bool crossable{false};
-  std::string reason;  ///< why not ("slope 10.1 deg > 8.0 deg"); empty when crossable
+  /// Why not ("slope 10.1 deg > 8.0 deg"); empty when crossable. A feature the profile may cross
+  /// one way only (an 8 cm drop for a robot stepping 3 cm up and 10 cm down: the directed layer
+  /// lets it drive down) is not crossable, and its reason ends with kOneWayMarker and the way
+  /// ("; one-way: crossable downwards only (<= 0.100 m step down)").
+  std::string reason;
   bool operator==(const ObstacleVerdict& o) const {
     return profile == o.profile && profile_hash == o.profile_hash && crossable == o.crossable &&
            reason == o.reason;
   }
 };
+
+/// What a one-way verdict's reason carries (see ObstacleVerdict::reason).
+inline constexpr char kOneWayMarker[] = "; one-way: ";
+/// True for a verdict that lets the profile cross the feature one way only.
+inline bool IsOneWay(const ObstacleVerdict& v) {
+  return !v.crossable && v.reason.find(kOneWayMarker) != std::string::npos;
+}
+/// "crossable", "one-way" or "blocked".
+inline const char* VerdictWord(const ObstacleVerdict& v) {
+  return v.crossable ? "crossable" : (IsOneWay(v) ? "one-way" : "blocked");
+}
 
 struct Obstacle {
   int32_t id{0};

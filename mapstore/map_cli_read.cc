@@ -68,7 +68,7 @@ void PrintObstacles(const common::ObstacleRegistry& obstacles) {
   for (const auto& o : obstacles.obstacles) {
     std::vector<std::string> verdicts;
     for (const auto& v : o.verdicts) {
-      verdicts.push_back(v.profile + ":" + (v.crossable ? "crossable" : "blocked"));
+      verdicts.push_back(v.profile + ":" + common::VerdictWord(v));
     }
     t.Add({std::to_string(o.id), common::ObstacleKindName(o.kind), Fmt("%.2f", o.centroid_m.x()),
            Fmt("%.2f", o.centroid_m.y()), Fmt("%.1f", o.slope_rad * 180.0 / M_PI),

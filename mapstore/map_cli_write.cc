@@ -143,7 +143,9 @@ int CmdShare(int argc, char** argv) {
     Table t({"id", "kind", "x_m", "y_m", "before", "after"});
     for (const auto& o : shared->changed) {
       auto text = [](const common::ObstacleVerdict& v) {
-        return v.profile + ": " + (v.crossable ? "crossable" : "blocked (" + v.reason + ")");
+        return v.profile + ": " +
+               (v.crossable ? "crossable"
+                            : std::string(common::VerdictWord(v)) + " (" + v.reason + ")");
       };
       t.Add({std::to_string(o.id), common::ObstacleKindName(o.kind), Fmt("%.2f", o.centroid_m.x()),
              Fmt("%.2f", o.centroid_m.y()), o.verdicts.size() > 1 ? text(o.verdicts[0]) : "-",

@@ -239,8 +239,12 @@ Result<ShareResult> ShareMap(MapStore& store, const ProfileDeriver& deriver, con
       source_verdict->profile = source->profile.name;
       source_verdict->profile_hash = source->content_hash;
     }
-    const bool differs = source_verdict ? source_verdict->crossable != target_verdict.crossable
-                                        : !target_verdict.crossable;
+    // One-way counts as its own verdict: a drop one profile may drive down and another may not
+    // cross at all is a change.
+    const bool differs =
+        source_verdict ? (source_verdict->crossable != target_verdict.crossable ||
+                          common::IsOneWay(*source_verdict) != common::IsOneWay(target_verdict))
+                       : !target_verdict.crossable;
     if (!differs) continue;
     common::Obstacle changed = o;
     changed.verdicts.clear();

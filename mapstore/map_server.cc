@@ -30,7 +30,7 @@ void MapServerParams::Validate() const {
 }
 
 std::vector<std::string> ServedLayers(const std::string& profile) {
-  return {layers::kElevation, layers::CostLayer(profile)};
+  return {layers::kElevation, layers::DirectedLayer(profile), layers::CostLayer(profile)};
 }
 
 std::string ServedMapName(const MapRef& ref) { return ref.site + "/" + ref.name; }
@@ -48,6 +48,7 @@ common::Result<ServedMap> LoadServedMap(const MapStore& store, const ProfileDeri
   if (std::find(base.begin(), base.end(), layers::kElevation) != base.end()) {
     wanted.push_back(layers::kElevation);
   }
+  wanted.push_back(layers::DirectedLayer(profile));
   wanted.push_back(cost);
   auto view = LoadForProfile(store, deriver, exact, profile, {wanted, std::nullopt});
   if (!view.ok()) return view.status();

@@ -27,8 +27,9 @@ Clock::time_point After(Clock::time_point t, double seconds) {
 
 // Profile-specific layers the store never saves: it derives them per profile itself.
 bool IsDerivedLayer(const std::string& name) {
-  return layers::IsCostLayer(name) || name == layers::kSlope || name == layers::kStepMax ||
-         name == layers::kRoughness || name == layers::kDitchDepth || name == layers::kDitchWidth;
+  return layers::IsCostLayer(name) || layers::IsDirectedLayer(name) || name == layers::kSlope ||
+         name == layers::kStepMax || name == layers::kRoughness || name == layers::kDitchDepth ||
+         name == layers::kDitchWidth;
 }
 
 bool IsPushName(const std::string& map_name) { return map_name.find('/') != std::string::npos; }

@@ -93,8 +93,9 @@ common::Result<std::shared_ptr<const CostMap>> MapSnapshotPolicy::Build(Assemble
   std::optional<common::Layer> directed;
   if (params_.encoding == MapEncoding::kCost && layer.directed) {
     directed = std::move(layer.directed);
-    FillTiles(layer.directed_missing_tiles, layer.tile_size_cells, layers::kAllHeadingsBlocked,
-              &*directed);
+    // Directed tiles not held read as 0: the cost layer alone there (its lethal cells stay
+    // lethal, one-way or not), never stricter than the cost layer.
+    FillTiles(layer.directed_missing_tiles, layer.tile_size_cells, 0.f, &*directed);
   }
   try {
     auto map = std::make_shared<CostMap>(layer.geometry, std::move(cells), std::move(directed),

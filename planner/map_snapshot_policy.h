@@ -54,8 +54,8 @@ struct AssembledLayer {
   /// The profile's directed layer ("directed/<profile>") on the same grid, when the transport
   /// holds one (cost encoding only); nullopt: the snapshot reads the cost layer alone.
   std::optional<common::Layer> directed;
-  /// Tiles of the directed layer's newest version not held: they read as 255 (every heading
-  /// blocked, which is what the cost layer says there on its own).
+  /// Tiles of the directed layer's newest version not held: they read as 0, the cost layer
+  /// alone (its lethal cells block, one-way or not; its free cells stay free).
   std::vector<std::pair<int, int>> directed_missing_tiles;
 };
 

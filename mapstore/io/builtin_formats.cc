@@ -1,6 +1,7 @@
 // The formats cairn-map export/import and OP_EXPORT/OP_IMPORT offer: one registration per
 // format file. A new format adds its line here (mapstore/README.md, "Adding an export format").
 
+#include "mapstore/io/directed_csv.h"
 #include "mapstore/io/format_registry.h"
 #include "mapstore/io/obstacles_csv.h"
 #include "mapstore/io/octomap_files.h"
@@ -14,6 +15,7 @@ void RegisterBuiltinFormats(FormatRegistry* registry) {
   RegisterPngFormats(registry);
   RegisterOctomapFormats(registry);
   RegisterObstaclesCsvFormats(registry);
+  RegisterDirectedCsvFormats(registry);
 }
 
 }  // namespace cairn::mapstore::io

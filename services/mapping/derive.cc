@@ -6,7 +6,7 @@
 namespace cairn::mapping {
 
 // Bump whenever a change to traversability.cc or obstacles.cc could change a derived value.
-const char kMappingCodeVersion[] = "cairn-terrain-1";
+const char kMappingCodeVersion[] = "cairn-terrain-2";
 
 DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::RobotProfile& profile,
                                   const TraversabilityParams& traversability,
@@ -31,7 +31,7 @@ DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::Rob
   for (const std::string& name :
        {std::string(layers::kSlope), std::string(layers::kStepMax), std::string(layers::kRoughness),
         std::string(layers::kDitchDepth), std::string(layers::kDitchWidth),
-        layers::CostLayer(profile.name)}) {
+        layers::CostLayer(profile.name), layers::DirectedLayer(profile.name)}) {
     out.layers.AddLayer(name) = work.at(name);
   }
   return out;

@@ -392,7 +392,7 @@ void NumberByCentroid(common::ObstacleRegistry* registry) {
   for (auto& o : registry->obstacles) o.id = id++;
 }
 
-std::string Format(const char* fmt, double a, double b) {
+std::string Format(const char* fmt, double a, double b = 0.0) {
   char buf[128];
   std::snprintf(buf, sizeof(buf), fmt, a, b);
   return buf;
@@ -480,6 +480,12 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
       if (!(o.slope_rad < limit)) {
         v.crossable = false;
         v.reason = Format("slope %.1f deg >= %.1f deg", o.slope_rad * kRadToDeg, limit * kRadToDeg);
+        // Within the other limit: the directed layer lets the robot drive it that way.
+        if (o.slope_rad < std::max(profile.max_slope_up_rad, profile.max_slope_down_rad)) {
+          v.reason += profile.max_slope_up_rad < profile.max_slope_down_rad
+                          ? std::string(common::kOneWayMarker) + "crossable downhill only"
+                          : std::string(common::kOneWayMarker) + "crossable uphill only";
+        }
       }
       break;
     }
@@ -487,12 +493,21 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
       if (!(o.height_m <= profile.max_step_up_m + kTol)) {
         v.crossable = false;
         v.reason = Format("step up %.3f m > %.3f m", o.height_m, profile.max_step_up_m);
+        if (o.height_m <= profile.max_step_down_m + kTol) {
+          v.reason +=
+              common::kOneWayMarker +
+              Format("crossable downwards only (<= %.3f m step down)", profile.max_step_down_m);
+        }
       }
       break;
     case ObstacleKind::kStepDown:
       if (!(o.height_m <= profile.max_step_down_m + kTol)) {
         v.crossable = false;
         v.reason = Format("step down %.3f m > %.3f m", o.height_m, profile.max_step_down_m);
+        if (o.height_m <= profile.max_step_up_m + kTol) {
+          v.reason += common::kOneWayMarker +
+                      Format("crossable upwards only (<= %.3f m step up)", profile.max_step_up_m);
+        }
       }
       break;
     case ObstacleKind::kDitch: {

@@ -82,7 +82,10 @@ std::vector<std::string> TerrainMap::BaseLayers() {
 
 std::vector<std::string> TerrainMap::DerivedLayers() const {
   std::vector<std::string> names = GeometricLayers();
-  for (const auto& p : profiles_) names.push_back(layers::CostLayer(p.name));
+  for (const auto& p : profiles_) {
+    names.push_back(layers::CostLayer(p.name));
+    names.push_back(layers::DirectedLayer(p.name));
+  }
   return names;
 }
 
@@ -123,6 +126,7 @@ bool TerrainMap::RemoveProfile(const std::string& name) {
   profiles_.erase(it);
   for (auto& [key, tile] : tiles_) {
     tile->layers.RemoveLayer(layers::CostLayer(name));
+    tile->layers.RemoveLayer(layers::DirectedLayer(name));
     ++tile->derived_version;
   }
   return true;

@@ -139,7 +139,10 @@ void TerrainMap::RecomputeCosts(const std::vector<CellRect>& rects, const RobotC
   std::vector<std::string> in{layers::kElevation, layers::kGroundBound};
   for (const auto& n : GeometricLayers()) in.push_back(n);
   std::vector<std::string> out;
-  for (const auto* p : which) out.push_back(layers::CostLayer(p->name));
+  for (const auto* p : which) {
+    out.push_back(layers::CostLayer(p->name));
+    out.push_back(layers::DirectedLayer(p->name));
+  }
   constexpr int kMargin = 2;
   for (const CellRect& r : rects) {
     const CellRect w = Grow(r, kMargin);

@@ -30,6 +30,13 @@ int UnseenDropReachCells(double resolution_m) {
 
 // 4-neighbourhood: +x, -x, +y, -y (the seed's RIGHT, LEFT, UP, DOWN).
 constexpr std::array<std::array<int, 2>, 4> kNeighbours{{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
+// The directed layer's heading bit of each of them (k * 45 deg counter-clockwise from +x).
+constexpr std::array<int, 4> kNeighbourBit{0, 4, 2, 6};
+// Unit vectors of the directed layer's heading bins.
+constexpr double kDiag = 0.70710678118654752;
+constexpr std::array<double, 8> kHeadingX{1, kDiag, 0, -kDiag, -1, -kDiag, 0, kDiag};
+constexpr std::array<double, 8> kHeadingY{0, kDiag, 1, kDiag, 0, -kDiag, -1, -kDiag};
+constexpr float kAllBlocked = layers::kAllHeadingsBlocked;
 
 CellRect Clip(const CellRect& r, int sx, int sy) {
   return {std::max(0, r.x0), std::max(0, r.y0), std::min(sx, r.x1), std::min(sy, r.y1)};
@@ -248,8 +255,26 @@ class CostRules {
   CostRules(const GridMap& map, const common::RobotProfile& profile,
             const TraversabilityParams& params, const RobotContext& robot);
 
-  // The cost of cell (x, y); `near_ditch`: a ditch lies in its row or a row next to it.
-  float Cost(int x, int y, bool near_ditch) const;
+  // The cost of cell (x, y) and its directed mask (common/layers.h); `near_ditch`: a ditch lies
+  // in its row or a row next to it.
+  struct Verdict {
+    float cost;
+    float mask;
+  };
+  Verdict Judge(int x, int y, bool near_ditch) const;
+
+ private:
+  // The mask of a cell whose cost is `cost` and that no rule below made one-way.
+  static Verdict Plain(float cost) {
+    return {cost, std::isnan(cost) ? kNaN : (cost >= layers::kCostLethal ? kAllBlocked : 0.f)};
+  }
+  // The headings a slope of `s` (>= the stricter slope limit) refuses: uphill ones when s is
+  // over the uphill limit, downhill ones when over the downhill one; kAllBlocked when it is over
+  // both, over max_one_way_slope_rad, or without a direction.
+  float SlopeMask(int64_t i, double s) const;
+  // A lethal step or drop towards neighbour k: its heading bit when the edge is crossable the
+  // other way, else kAllBlocked.
+  float StepMask(int64_t i, int k, float hc) const;
 
  private:
   // Terrain using the share r of its most used limit: free up to free_fraction, then a whole
@@ -281,7 +306,8 @@ class CostRules {
   const float* dwidth_;
   const float* bound_;
   int sx_, sy_;
-  double tol_, max_slope_, up_limit_, down_limit_, rough_limit_, ditch_limit_;
+  double tol_, max_slope_, max_slope_both_, slope_up_, slope_down_, up_limit_, down_limit_,
+      rough_limit_, ditch_limit_;
   float unknown_value_;
   double ff_, graded_top_;
   double inv_slope_, inv_rough_, inv_up_, inv_down_;
@@ -310,6 +336,9 @@ CostRules::CostRules(const GridMap& map, const common::RobotProfile& profile,
       sy_(map.size_y()),
       tol_(params.height_tolerance_m),
       max_slope_(std::min(profile.max_slope_up_rad, profile.max_slope_down_rad)),
+      max_slope_both_(std::max(profile.max_slope_up_rad, profile.max_slope_down_rad)),
+      slope_up_(profile.max_slope_up_rad),
+      slope_down_(profile.max_slope_down_rad),
       up_limit_(profile.max_step_up_m),
       down_limit_(profile.max_step_down_m),
       rough_limit_(profile.max_roughness_m),
@@ -437,27 +466,67 @@ bool CostRules::NeighbourLethal(int x, int y, int64_t i, int k, float hc, double
   return false;
 }
 
-float CostRules::Cost(int x, int y, bool near_ditch) const {
+float CostRules::SlopeMask(int64_t i, double s) const {
+  if (compensate_ || s >= max_slope_both_ || s >= params_.max_one_way_slope_rad) {
+    return kAllBlocked;
+  }
+  // Uphill is against the normal's horizontal component.
+  const double gx = -nx_[i], gy = -ny_[i];
+  const double g = std::hypot(gx, gy);
+  if (!(g > 1e-9)) return kAllBlocked;
+  unsigned mask = 0;
+  for (int b = 0; b < layers::kHeadingBins; ++b) {
+    const double along = (kHeadingX[b] * gx + kHeadingY[b] * gy) / g;
+    if ((along > 1e-6 && s >= slope_up_) || (along < -1e-6 && s >= slope_down_)) mask |= 1u << b;
+  }
+  return mask == 0 ? kAllBlocked : static_cast<float>(mask);
+}
+
+float CostRules::StepMask(int64_t i, int k, float hc) const {
+  const float hn = h_[i + neighbour_offset_[k]];
+  if (std::isnan(hn)) return kAllBlocked;  // an unseen drop: its depth is only a lower bound
+  double rise = double(hn) - hc;
+  if (exact_tilt_) rise = Tilted(k, rise);
+  // Crossable the other way: up it when it is a drop within the step-up limit, down it when it
+  // is a rise within the step-down limit.
+  const bool other_way = rise > 0 ? rise <= down_limit_ + tol_ : -rise <= up_limit_ + tol_;
+  return other_way ? static_cast<float>(1u << kNeighbourBit[k]) : kAllBlocked;
+}
+
+CostRules::Verdict CostRules::Judge(int x, int y, bool near_ditch) const {
   const int64_t i = x + static_cast<int64_t>(y) * sx_;
   const float hc = h_[i];
-  if (std::isnan(hc)) return UnknownCellCost(x, y, i);
+  if (std::isnan(hc)) return Plain(UnknownCellCost(x, y, i));
   // A known cell at the map border cannot be judged against all its neighbours.
-  if (x == 0 || y == 0 || x == sx_ - 1 || y == sy_ - 1) return unknown_value_;
+  if (x == 0 || y == 0 || x == sx_ - 1 || y == sy_ - 1) return Plain(unknown_value_);
   if (!std::isnan(ddepth_[i])) {
     // A ditch's bottom: lethal when too wide, else the robot bridges it (its wheels never
     // touch it).
-    if (dwidth_[i] > ditch_limit_ + tol_) return layers::kCostLethal;
-    return Graded(Share(dwidth_[i], ditch_limit_));
+    if (dwidth_[i] > ditch_limit_ + tol_) return Plain(layers::kCostLethal);
+    return Plain(Graded(Share(dwidth_[i], ditch_limit_)));
   }
+  if (rough_[i] > rough_limit_ + tol_) return Plain(layers::kCostLethal);
   const double s = Slope(i);
-  if (s >= max_slope_ || rough_[i] > rough_limit_ + tol_) return layers::kCostLethal;
+  unsigned mask = 0;
+  if (s >= max_slope_) {
+    const float m = SlopeMask(i, s);
+    if (m == kAllBlocked) return Plain(layers::kCostLethal);
+    mask = static_cast<unsigned>(m);
+  }
   double ratio = std::max(s * inv_slope_, rough_[i] > 0 ? rough_[i] * inv_rough_ : 0.0);
   // Steps to the 4-neighbours, inclusive bounds.
-  if (!near_ditch && !exact_tilt_ && FastSteps(i, hc, &ratio)) return Graded(ratio);
-  for (int k = 0; k < 4; ++k) {
-    if (NeighbourLethal(x, y, i, k, hc, &ratio)) return layers::kCostLethal;
+  if (!near_ditch && !exact_tilt_ && FastSteps(i, hc, &ratio)) {
+    if (mask != 0) return {layers::kCostLethal, static_cast<float>(mask)};
+    return Plain(Graded(ratio));
   }
-  return Graded(ratio);
+  for (int k = 0; k < 4; ++k) {
+    if (!NeighbourLethal(x, y, i, k, hc, &ratio)) continue;
+    const float m = StepMask(i, k, hc);
+    if (m == kAllBlocked) return Plain(layers::kCostLethal);
+    mask |= static_cast<unsigned>(m);
+  }
+  if (mask != 0) return {layers::kCostLethal, static_cast<float>(mask)};
+  return Plain(Graded(ratio));
 }
 
 }  // namespace
@@ -486,6 +555,8 @@ void TraversabilityParams::Validate() const {
       "min_ditch_wall_slope_rad must be in [0, 1.5), got " << min_ditch_wall_slope_rad);
   CAIRN_THROW_UNLESS(std::isfinite(max_ditch_search_m) && max_ditch_search_m > 0,
                      "max_ditch_search_m must be positive, got " << max_ditch_search_m);
+  CAIRN_THROW_UNLESS(max_one_way_slope_rad >= 0 && max_one_way_slope_rad <= 1.5708,
+                     "max_one_way_slope_rad must be in [0, pi/2], got " << max_one_way_slope_rad);
   CAIRN_THROW_UNLESS(std::isfinite(unseen_drop_m) && unseen_drop_m >= 0,
                      "unseen_drop_m must be >= 0, got " << unseen_drop_m);
   CAIRN_THROW_UNLESS(height_tolerance_m >= 0 && height_tolerance_m < 0.01,
@@ -568,8 +639,11 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
   const int sx = map->size_x(), sy = map->size_y();
   const CellRect rect = Clip(rect_in, sx, sy);
   const std::string cost_name = layers::CostLayer(profile.name);
+  const std::string directed_name = layers::DirectedLayer(profile.name);
   if (!map->HasLayer(cost_name)) map->AddLayer(cost_name);
+  if (!map->HasLayer(directed_name)) map->AddLayer(directed_name);
   float* cost = map->at(cost_name).data();
+  float* directed = map->at(directed_name).data();
   if (rect.empty()) return;
   const CostRules rules(*map, profile, params, robot);
   const std::vector<uint8_t> ditch_row =
@@ -577,7 +651,9 @@ void ComputeCostLayer(GridMap* map, const common::RobotProfile& profile,
   for (int y = rect.y0; y < rect.y1; ++y) {
     const bool near_ditch = ditch_row[y] || ditch_row[y + 1] || ditch_row[y + 2];
     for (int x = rect.x0; x < rect.x1; ++x) {
-      cost[x + static_cast<int64_t>(y) * sx] = rules.Cost(x, y, near_ditch);
+      const auto verdict = rules.Judge(x, y, near_ditch);
+      cost[x + static_cast<int64_t>(y) * sx] = verdict.cost;
+      directed[x + static_cast<int64_t>(y) * sx] = verdict.mask;
     }
   }
 }
@@ -596,6 +672,7 @@ TraversabilityParams LoadTraversabilityParams(common::YamlMap& m) {
   m.Get("free_fraction", &p.free_fraction);
   m.Get("min_ditch_depth_m", &p.min_ditch_depth_m);
   m.Get("unseen_drop_m", &p.unseen_drop_m);
+  m.Get("max_one_way_slope_rad", &p.max_one_way_slope_rad);
   m.Get("max_ditch_search_m", &p.max_ditch_search_m);
   m.Get("min_ditch_wall_slope_rad", &p.min_ditch_wall_slope_rad);
   m.Get("height_tolerance_m", &p.height_tolerance_m);

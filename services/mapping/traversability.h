@@ -32,6 +32,8 @@
 ///    - an unknown cell is free inside the blind zone around the robot's current position (the
 ///      listing used the centre of its robot-centric map window, on every update), else
 ///      unknown; a known cell with a neighbour outside the map is unknown;
+///    - the directed layer beside the cost says which of a lethal cell's headings are refused:
+///      one-way steps and slopes (see ComputeCostLayer);
 ///    - everything else gets 0 when it uses at most free_fraction of every limit, else a graded
 ///      cost in [1, graded_cost_max] growing with the most used limit, rounded to a whole number
 ///      (a ROS occupancy grid's values; the map store packs such a layer into bytes).
@@ -93,6 +95,12 @@ struct TraversabilityParams {
   /// millimetres of noise on two cells make a false 3 cm step). This is the idea of
   /// traversability_estimation's critical_cell_number. 1 gives the seed's per-pair rule.
   int min_step_edge_cells{2};
+  /// The directed layer lets a slope over one of the profile's slope limits be driven the way
+  /// the other limit allows (down a slope too steep to climb) only up to this (rad, 20 deg):
+  /// steeper cells are an object's flank, not ground, and block every heading. The Pioneer 3-AT
+  /// has no downhill limit (seed 000), so without this bound a rock's side would read as a slope
+  /// it may drive down.
+  double max_one_way_slope_rad{0.35};
 
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;
@@ -135,7 +143,14 @@ void ComputeGeometricLayers(common::GridMap* map, const TraversabilityParams& pa
 int DependencyRadiusCells(const TraversabilityParams& params, double resolution_m);
 
 /// Adds layers::CostLayer(profile.name): 0 free, [1, 99] graded (whole numbers), 100 lethal,
-/// NaN unknown.
+/// NaN unknown; and beside it layers::DirectedLayer(profile.name) (contract in common/layers.h):
+/// NaN where the cost is NaN, 0 where it is below lethal, and for a lethal cell the headings it
+/// may not be left towards. A step or drop to a 4-neighbour that is crossable the other way (an
+/// 8 cm drop for a profile stepping 3 cm up and 10 cm down: the cell below refuses heading
+/// "towards the platform") sets that heading's bit; a slope between the uphill and downhill
+/// limits sets the bits of the headings that climb (or descend) it; every other reason (an edge
+/// crossable neither way, an unseen drop, a ditch too wide, roughness, a slope over both limits
+/// or max_one_way_slope_rad, an unknown cell read as lethal) gives layers::kAllHeadingsBlocked.
 /// Computes the geometric layers first when they are missing. `robot_xy_m` applies the
 /// blind-zone rule around the robot; `robot_pitch_rad` the IMU compensation when enabled.
 /// Without a heading, the compensation is the seed's worst case (slope + pitch).

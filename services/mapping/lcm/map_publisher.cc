@@ -86,7 +86,12 @@ void MapPublisher::PublishDue(bool force, int64_t map_version) {
 std::vector<std::string> MapPublisher::FastLayers() const {
   std::vector<std::string> names{layers::kElevation, layers::kSlope, layers::kStepMax,
                                  layers::kRoughness};
-  for (const auto& p : terrain_->map().profiles()) names.push_back(layers::CostLayer(p.name));
+  // Each profile's directed layer before its cost layer: a navigator pairs a cost version with
+  // the directed data it holds (planner/README.md, "One-way steps").
+  for (const auto& p : terrain_->map().profiles()) {
+    names.push_back(layers::DirectedLayer(p.name));
+    names.push_back(layers::CostLayer(p.name));
+  }
   return names;
 }
 

@@ -546,6 +546,7 @@ void MapperService::AddProfile(const lcmt_map_control_request& request,
   }
   try {
     core_.terrain()->AddProfile(*profile);
+    publisher_->UnretireLayer(layers::DirectedLayer(profile->name));
     publisher_->UnretireLayer(layers::CostLayer(profile->name));
     reply->message = "profile '" + profile->name + "' added";
     node_.Event("profile %s added", profile->name.c_str());
@@ -559,6 +560,7 @@ void MapperService::AddProfile(const lcmt_map_control_request& request,
 void MapperService::RemoveProfile(const lcmt_map_control_request& request,
                                   lcmt_map_control_reply* reply) {
   if (core_.terrain() != nullptr && core_.terrain()->RemoveProfile(request.profile)) {
+    publisher_->RetireLayer(layers::DirectedLayer(request.profile));
     publisher_->RetireLayer(layers::CostLayer(request.profile));
     reply->message = "profile '" + request.profile + "' removed";
     node_.Event("profile %s removed", request.profile.c_str());

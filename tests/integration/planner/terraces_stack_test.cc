@@ -29,9 +29,9 @@ class TerracesStackTest : public NavigatorStackTest {
   }
 };
 
-// Disabled until the mapper publishes the directed layer (directed/<profile>): the navigator reads
-// it, but with the isotropic cost alone the foot of the drop is lethal both ways.
-TEST_F(TerracesStackTest, DISABLED_DrivesUpTheRampAndOffTheEightCentimetreDrop) {
+// The foot of the drop is lethal in the isotropic cost layer; the directed layer the mapper
+// publishes beside it (directed/<profile>) lets the navigator drive down it.
+TEST_F(TerracesStackTest, DrivesUpTheRampAndOffTheEightCentimetreDrop) {
   // Lane 0: a 5 deg ramp up to an 8 cm platform that ends in an 8 cm drop at x = 12, wall to
   // wall. Down the drop is the only way to the goal, and 8 cm is within the 10 cm step down.
   // The 12 m horizon keeps the robot from looking for another way through the unexplored lanes.

@@ -14,7 +14,8 @@
 namespace cairn::mapstore::testing {
 
 /// Fake derivation: a cell is lethal (100) when the elevation step to its +x neighbour exceeds
-/// the profile's max_step_up_m, free (0) otherwise, NaN where the elevation is unknown. An
+/// the profile's max_step_up_m, free (0) otherwise, NaN where the elevation is unknown (the
+/// directed layer beside it: 255 where lethal, no one-way cells). An
 /// obstacle is crossable when its slope and height are within the profile's limits.
 inline ProfileDeriver FakeDeriver(const std::string& code_version = "fake-1") {
   ProfileDeriver d;
@@ -26,6 +27,8 @@ inline ProfileDeriver FakeDeriver(const std::string& code_version = "fake-1") {
     const common::Layer& e = base.at(layers::kElevation);
     common::Layer& cost = out.layers.AddLayer(layers::CostLayer(profile.name));
     common::Layer& step = out.layers.AddLayer(layers::kStepMax);
+    // The directed layer's contract (common/layers.h): NaN where the cost is, 255 where lethal.
+    common::Layer& directed = out.layers.AddLayer(layers::DirectedLayer(profile.name));
     for (int iy = 0; iy < base.size_y(); ++iy) {
       for (int ix = 0; ix < base.size_x(); ++ix) {
         if (std::isnan(e(ix, iy))) continue;
@@ -33,6 +36,7 @@ inline ProfileDeriver FakeDeriver(const std::string& code_version = "fake-1") {
         const float d = std::isnan(e(nx, iy)) ? 0.f : std::abs(e(nx, iy) - e(ix, iy));
         step(ix, iy) = d;
         cost(ix, iy) = d > profile.max_step_up_m ? 100.f : 0.f;
+        directed(ix, iy) = cost(ix, iy) >= 100.f ? layers::kAllHeadingsBlocked : 0.f;
       }
     }
     return out;

@@ -44,7 +44,8 @@ class MapServerTest : public ::testing::Test {
 };
 
 TEST(MapServerNamesTest, ServesElevationAndTheProfilesCostLayerUnderTheStoredName) {
-  EXPECT_EQ(ServedLayers("rover"), (std::vector<std::string>{"elevation", "cost/rover"}));
+  EXPECT_EQ(ServedLayers("rover"),
+            (std::vector<std::string>{"elevation", "directed/rover", "cost/rover"}));
   EXPECT_EQ(ServedMapName({"tunnel", "lanes", 3}), "tunnel/lanes");
 }
 
@@ -93,7 +94,7 @@ TEST_F(MapServerTest, LoadsElevationCostAndTheProfilesVerdicts) {
   EXPECT_EQ(rover->info.version, saved.version);
   EXPECT_EQ(rover->profile, "rover");
   EXPECT_EQ(rover->layers.layer_names(),
-            (std::vector<std::string>{"cost/rover", "elevation"}));
+            (std::vector<std::string>{"cost/rover", "directed/rover", "elevation"}));
   EXPECT_EQ(rover->layers.geometry(), saved.geometry);
   EXPECT_FALSE(rover->from_cache);
   EXPECT_EQ(rover->obstacles.map_version, saved.version);
@@ -243,8 +244,7 @@ TEST(MapWaiterTest, GivesUpAfterTheBoundOrAtOnceWithoutOne) {
 
 TEST(MapWaiterTest, ANonTransientFailureEndsTheWait) {
   MapWaiter dut(100.0);
-  EXPECT_EQ(dut.OnAttempt(0.0, common::NotFoundError("no map")).action,
-            MapWaiter::Action::kWait);
+  EXPECT_EQ(dut.OnAttempt(0.0, common::NotFoundError("no map")).action, MapWaiter::Action::kWait);
   auto d = dut.OnAttempt(1.0, common::CorruptError("tile (0, 0) of elevation"));
   EXPECT_EQ(d.action, MapWaiter::Action::kGiveUp);
   EXPECT_NE(d.log->find("CORRUPT"), std::string::npos) << *d.log;

@@ -91,7 +91,7 @@ TEST_F(FormatRegistryTest, ATestFormatRegisteredThroughTheSeamExportsAndImports)
   auto unknown = ExportMap(store_, nullptr, options_);
   EXPECT_EQ(unknown.status().code(), StatusCode::kInvalidArgument);
   EXPECT_EQ(unknown.status().message(),
-            "unknown export format 'count' (bt, csv, ot, png, ros, ros-raw, ros-scale, "
+            "unknown export format 'count' (bt, csv, directed, ot, png, ros, ros-raw, ros-scale, "
             "ros-trinary)");
   EXPECT_EQ(ImportMap(store_, import, {"unit", 0, 0}).status().code(),
             StatusCode::kInvalidArgument);
@@ -100,8 +100,8 @@ TEST_F(FormatRegistryTest, ATestFormatRegisteredThroughTheSeamExportsAndImports)
 TEST_F(FormatRegistryTest, TheBuiltinFormatsAreRegisteredByName) {
   const FormatRegistry& formats = BuiltinFormats();
   EXPECT_EQ(formats.ExportNames(),
-            (std::vector<std::string>{"bt", "csv", "ot", "png", "ros", "ros-raw", "ros-scale",
-                                      "ros-trinary"}));
+            (std::vector<std::string>{"bt", "csv", "directed", "ot", "png", "ros", "ros-raw",
+                                      "ros-scale", "ros-trinary"}));
   EXPECT_EQ(formats.ImportNames(), (std::vector<std::string>{"bt", "csv", "ot", "ros"}));
   for (const auto& [name, format] : formats.exporters()) EXPECT_FALSE(format.summary.empty());
   ASSERT_NE(formats.ImporterForPath("maps/Site.YML"), nullptr);

@@ -195,13 +195,24 @@ TEST(JudgeObstacleTest, BoundariesPerKind) {
   EXPECT_TRUE(JudgeObstacle(ramp, pioneer).crossable);
   ramp.slope_rad = 8.0 * kDeg;
   EXPECT_FALSE(JudgeObstacle(ramp, pioneer).crossable);
+  // No downhill limit (seed 000): one-way.
+  EXPECT_EQ(JudgeObstacle(ramp, pioneer).reason,
+            "slope 8.0 deg >= 8.0 deg; one-way: crossable downhill only");
   Obstacle up = Make(ObstacleKind::kStepUp);
   up.height_m = 0.03;
   EXPECT_TRUE(JudgeObstacle(up, pioneer).crossable);
   up.height_m = 0.031;
   const common::ObstacleVerdict v = JudgeObstacle(up, pioneer);
   EXPECT_FALSE(v.crossable);
-  EXPECT_EQ(v.reason, "step up 0.031 m > 0.030 m");
+  // Within the 10 cm step down: the directed layer lets the Pioneer drive down it.
+  EXPECT_EQ(v.reason,
+            "step up 0.031 m > 0.030 m; one-way: crossable downwards only (<= 0.100 m step down)");
+  EXPECT_TRUE(common::IsOneWay(v));
+  EXPECT_STREQ(common::VerdictWord(v), "one-way");
+  up.height_m = 0.12;  // over both limits: no way across
+  EXPECT_EQ(JudgeObstacle(up, pioneer).reason, "step up 0.120 m > 0.030 m");
+  EXPECT_FALSE(common::IsOneWay(JudgeObstacle(up, pioneer)));
+  EXPECT_STREQ(common::VerdictWord(JudgeObstacle(up, pioneer)), "blocked");
   EXPECT_EQ(v.profile, "pioneer3at");
   EXPECT_EQ(v.profile_hash, pioneer.ContentHash());
   Obstacle down = Make(ObstacleKind::kStepDown);

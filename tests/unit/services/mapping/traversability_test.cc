@@ -688,6 +688,162 @@ TEST(TraversabilityTest, WindowWithMarginMatchesWholeMap) {
   EXPECT_GT(ditch, 0);
 }
 
+// ---- The directed layer (directed/<profile>, common/layers.h) ----
+
+float Mask(const GridMap& map, const std::string& profile, int ix, int iy) {
+  return map.at(layers::DirectedLayer(profile))(ix, iy);
+}
+
+// Unit vector of heading bin b (b * 45 deg counter-clockwise from +x).
+common::Vector2 HeadingOf(int b) { return {std::cos(b * M_PI / 4), std::sin(b * M_PI / 4)}; }
+
+// A step of `rise_m` through the centre of a 24 x 24 grid whose high side lies towards heading
+// bin k (for odd k the edge is a staircase of cells).
+GridMap StepTowardsBin(int k, double rise_m) {
+  const common::Vector2 u = HeadingOf(k), centre(2.4, 2.4);
+  return MakeTerrain(24, 24, kRes, [=](double x, double y) {
+    return (common::Vector2(x, y) - centre).dot(u) >= -1e-9 ? rise_m : 0.0;
+  });
+}
+
+// Every interior cell: the mask is NaN exactly where the cost is, non-zero exactly where the
+// cost is lethal, and a whole number in [0, 255].
+void ExpectMaskMatchesCost(const GridMap& map, const std::string& profile) {
+  ForInterior(map, [&](int ix, int iy) {
+    const float c = Cost(map, profile, ix, iy), m = Mask(map, profile, ix, iy);
+    ASSERT_EQ(std::isnan(c), std::isnan(m)) << ix << "," << iy;
+    if (std::isnan(c)) return;
+    ASSERT_EQ(m != 0.f, c >= layers::kCostLethal) << ix << "," << iy << " cost " << c;
+    ASSERT_EQ(m, std::round(m));
+    ASSERT_TRUE(m >= 0.f && m <= 255.f);
+  });
+}
+
+// An 8 cm step for the Pioneer 3-AT (up 3 cm, down 10 cm) seen from each of the 8 headings: the
+// cells at its foot refuse exactly the headings that climb it, the cells above it refuse
+// nothing, and no cell refuses a heading that runs along the edge or down it.
+TEST(TraversabilityTest, AOneWayStepSeenFromEachOfEightHeadings) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  for (int k = 0; k < 8; ++k) {
+    SCOPED_TRACE("high side towards bin " + std::to_string(k));
+    GridMap map = StepTowardsBin(k, 0.08);
+    ComputeCostLayer(&map, pioneer, {});
+    ExpectMaskMatchesCost(map, "pioneer3at");
+    const common::Vector2 u = HeadingOf(k);
+    int one_way = 0;
+    ForInterior(map, [&](int ix, int iy) {
+      const float m = Mask(map, "pioneer3at", ix, iy);
+      if (m == 0.f) return;
+      // Cells on both sides of the edge: the foot for the step, and (the slope fitted across
+      // the edge exceeds 8 deg) the rim for the slope, uphill only.
+      ASSERT_NE(m, layers::kAllHeadingsBlocked) << ix << "," << iy;
+      ++one_way;
+      const unsigned bits = static_cast<unsigned>(m);
+      for (int b = 0; b < 8; ++b) {
+        if (bits & (1u << b)) {
+          EXPECT_GT(HeadingOf(b).dot(u), 0.1) << "refuses bin " << b << " at " << ix << "," << iy;
+        }
+      }
+    });
+    // The whole foot of the edge, inside the 2-cell interior margin, is one-way.
+    EXPECT_GE(one_way, k % 2 == 0 ? 18 : 17);
+  }
+}
+
+// Steps alone (slopes unlimited): the foot of an axis step refuses its climbing heading alone,
+// the rim nothing.
+TEST(TraversabilityTest, TheDirectedBitsOfAnAxisStepAreItsClimbingHeadingAlone) {
+  common::RobotProfile pioneer = LenientProfile("pioneer3at");
+  pioneer.max_step_up_m = 0.03;
+  pioneer.max_step_down_m = 0.10;
+  for (int k = 0; k < 8; k += 2) {
+    GridMap map = StepTowardsBin(k, 0.08);
+    ComputeCostLayer(&map, pioneer, {});
+    // The cell below the edge on the line through the centre, and the cell above it.
+    const common::Vector2 u = HeadingOf(k);
+    const int low_x = u.x() < -0.5 ? 12 : 11, low_y = u.y() < -0.5 ? 12 : 11;
+    EXPECT_EQ(map.at(layers::kElevation)(low_x, low_y), 0.f) << "bin " << k;
+    EXPECT_EQ(Mask(map, "pioneer3at", low_x, low_y), static_cast<float>(1u << k)) << "bin " << k;
+    const int high_x = low_x + static_cast<int>(std::lround(u.x()));
+    const int high_y = low_y + static_cast<int>(std::lround(u.y()));
+    EXPECT_EQ(Mask(map, "pioneer3at", high_x, high_y), 0.f) << "bin " << k;
+    EXPECT_LT(Cost(map, "pioneer3at", high_x, high_y), layers::kCostLethal);
+  }
+}
+
+// A 12 cm step is over the Pioneer's 10 cm step down as well: crossable neither way, both sides
+// block every heading. So does an 8 cm step for a profile stepping 3 cm either way.
+TEST(TraversabilityTest, AStepCrossableNeitherWayBlocksEveryHeading) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  GridMap twelve = StepTowardsBin(0, 0.12);
+  ComputeCostLayer(&twelve, pioneer, {});
+  ExpectMaskMatchesCost(twelve, "pioneer3at");
+  common::RobotProfile even = LenientProfile("even");
+  even.max_step_up_m = 0.03;
+  even.max_step_down_m = 0.03;
+  GridMap eight = StepTowardsBin(0, 0.08);
+  ComputeCostLayer(&eight, even, {});
+  for (int iy = 3; iy < 21; ++iy) {
+    EXPECT_EQ(Mask(twelve, "pioneer3at", 11, iy), layers::kAllHeadingsBlocked);
+    EXPECT_EQ(Mask(twelve, "pioneer3at", 12, iy), layers::kAllHeadingsBlocked);
+    EXPECT_EQ(Mask(eight, "even", 11, iy), layers::kAllHeadingsBlocked);
+    EXPECT_EQ(Mask(eight, "even", 12, iy), layers::kAllHeadingsBlocked);
+  }
+}
+
+// The Pioneer 3-AT has no downhill limit (seed 000): a 10 deg slope refuses the headings that
+// climb it only; over max_one_way_slope_rad (20 deg) it blocks every heading. The rover (12 deg
+// up, 20 deg down) descends 15 deg but not 22.
+TEST(TraversabilityTest, ASlopeBetweenTheUphillAndDownhillLimitsIsOneWay) {
+  const common::RobotProfile pioneer = ShippedProfile("pioneer3at");
+  const common::RobotProfile rover = ShippedProfile("rover");
+  const unsigned climbing_x = (1u << 0) | (1u << 1) | (1u << 7);  // headings with +x component
+  for (double azimuth_deg : {0.0, 180.0}) {
+    GridMap ten = MakeTerrain(16, 16, kRes, Plane(10 * kDeg, azimuth_deg * kDeg));
+    ComputeCostLayer(&ten, pioneer, {});
+    ExpectMaskMatchesCost(ten, "pioneer3at");
+    const unsigned expect = azimuth_deg == 0.0 ? climbing_x : (1u << 3) | (1u << 4) | (1u << 5);
+    ForInterior(ten, [&](int ix, int iy) {
+      ASSERT_EQ(Mask(ten, "pioneer3at", ix, iy), static_cast<float>(expect)) << ix << "," << iy;
+    });
+  }
+  GridMap steep = MakeTerrain(16, 16, kRes, Plane(22 * kDeg));
+  ComputeCostLayer(&steep, pioneer, {});
+  ComputeCostLayer(&steep, rover, {});
+  GridMap fifteen = MakeTerrain(16, 16, kRes, Plane(15 * kDeg));
+  TraversabilityParams steps_off;  // 15 deg rises 5.4 cm per cell: judge the slope alone
+  common::RobotProfile rover_slopes = rover;
+  rover_slopes.max_step_up_m = 1.0;
+  rover_slopes.max_step_down_m = 1.0;
+  ComputeCostLayer(&fifteen, rover_slopes, steps_off);
+  ForInterior(steep, [&](int ix, int iy) {
+    ASSERT_EQ(Mask(steep, "pioneer3at", ix, iy), layers::kAllHeadingsBlocked);
+    ASSERT_EQ(Mask(steep, "rover", ix, iy), layers::kAllHeadingsBlocked);
+    ASSERT_EQ(Mask(fifteen, "rover", ix, iy), static_cast<float>(climbing_x));
+  });
+}
+
+// Unknown cells have no mask (NaN); blind-zone cells are free, so nothing is refused there; an
+// unknown cell read as lethal blocks every heading.
+TEST(TraversabilityTest, TheDirectedLayerFollowsTheCostOfUnknownCells) {
+  GridMap map = MakeTerrain(30, 30, kRes, [](double x, double y) {
+    return (std::fabs(x - 3.0) < 0.8 && std::fabs(y - 3.0) < 0.8) ? std::nan("") : 0.0;
+  });
+  RobotContext robot;
+  robot.xy_m = common::Vector2(3.0, 3.0);
+  ComputeGeometricLayers(&map, {});
+  ComputeCostLayer(&map, LenientProfile(), {}, robot, CellRect::All(map));
+  ExpectMaskMatchesCost(map, "test");
+  EXPECT_EQ(Cost(map, "test", 14, 14), layers::kCostFree);  // inside the blind zone
+  EXPECT_EQ(Mask(map, "test", 14, 14), 0.f);
+  EXPECT_TRUE(std::isnan(Mask(map, "test", 11, 11)));  // unknown, outside it
+  TraversabilityParams lethal_unknown;
+  lethal_unknown.unknown_is_lethal = true;
+  ComputeCostLayer(&map, LenientProfile(), lethal_unknown, robot, CellRect::All(map));
+  EXPECT_EQ(Mask(map, "test", 11, 11), layers::kAllHeadingsBlocked);
+  EXPECT_EQ(Mask(map, "test", 0, 5), layers::kAllHeadingsBlocked);  // the border
+}
+
 TEST(TraversabilityTest, BadInputThrows) {
   common::GridGeometry g;
   g.size_x = 4;
