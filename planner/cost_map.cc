@@ -546,6 +546,13 @@ bool CostMap::ConnectedWithinHorizon(const Vector2& a_world_m, const Vector2& b_
     return da <= h2 || db <= g2;
   };
   if (!allowed(a->ix, a->iy) || !allowed(b->ix, b->iy)) return false;
+  // On a map with one-way cells, the steps DirectedReachable refuses are refused here too.
+  const bool directed = one_way_cells_ > 0 && inscribed > 0.0;
+  std::array<const float*, 8> refused{};
+  if (directed) {
+    for (int k = 0; k < 8; ++k) refused[k] = heading_block_distance_cells(k).data();
+  }
+  const auto f_threshold = static_cast<float>(threshold);
   std::vector<uint8_t> seen(static_cast<size_t>(geometry_.num_cells()), 0);
   std::vector<int64_t> stack = {a->ix + static_cast<int64_t>(a->iy) * sx};
   seen[stack.back()] = 1;
@@ -556,15 +563,15 @@ bool CostMap::ConnectedWithinHorizon(const Vector2& a_world_m, const Vector2& b_
     if (i == target) return true;
     const int ix = static_cast<int>(i % sx);
     const int iy = static_cast<int>(i / sx);
-    for (int dy = -1; dy <= 1; ++dy) {
-      for (int dx = -1; dx <= 1; ++dx) {
-        const int nx = ix + dx, ny = iy + dy;
-        if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= sx || ny >= sy) continue;
-        const int64_t j = nx + static_cast<int64_t>(ny) * sx;
-        if (seen[j] || !allowed(nx, ny)) continue;
-        seen[j] = 1;
-        stack.push_back(j);
-      }
+    for (int k = 0; k < 8; ++k) {
+      const CellIndex step = HeadingStep(k);
+      const int nx = ix + step.ix, ny = iy + step.iy;
+      if (nx < 0 || ny < 0 || nx >= sx || ny >= sy) continue;
+      const int64_t j = nx + static_cast<int64_t>(ny) * sx;
+      if (seen[j] || !allowed(nx, ny)) continue;
+      if (directed && (refused[k][i] <= f_threshold || refused[k][j] <= f_threshold)) continue;
+      seen[j] = 1;
+      stack.push_back(j);
     }
   }
   return false;

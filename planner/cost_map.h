@@ -210,7 +210,8 @@ class CostMap {
   /// `goal_radius_m` of `b`: "is there a route through what the robot knows, and through the
   /// unexplored space it can see around it?" Unknown space far away (between distant lidar
   /// rings, behind unobserved stretches of wall) is not assumed open. A breadth-first search
-  /// from `a` (linear in the cells it reaches).
+  /// from `a` (linear in the cells it reaches). With one-way cells, by the directed steps of
+  /// MaybeConnected.
   bool ConnectedWithinHorizon(const common::Vector2& a_world_m, const common::Vector2& b_world_m,
                               double horizon_m, double goal_radius_m) const;
 

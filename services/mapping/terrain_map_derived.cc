@@ -143,11 +143,11 @@ void TerrainMap::RecomputeCosts(const std::vector<CellRect>& rects, const RobotC
     out.push_back(layers::CostLayer(p->name));
     out.push_back(layers::DirectedLayer(p->name));
   }
-  constexpr int kMargin = 2;
+  const int margin = CostRadiusCells(params_.resolution_m);
   for (const CellRect& r : rects) {
-    const CellRect w = Grow(r, kMargin);
+    const CellRect w = Grow(r, margin);
     common::GridMap& window = Scratch(w, in);
-    const CellRect local{kMargin, kMargin, kMargin + r.x1 - r.x0, kMargin + r.y1 - r.y0};
+    const CellRect local{margin, margin, margin + r.x1 - r.x0, margin + r.y1 - r.y0};
     // The window is in local coordinates: so is the robot.
     RobotContext local_robot = robot;
     if (robot.xy_m) {

@@ -27,6 +27,16 @@ constexpr double kUnseenDropReachM = 0.4;
 int UnseenDropReachCells(double resolution_m) {
   return std::max(1, static_cast<int>(std::ceil(kUnseenDropReachM / resolution_m - 1e-9)));
 }
+// How far past a rim the cost layer looks through a drop's shadow (unknown cells the rays passed
+// over) for the floor beyond it: a lidar a few metres back sees the floor below an 8 cm drop
+// from about half a metre past the edge on.
+constexpr double kShadowFloorReachM = 1.2;
+int ShadowFloorReachCells(double resolution_m) {
+  return std::max(UnseenDropReachCells(resolution_m),
+                  static_cast<int>(std::ceil(kShadowFloorReachM / resolution_m - 1e-9)));
+}
+// A ray bound this far below the floor past the shadow proves a hole in the shadow.
+constexpr double kShadowBoundSlackM = 0.02;
 
 // 4-neighbourhood: +x, -x, +y, -y (the seed's RIGHT, LEFT, UP, DOWN).
 constexpr std::array<std::array<int, 2>, 4> kNeighbours{{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
@@ -317,6 +327,7 @@ class CostRules {
   bool compensate_, exact_tilt_;
   double pitch_rad_, cp_, sp_, cos_heading_, sin_heading_;
   int reach_cells_;
+  int shadow_cells_;
   std::array<int64_t, 4> neighbour_offset_{};
   std::array<double, 4> forward_m_{};
 };
@@ -358,7 +369,8 @@ CostRules::CostRules(const GridMap& map, const common::RobotProfile& profile,
       pitch_rad_(robot.pitch_rad),
       cp_(std::cos(robot.pitch_rad)),
       sp_(std::sin(robot.pitch_rad)),
-      reach_cells_(UnseenDropReachCells(map.resolution_m())) {
+      reach_cells_(UnseenDropReachCells(map.resolution_m())),
+      shadow_cells_(ShadowFloorReachCells(map.resolution_m())) {
   if (blind_) {
     robot_cells_ = map.geometry().ContinuousIndexOf(*robot.xy_m);
     blind_cells_ = params.blind_zone_half_size_m / map.resolution_m();
@@ -434,12 +446,29 @@ bool CostRules::UnseenDropLethal(int x, int y, int k, int64_t j, float hc, doubl
   // The sensor looked into this neighbour and found nothing down to bound[j], nor in the
   // unknown cells beyond it down to theirs.
   float lowest = bound_[j];
-  for (int s = 2; s <= reach_cells_; ++s) {
+  float lowest_in_shadow = bound_[j];  // over the whole shadow up to the floor past it
+  float floor_beyond = kNaN;
+  for (int s = 2; s <= shadow_cells_; ++s) {
     const int nx = x + s * kNeighbours[k][0], ny = y + s * kNeighbours[k][1];
     if (nx < 0 || ny < 0 || nx >= sx_ || ny >= sy_) break;
     const int64_t jj = nx + static_cast<int64_t>(ny) * sx_;
-    if (!std::isnan(h_[jj])) break;
-    if (std::isfinite(bound_[jj])) lowest = std::min(lowest, bound_[jj]);
+    if (!std::isnan(h_[jj])) {
+      floor_beyond = h_[jj];
+      break;
+    }
+    if (!std::isfinite(bound_[jj])) continue;
+    lowest_in_shadow = std::min(lowest_in_shadow, bound_[jj]);
+    if (s <= reach_cells_) lowest = std::min(lowest, bound_[jj]);
+  }
+  // The floor past the shadow, lower than the rim, with no ray proving the shadow deeper than
+  // it: the drop is the rim over that floor, judged like a measured step down (an 8 cm drop seen
+  // from a few metres back is crossable for a profile stepping 10 cm down).
+  if (floor_beyond < hc && lowest_in_shadow >= floor_beyond - kShadowBoundSlackM) {
+    double drop = double(hc) - floor_beyond;
+    if (exact_tilt_) drop = drop * cp_ - forward_m_[k] * sp_;
+    if (drop > down_limit_ + tol_) return true;
+    if (drop > 0) *ratio = std::max(*ratio, drop * inv_down_);
+    return false;
   }
   double drop = double(hc) - lowest;
   if (exact_tilt_) drop = drop * cp_ - forward_m_[k] * sp_;
@@ -570,10 +599,12 @@ int DependencyRadiusCells(const TraversabilityParams& params, double resolution_
       std::ceil(std::max(params.normal_radius_m, params.wide_normal_radius_m) / resolution_m));
   // Known ditch bottoms look up to K cells for an unseen ditch cell, which looks K further for
   // its rims and two beyond them; the cost layer reads the 4-neighbours of each cell and the
-  // unknown cells beyond them (UnseenDropReachCells).
+  // unknown cells beyond them (ShadowFloorReachCells).
   return std::max(normal, 2 * internal::DitchSearchCells(params, resolution_m) + 2) +
-         UnseenDropReachCells(resolution_m);
+         ShadowFloorReachCells(resolution_m);
 }
+
+int CostRadiusCells(double resolution_m) { return ShadowFloorReachCells(resolution_m) + 1; }
 
 void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params) {
   CAIRN_THROW_UNLESS(map != nullptr, "no map");

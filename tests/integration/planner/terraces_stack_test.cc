@@ -121,7 +121,9 @@ TEST_F(TerracesStackTest, TheRoverBridgesADitchNarrowerThanItsProfileAllows) {
   ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
   SendGoal(18, 15.0, 10.0);
   ASSERT_TRUE(WaitState(kStateReached, 150.0)) << StatusText();
-  const auto& last = Poses().back();
+  const auto poses = Poses();  // a copy: a reference into the temporary would dangle
+  ASSERT_FALSE(poses.empty());
+  const auto& last = poses.back();
   EXPECT_LT(std::hypot(last.position_m[0] - 15.0, last.position_m[1] - 10.0), 0.5);
   ExpectClearOfTheWalls(2);
 }

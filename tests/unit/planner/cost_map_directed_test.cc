@@ -210,5 +210,15 @@ TEST(CostMapDirectedTest, ConnectivityFollowsTheOneWaySteps) {
   EXPECT_TRUE(ramp->MaybeConnected({3.0, 2.0}, {9.0, 2.0}));  // round by the ramp
 }
 
+// The horizon search follows the one-way steps too: a goal up the step is not reachable however
+// far the horizon reaches, one down it is.
+TEST(CostMapDirectedTest, TheHorizonSearchFollowsTheOneWaySteps) {
+  const auto closed = testing::OneWayStepCorridor().Build(PioneerFootprint());
+  EXPECT_TRUE(closed->ConnectedWithinHorizon({9.0, 2.0}, {3.0, 2.0}, 50.0, 1.0));
+  EXPECT_FALSE(closed->ConnectedWithinHorizon({3.0, 2.0}, {9.0, 2.0}, 50.0, 1.0));
+  const auto ramp = testing::OneWayStepCorridor(3.5).Build(PioneerFootprint());
+  EXPECT_TRUE(ramp->ConnectedWithinHorizon({3.0, 2.0}, {9.0, 2.0}, 50.0, 1.0));
+}
+
 }  // namespace
 }  // namespace cairn::planner

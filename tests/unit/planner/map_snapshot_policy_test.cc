@@ -31,6 +31,27 @@ MapSnapshotParams Params(double incomplete_timeout_s = 1.0) {
   return p;
 }
 
+// Directed tiles not held read as the cost layer alone: free cells stay free (a missing tile of
+// the directed layer once blocked the cells around the robot), lethal cells stay lethal, and the
+// one-way cells of the tiles held stay one-way.
+TEST(MapSnapshotPolicyTest, MissingDirectedTilesReadAsTheCostLayerAlone) {
+  MapSnapshotPolicy dut(Params(), PioneerFootprint());
+  AssembledLayer layer = Layer(4);
+  layer.cells(25, 5) = 100.0f;  // lethal in the missing directed tile (1, 0)
+  layer.cells(5, 5) = 100.0f;   // lethal and one-way in the held tile (0, 0)
+  layer.directed = common::Layer::Zero(60, 40);
+  (*layer.directed)(5, 5) = 4.0f;
+  layer.directed_missing_tiles = {{1, 0}};
+  const auto map = dut.Build(std::move(layer), 1'000'000);
+  ASSERT_TRUE(map.ok()) << map.status().ToString();
+  EXPECT_TRUE((*map)->has_directed());
+  EXPECT_FALSE((*map)->IsBlockedCell({30, 10}));
+  EXPECT_TRUE((*map)->IsBlockedCell({25, 5}));
+  EXPECT_EQ((*map)->OneWayMask({5, 5}), 4);
+  EXPECT_FALSE((*map)->IsBlockedCell({5, 5}));
+  EXPECT_TRUE((*map)->IsValid({1.5, 0.75, 0.0}));  // a pose inside the missing directed tile
+}
+
 TEST(MapSnapshotPolicyTest, MissingTilesAreLethalNotUnexplored) {
   MapSnapshotParams params = Params();
   params.cost.unknown_is_traversable = true;  // unexplored cells could be crossed ...
