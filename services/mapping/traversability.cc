@@ -27,16 +27,6 @@ constexpr double kUnseenDropReachM = 0.4;
 int UnseenDropReachCells(double resolution_m) {
   return std::max(1, static_cast<int>(std::ceil(kUnseenDropReachM / resolution_m - 1e-9)));
 }
-// How far past a rim the cost layer looks through a drop's shadow (unknown cells the rays passed
-// over) for the floor beyond it: a lidar a few metres back sees the floor below an 8 cm drop
-// from about half a metre past the edge on.
-constexpr double kShadowFloorReachM = 1.2;
-int ShadowFloorReachCells(double resolution_m) {
-  return std::max(UnseenDropReachCells(resolution_m),
-                  static_cast<int>(std::ceil(kShadowFloorReachM / resolution_m - 1e-9)));
-}
-// A ray bound this far below the floor past the shadow proves a hole in the shadow.
-constexpr double kShadowBoundSlackM = 0.02;
 
 // 4-neighbourhood: +x, -x, +y, -y (the seed's RIGHT, LEFT, UP, DOWN).
 constexpr std::array<std::array<int, 2>, 4> kNeighbours{{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
@@ -284,7 +274,7 @@ class CostRules {
   float SlopeMask(int64_t i, double s) const;
   // A lethal step or drop towards neighbour k: its heading bit when the edge is crossable the
   // other way, else kAllBlocked.
-  float StepMask(int64_t i, int k, float hc) const;
+  float StepMask(int k, double rise) const;
 
  private:
   // Terrain using the share r of its most used limit: free up to free_fraction, then a whole
@@ -300,10 +290,10 @@ class CostRules {
   // All four neighbours known, no ditch nearby, no tilt: only the highest and the lowest
   // neighbour matter. False when the per-neighbour rules must decide.
   bool FastSteps(int64_t i, float hc, double* ratio) const;
-  // The rules towards neighbour k: true when they make the cell lethal.
-  bool NeighbourLethal(int x, int y, int64_t i, int k, float hc, double* ratio) const;
+  // The rules towards neighbour k: 0 when they leave the cell alone, else StepMask's value.
+  float NeighbourMask(int x, int y, int64_t i, int k, float hc, double* ratio) const;
   bool StepLethal(int64_t i, int64_t j, int k, double rise, double* ratio) const;
-  bool UnseenDropLethal(int x, int y, int k, int64_t j, float hc, double* ratio) const;
+  float UnseenDropMask(int x, int y, int k, int64_t j, float hc, double* ratio) const;
   double Tilted(int k, double rise) const { return forward_m_[k] * sp_ + rise * cp_; }
 
   const TraversabilityParams& params_;
@@ -327,7 +317,6 @@ class CostRules {
   bool compensate_, exact_tilt_;
   double pitch_rad_, cp_, sp_, cos_heading_, sin_heading_;
   int reach_cells_;
-  int shadow_cells_;
   std::array<int64_t, 4> neighbour_offset_{};
   std::array<double, 4> forward_m_{};
 };
@@ -369,8 +358,7 @@ CostRules::CostRules(const GridMap& map, const common::RobotProfile& profile,
       pitch_rad_(robot.pitch_rad),
       cp_(std::cos(robot.pitch_rad)),
       sp_(std::sin(robot.pitch_rad)),
-      reach_cells_(UnseenDropReachCells(map.resolution_m())),
-      shadow_cells_(ShadowFloorReachCells(map.resolution_m())) {
+      reach_cells_(UnseenDropReachCells(map.resolution_m())) {
   if (blind_) {
     robot_cells_ = map.geometry().ContinuousIndexOf(*robot.xy_m);
     blind_cells_ = params.blind_zone_half_size_m / map.resolution_m();
@@ -442,57 +430,40 @@ bool CostRules::StepLethal(int64_t i, int64_t j, int k, double rise, double* rat
   return false;
 }
 
-bool CostRules::UnseenDropLethal(int x, int y, int k, int64_t j, float hc, double* ratio) const {
+float CostRules::UnseenDropMask(int x, int y, int k, int64_t j, float hc, double* ratio) const {
   // The sensor looked into this neighbour and found nothing down to bound[j], nor in the
   // unknown cells beyond it down to theirs.
   float lowest = bound_[j];
-  float lowest_in_shadow = bound_[j];  // over the whole shadow up to the floor past it
-  float floor_beyond = kNaN;
-  for (int s = 2; s <= shadow_cells_; ++s) {
+  for (int s = 2; s <= reach_cells_; ++s) {
     const int nx = x + s * kNeighbours[k][0], ny = y + s * kNeighbours[k][1];
     if (nx < 0 || ny < 0 || nx >= sx_ || ny >= sy_) break;
     const int64_t jj = nx + static_cast<int64_t>(ny) * sx_;
-    if (!std::isnan(h_[jj])) {
-      floor_beyond = h_[jj];
-      break;
-    }
-    if (!std::isfinite(bound_[jj])) continue;
-    lowest_in_shadow = std::min(lowest_in_shadow, bound_[jj]);
-    if (s <= reach_cells_) lowest = std::min(lowest, bound_[jj]);
-  }
-  // The floor past the shadow, lower than the rim, with no ray proving the shadow deeper than
-  // it: the drop is the rim over that floor, judged like a measured step down (an 8 cm drop seen
-  // from a few metres back is crossable for a profile stepping 10 cm down).
-  if (floor_beyond < hc && lowest_in_shadow >= floor_beyond - kShadowBoundSlackM) {
-    double drop = double(hc) - floor_beyond;
-    if (exact_tilt_) drop = drop * cp_ - forward_m_[k] * sp_;
-    if (drop > down_limit_ + tol_) return true;
-    if (drop > 0) *ratio = std::max(*ratio, drop * inv_down_);
-    return false;
+    if (!std::isnan(h_[jj])) break;
+    if (std::isfinite(bound_[jj])) lowest = std::min(lowest, bound_[jj]);
   }
   double drop = double(hc) - lowest;
   if (exact_tilt_) drop = drop * cp_ - forward_m_[k] * sp_;
   if (drop > down_limit_ + tol_ ||
       (params_.unseen_drop_m > 0 && drop >= params_.unseen_drop_m - tol_)) {
-    return true;
+    return kAllBlocked;  // its depth is only a lower bound
   }
   if (drop > 0) *ratio = std::max(*ratio, drop * inv_down_);
-  return false;
+  return 0.f;
 }
 
-bool CostRules::NeighbourLethal(int x, int y, int64_t i, int k, float hc, double* ratio) const {
+float CostRules::NeighbourMask(int x, int y, int64_t i, int k, float hc, double* ratio) const {
   const int64_t j = i + neighbour_offset_[k];
   // A bridged ditch is no step: the robot spans it.
-  if (!std::isnan(ddepth_[j]) && !(dwidth_[j] > ditch_limit_ + tol_)) return false;
+  if (!std::isnan(ddepth_[j]) && !(dwidth_[j] > ditch_limit_ + tol_)) return 0.f;
   const float hn = h_[j];
   if (!std::isnan(hn)) {
     double rise = double(hn) - hc;
     // In a robot-levelled map the neighbour offset is tilted by the pitch as well.
     if (exact_tilt_) rise = Tilted(k, rise);
-    return StepLethal(i, j, k, rise, ratio);
+    return StepLethal(i, j, k, rise, ratio) ? StepMask(k, rise) : 0.f;
   }
-  if (bound_ != nullptr && std::isfinite(bound_[j])) return UnseenDropLethal(x, y, k, j, hc, ratio);
-  return false;
+  if (bound_ != nullptr && std::isfinite(bound_[j])) return UnseenDropMask(x, y, k, j, hc, ratio);
+  return 0.f;
 }
 
 float CostRules::SlopeMask(int64_t i, double s) const {
@@ -511,11 +482,7 @@ float CostRules::SlopeMask(int64_t i, double s) const {
   return mask == 0 ? kAllBlocked : static_cast<float>(mask);
 }
 
-float CostRules::StepMask(int64_t i, int k, float hc) const {
-  const float hn = h_[i + neighbour_offset_[k]];
-  if (std::isnan(hn)) return kAllBlocked;  // an unseen drop: its depth is only a lower bound
-  double rise = double(hn) - hc;
-  if (exact_tilt_) rise = Tilted(k, rise);
+float CostRules::StepMask(int k, double rise) const {
   // Crossable the other way: up it when it is a drop within the step-up limit, down it when it
   // is a rise within the step-down limit.
   const bool other_way = rise > 0 ? rise <= down_limit_ + tol_ : -rise <= up_limit_ + tol_;
@@ -549,8 +516,8 @@ CostRules::Verdict CostRules::Judge(int x, int y, bool near_ditch) const {
     return Plain(Graded(ratio));
   }
   for (int k = 0; k < 4; ++k) {
-    if (!NeighbourLethal(x, y, i, k, hc, &ratio)) continue;
-    const float m = StepMask(i, k, hc);
+    const float m = NeighbourMask(x, y, i, k, hc, &ratio);
+    if (m == 0.f) continue;
     if (m == kAllBlocked) return Plain(layers::kCostLethal);
     mask |= static_cast<unsigned>(m);
   }
@@ -599,12 +566,12 @@ int DependencyRadiusCells(const TraversabilityParams& params, double resolution_
       std::ceil(std::max(params.normal_radius_m, params.wide_normal_radius_m) / resolution_m));
   // Known ditch bottoms look up to K cells for an unseen ditch cell, which looks K further for
   // its rims and two beyond them; the cost layer reads the 4-neighbours of each cell and the
-  // unknown cells beyond them (ShadowFloorReachCells).
+  // unknown cells beyond them (UnseenDropReachCells).
   return std::max(normal, 2 * internal::DitchSearchCells(params, resolution_m) + 2) +
-         ShadowFloorReachCells(resolution_m);
+         UnseenDropReachCells(resolution_m);
 }
 
-int CostRadiusCells(double resolution_m) { return ShadowFloorReachCells(resolution_m) + 1; }
+int CostRadiusCells(double resolution_m) { return UnseenDropReachCells(resolution_m); }
 
 void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params) {
   CAIRN_THROW_UNLESS(map != nullptr, "no map");

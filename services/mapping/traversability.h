@@ -26,9 +26,7 @@
 ///      lethal; the bounds are inclusive (exactly the limit is crossable) and every neighbour is
 ///      checked (the listing initialised only one of its four neighbour values);
 ///    - a neighbour the sensor looked into without a return (ground bound) counts as lower by at
-///      least the bound's depth: a drop into an unseen gap is a step down; when the floor past
-///      that shadow is seen (within 1.2 m) and no ray proves the shadow deeper, the drop is the
-///      rim over that floor, judged against the step-down limit;
+///      least the bound's depth: a drop into an unseen gap is a step down;
 ///    - a ditch wider than max_ditch_width is lethal; narrower ones are bridged (graded);
 ///    - roughness above max_roughness is lethal;
 ///    - an unknown cell is free inside the blind zone around the robot's current position (the
@@ -143,8 +141,8 @@ void ComputeGeometricLayers(common::GridMap* map, const TraversabilityParams& pa
 /// How far (cells) a geometric or cost value depends on its neighbours: a window computed with
 /// this much margin around the written rectangle matches the whole-map computation.
 int DependencyRadiusCells(const TraversabilityParams& params, double resolution_m);
-/// How far (cells) a cell's cost reads the elevation and ground bound around it (through a
-/// drop's shadow to the floor past it), given the geometric layers.
+/// How far (cells) a cell's cost reads the elevation and ground bound around it (through the
+/// unknown cells past a drop), given the geometric layers.
 int CostRadiusCells(double resolution_m);
 
 /// Adds layers::CostLayer(profile.name): 0 free, [1, 99] graded (whole numbers), 100 lethal,

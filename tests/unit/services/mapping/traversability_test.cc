@@ -637,33 +637,6 @@ TEST(TraversabilityTest, TheRimSeesTheDropBeyondAMixedEdgeCell) {
 
 // The live mapper recomputes windows of a larger map: with DependencyRadiusCells of margin the
 // window's values equal the whole-map computation.
-// An 8 cm platform edge seen from a few metres back: its shadow (x 2.0..2.8, unknown, the rays
-// passing over it a few centimetres below the rim) hides the floor below the edge, but the floor
-// past the shadow is seen. The drop is the rim over that floor: within the Pioneer's 10 cm step
-// down. The same edge over a 20 cm drop is lethal, and so is a shadow a ray proves deeper than
-// the floor past it.
-TEST(TraversabilityTest, TheFloorPastADropsShadowMeasuresTheDrop) {
-  auto platform = [](double floor_m, float shadow_bound_m) {
-    GridMap map = MakeTerrain(30, 12, kRes, [floor_m](double x, double) {
-      return x < 2.0 ? 0.08 : (x < 2.8 ? std::nan("") : floor_m);
-    });
-    Layer& b = map.AddLayer(layers::kGroundBound);
-    for (int iy = 0; iy < 12; ++iy) {
-      for (int ix = 10; ix < 14; ++ix) b(ix, iy) = shadow_bound_m;
-    }
-    ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
-    return map;
-  };
-  const GridMap eight = platform(0.0, 0.03f);
-  EXPECT_LT(Cost(eight, "pioneer3at", 9, 6), layers::kCostLethal);
-  EXPECT_EQ(Mask(eight, "pioneer3at", 9, 6), 0.f);
-  const GridMap twenty = platform(-0.12, 0.03f);
-  EXPECT_EQ(Cost(twenty, "pioneer3at", 9, 6), layers::kCostLethal);
-  EXPECT_EQ(Mask(twenty, "pioneer3at", 9, 6), layers::kAllHeadingsBlocked);
-  const GridMap hole = platform(0.0, -0.05f);
-  EXPECT_EQ(Cost(hole, "pioneer3at", 9, 6), layers::kCostLethal);
-}
-
 TEST(TraversabilityTest, WindowWithMarginMatchesWholeMap) {
   std::mt19937 rng(7);
   std::normal_distribution<double> noise(0.0, 0.01);
