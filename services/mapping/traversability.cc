@@ -276,7 +276,6 @@ class CostRules {
   // other way, else kAllBlocked.
   float StepMask(int k, double rise) const;
 
- private:
   // Terrain using the share r of its most used limit: free up to free_fraction, then a whole
   // number in [1, graded_cost_max] (see common/layers.h).
   float Graded(double r) const {
