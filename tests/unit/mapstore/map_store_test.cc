@@ -423,6 +423,33 @@ TYPED_TEST(MapStoreTest, DerivedCacheIsKeyedByVersionProfileHashAndCodeVersion) 
   EXPECT_EQ(this->dut_->PutDerived(ref, wrong, this->ctx_).code(), StatusCode::kInvalidArgument);
 }
 
+// A feature blocked for the source profile and crossable one way for the target (the directed
+// layer lets it drive down a drop) is a verdict change, though neither verdict is "crossable".
+TYPED_TEST(MapStoreTest, SharingCountsAOneWayVerdictAsAChange) {
+  ProfileDeriver deriver = FakeDeriver();
+  deriver.judge = [](const common::Obstacle&, const common::RobotProfile& profile) {
+    common::ObstacleVerdict v;
+    v.profile = profile.name;
+    v.profile_hash = profile.ContentHash();
+    v.crossable = false;
+    v.reason = "step up 0.080 m > 0.030 m";
+    if (profile.name == "oneway") v.reason += std::string(common::kOneWayMarker) + "downwards";
+    return v;
+  };
+  this->Save(SampleSnapshot("corridor"));
+  ASSERT_TRUE(this->dut_->PutProfile(Profile("pioneer3at", 8.0, 0.03), this->ctx_).ok());
+  ASSERT_TRUE(this->dut_->PutProfile(Profile("oneway", 8.0, 0.03), this->ctx_).ok());
+  auto shared = ShareMap(*this->dut_, deriver, {"lab", "corridor", 0}, "oneway", this->ctx_);
+  ASSERT_TRUE(shared.ok()) << shared.status().ToString();
+  ASSERT_EQ(shared->changed.size(), 2u);  // the ramp (stored verdict) and the step (judged)
+  for (const auto& o : shared->changed) {
+    ASSERT_EQ(o.verdicts.size(), 2u);
+    EXPECT_FALSE(common::IsOneWay(o.verdicts[0])) << o.id;
+    EXPECT_TRUE(common::IsOneWay(o.verdicts[1])) << o.id;
+    EXPECT_STREQ(common::VerdictWord(o.verdicts[1]), "one-way");
+  }
+}
+
 TYPED_TEST(MapStoreTest, SharingDerivesCachesAndReportsVerdictChanges) {
   const ProfileDeriver deriver = FakeDeriver();
   MapSnapshot s = SampleSnapshot("corridor");
