@@ -451,6 +451,25 @@ bool CostMap::IsValid(const Pose2& pose_world, FootprintKind kind) const {
   return ExactAtGridPose(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad), shape).valid;
 }
 
+bool CostMap::FitsAtSomeHeading(int64_t cell, FootprintKind kind) const {
+  const int k_kind = static_cast<int>(kind);
+  std::call_once(fits_once_[k_kind], [this, k_kind] {
+    fits_[k_kind].reset(new std::atomic<uint8_t>[static_cast<size_t>(geometry_.num_cells())]());
+  });
+  std::atomic<uint8_t>& known = fits_[k_kind][static_cast<size_t>(cell)];
+  const uint8_t answer = known.load(std::memory_order_relaxed);
+  if (answer != 0) return answer == 1;
+  const Vector2 c = geometry_.CenterOf(
+      {static_cast<int>(cell % geometry_.size_x), static_cast<int>(cell / geometry_.size_x)});
+  constexpr int kHeadings = 16;
+  bool fits = false;
+  for (int k = 0; k < kHeadings && !fits; ++k) {
+    fits = IsValid({c.x(), c.y(), 2.0 * M_PI * k / kHeadings}, kind);
+  }
+  known.store(fits ? 1 : 2, std::memory_order_relaxed);
+  return fits;
+}
+
 void CostMap::ComputeComponents() const {
   const int sx = geometry_.size_x;
   const int sy = geometry_.size_y;

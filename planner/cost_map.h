@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <mutex>
@@ -215,6 +216,10 @@ class CostMap {
   bool ConnectedWithinHorizon(const common::Vector2& a_world_m, const common::Vector2& b_world_m,
                               double horizon_m, double goal_radius_m) const;
 
+  /// True when the footprint centred on the cell (linear index) is valid at one of 16 headings.
+  /// Each cell is answered once per snapshot and kind, and kept (safe from several threads).
+  bool FitsAtSomeHeading(int64_t cell, FootprintKind kind = FootprintKind::kRobot) const;
+
   /// Component label of the cell holding a point; -1 when impassable or outside.
   int ComponentOf(const common::Vector2& world_m) const;
 
@@ -264,6 +269,9 @@ class CostMap {
   mutable std::vector<int32_t> components_;
   mutable std::once_flag ridges_once_;
   mutable std::vector<int32_t> ridges_;
+  // FitsAtSomeHeading's answers per kind and cell: 0 not asked yet, 1 fits, 2 does not.
+  mutable std::array<std::once_flag, 2> fits_once_;
+  mutable std::array<std::unique_ptr<std::atomic<uint8_t>[]>, 2> fits_;
 };
 
 }  // namespace cairn::planner

@@ -18,8 +18,12 @@ namespace {
 // The cost layer as the coarse search reads it (cell index ix + iy * size_x).
 class FineGrid {
  public:
-  FineGrid(const CostMap& map, const CoarseRouteParams& params)
+  FineGrid(const CostMap& map, const CoarseRouteParams& params, const Vector2& start_m,
+           const Vector2& goal_m)
       : map_(map),
+        start_m_(start_m),
+        goal_m_(goal_m),
+        escape2_m2_(params.escape_radius_m * params.escape_radius_m),
         sx_(map.geometry().size_x),
         sy_(map.geometry().size_y),
         res_(map.geometry().resolution_m),
@@ -33,7 +37,9 @@ class FineGrid {
         inflation_cells_(params.clearance_inflation_m / res_),
         // The grid A*'s default passability: the inscribed radius less (half a cell diagonal -
         // half a cell).
-        clearance_cells_(std::max(0.0, inscribed_cells_ - (0.70710678 - 0.5) - 1e-3)) {}
+        clearance_cells_(std::max(0.0, inscribed_cells_ - (0.70710678 - 0.5) - 1e-3)),
+        circumscribed_cells_(
+            (map.footprint().circumscribed_radius_m() + map.params().planning_padding_m) / res_) {}
 
   int size_x() const { return sx_; }
   int size_y() const { return sy_; }
@@ -43,7 +49,18 @@ class FineGrid {
   Vector2 Center(int64_t i) const {
     return map_.geometry().CenterOf({static_cast<int>(i % sx_), static_cast<int>(i / sx_)});
   }
-  bool Passable(int64_t i) const { return dist_[i] > 0.0f && dist_[i] >= clearance_cells_; }
+  // The inscribed disc keeps off blocking cells, and, nearer to them than the circumscribed
+  // radius, the footprint fits at the cell's centre at some heading: padded, as the OMPL problem
+  // checks it, away from the ends (a gap the disc passes but the footprint's corners do not, at
+  // any heading, is not a way through).
+  bool Passable(int64_t i) const {
+    if (!(dist_[i] > 0.0f && dist_[i] >= clearance_cells_)) return false;
+    if (dist_[i] > circumscribed_cells_ + 0.75) return true;
+    const Vector2 c = Center(i);
+    const bool near_end =
+        (c - start_m_).squaredNorm() <= escape2_m2_ || (c - goal_m_).squaredNorm() <= escape2_m2_;
+    return map_.FitsAtSomeHeading(i, near_end ? FootprintKind::kRobot : FootprintKind::kPadded);
+  }
   // Cost / 100 plus proximity, as the grid A* and the OMPL objective weigh them.
   double Traversal(int64_t i) const {
     const float v = cost_[i];
@@ -98,6 +115,9 @@ class FineGrid {
 
  private:
   const CostMap& map_;
+  Vector2 start_m_;
+  Vector2 goal_m_;
+  double escape2_m2_;
   int sx_;
   int sy_;
   double res_;
@@ -110,6 +130,7 @@ class FineGrid {
   double inscribed_cells_;
   double inflation_cells_;
   double clearance_cells_;
+  double circumscribed_cells_;
 };
 
 // A* over the blocks; each block's cell is found when the search first reaches it.
@@ -248,7 +269,7 @@ GridPath CoarseGridRoute(const CostMap& map, const Vector2& start_m, const Vecto
   const auto start = geometry.IndexOf(start_m);
   const auto goal = geometry.IndexOf(goal_m);
   if (!start || !goal) return {};
-  const FineGrid grid(map, params);
+  const FineGrid grid(map, params, start_m, goal_m);
   const int64_t s = grid.Index(start->ix, start->iy);
   const int64_t g = grid.Index(goal->ix, goal->iy);
   if (!grid.Passable(s) || !grid.Passable(g)) return {};

@@ -24,6 +24,9 @@ struct CoarseRouteParams {
   double traversal_cost_weight{1.0};
   double clearance_weight{1.0};
   double clearance_inflation_m{0.4};
+  /// Within this distance of the start or the goal a cell takes the robot's own footprint,
+  /// farther away the padded one (GlobalPlannerParams::escape_radius_m: the OMPL problem's check).
+  double escape_radius_m{0.6};
 };
 
 /// The route from the cell of `start_m` to the cell of `goal_m` (points at the cells standing

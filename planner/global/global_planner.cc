@@ -151,6 +151,7 @@ class PlanRun {
   std::shared_ptr<og::PathGeometric> SolveAgain(double time_left_s);
   bool OfferGridRoute(og::PathSimplifier& simplifier);
   std::optional<og::PathGeometric> GridRouteAsPath(og::PathSimplifier& simplifier, int stride);
+  ob::ScopedStatePtr RouteGoalState(const std::vector<Vector2>& points) const;
   void Simplify(og::PathSimplifier& simplifier, og::PathGeometric* path) const;
   bool Finish();
 
@@ -408,6 +409,30 @@ bool PlanRun::OfferGridRoute(og::PathSimplifier& simplifier) {
   return false;
 }
 
+// Where the grid route ends: the goal state of the first solution, or, when the request gives no
+// heading, the goal position at the heading nearest the route's last leg among those valid there
+// (that leg's own first).
+ob::ScopedStatePtr PlanRun::RouteGoalState(const std::vector<Vector2>& points) const {
+  auto goal = std::make_shared<ob::ScopedState<>>(problem_.space);
+  problem_.space->copyState(goal->get(), best_->getState(best_->getStateCount() - 1));
+  if (request_.goal_has_yaw || points.size() < 2) return goal;
+  const Vector2 leg = points.back() - points[points.size() - 2];
+  const double arrival = std::atan2(leg.y(), leg.x());
+  std::vector<double> yaws{arrival};
+  yaws.insert(yaws.end(), goal_yaws_.begin(), goal_yaws_.end());
+  std::stable_sort(yaws.begin(), yaws.end(), [arrival](double a, double b) {
+    return std::abs(common::WrapAngle(a - arrival)) < std::abs(common::WrapAngle(b - arrival));
+  });
+  for (const double yaw : yaws) {
+    if (!map_.IsValid({goal_.x_m, goal_.y_m, yaw})) continue;
+    auto* s = goal->get()->as<ob::SE2StateSpace::StateType>();
+    s->setXY(goal_.x_m, goal_.y_m);
+    s->setYaw(internal::OmplYaw(yaw));
+    break;
+  }
+  return goal;
+}
+
 // The grid route over blocks of `stride` cells as a simplified, checked OMPL path, or nullopt
 // when there is no route or it does not check.
 std::optional<og::PathGeometric> PlanRun::GridRouteAsPath(og::PathSimplifier& simplifier,
@@ -417,15 +442,19 @@ std::optional<og::PathGeometric> PlanRun::GridRouteAsPath(og::PathSimplifier& si
   cp.traversal_cost_weight = params_.traversal_cost_weight;
   cp.clearance_weight = params_.clearance_weight;
   cp.clearance_inflation_m = params_.clearance_inflation_m;
+  cp.escape_radius_m = params_.escape_radius_m;
   const GridPath grid_path = CoarseGridRoute(map_, start_.position(), goal_.position(), cp,
                                              [this] { return Cancelled() || TimeLeft() <= 0.0; });
   if (!grid_path.found || grid_path.points_m.size() < 2) return std::nullopt;
-  // End on a goal state the planner accepts (the goal position with an allowed heading).
   og::PathGeometric route = internal::RouteAsPath(problem_, grid_path.points_m, start_,
-                                                  best_->getState(best_->getStateCount() - 1));
-  if (params_.simplify_time_s > 0.0) Simplify(simplifier, &route);
-  if (!route.check()) return std::nullopt;
-  return route;
+                                                  RouteGoalState(grid_path.points_m)->get());
+  if (!internal::RepairRoute(problem_, &route)) return std::nullopt;
+  // Shortcuts are checked one way only (see Simplify): the repaired route stays the fallback.
+  og::PathGeometric simplified = route;
+  if (params_.simplify_time_s > 0.0) Simplify(simplifier, &simplified);
+  if (simplified.check()) return simplified;
+  if (route.check()) return route;
+  return std::nullopt;
 }
 
 // Interpolate and check again, pose by pose with the robot's own footprint; fall back to the

@@ -1,6 +1,7 @@
 #include "planner/global/ompl_problem.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -477,7 +478,9 @@ og::PathGeometric RouteAsPath(const OmplProblem& problem, const std::vector<Vect
   og::PathGeometric route(problem.si);
   ob::ScopedState<ob::SE2StateSpace> s(problem.space);
   const size_t n = points.size();
-  for (size_t i = 0; i < n; ++i) {
+  // The last point (the goal's cell centre) gives way to the goal state itself: a motion of a
+  // few centimetres that must also turn to the goal's heading would turn in place.
+  for (size_t i = 0; i + 1 < n || i == 0; ++i) {
     const Vector2& p = points[i];
     double yaw = start.yaw_rad;
     if (i == 0) {
@@ -492,6 +495,80 @@ og::PathGeometric RouteAsPath(const OmplProblem& problem, const std::vector<Vect
   }
   route.append(goal_state);
   return route;
+}
+
+namespace {
+
+// Turns `state` in place to the heading nearest its own, among the 16 that
+// CostMap::FitsAtSomeHeading tries, where its footprint fits; false (the state unchanged) when
+// none does.
+bool TurnUntilValid(const ob::SpaceInformation& si, ob::State* state) {
+  if (si.isValid(state)) return true;
+  auto* s = state->as<ob::SE2StateSpace::StateType>();
+  const double yaw0 = s->getYaw();
+  constexpr int kHeadings = 16;
+  std::array<double, kHeadings> yaws;
+  for (int k = 0; k < kHeadings; ++k) yaws[k] = 2.0 * M_PI * k / kHeadings;
+  std::sort(yaws.begin(), yaws.end(), [yaw0](double a, double b) {
+    return std::abs(common::WrapAngle(a - yaw0)) < std::abs(common::WrapAngle(b - yaw0));
+  });
+  for (const double yaw : yaws) {
+    s->setYaw(OmplYaw(yaw));
+    if (si.isValid(state)) return true;
+  }
+  s->setYaw(yaw0);
+  return false;
+}
+
+// Appends to `out` the states that bridge the motion from `a` to `b` (not `b` itself): none when
+// the motion is valid, else its midpoint turned until it fits, recursively, `depth` levels at
+// most. Every state appended is owned by `out`'s path, whatever the outcome.
+bool Bridge(const ob::SpaceInformation& si, const ob::State* a, const ob::State* b, int depth,
+            std::vector<ob::State*>* out) {
+  if (si.checkMotion(a, b)) return true;
+  if (depth == 0) return false;
+  ob::State* mid = si.allocState();
+  si.getStateSpace()->interpolate(a, b, 0.5, mid);
+  const bool fits = TurnUntilValid(si, mid);
+  if (!fits) {
+    si.freeState(mid);
+    return false;
+  }
+  if (!Bridge(si, a, mid, depth - 1, out)) {
+    si.freeState(mid);
+    return false;
+  }
+  out->push_back(mid);
+  return Bridge(si, mid, b, depth - 1, out);
+}
+
+}  // namespace
+
+bool RepairRoute(const OmplProblem& problem, og::PathGeometric* route) {
+  const ob::SpaceInformation& si = *problem.si;
+  std::vector<ob::State*>& states = route->getStates();
+  if (states.size() < 2) return false;
+  // Turned where the footprint is blocked at the route's heading; a waypoint where it fits at none
+  // of the 16 headings is dropped (the motion past it is bridged below, or the route fails).
+  std::vector<ob::State*> kept{states.front()};
+  for (size_t i = 1; i + 1 < states.size(); ++i) {
+    if (TurnUntilValid(si, states[i])) {
+      kept.push_back(states[i]);
+    } else {
+      si.freeState(states[i]);
+    }
+  }
+  kept.push_back(states.back());
+  // Three levels of midpoints: a motion is bridged by up to seven more states.
+  constexpr int kBridgeDepth = 3;
+  std::vector<ob::State*> repaired{kept.front()};
+  bool ok = true;
+  for (size_t i = 0; i + 1 < kept.size(); ++i) {
+    ok = ok && Bridge(si, kept[i], kept[i + 1], kBridgeDepth, &repaired);
+    repaired.push_back(kept[i + 1]);
+  }
+  states.swap(repaired);  // the path owns every state, bridged or not
+  return ok;
 }
 
 }  // namespace cairn::planner::internal

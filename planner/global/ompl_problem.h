@@ -65,9 +65,17 @@ og::PathGeometric Interpolate(const ob::SpaceInformationPtr& si, og::PathGeometr
                               double step_m);
 
 /// A grid route (at least two points) as an OMPL path from `start`, headings along the route,
-/// ending on `goal_state` (a goal state the planner accepts).
+/// ending on `goal_state` (a goal state the planner accepts) in place of the route's last point.
 og::PathGeometric RouteAsPath(const OmplProblem& problem,
                               const std::vector<common::Vector2>& points,
                               const common::Pose2& start, const ob::State* goal_state);
+
+/// Makes a route from RouteAsPath drivable where it can: a state whose footprint is blocked at
+/// the route's heading is turned to the nearest of 16 headings where it fits (or dropped when
+/// none does), and a motion that fails its check is bridged by midpoints turned the same way.
+/// The route keeps the footprint's inscribed disc off blocking cells, so what fails is the
+/// footprint's corners at the route's heading (a diagonal gap an axis-aligned robot fits
+/// through). False when some motion could not be bridged (the route is then partly repaired).
+bool RepairRoute(const OmplProblem& problem, og::PathGeometric* route);
 
 }  // namespace cairn::planner::internal

@@ -109,6 +109,27 @@ TEST(CostMapTest, ShortcutsAgreeWithTheExactCheck) {
   }
 }
 
+// A 0.56 m gap in a wall across x: the pioneer3at (0.63 m x 0.50 m) fits through it facing along
+// x, not across; grown by the 0.05 m planning padding on every side it fits at no heading.
+TEST(CostMapTest, FitsAtSomeHeadingPerFootprint) {
+  TestLayer layer(100, 100, 0.02);
+  layer.Rect(0.9, 0.0, 1.1, 0.72, 100.0f).Rect(0.9, 1.28, 1.1, 2.0, 100.0f);
+  const auto map = layer.Build(PioneerFootprint());
+  const auto& g = map->geometry();
+  auto index = [&](double x, double y) {
+    const auto c = g.IndexOf({x, y});
+    return c->ix + static_cast<int64_t>(c->iy) * g.size_x;
+  };
+  EXPECT_TRUE(map->IsValid({1.0, 1.0, 0.0}));
+  EXPECT_FALSE(map->IsValid({1.0, 1.0, M_PI / 2}));
+  for (int repeat = 0; repeat < 2; ++repeat) {  // the second answer comes from the cache
+    EXPECT_TRUE(map->FitsAtSomeHeading(index(1.0, 1.0), FootprintKind::kRobot));
+    EXPECT_FALSE(map->FitsAtSomeHeading(index(1.0, 1.0), FootprintKind::kPadded));
+    EXPECT_TRUE(map->FitsAtSomeHeading(index(0.4, 1.0), FootprintKind::kPadded));
+    EXPECT_FALSE(map->FitsAtSomeHeading(index(1.0, 0.5), FootprintKind::kRobot));
+  }
+}
+
 TEST(CostMapTest, ConnectivityNeverDeniesAPathThePlannerFinds) {
   // Soundness of the "no path" proof: whenever OMPL finds an exact path, the grid says the
   // endpoints may be connected.

@@ -71,6 +71,36 @@ TEST(CoarseRouteTest, CostAwareAndNotFoundWhenClosed) {
   EXPECT_FALSE(CoarseGridRoute(*walled, {10.0, 2.0}, {18.0, 2.0}, {}).found);
 }
 
+// A 0.5 m gap on the straight line and a 1.2 m gap 5 m aside. The pioneer3at's inscribed disc
+// (0.25 m) passes the narrow gap, but its footprint (0.63 m x 0.50 m, 0.05 m more with the
+// planning padding) fits there at no heading: the route takes the wide gap.
+TEST(CoarseRouteTest, AGapTheDiscPassesButNoHeadingFitsIsNotAWayThrough) {
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(9.8, 0.0, 10.2, 2.0, 100.0f)
+      .Rect(9.8, 2.5, 10.2, 7.0, 100.0f)
+      .Rect(9.8, 8.2, 10.2, 10.0, 100.0f);
+  const auto map = layer.Build(PioneerFootprint());
+  const Vector2 gap(10.0, 2.25);
+  ASSERT_GT(map->ClearanceAt(gap), map->footprint().inscribed_radius_m() - 0.1);
+  const auto cell = map->geometry().IndexOf(gap);
+  ASSERT_TRUE(cell);
+  const int64_t i = cell->ix + static_cast<int64_t>(cell->iy) * map->geometry().size_x;
+  EXPECT_FALSE(map->FitsAtSomeHeading(i, FootprintKind::kRobot));
+  EXPECT_FALSE(map->FitsAtSomeHeading(i, FootprintKind::kPadded));
+  for (const int stride : {1, 4}) {
+    CoarseRouteParams p;
+    p.stride_cells = stride;
+    const GridPath route = CoarseGridRoute(*map, {2.0, 2.25}, {18.0, 2.25}, p);
+    ASSERT_TRUE(route.found) << stride;
+    EXPECT_GT(route.length_m, 19.0) << stride;  // round by the wide gap (the straight line: 16 m)
+    for (size_t k = 1; k < route.points_m.size(); ++k) {
+      const Vector2 a = route.points_m[k - 1], b = route.points_m[k];
+      if ((a.x() - 10.0) * (b.x() - 10.0) > 0.0) continue;  // not across the wall
+      EXPECT_GT(std::min(a.y(), b.y()), 6.9) << "stride " << stride << " crossed at y " << a.y();
+    }
+  }
+}
+
 TEST(CoarseRouteTest, SameBlockAndStopAndBadStride) {
   const auto map = WallWithGap().Build(PioneerFootprint());
   const GridPath near = CoarseGridRoute(*map, {2.0, 2.0}, {2.15, 2.1}, {});
