@@ -42,7 +42,8 @@ inline std::string Describe(const cairn::lcmt_obstacle_registry& r) {
   std::ostringstream s;
   for (const auto& o : r.obstacles) {
     s << "  kind " << int(o.kind) << " at (" << o.centroid_m[0] << ", " << o.centroid_m[1] << ") h "
-      << o.height_m << " w " << o.width_m << " slope " << o.slope_rad * 180 / M_PI;
+      << o.height_m << " w " << o.width_m << " d " << o.depth_m << " slope "
+      << o.slope_rad * 180 / M_PI;
     for (const auto& v : o.verdicts) {
       s << " " << v.profile << ":" << (v.crossable ? "yes" : v.reason);
     }

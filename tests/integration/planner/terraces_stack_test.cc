@@ -3,6 +3,8 @@
 // Lanes, starts and goals: simulator/worlds/terraces_lanes.yaml. The verdicts depend on the
 // direction of travel: an 8 cm drop may be driven down, never up.
 
+#include <optional>
+
 #include <gtest/gtest.h>
 
 #include "tests/integration/planner/navigator_stack_fixture.h"
@@ -26,6 +28,50 @@ class TerracesStackTest : public NavigatorStackTest {
       ASSERT_FALSE(ConvexOverlap(fp, Box(3.0, y1 - 0.1, 24.0, y1 + 0.1), 0.0))
           << "touched the north wall at x " << p.position_m[0];
     }
+  }
+
+  // Lane 2: the 0.15 m ditch that stops the pioneer3at; the rover's profile bridges 0.30 m.
+  void DriveTheRoverOverTheNarrowDitch() {
+    UseProfile("rover", "rover", {});
+    StartStack(4.0, 10.0, 0.0, HorizonNavigatorConfig());
+    ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
+    SendGoal(18, 15.0, 10.0);
+    ASSERT_TRUE(WaitState(kStateReached, 150.0)) << StatusText();
+    const auto poses = Poses();  // a copy: a reference into the temporary would dangle
+    ASSERT_FALSE(poses.empty());
+    const auto& last = poses.back();
+    EXPECT_LT(std::hypot(last.position_m[0] - 15.0, last.position_m[1] - 10.0), 0.5);
+    ExpectClearOfTheWalls(2);
+  }
+
+  // The mapper's registry names the ditch across `lane` at x in [x0, x1] as one ditch, its
+  // width within a cell (0.1 m) and its depth within 2 cm of the world's.
+  void ExpectDitchInTheRegistry(int lane, double x0, double x1, double depth_m) {
+    const double y0 = 4.0 * lane, y1 = y0 + 4.0;
+    std::optional<cairn::lcmt_obstacle> ditch;
+    int ditches = 0;
+    const bool found = WaitFor(
+        [&] {
+          const auto r =
+              bus_.Last<cairn::lcmt_obstacle_registry>(ch::ForRobot(kRobot, ch::kMapObstacles));
+          if (!r) return false;
+          ditches = 0;
+          for (const auto& o : r->obstacles) {
+            if (o.kind != cairn::lcmt_obstacle::KIND_DITCH ||
+                !testing::CentroidIn(o, x0 - 0.5, x1 + 0.5, y0, y1)) {
+              continue;
+            }
+            ++ditches;
+            ditch = o;
+          }
+          return ditches == 1 && std::abs(ditch->width_m - (x1 - x0)) <= 0.1 &&
+                 std::abs(ditch->depth_m - depth_m) <= 0.02;
+        },
+        20.0, [&] { bus_.Pump(20); });
+    ASSERT_EQ(ditches, 1) << StatusText();
+    EXPECT_TRUE(found) << StatusText();
+    EXPECT_NEAR(ditch->width_m, x1 - x0, 0.1);
+    EXPECT_NEAR(ditch->depth_m, depth_m, 0.02);
   }
 };
 
@@ -100,6 +146,16 @@ TEST_F(TerracesStackTest, NeverEntersADitchWiderThanItsProfileAllows) {
   ExpectNoPathNeverEntering(4.0, 14.0, 16, 15.0, Box(10.0, 12.1, 10.6, 15.9), 110.0, true);
 }
 
+// Disabled (issue 17, "ditches as ditches"): the registry lists the wide ditch once, 0.57 m wide,
+// but "bottom unseen": the rover reports no path from afar, and a ray reaches the bottom of a
+// 0.25 m deep, 0.6 m wide trench only from a sensor within about 1.2 m of the near rim, so its
+// depth stays unknown.
+TEST_F(TerracesStackTest, DISABLED_TheRegistryNamesTheWideDitchWithItsWidthAndDepth) {
+  UseProfile("rover", "rover", {});
+  ExpectNoPathNeverEntering(4.0, 14.0, 16, 15.0, Box(10.0, 12.1, 10.6, 15.9), 110.0, true);
+  ExpectDitchInTheRegistry(3, 10.0, 10.6, 0.25);
+}
+
 // Disabled: from below, the ramp behind the platform lies in the platform's lidar shadow, and the
 // rays passing over it prove only that the ground lies more than unseen_drop_m below the platform
 // edge, which reads as a drop for every profile; the goal is then not connected.
@@ -120,17 +176,16 @@ TEST_F(TerracesStackTest,
 }
 
 TEST_F(TerracesStackTest, TheRoverBridgesADitchNarrowerThanItsProfileAllows) {
-  // Lane 2: the 0.15 m ditch that stops the pioneer3at; the rover's profile bridges 0.30 m.
-  UseProfile("rover", "rover", {});
-  StartStack(4.0, 10.0, 0.0, HorizonNavigatorConfig());
-  ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
-  SendGoal(18, 15.0, 10.0);
-  ASSERT_TRUE(WaitState(kStateReached, 150.0)) << StatusText();
-  const auto poses = Poses();  // a copy: a reference into the temporary would dangle
-  ASSERT_FALSE(poses.empty());
-  const auto& last = poses.back();
-  EXPECT_LT(std::hypot(last.position_m[0] - 15.0, last.position_m[1] - 10.0), 0.5);
-  ExpectClearOfTheWalls(2);
+  DriveTheRoverOverTheNarrowDitch();
+}
+
+// Disabled (issue 17, "ditches as ditches"): after the rover drove over it, the registry lists
+// the narrow ditch as two ditches (centroids y 9.85 and 11.15 m), each 0.24 m wide (within a
+// cell of 0.15 m) and "bottom unseen": a 0.1 m deep, 0.15 m wide slot shows its bottom only to
+// rays steeper than the lidar's lowest beam at the distances it was seen from.
+TEST_F(TerracesStackTest, DISABLED_TheRegistryNamesTheNarrowDitchOnceWithItsWidthAndDepth) {
+  DriveTheRoverOverTheNarrowDitch();
+  ExpectDitchInTheRegistry(2, 10.0, 10.15, 0.10);
 }
 
 }  // namespace
