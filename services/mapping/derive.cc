@@ -6,7 +6,7 @@
 namespace cairn::mapping {
 
 // Bump whenever a change to traversability.cc or obstacles.cc could change a derived value.
-const char kMappingCodeVersion[] = "cairn-terrain-2";
+const char kMappingCodeVersion[] = "cairn-terrain-3";
 
 DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::RobotProfile& profile,
                                   const TraversabilityParams& traversability,
@@ -18,8 +18,8 @@ DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::Rob
   // Work on a copy holding only what derivation reads, so the base map is never touched.
   common::GridMap work(base.geometry());
   work.AddLayer(layers::kElevation) = base.at(layers::kElevation);
-  if (base.HasLayer(layers::kGroundBound)) {
-    work.AddLayer(layers::kGroundBound) = base.at(layers::kGroundBound);
+  for (const char* name : {layers::kGroundBound, layers::kElevationVariance}) {
+    if (base.HasLayer(name)) work.AddLayer(name) = base.at(name);
   }
   ComputeGeometricLayers(&work, traversability);
   ComputeCostLayer(&work, profile, traversability);

@@ -22,7 +22,8 @@ struct DerivedLayers {
   common::ObstacleRegistry registry;  ///< obstacles with this profile's verdict
 };
 
-/// Derives the profile layers from `base` (which must hold layers::kElevation). The base map is
+/// Derives the profile layers from `base` (which must hold layers::kElevation; its ground bound
+/// and elevation variance are read when present, as the live map reads them). The base map is
 /// not modified. @throws std::invalid_argument if the elevation layer is missing.
 DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::RobotProfile& profile,
                                   const TraversabilityParams& traversability = {},

@@ -75,6 +75,7 @@ struct FeatureInputs {
   const float* nx;
   const float* ny;
   const float* bound;  // or nullptr
+  const float* var;    // elevation variance, or nullptr
   int sx;
   int sy;
   double res;
@@ -85,6 +86,8 @@ struct FeatureInputs {
         nx(map.at(kNormalXLayer).data()),
         ny(map.at(kNormalYLayer).data()),
         bound(map.HasLayer(layers::kGroundBound) ? map.at(layers::kGroundBound).data() : nullptr),
+        var(map.HasLayer(layers::kElevationVariance) ? map.at(layers::kElevationVariance).data()
+                                                     : nullptr),
         sx(map.size_x()),
         sy(map.size_y()),
         res(map.resolution_m()) {}
@@ -92,6 +95,24 @@ struct FeatureInputs {
   bool Inside(int x, int y) const { return x >= 0 && y >= 0 && x < sx && y < sy; }
   bool Known(int x, int y) const { return Inside(x, y) && !std::isnan(H(x, y)); }
 };
+
+// The standard deviation of the height difference between two cells as their heights stand for
+// their centres: each cell's elevation variance (what the fused returns support), plus the
+// spread of a sloped cell's height across it (the returns of a lidar ring land anywhere in the
+// cell: res^2 / 12 * tan^2(slope) for a point uniform in the cell along the fall line). 0 when
+// the map has no variance layer.
+double DifferenceSigma(const FeatureInputs& in, int x, int y, int nx, int ny) {
+  if (in.var == nullptr) return 0.0;
+  const int64_t a = x + static_cast<int64_t>(y) * in.sx;
+  const int64_t b = nx + static_cast<int64_t>(ny) * in.sx;
+  auto tan2 = [&](int64_t i) {
+    const double t = std::isnan(in.slope[i]) ? 0.0 : std::tan(double(in.slope[i]));
+    return t * t;
+  };
+  const double va = std::isfinite(in.var[a]) ? in.var[a] : 0.0;
+  const double vb = std::isfinite(in.var[b]) ? in.var[b] : 0.0;
+  return std::sqrt(va + vb + in.res * in.res / 12.0 * (tan2(a) + tan2(b)));
+}
 
 // The difference from (x, y) to the cell `span` cells along d, when it is a step: it stands
 // out from the same-direction differences just before and after it (a ramp rises evenly; a
@@ -125,6 +146,11 @@ void TestSpan(const FeatureInputs& in, const ObstacleParams& p, int x, int y,
   const double along = std::min(Rise(in.nx, in.ny, x, y, in.sx, d, in.res),
                                 Rise(in.nx, in.ny, nx, ny, in.sx, d, in.res));
   if (std::fabs(delta) <= p.step_contrast * span * std::max({before, after, along})) return;
+  // What the difference exceeds the incline's own rise by must stand out of the noise of the
+  // two heights.
+  if (std::fabs(delta) - span * along < p.step_noise_sigmas * DifferenceSigma(in, x, y, nx, ny)) {
+    return;
+  }
   // Small steps must hold over two cells on each side (noise rarely does): the mean of the
   // pair beyond minus the mean of the pair before.
   if (std::fabs(delta) < p.wall_min_height_m && in.Known(x - d[0], y - d[1]) &&

@@ -204,6 +204,7 @@ class FeatureMeasurer {
   // The heights next to a step, per surface (each ring cell once).
   std::map<int32_t, std::vector<double>> HeightsBeside(const std::vector<int64_t>& cells);
   void MeasureRamp(const std::vector<int64_t>& cells, Obstacle* o) const;
+  bool MeetsFlatterGround(const std::vector<int64_t>& cells) const;
 
   const GridMap& map_;
   const Cells& cells_;
@@ -339,6 +340,37 @@ void FeatureMeasurer::MeasureRamp(const std::vector<int64_t>& cells, Obstacle* o
   o->height_m = hi - lo;
 }
 
+// A ramp is built: it meets flatter ground at creases (its foot, its top), where the ground two
+// cells beyond its edge slopes at most half as much as the ramp a cell inside it. A hillside fades out instead:
+// just outside a patch of it the ground slopes almost as much. True when at least
+// min_ramp_crease_fraction of the featureless known ground two cells beyond the ramp's edge is
+// that much flatter.
+bool FeatureMeasurer::MeetsFlatterGround(const std::vector<int64_t>& cells) const {
+  const int32_t own = label_[cells.front()];
+  int64_t beyond = 0, flatter = 0;
+  for (int64_t i : cells) {
+    const int cx = static_cast<int>(i % sx_), cy = static_cast<int>(i / sx_);
+    for (const auto& d : kNeighbours4) {
+      const int ex = cx + d[0], ey = cy + d[1];
+      const int ox = cx + 2 * d[0], oy = cy + 2 * d[1];
+      if (!cells_.Inside(ex, ey) || !cells_.Inside(ox, oy)) continue;
+      if (label_[cells_.Index(ex, ey)] == own) continue;  // not the edge this way
+      const int64_t j = cells_.Index(ox, oy);
+      if (label_[j] != 0 || cells_.Class(j) != internal::kNone || std::isnan(slope_[j])) continue;
+      // The ramp's own slope a cell in from its edge (the edge cell's normal is tilted by the
+      // crease itself).
+      const int ix = cx - d[0], iy = cy - d[1];
+      const int64_t in = cells_.Inside(ix, iy) && label_[cells_.Index(ix, iy)] == own
+                             ? cells_.Index(ix, iy)
+                             : i;
+      if (std::isnan(slope_[in])) continue;
+      ++beyond;
+      flatter += slope_[j] <= 0.5 * slope_[in];
+    }
+  }
+  return beyond > 0 && flatter >= params_.min_ramp_crease_fraction * beyond;
+}
+
 std::optional<Obstacle> FeatureMeasurer::Measure(const Found& f) {
   const double res = map_.resolution_m();
   if (static_cast<int>(f.cells.size()) < params_.min_cells) return std::nullopt;
@@ -367,6 +399,7 @@ std::optional<Obstacle> FeatureMeasurer::Measure(const Found& f) {
       break;
     case ObstacleKind::kRamp:
       MeasureRamp(f.cells, &o);
+      if (!MeetsFlatterGround(f.cells)) return std::nullopt;  // a hillside
       break;
     case ObstacleKind::kStepDown:
       break;
@@ -406,10 +439,15 @@ void ObstacleParams::Validate() const {
   CAIRN_THROW_UNLESS(min_step_height_m > 0, "min_step_height_m must be positive");
   CAIRN_THROW_UNLESS(min_cells >= 1, "min_cells must be >= 1, got " << min_cells);
   CAIRN_THROW_UNLESS(step_contrast >= 1, "step_contrast must be >= 1, got " << step_contrast);
+  CAIRN_THROW_UNLESS(std::isfinite(step_noise_sigmas) && step_noise_sigmas >= 0,
+                     "step_noise_sigmas must be >= 0, got " << step_noise_sigmas);
   CAIRN_THROW_UNLESS(wall_min_height_m > min_step_height_m,
                      "wall_min_height_m must exceed min_step_height_m");
   CAIRN_THROW_UNLESS(min_drop_height_m > 0, "min_drop_height_m must be positive");
   CAIRN_THROW_UNLESS(min_ramp_area_m2 >= 0, "min_ramp_area_m2 must be >= 0");
+  CAIRN_THROW_UNLESS(
+      min_ramp_crease_fraction >= 0 && min_ramp_crease_fraction <= 1,
+      "min_ramp_crease_fraction must be in [0, 1], got " << min_ramp_crease_fraction);
   CAIRN_THROW_UNLESS(
       small_step_height_m >= 0 && min_small_step_length_m >= 0 && min_small_step_elongation >= 0,
       "small step limits must be >= 0");
@@ -559,9 +597,11 @@ ObstacleParams LoadObstacleParams(common::YamlMap& m) {
   m.Get("min_step_height_m", &p.min_step_height_m);
   m.Get("min_cells", &p.min_cells);
   m.Get("step_contrast", &p.step_contrast);
+  m.Get("step_noise_sigmas", &p.step_noise_sigmas);
   m.Get("wall_min_height_m", &p.wall_min_height_m);
   m.Get("min_drop_height_m", &p.min_drop_height_m);
   m.Get("min_ramp_area_m2", &p.min_ramp_area_m2);
+  m.Get("min_ramp_crease_fraction", &p.min_ramp_crease_fraction);
   m.Get("small_step_height_m", &p.small_step_height_m);
   m.Get("min_small_step_length_m", &p.min_small_step_length_m);
   m.Get("min_small_step_elongation", &p.min_small_step_elongation);

@@ -23,8 +23,9 @@
 ///   does not), plus drops into a gap the sensor looked into; up when it rises from the larger
 ///   of the two surfaces it separates (see surface_continuity_m), down when it falls from it;
 /// - wall_or_object: the same discontinuities, at least wall_min_height_m high;
-/// - ramp: inclined cells away from any edge; its slope is the larger of the sustained slope
-///   (75th percentile of the interior cells, so a steep section is not averaged away) and the
+/// - ramp: inclined cells away from any edge that meet flatter ground at creases (a hillside is
+///   terrain, not a ramp: see min_ramp_crease_fraction); its slope is the larger of the sustained
+///   slope (75th percentile of the interior cells, so a steep section is not averaged away) and the
 ///   slope of the plane fitted to its heights (robust where only part of it was seen).
 
 namespace cairn::common {
@@ -40,6 +41,12 @@ struct ObstacleParams {
   /// A height difference is a step when it exceeds this multiple of the differences just
   /// before and after it along the same line.
   double step_contrast{1.5};
+  /// A height difference is a step only when it exceeds this many standard deviations of
+  /// itself: both cells' elevation variances plus the spread of a sloped cell's height across
+  /// the cell (a lidar ring's returns on an incline land anywhere in it). On a hillside seen at
+  /// grazing angles that is a centimetre or two; on level, well-observed floor a few
+  /// millimetres. 0 turns the test off.
+  double step_noise_sigmas{3.0};
   /// Discontinuities at least this high are walls or objects, not steps.
   double wall_min_height_m{0.3};
   /// A drop into a gap the sensor looked into counts from this depth (m).
@@ -52,6 +59,11 @@ struct ObstacleParams {
   double min_small_step_elongation{2.0};
   /// Ramps smaller than this are the rims of other features, not ramps (m²).
   double min_ramp_area_m2{0.5};
+  /// A ramp meets flatter ground: of the featureless ground two cells beyond its edge, at least
+  /// this fraction slopes at most half as much as the ramp (its foot and top, where a built
+  /// ramp creases). Inclined ground that fades out into ground almost as steep is a hillside,
+  /// terrain rather than a feature (the cost layer still judges its slope). 0: every incline.
+  double min_ramp_crease_fraction{0.25};
   /// Neighbouring cells closer in height than this lie on one surface (m). A step rises from
   /// the larger surface it separates onto the smaller one (a block on the ground is a step up,
   /// the edge of a raised platform a step down).

@@ -204,7 +204,8 @@ int64_t TerrainMap::RecomputeGeometry(const std::vector<CellRect>& rects) {
     cells += static_cast<int64_t>(r.x1 - r.x0) * (r.y1 - r.y0);
   }
   // ... then the feature layers from them.
-  std::vector<std::string> feature_in{layers::kElevation, layers::kGroundBound};
+  std::vector<std::string> feature_in{layers::kElevation, layers::kElevationVariance,
+                                     layers::kGroundBound};
   for (const auto& n : GeometricLayers()) feature_in.push_back(n);
   const int fm = FeatureRadiusCells() + 1;
   for (const CellRect& r : rects) {

@@ -182,6 +182,38 @@ TEST(ObstaclesTest, FlatNoisyGroundHoldsNoFeatures) {
   EXPECT_TRUE(r.obstacles.empty());
 }
 
+common::ObstacleRegistry ExtractWith(GridMap map, const ObstacleParams& params) {
+  ComputeGeometricLayers(&map, {});
+  return ExtractObstacles(map, params);
+}
+
+// A smooth hill (a Gaussian bump 1 m high, 2.5 m wide: up to 13 deg) fades out into the plain
+// around it: terrain the cost layer judges by its slope, not a ramp. The same cells with the
+// crease rule off come out as ramps.
+TEST(ObstaclesTest, AHillsideIsTerrainNotARamp) {
+  const GridMap hill = MakeTerrain(60, 60, kRes, [](double x, double y) {
+    return std::exp(-((x - 6.0) * (x - 6.0) + (y - 6.0) * (y - 6.0)) / (2.0 * 2.5 * 2.5));
+  });
+  ObstacleParams every_incline;
+  every_incline.min_ramp_crease_fraction = 0.0;
+  EXPECT_FALSE(OfKind(ExtractWith(hill, every_incline), ObstacleKind::kRamp).empty());
+  EXPECT_TRUE(ExtractWith(hill, {}).obstacles.empty());
+}
+
+// A 1.2 cm step across a corridor is a step where both sides were observed to a millimetre, and
+// noise where their heights are known to a centimetre only (3 sigma of the difference: 4 cm).
+TEST(ObstaclesTest, AStepMustStandOutOfTheNoiseOfItsHeights) {
+  GridMap step = Corridor([](double x) { return x < 5.0 ? 0.0 : 0.012; });
+  common::Layer& variance = step.AddLayer(layers::kElevationVariance);
+  variance.setConstant(1e-6f);
+  EXPECT_EQ(OfKind(ExtractWith(step, {}), ObstacleKind::kStepUp).size(), 1u);
+  variance.setConstant(1e-4f);
+  EXPECT_TRUE(ExtractWith(step, {}).obstacles.empty());
+  ObstacleParams no_noise_test;
+  no_noise_test.step_noise_sigmas = 0.0;
+  EXPECT_EQ(OfKind(ExtractWith(step, no_noise_test), ObstacleKind::kStepUp).size(), 1u);
+}
+
 common::Obstacle Make(ObstacleKind kind) {
   common::Obstacle o;
   o.kind = kind;

@@ -301,7 +301,8 @@ TEST(TerrainMapTest, LiveDerivedLayersEqualDerivingTheExport) {
     map.UpdateDerived(robot);
   }
   // The final robot position decides the blind zone: derive with the same context.
-  const GridMap base = map.Export({layers::kElevation, layers::kGroundBound});
+  const GridMap base =
+      map.Export({layers::kElevation, layers::kElevationVariance, layers::kGroundBound});
   GridMap derived = base;
   ComputeGeometricLayers(&derived, map.params().traversability);
   RobotContext robot;
