@@ -147,8 +147,10 @@ void TestSpan(const FeatureInputs& in, const ObstacleParams& p, int x, int y,
                                 Rise(in.nx, in.ny, nx, ny, in.sx, d, in.res));
   if (std::fabs(delta) <= p.step_contrast * span * std::max({before, after, along})) return;
   // What the difference exceeds the incline's own rise by must stand out of the noise of the
-  // two heights.
-  if (std::fabs(delta) - span * along < p.step_noise_sigmas * DifferenceSigma(in, x, y, nx, ny)) {
+  // two heights. The rise: the normals' (tilted up by an object's own edge, so no more than the
+  // larger of the differences before and after).
+  const double rise = std::min(along, std::max(before, after));
+  if (std::fabs(delta) - span * rise < p.step_noise_sigmas * DifferenceSigma(in, x, y, nx, ny)) {
     return;
   }
   // Small steps must hold over two cells on each side (noise rarely does): the mean of the

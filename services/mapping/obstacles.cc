@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -154,18 +155,65 @@ void Absorb(const Cells& cells, std::initializer_list<uint8_t> classes, std::vec
   }
 }
 
+// Joins the components whose cells come within `gap_cells` of each other (Chebyshev), relabelling
+// the cells of each joined group with its first component's id: the faces of one object (a
+// house's walls, a rock's sides) that the sensor saw as pieces, with unseen or unclassified
+// cells between them.
+void JoinNearby(const Cells& c, int gap_cells, std::vector<int32_t>* label,
+                std::vector<std::vector<int64_t>>* comps) {
+  if (gap_cells <= 0 || comps->size() < 2) return;
+  std::map<int32_t, size_t> index_of;  // label id -> component
+  for (size_t k = 0; k < comps->size(); ++k) index_of[(*label)[(*comps)[k].front()]] = k;
+  std::vector<size_t> parent(comps->size());
+  for (size_t k = 0; k < parent.size(); ++k) parent[k] = k;
+  std::function<size_t(size_t)> root = [&](size_t k) {
+    while (parent[k] != k) k = parent[k] = parent[parent[k]];
+    return k;
+  };
+  for (size_t k = 0; k < comps->size(); ++k) {
+    for (const int64_t i : (*comps)[k]) {
+      const int cx = static_cast<int>(i % c.sx), cy = static_cast<int>(i / c.sx);
+      for (int dy = -gap_cells; dy <= gap_cells; ++dy) {
+        for (int dx = -gap_cells; dx <= gap_cells; ++dx) {
+          if (!c.Inside(cx + dx, cy + dy)) continue;
+          const auto it = index_of.find((*label)[c.Index(cx + dx, cy + dy)]);
+          if (it == index_of.end() || it->second == k) continue;
+          parent[root(it->second)] = root(k);
+        }
+      }
+    }
+  }
+  std::vector<std::vector<int64_t>> joined;
+  std::map<size_t, size_t> joined_of;  // root -> index in `joined`
+  for (size_t k = 0; k < comps->size(); ++k) {
+    const size_t r = root(k);
+    auto [it, fresh] = joined_of.emplace(r, joined.size());
+    if (fresh) joined.emplace_back();
+    std::vector<int64_t>& group = joined[it->second];
+    const int32_t id = group.empty() ? (*label)[(*comps)[k].front()] : (*label)[group.front()];
+    for (const int64_t i : (*comps)[k]) {
+      (*label)[i] = id;
+      group.push_back(i);
+    }
+  }
+  comps->swap(joined);
+}
+
 // The connected features, each cell in one (`label` holds its component's id). Ditches
 // first: step, drop and ramp cells near a ditch are its rims and walls (a wall face seen at an
 // angle looks like a short ramp). Then walls and objects: low steps at their feet are partly
 // seen faces. Then steps and drops, then ramps.
-std::vector<Found> FindFeatures(const Cells& cells, std::vector<int32_t>* label) {
+std::vector<Found> FindFeatures(const Cells& cells, int object_gap_cells,
+                                std::vector<int32_t>* label) {
   std::vector<Found> found;
   int32_t next_label = 1;
   for (auto& comp : Components(cells, {kDitch}, label, &next_label)) {
     Absorb(cells, {kStep, kDrop, kRamp}, label, &comp);
     found.push_back({ObstacleKind::kDitch, std::move(comp)});
   }
-  for (auto& comp : Components(cells, {kWall}, label, &next_label)) {
+  std::vector<std::vector<int64_t>> objects = Components(cells, {kWall}, label, &next_label);
+  JoinNearby(cells, object_gap_cells, label, &objects);
+  for (auto& comp : objects) {
     Absorb(cells, {kStep, kDrop}, label, &comp);
     found.push_back({ObstacleKind::kWallOrObject, std::move(comp)});
   }
@@ -341,8 +389,8 @@ void FeatureMeasurer::MeasureRamp(const std::vector<int64_t>& cells, Obstacle* o
 }
 
 // A ramp is built: it meets flatter ground at creases (its foot, its top), where the ground two
-// cells beyond its edge slopes at most half as much as the ramp a cell inside it. A hillside fades out instead:
-// just outside a patch of it the ground slopes almost as much. True when at least
+// cells beyond its edge slopes at most half as much as the ramp a cell inside it. A hillside fades
+// out instead: just outside a patch of it the ground slopes almost as much. True when at least
 // min_ramp_crease_fraction of the featureless known ground two cells beyond the ramp's edge is
 // that much flatter.
 bool FeatureMeasurer::MeetsFlatterGround(const std::vector<int64_t>& cells) const {
@@ -360,9 +408,8 @@ bool FeatureMeasurer::MeetsFlatterGround(const std::vector<int64_t>& cells) cons
       // The ramp's own slope a cell in from its edge (the edge cell's normal is tilted by the
       // crease itself).
       const int ix = cx - d[0], iy = cy - d[1];
-      const int64_t in = cells_.Inside(ix, iy) && label_[cells_.Index(ix, iy)] == own
-                             ? cells_.Index(ix, iy)
-                             : i;
+      const int64_t in =
+          cells_.Inside(ix, iy) && label_[cells_.Index(ix, iy)] == own ? cells_.Index(ix, iy) : i;
       if (std::isnan(slope_[in])) continue;
       ++beyond;
       flatter += slope_[j] <= 0.5 * slope_[in];
@@ -445,6 +492,8 @@ void ObstacleParams::Validate() const {
                      "wall_min_height_m must exceed min_step_height_m");
   CAIRN_THROW_UNLESS(min_drop_height_m > 0, "min_drop_height_m must be positive");
   CAIRN_THROW_UNLESS(min_ramp_area_m2 >= 0, "min_ramp_area_m2 must be >= 0");
+  CAIRN_THROW_UNLESS(std::isfinite(object_join_gap_m) && object_join_gap_m >= 0,
+                     "object_join_gap_m must be >= 0, got " << object_join_gap_m);
   CAIRN_THROW_UNLESS(
       min_ramp_crease_fraction >= 0 && min_ramp_crease_fraction <= 1,
       "min_ramp_crease_fraction must be in [0, 1], got " << min_ramp_crease_fraction);
@@ -483,7 +532,9 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map, const ObstaclePar
   cells.low = map.at(kFeatureLowLayer).data();
   cells.high = map.at(kFeatureHighLayer).data();
   std::vector<int32_t> label(static_cast<size_t>(cells.sx) * cells.sy, 0);
-  const std::vector<Found> found = FindFeatures(cells, &label);
+  const int object_gap_cells =
+      static_cast<int>(std::floor(params.object_join_gap_m / map.resolution_m() + 1e-9));
+  const std::vector<Found> found = FindFeatures(cells, object_gap_cells, &label);
   FeatureMeasurer measurer(map, cells, label, params);
   common::ObstacleRegistry registry;
   for (const Found& f : found) {
@@ -601,6 +652,7 @@ ObstacleParams LoadObstacleParams(common::YamlMap& m) {
   m.Get("wall_min_height_m", &p.wall_min_height_m);
   m.Get("min_drop_height_m", &p.min_drop_height_m);
   m.Get("min_ramp_area_m2", &p.min_ramp_area_m2);
+  m.Get("object_join_gap_m", &p.object_join_gap_m);
   m.Get("min_ramp_crease_fraction", &p.min_ramp_crease_fraction);
   m.Get("small_step_height_m", &p.small_step_height_m);
   m.Get("min_small_step_length_m", &p.min_small_step_length_m);

@@ -385,11 +385,10 @@ TEST_F(OutdoorTerrainTest, TheRouteNorthCostLayerMatchesTheTruth) {
   ExpectCostLayerMatchesTheTruth(Evaluate());
 }
 
-// Left (issue 17): the registry of the same drive still lists 9 features on smooth ground (small
-// step pieces and two ramps; 130 before steps had to stand out of their heights' noise and ramps
-// had to crease into flatter ground), and lists the house 9 times and rocks 2 or 3 times (one
-// entry per face: "one feature, one entry" is not built yet). Run with
-// --gtest_also_run_disabled_tests.
+// Left (issue 17): the registry of the same drive still lists 13 features on smooth ground
+// (small step pieces; 130 before steps had to stand out of their heights' noise and ramps had to
+// crease into flatter ground), the house 3 times and rock_5 twice (pieces of one object farther
+// apart than object_join_gap_m). Run with --gtest_also_run_disabled_tests.
 TEST_F(OutdoorTerrainTest, DISABLED_TheDemoRoutesRegistryListsEachObjectOnce) {
   const Evaluation e = DemoRoute(this);
   SCOPED_TRACE(Describe(e));

@@ -29,6 +29,11 @@ common::ObstacleRegistry Extract(GridMap map) {
   return r;
 }
 
+common::ObstacleRegistry ExtractWith(GridMap map, const ObstacleParams& params) {
+  ComputeGeometricLayers(&map, {});
+  return ExtractObstacles(map, params);
+}
+
 std::vector<const Obstacle*> OfKind(const common::ObstacleRegistry& r, ObstacleKind kind) {
   std::vector<const Obstacle*> out;
   for (const auto& o : r.obstacles) {
@@ -174,17 +179,28 @@ TEST(ObstaclesTest, CubeIsAWallOrObject) {
   EXPECT_EQ(r.obstacles.size(), 1u);
 }
 
+// Two pieces of one 1 m high wall with a 1.2 m doorway between them: the edge cells at their ends
+// come within 0.6 m (object_join_gap_m) of each other, one object; 2 m apart, two.
+TEST(ObstaclesTest, WallPiecesCloseTogetherAreOneObject) {
+  auto wall = [](double gap_m) {
+    return MakeTerrain(60, 40, kRes, [gap_m](double x, double y) {
+      const bool in_y = y > 4.0 && y < 4.2;
+      return in_y && ((x > 2.0 && x < 4.0) || (x > 4.0 + gap_m && x < 6.0 + gap_m)) ? 1.0 : 0.0;
+    });
+  };
+  EXPECT_EQ(OfKind(Extract(wall(1.2)), ObstacleKind::kWallOrObject).size(), 1u);
+  ObstacleParams apart;
+  apart.object_join_gap_m = 0.0;
+  EXPECT_EQ(OfKind(ExtractWith(wall(1.2), apart), ObstacleKind::kWallOrObject).size(), 2u);
+  EXPECT_EQ(OfKind(Extract(wall(2.0)), ObstacleKind::kWallOrObject).size(), 2u);
+}
+
 TEST(ObstaclesTest, FlatNoisyGroundHoldsNoFeatures) {
   std::mt19937 rng(11);
   std::normal_distribution<double> noise(0.0, 0.001);
   const common::ObstacleRegistry r =
       Extract(MakeTerrain(50, 50, kRes, [&](double, double) { return noise(rng); }));
   EXPECT_TRUE(r.obstacles.empty());
-}
-
-common::ObstacleRegistry ExtractWith(GridMap map, const ObstacleParams& params) {
-  ComputeGeometricLayers(&map, {});
-  return ExtractObstacles(map, params);
 }
 
 // A smooth hill (a Gaussian bump 1 m high, 2.5 m wide: up to 13 deg) fades out into the plain
