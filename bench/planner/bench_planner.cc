@@ -4,12 +4,12 @@
 //    cost layer around clutter). Anchor: Nav2 DWB, about 3 ms per cycle (published).
 // 2. The whole global plan (planner.plan.*, the headline): GlobalPlanner::Plan as the navigator
 //    runs it (its default params: grid pre-check, first solution, simplification, the coarse
-//    grid route candidate, improvement rounds without one, re-validation) on a 100 m x 100 m cost layer at 0.1 m with
-//    obstacles and a 10 degree ramp band the pioneer3at profile may not climb, derived from an
-//    elevation map by the mapper's own traversability code. 100 seeded queries drawn wherever the
-//    footprint fits, solvable or not: every one counts, failures included. Baselines in the same
-//    run on the same queries: 8-connected grid A* (time) and Theta* on the same grid (any-angle
-//    path length).
+//    grid route candidate, improvement rounds without one, re-validation) on a 100 m x 100 m cost
+//    layer at 0.1 m with obstacles and a 10 degree ramp band the pioneer3at profile may not climb,
+//    derived from an elevation map by the mapper's own traversability code. 100 seeded queries
+//    drawn wherever the footprint fits, solvable or not: every one counts, failures included.
+//    Baselines in the same run on the same queries: 8-connected grid A* (time) and Theta* on the
+//    same grid (any-angle path length).
 // 3. Parts (planner.ompl_parts.*, the figures this benchmark used to report): sampling alone
 //    (no grid route candidate), only queries grid A* solves with 0.8 m clearance at both ends,
 //    the time to the first solution (without the pre-check and simplification) and the length
@@ -270,8 +270,9 @@ void BenchPlanTotal(const planner::CostMap& map) {
   const double rate = reachable > 0 ? 100.0 * solved / reachable : NAN;
   const double ratio = Percentile(ratio_theta, 0.5);
   const std::string a_star = "grid A* 8-connected, same queries (same run)";
-  Report(Figure{"planner.plan.total_median", median, "ms", a_star, Percentile(astar_ms, 0.5), false,
-                "<= 50 ms", median <= 50.0});
+  const double astar_median = Percentile(astar_ms, 0.5);
+  Report(Figure{"planner.plan.total_median", median, "ms", a_star, astar_median, false,
+                "<= 50 ms and <= the grid A*", median <= 50.0 && median <= astar_median});
   Report(Figure{"planner.plan.total_p99", p99, "ms", a_star, Percentile(astar_ms, 0.99), false,
                 "<= 200 ms", p99 <= 200.0});
   Report(Figure{"planner.plan.success_rate", rate, "%", "queries grid A* reaches", NAN, true,
