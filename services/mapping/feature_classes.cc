@@ -105,9 +105,10 @@ double DifferenceSigma(const FeatureInputs& in, int x, int y, int nx, int ny) {
   if (in.var == nullptr) return 0.0;
   const int64_t a = x + static_cast<int64_t>(y) * in.sx;
   const int64_t b = nx + static_cast<int64_t>(ny) * in.sx;
+  // tan^2 of the slope from the cell's unit normal: (nx^2 + ny^2) / nz^2.
   auto tan2 = [&](int64_t i) {
-    const double t = std::isnan(in.slope[i]) ? 0.0 : std::tan(double(in.slope[i]));
-    return t * t;
+    const double h2 = double(in.nx[i]) * in.nx[i] + double(in.ny[i]) * in.ny[i];
+    return std::isnan(h2) ? 0.0 : h2 / std::max(1e-6, 1.0 - h2);
   };
   const double va = std::isfinite(in.var[a]) ? in.var[a] : 0.0;
   const double vb = std::isfinite(in.var[b]) ? in.var[b] : 0.0;
