@@ -50,8 +50,11 @@ struct ObstacleParams {
   /// Discontinuities at least this high are walls or objects, not steps.
   double wall_min_height_m{0.3};
   /// Walls and objects whose cells come this close (m) are one object: the faces of a house or a
-  /// rock seen as pieces, with unseen or unclassified cells between them.
-  double object_join_gap_m{0.6};
+  /// rock seen as pieces, with unseen or unclassified cells between them. 0 (the default): off.
+  /// At 0.6 m the outdoor house is 3 entries instead of 9, but whether two pieces join depends
+  /// on cells at the limit, so two maps of one recording (live and replayed) can list one
+  /// wall differently.
+  double object_join_gap_m{0.0};
   /// A drop into a gap the sensor looked into counts from this depth (m).
   double min_drop_height_m{0.05};
   /// Steps lower than this must be edge lines (at least min_small_step_length_m long and

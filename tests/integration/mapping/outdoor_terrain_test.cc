@@ -387,8 +387,9 @@ TEST_F(OutdoorTerrainTest, TheRouteNorthCostLayerMatchesTheTruth) {
 
 // Left (issue 17): the registry of the same drive still lists 13 features on smooth ground
 // (small step pieces; 130 before steps had to stand out of their heights' noise and ramps had to
-// crease into flatter ground), the house 3 times and rock_5 twice (pieces of one object farther
-// apart than object_join_gap_m). Run with --gtest_also_run_disabled_tests.
+// crease into flatter ground), the house 3 times, rock_0 twice and rock_5 3 times (one entry per
+// piece of an object: "one feature, one entry" is not built; obstacles.object_join_gap_m joins
+// close pieces but is off). Run with --gtest_also_run_disabled_tests.
 TEST_F(OutdoorTerrainTest, DISABLED_TheDemoRoutesRegistryListsEachObjectOnce) {
   const Evaluation e = DemoRoute(this);
   SCOPED_TRACE(Describe(e));

@@ -206,11 +206,42 @@ TEST(MissionStackTest, MapperAndNavigatorKilledMidMissionAreRestartedAndTheMissi
 
 // The least distance between a vertex of one outline and a vertex of the other: outlines traced
 // around the same cells share corners, and a piece split off a feature keeps some of them.
+// The distance between two outlines as regions: 0 when they overlap (a vertex of one inside the
+// other), else the least distance from a vertex of one to an edge of the other. One object's
+// outline and the outline of a larger piece holding it (a wall seen whole in one map and in
+// pieces in the other) are 0 apart, however far apart their vertices are.
+double PointSegment(const common::Vector2& p, const common::Vector2& a, const common::Vector2& b) {
+  const common::Vector2 ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * ab)).norm();
+}
+
+bool InsidePolygon(const std::vector<common::Vector2>& poly, const common::Vector2& p) {
+  bool inside = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    if ((poly[i].y() > p.y()) != (poly[j].y() > p.y()) &&
+        p.x() < (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) +
+                    poly[i].x()) {
+      inside = !inside;
+    }
+  }
+  return inside;
+}
+
 double OutlineDistance(const std::vector<common::Vector2>& a,
                        const std::vector<common::Vector2>& b) {
+  if (a.empty() || b.empty()) return std::numeric_limits<double>::infinity();
   double best = std::numeric_limits<double>::infinity();
-  for (const auto& p : a) {
-    for (const auto& q : b) best = std::min(best, (p - q).norm());
+  for (const auto* pair : {&a, &b}) {
+    const auto& from = *pair;
+    const auto& to = pair == &a ? b : a;
+    for (const auto& p : from) {
+      if (to.size() >= 3 && InsidePolygon(to, p)) return 0.0;
+      for (size_t i = 0; i < to.size(); ++i) {
+        best = std::min(best, PointSegment(p, to[i], to[(i + 1) % to.size()]));
+      }
+    }
   }
   return best;
 }

@@ -180,7 +180,8 @@ TEST(ObstaclesTest, CubeIsAWallOrObject) {
 }
 
 // Two pieces of one 1 m high wall with a 1.2 m doorway between them: the edge cells at their ends
-// come within 0.6 m (object_join_gap_m) of each other, one object; 2 m apart, two.
+// come within 0.6 m (object_join_gap_m, off by default) of each other, one object; 2 m apart,
+// two.
 TEST(ObstaclesTest, WallPiecesCloseTogetherAreOneObject) {
   auto wall = [](double gap_m) {
     return MakeTerrain(60, 40, kRes, [gap_m](double x, double y) {
@@ -188,11 +189,11 @@ TEST(ObstaclesTest, WallPiecesCloseTogetherAreOneObject) {
       return in_y && ((x > 2.0 && x < 4.0) || (x > 4.0 + gap_m && x < 6.0 + gap_m)) ? 1.0 : 0.0;
     });
   };
-  EXPECT_EQ(OfKind(Extract(wall(1.2)), ObstacleKind::kWallOrObject).size(), 1u);
-  ObstacleParams apart;
-  apart.object_join_gap_m = 0.0;
-  EXPECT_EQ(OfKind(ExtractWith(wall(1.2), apart), ObstacleKind::kWallOrObject).size(), 2u);
-  EXPECT_EQ(OfKind(Extract(wall(2.0)), ObstacleKind::kWallOrObject).size(), 2u);
+  ObstacleParams joined;
+  joined.object_join_gap_m = 0.6;
+  EXPECT_EQ(OfKind(ExtractWith(wall(1.2), joined), ObstacleKind::kWallOrObject).size(), 1u);
+  EXPECT_EQ(OfKind(ExtractWith(wall(1.2), {}), ObstacleKind::kWallOrObject).size(), 2u);  // off
+  EXPECT_EQ(OfKind(ExtractWith(wall(2.0), joined), ObstacleKind::kWallOrObject).size(), 2u);
 }
 
 TEST(ObstaclesTest, FlatNoisyGroundHoldsNoFeatures) {
