@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -166,7 +165,7 @@ void JoinNearby(const Cells& c, int gap_cells, std::vector<int32_t>* label,
   for (size_t k = 0; k < comps->size(); ++k) index_of[(*label)[(*comps)[k].front()]] = k;
   std::vector<size_t> parent(comps->size());
   for (size_t k = 0; k < parent.size(); ++k) parent[k] = k;
-  std::function<size_t(size_t)> root = [&](size_t k) {
+  auto root = [&parent](size_t k) {
     while (parent[k] != k) k = parent[k] = parent[parent[k]];
     return k;
   };

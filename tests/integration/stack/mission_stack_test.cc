@@ -19,6 +19,7 @@
 
 #include "common/layers.h"
 #include "mapstore/sqlite_map_store.h"
+#include "planner/footprint.h"
 #include "services/launch/status.h"
 #include "tests/integration/mapstore/mapstore_fixture.h"
 #include "tests/support/harness.h"
@@ -217,18 +218,6 @@ double PointSegment(const common::Vector2& p, const common::Vector2& a, const co
   return (p - (a + t * ab)).norm();
 }
 
-bool InsidePolygon(const std::vector<common::Vector2>& poly, const common::Vector2& p) {
-  bool inside = false;
-  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
-    if ((poly[i].y() > p.y()) != (poly[j].y() > p.y()) &&
-        p.x() < (poly[j].x() - poly[i].x()) * (p.y() - poly[i].y()) / (poly[j].y() - poly[i].y()) +
-                    poly[i].x()) {
-      inside = !inside;
-    }
-  }
-  return inside;
-}
-
 double OutlineDistance(const std::vector<common::Vector2>& a,
                        const std::vector<common::Vector2>& b) {
   if (a.empty() || b.empty()) return std::numeric_limits<double>::infinity();
@@ -237,7 +226,7 @@ double OutlineDistance(const std::vector<common::Vector2>& a,
     const auto& from = *pair;
     const auto& to = pair == &a ? b : a;
     for (const auto& p : from) {
-      if (to.size() >= 3 && InsidePolygon(to, p)) return 0.0;
+      if (to.size() >= 3 && planner::PointInPolygon(to, p)) return 0.0;
       for (size_t i = 0; i < to.size(); ++i) {
         best = std::min(best, PointSegment(p, to[i], to[(i + 1) % to.size()]));
       }
