@@ -39,7 +39,7 @@ inline std::string CostLayer(const std::string& profile) { return "cost/" + prof
 inline bool IsCostLayer(const std::string& name) { return name.rfind("cost/", 0) == 0; }
 
 // Directed traversability ("directed/<profile>"), the companion of the cost layer. Per cell: NaN
-// where the cost is NaN; otherwise a whole number in [0, 255] whose bit k is set when the profile
+// where the cost is NaN; otherwise a whole number in [0, 255] (or kUnseenDrop, below) whose bit k is set when the profile
 // may not drive out of the cell towards heading k * 45 degrees (grid frame, counter-clockwise from
 // +x: bit 0 is +x, bit 2 is +y, odd bits reach the diagonal neighbours), because the step or the
 // slope that way exceeds the profile's limit for that direction (step up or down, slope up or
@@ -52,6 +52,11 @@ inline std::string DirectedLayer(const std::string& profile) { return "directed/
 inline bool IsDirectedLayer(const std::string& name) { return name.rfind("directed/", 0) == 0; }
 inline constexpr int kHeadingBins = 8;
 inline constexpr float kAllHeadingsBlocked = 255.f;
+// kUnseenDrop marks a cell blocked every way because beside it the ground falls out of sight
+// (the rays over the unknown cells beyond prove a drop of at least unseen_drop_m, but not how
+// deep): lethal like kAllHeadingsBlocked for whoever reads a value above 255 as 255, and a cell
+// that a planner may treat as unknown ground to go and look (planner/README.md, "Unseen drops").
+inline constexpr float kUnseenDrop = 256.f;
 
 inline constexpr float kCostFree = 0.f;
 inline constexpr float kCostLethal = 100.f;

@@ -123,8 +123,8 @@ CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
   nonfree_distance_ = DistanceTransform(nonfree);
 }
 
-// The directed masks into the cost layer (255: lethal; 1..254: one-way, not blocking) and the
-// one-way masks.
+// The directed masks into the cost layer (255: lethal; 1..254: one-way, not blocking; unseen
+// drops: lethal or unknown) and the one-way masks.
 void CostMap::ReadDirected(const common::Layer& directed) {
   has_directed_ = true;
   // Graded: never as high as the lethal cost.
@@ -135,6 +135,12 @@ void CostMap::ReadDirected(const common::Layer& directed) {
   for (int64_t i = 0; i < n; ++i) {
     const float v = d[i];
     if (std::isnan(v) || v == 0.0f) continue;
+    if (v == layers::kUnseenDrop) {
+      ++unseen_drop_cells_;
+      c[i] = params_.unseen_drop_is_unknown ? std::numeric_limits<float>::quiet_NaN()
+                                            : params_.lethal_cost;
+      continue;
+    }
     const bool whole = v >= 0.0f && v <= layers::kAllHeadingsBlocked && v == std::floor(v);
     const int mask = whole ? static_cast<int>(v) : static_cast<int>(layers::kAllHeadingsBlocked);
     if (mask == static_cast<int>(layers::kAllHeadingsBlocked)) {

@@ -57,6 +57,12 @@ struct CostMapParams {
   /// high, so paths cross steps where they must and not along them. At or above lethal_cost it
   /// reads as the highest graded cost below it.
   float one_way_cost{90.0f};
+  /// How a directed layer's layers::kUnseenDrop cells read (a rim whose ground beyond fell out
+  /// of sight, not yet deeper than the profile's step down): false, blocking like 255; true,
+  /// unknown ground (NaN), so that a plan may lead there to look. The navigator builds the
+  /// snapshot its plans use this way when its map config allows (`look_at_unseen_drops`), and
+  /// drives on the strict one.
+  bool unseen_drop_is_unknown{false};
 
   /// @throws std::invalid_argument naming the bad field.
   void Validate() const;
@@ -98,7 +104,8 @@ class CostMap {
   /// without one (nullopt: exactly the constructor above). Its cells are read as: NaN or 0, no
   /// restriction (the cost layer alone); 255, blocking (lethal, whatever the cost layer says);
   /// 1..254, a one-way cell (cost one_way_cost, or the cost layer's where that is graded and
-  /// higher; NaN stays unknown). A value that is not a whole number in [0, 255] reads as 255.
+  /// higher; NaN stays unknown); layers::kUnseenDrop, blocking or unknown (see
+  /// unseen_drop_is_unknown). Any other value that is not a whole number in [0, 255] reads as 255.
   /// @throws std::invalid_argument as above, or for a directed layer of another size.
   CostMap(const common::GridGeometry& geometry, common::Layer cost,
           std::optional<common::Layer> directed, const std::vector<common::Vector2>& footprint_m,
@@ -127,6 +134,14 @@ class CostMap {
   /// waits for them rather than plan on a layer with holes.
   int missing_tiles() const { return missing_tiles_; }
   void set_missing_tiles(int count) { missing_tiles_ = count; }
+
+  /// Cells of the directed layer marked layers::kUnseenDrop (0 without a directed layer).
+  int64_t unseen_drop_cells() const { return unseen_drop_cells_; }
+  /// The snapshot global plans use: the one set with set_planning_map (the same data with
+  /// unseen drops read as unknown), else this one.
+  const CostMap& planning_map() const { return planning_map_ ? *planning_map_ : *this; }
+  std::shared_ptr<const CostMap> planning_map_shared() const { return planning_map_; }
+  void set_planning_map(std::shared_ptr<const CostMap> map) { planning_map_ = std::move(map); }
 
   /// True when the world point lies inside the grid.
   bool Contains(const common::Vector2& world_m) const;
@@ -252,6 +267,8 @@ class CostMap {
   int64_t version_{0};
   int64_t utime_{0};
   int missing_tiles_{0};
+  int64_t unseen_drop_cells_{0};
+  std::shared_ptr<const CostMap> planning_map_;
   double cos_origin_{1.0};
   double sin_origin_{0.0};
   std::optional<std::pair<common::CellIndex, common::CellIndex>> known_cells_;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <exception>
+#include <optional>
+#include <utility>
 
 #include "common/check.h"
 #include "common/layers.h"
@@ -98,10 +100,25 @@ common::Result<std::shared_ptr<const CostMap>> MapSnapshotPolicy::Build(Assemble
     FillTiles(layer.directed_missing_tiles, layer.tile_size_cells, 0.f, &*directed);
   }
   try {
+    // The planning twin copies the layers only when the directed layer marks unseen drops.
+    std::optional<std::pair<common::Layer, common::Layer>> twin_layers;
+    if (params_.look_at_unseen_drops && directed &&
+        (directed->array() == layers::kUnseenDrop).any()) {
+      twin_layers.emplace(cells, *directed);
+    }
     auto map = std::make_shared<CostMap>(layer.geometry, std::move(cells), std::move(directed),
                                          footprint_m_, params_.cost);
     map->set_stamp(layer.version, now_utime);
     map->set_missing_tiles(missing);
+    if (twin_layers) {
+      CostMapParams relaxed = params_.cost;
+      relaxed.unseen_drop_is_unknown = true;
+      auto twin = std::make_shared<CostMap>(layer.geometry, std::move(twin_layers->first),
+                                            std::move(twin_layers->second), footprint_m_, relaxed);
+      twin->set_stamp(layer.version, now_utime);
+      twin->set_missing_tiles(missing);
+      map->set_planning_map(std::move(twin));
+    }
     Record(layer.version, missing > 0);
     return std::shared_ptr<const CostMap>(std::move(map));
   } catch (const std::exception& e) {

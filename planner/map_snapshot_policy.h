@@ -38,6 +38,9 @@ struct MapSnapshotParams {
   CostMapParams cost;
   /// Take a version with missing tiles after waiting this long for them (s, >= 0).
   double incomplete_timeout_s{1.0};
+  /// A snapshot whose directed layer marks unseen drops also carries a planning twin that reads
+  /// them as unknown (CostMap::planning_map, CostMapParams::unseen_drop_is_unknown).
+  bool look_at_unseen_drops{false};
 
   /// @throws std::invalid_argument naming the bad field.
   void Validate() const;

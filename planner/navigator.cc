@@ -338,9 +338,12 @@ void Navigator::UpdatePathProgress() {
 
 bool Navigator::PathBlockedAhead() const {
   if (path_.empty() || !map_) return false;
+  // Judged on the map plans are made on: a path that leads to look at an unseen drop is not
+  // blocked by it (the local planner stops short of it).
+  const CostMap& map = map_->planning_map();
   const size_t end = path_.IndexAt(path_arc_m_ + params_.path_check_ahead_m);
   for (size_t i = path_segment_ + 1; i <= end && i < path_.size(); ++i) {
-    if (!map_->IsValid(path_.poses()[i])) return true;
+    if (!map.IsValid(path_.poses()[i])) return true;
   }
   return false;
 }
@@ -658,7 +661,8 @@ bool Navigator::StartWantedPlan(double now_s, StepOutput* out) {
   if (to_goal > params_.occupied_goal_far_m) {
     job.request.goal_shift_radius_m = params_.occupied_goal_shift_m;
   }
-  job.map = map_;
+  // Plans may lead to look at unseen drops; the local planner drives on map_ itself.
+  job.map = map_->planning_map_shared() ? map_->planning_map_shared() : map_;
   pending_request_ = job.request_id;
   last_plan_request_s_ = now_s;
   if (out->cancel_plan) out->cancel_plan = false;  // the new job supersedes the old one

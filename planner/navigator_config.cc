@@ -39,6 +39,7 @@ void LoadMapLayer(YamlMap map, MapLayerConfig* p) {
   map.Get("layer", &p->layer);
   GetNamed(map, "encoding", &p->encoding, MapEncodingFromName);
   map.Get("directed", &p->directed);
+  map.Get("look_at_unseen_drops", &p->look_at_unseen_drops);
   map.Get("occupied_threshold_og", &p->occupancy.occupied_threshold_og);
   map.Get("free_threshold_og", &p->occupancy.free_threshold_og);
   map.Finish();

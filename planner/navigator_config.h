@@ -29,6 +29,12 @@ struct MapLayerConfig {
   /// "cost/<profile>") when the mapper publishes it, so one-way steps and slopes can be driven
   /// the way they allow (CostMap). Without it, or without directed tiles, the cost layer alone.
   bool directed{true};
+  /// With a directed layer: plan through a rim marked as an unseen drop (ground that fell out of
+  /// sight beyond it, not yet proven deeper than the profile's step down) as through unknown
+  /// ground, so the robot drives up to look; the local planner never crosses it until the ground
+  /// beyond is seen (planner/README.md, "Unseen drops": off by default, for the reasons there).
+  /// False: such a rim blocks plans too.
+  bool look_at_unseen_drops{false};
 
   /// The layer name to subscribe to for a robot profile.
   std::string LayerFor(const std::string& profile) const;

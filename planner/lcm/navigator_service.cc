@@ -34,6 +34,7 @@ LcmMapClientParams MapClientParams(const std::string& robot, const common::Robot
   p.snapshot.occupancy = config.map.occupancy;
   p.snapshot.cost = config.cost_map;
   p.snapshot.incomplete_timeout_s = config.incomplete_map_timeout_s;
+  p.snapshot.look_at_unseen_drops = config.map.look_at_unseen_drops;
   return p;
 }
 

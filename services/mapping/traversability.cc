@@ -37,6 +37,7 @@ constexpr double kDiag = 0.70710678118654752;
 constexpr std::array<double, 8> kHeadingX{1, kDiag, 0, -kDiag, -1, -kDiag, 0, kDiag};
 constexpr std::array<double, 8> kHeadingY{0, kDiag, 1, kDiag, 0, -kDiag, -1, -kDiag};
 constexpr float kAllBlocked = layers::kAllHeadingsBlocked;
+constexpr float kUnseenDrop = layers::kUnseenDrop;
 
 CellRect Clip(const CellRect& r, int sx, int sy) {
   return {std::max(0, r.x0), std::max(0, r.y0), std::min(sx, r.x1), std::min(sy, r.y1)};
@@ -289,9 +290,12 @@ class CostRules {
   // All four neighbours known, no ditch nearby, no tilt: only the highest and the lowest
   // neighbour matter. False when the per-neighbour rules must decide.
   bool FastSteps(int64_t i, float hc, double* ratio) const;
-  // The rules towards neighbour k: 0 when they leave the cell alone, else StepMask's value.
+  // The rules towards neighbour k: 0 when they leave the cell alone, else StepMask's value, or
+  // kUnseenDrop from UnseenDropMask.
   float NeighbourMask(int x, int y, int64_t i, int k, float hc, double* ratio) const;
   bool StepLethal(int64_t i, int64_t j, int k, double rise, double* ratio) const;
+  // Towards an unknown neighbour the rays looked into: kUnseenDrop when the ground there lies
+  // too far below (a lower bound), else 0.
   float UnseenDropMask(int x, int y, int k, int64_t j, float hc, double* ratio) const;
   double Tilted(int k, double rise) const { return forward_m_[k] * sp_ + rise * cp_; }
 
@@ -442,10 +446,10 @@ float CostRules::UnseenDropMask(int x, int y, int k, int64_t j, float hc, double
   }
   double drop = double(hc) - lowest;
   if (exact_tilt_) drop = drop * cp_ - forward_m_[k] * sp_;
-  if (drop > down_limit_ + tol_ ||
-      (params_.unseen_drop_m > 0 && drop >= params_.unseen_drop_m - tol_)) {
-    return kAllBlocked;  // its depth is only a lower bound
-  }
+  // Deeper than the step-down limit already: blocked whatever lies below.
+  if (drop > down_limit_ + tol_) return kAllBlocked;
+  // Its depth is only a lower bound: blocked until seen, but worth a closer look.
+  if (params_.unseen_drop_m > 0 && drop >= params_.unseen_drop_m - tol_) return kUnseenDrop;
   if (drop > 0) *ratio = std::max(*ratio, drop * inv_down_);
   return 0.f;
 }
@@ -514,12 +518,19 @@ CostRules::Verdict CostRules::Judge(int x, int y, bool near_ditch) const {
     if (mask != 0) return {layers::kCostLethal, static_cast<float>(mask)};
     return Plain(Graded(ratio));
   }
+  bool unseen_drop = false;
   for (int k = 0; k < 4; ++k) {
     const float m = NeighbourMask(x, y, i, k, hc, &ratio);
     if (m == 0.f) continue;
     if (m == kAllBlocked) return Plain(layers::kCostLethal);
+    if (m == kUnseenDrop) {
+      unseen_drop = true;
+      continue;
+    }
     mask |= static_cast<unsigned>(m);
   }
+  // Blocked every way until the ground beyond is seen; a planner may look (common/layers.h).
+  if (unseen_drop) return {layers::kCostLethal, kUnseenDrop};
   if (mask != 0) return {layers::kCostLethal, static_cast<float>(mask)};
   return Plain(Graded(ratio));
 }

@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include "common/layers.h"
+
 #include "tests/unit/planner/test_maps.h"
 
 namespace cairn::planner {
@@ -50,6 +52,53 @@ TEST(MapSnapshotPolicyTest, MissingDirectedTilesReadAsTheCostLayerAlone) {
   EXPECT_EQ((*map)->OneWayMask({5, 5}), 4);
   EXPECT_FALSE((*map)->IsBlockedCell({5, 5}));
   EXPECT_TRUE((*map)->IsValid({1.5, 0.75, 0.0}));  // a pose inside the missing directed tile
+}
+
+// A rim marked as an unseen drop blocks the snapshot the robot drives on; with
+// look_at_unseen_drops the snapshot carries a planning twin where it is unknown ground (traversable
+// here at unknown_cost), and without any such mark no twin is built.
+TEST(MapSnapshotPolicyTest, UnseenDropsAreUnknownToPlansOnlyWhenAllowed) {
+  MapSnapshotParams params = Params();
+  params.cost.unknown_is_traversable = true;
+  params.look_at_unseen_drops = true;
+  auto layer_with_rim = [] {
+    AssembledLayer layer = Layer(4);
+    layer.directed = common::Layer::Zero(60, 40);
+    for (int iy = 0; iy < 40; ++iy) {
+      layer.cells(30, iy) = 100.0f;
+      (*layer.directed)(30, iy) = layers::kUnseenDrop;
+    }
+    return layer;
+  };
+  MapSnapshotPolicy dut(params, PioneerFootprint());
+  const auto map = dut.Build(layer_with_rim(), 1'000'000);
+  ASSERT_TRUE(map.ok()) << map.status().ToString();
+  EXPECT_EQ((*map)->unseen_drop_cells(), 40);
+  EXPECT_TRUE((*map)->IsBlockedCell({30, 10}));
+  ASSERT_NE((*map)->planning_map_shared(), nullptr);
+  const CostMap& plan = (*map)->planning_map();
+  EXPECT_FALSE(plan.IsBlockedCell({30, 10}));
+  EXPECT_TRUE(std::isnan(plan.cost()(30, 10)));
+  EXPECT_EQ(plan.version(), (*map)->version());
+  // A pose astride the rim: invalid to drive, valid to plan through.
+  EXPECT_FALSE((*map)->IsValid({1.525, 1.0, 0.0}));
+  EXPECT_TRUE(plan.IsValid({1.525, 1.0, 0.0}));
+
+  params.look_at_unseen_drops = false;
+  MapSnapshotPolicy strict(params, PioneerFootprint());
+  const auto no_twin = strict.Build(layer_with_rim(), 1'000'000);
+  ASSERT_TRUE(no_twin.ok());
+  EXPECT_EQ((*no_twin)->planning_map_shared(), nullptr);
+  EXPECT_EQ(&(*no_twin)->planning_map(), no_twin->get());
+  EXPECT_TRUE((*no_twin)->planning_map().IsBlockedCell({30, 10}));
+
+  params.look_at_unseen_drops = true;
+  MapSnapshotPolicy plain(params, PioneerFootprint());
+  AssembledLayer layer = Layer(5);
+  layer.directed = common::Layer::Zero(60, 40);
+  const auto without_marks = plain.Build(std::move(layer), 1'000'000);
+  ASSERT_TRUE(without_marks.ok());
+  EXPECT_EQ((*without_marks)->planning_map_shared(), nullptr);
 }
 
 TEST(MapSnapshotPolicyTest, MissingTilesAreLethalNotUnexplored) {

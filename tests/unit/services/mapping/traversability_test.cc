@@ -615,6 +615,31 @@ TEST(TraversabilityTest, AShallowBoundOfAnUnseenDropIsLethalAlready) {
   EXPECT_LT(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
 }
 
+void ExpectMaskMatchesCost(const GridMap& map, const std::string& profile);
+
+// An unseen drop whose bound is within the profile's step down is marked as such in the directed
+// layer (a planner may go and look); one already deeper is blocked like any other lethal cell.
+TEST(TraversabilityTest, AnUnseenDropIsMarkedForALookUnlessAlreadyTooDeep) {
+  GridMap map =
+      MakeTerrain(30, 12, kRes, [](double x, double) { return x < 2.0 ? 0.2 : std::nan(""); });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  auto bound_below_rim = [&](float depth_m) {
+    for (int ix = 10; ix < 30; ++ix) {
+      for (int iy = 0; iy < 12; ++iy) b(ix, iy) = 0.2f - depth_m;
+    }
+  };
+  bound_below_rim(0.06f);  // more than unseen_drop_m (5 cm), less than the 10 cm step down
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  EXPECT_EQ(Mask(map, "pioneer3at", 9, 6), layers::kUnseenDrop);
+  EXPECT_EQ(Mask(map, "pioneer3at", 8, 6), 0.f);
+  ExpectMaskMatchesCost(map, "pioneer3at");
+  bound_below_rim(0.14f);  // the rays prove more than the step down already
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_EQ(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
+  EXPECT_EQ(Mask(map, "pioneer3at", 9, 6), layers::kAllHeadingsBlocked);
+}
+
 // The cell on the edge itself is often mixed (part rim, part gap) and unknown, its bound barely
 // below the rim; the rays show the drop a cell further. The rim looks through the unknown cells
 // beyond it (0.4 m) for the lowest bound.
@@ -707,7 +732,7 @@ GridMap StepTowardsBin(int k, double rise_m) {
 }
 
 // Every interior cell: the mask is NaN exactly where the cost is, non-zero exactly where the
-// cost is lethal, and a whole number in [0, 255].
+// cost is lethal, and a whole number in [0, 255] or an unseen drop's mark.
 void ExpectMaskMatchesCost(const GridMap& map, const std::string& profile) {
   ForInterior(map, [&](int ix, int iy) {
     const float c = Cost(map, profile, ix, iy), m = Mask(map, profile, ix, iy);
@@ -715,7 +740,7 @@ void ExpectMaskMatchesCost(const GridMap& map, const std::string& profile) {
     if (std::isnan(c)) return;
     ASSERT_EQ(m != 0.f, c >= layers::kCostLethal) << ix << "," << iy << " cost " << c;
     ASSERT_EQ(m, std::round(m));
-    ASSERT_TRUE(m >= 0.f && m <= 255.f);
+    ASSERT_TRUE((m >= 0.f && m <= 255.f) || m == layers::kUnseenDrop);
   });
 }
 
