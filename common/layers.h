@@ -39,15 +39,16 @@ inline std::string CostLayer(const std::string& profile) { return "cost/" + prof
 inline bool IsCostLayer(const std::string& name) { return name.rfind("cost/", 0) == 0; }
 
 // Directed traversability ("directed/<profile>"), the companion of the cost layer. Per cell: NaN
-// where the cost is NaN; otherwise a whole number in [0, 255] (or kUnseenDrop, below) whose bit k is set when the profile
-// may not drive out of the cell towards heading k * 45 degrees (grid frame, counter-clockwise from
-// +x: bit 0 is +x, bit 2 is +y, odd bits reach the diagonal neighbours), because the step or the
-// slope that way exceeds the profile's limit for that direction (step up or down, slope up or
-// down). kAllHeadingsBlocked marks a cell that no heading may cross for a reason that does not
-// depend on the direction (an object, a ditch too wide, roughness, an unseen drop). The cost layer
-// stays isotropic: it is lethal wherever this layer is non-zero (the stricter value), so exports
-// and renders keep one number per cell; planners that read both may cross a one-way cell in the
-// headings it allows.
+// where the cost is NaN; otherwise a whole number in [0, 255] (or kUnseenDrop, below) whose bit k
+// is set when the profile may not drive out of the cell towards heading k * 45 degrees (grid frame,
+// counter-clockwise from +x: bit 0 is +x, bit 2 is +y, odd bits reach the diagonal neighbours),
+// because the step or the slope that way exceeds the profile's limit for that direction (step up or
+// down, slope up or down). kAllHeadingsBlocked marks a cell that no heading may cross for a reason
+// that does not depend on the direction (an object, a ditch too wide, roughness, an unseen drop
+// already proven deeper than the step down).
+// The cost layer stays isotropic: it is lethal wherever this layer is non-zero (the stricter
+// value), so exports and renders keep one number per cell; planners that read both may cross a
+// one-way cell in the headings it allows.
 inline std::string DirectedLayer(const std::string& profile) { return "directed/" + profile; }
 inline bool IsDirectedLayer(const std::string& name) { return name.rfind("directed/", 0) == 0; }
 inline constexpr int kHeadingBins = 8;

@@ -56,19 +56,19 @@ Result<std::string> WriteDirectedCsv(const std::string& folder, const std::strin
     for (int ix = 0; ix < map.size_x(); ++ix) {
       const float v = d(ix, iy);
       if (std::isnan(v) || v == 0.f) continue;
-      // An unseen drop keeps its own value; any other value that is not a whole number in
-      // [0, 255] reads as 255, as the planner reads it.
-      const bool unseen = v == layers::kUnseenDrop;
-      const unsigned mask = unseen ? static_cast<unsigned>(layers::kUnseenDrop)
-                            : (v > 0.f && v <= 255.f && v == std::round(v))
-                                ? static_cast<unsigned>(v)
-                                : 255u;
       const common::Vector2 c = map.CenterOf({ix, iy});
+      if (v == layers::kUnseenDrop) {
+        std::snprintf(buf, sizeof(buf), "%.3f,%.3f,256,all (unseen drop)\n", c.x(), c.y());
+        out += buf;
+        continue;
+      }
+      // Any other value that is not a whole number in [0, 255] reads as 255, as the planner
+      // reads it.
+      const unsigned mask =
+          (v > 0.f && v <= 255.f && v == std::round(v)) ? static_cast<unsigned>(v) : 255u;
       std::snprintf(buf, sizeof(buf), "%.3f,%.3f,%u,", c.x(), c.y(), mask);
       out += buf;
-      out += (unseen ? std::string("all (unseen drop)")
-                     : RefusedHeadings(mask, map.geometry().origin.yaw_rad)) +
-             "\n";
+      out += RefusedHeadings(mask, map.geometry().origin.yaw_rad) + "\n";
     }
   }
   const common::Status s = WriteFileAtomically(*path, out);

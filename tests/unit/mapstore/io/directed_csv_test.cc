@@ -57,5 +57,24 @@ TEST(DirectedCsvTest, OneRowPerRefusingCellWithItsWorldHeadings) {
   EXPECT_FALSE(WriteDirectedCsv(dir, "none", map, "directed/other").ok());
 }
 
+// An unseen drop (the mapper's mark 256) keeps its own value and says what it is.
+TEST(DirectedCsvTest, AnUnseenDropIsListedAsSuch) {
+  common::GridGeometry g;
+  g.resolution_m = 0.5;
+  g.size_x = 2;
+  g.size_y = 1;
+  common::GridMap map(g);
+  common::Layer& d = map.AddLayer(layers::DirectedLayer("p"));
+  d.setZero();
+  d(1, 0) = layers::kUnseenDrop;
+  auto path = WriteDirectedCsv(TempDir(), "unseen", map, layers::DirectedLayer("p"));
+  ASSERT_TRUE(path.ok()) << path.status().message();
+  auto text = ReadFile(*path);
+  ASSERT_TRUE(text.ok());
+  const auto lines = Lines(*text);
+  ASSERT_EQ(lines.size(), 2u) << *text;
+  EXPECT_NE(lines[1].find(",256,all (unseen drop)"), std::string::npos) << lines[1];
+}
+
 }  // namespace
 }  // namespace cairn::mapstore::io
