@@ -150,8 +150,11 @@ void TestSpan(const FeatureInputs& in, const ObstacleParams& p, int x, int y,
   // What the difference exceeds the incline's own rise by must stand out of the noise of the
   // two heights. The rise: the normals' (tilted up by an object's own edge, so no more than the
   // larger of the differences before and after).
+  // A difference of a wall's height is no noise whatever the variance says (a cell that straddles
+  // a wall's foot or top mixes both levels and its variance is of the wall's height).
   const double rise = std::min(along, std::max(before, after));
-  if (std::fabs(delta) - span * rise < p.step_noise_sigmas * DifferenceSigma(in, x, y, nx, ny)) {
+  if (std::fabs(delta) < p.wall_min_height_m &&
+      std::fabs(delta) - span * rise < p.step_noise_sigmas * DifferenceSigma(in, x, y, nx, ny)) {
     return;
   }
   // Small steps must hold over two cells on each side (noise rarely does): the mean of the
