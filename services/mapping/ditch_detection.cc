@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace cairn::mapping::internal {
@@ -101,11 +102,10 @@ struct DitchCell {
   std::array<GapLine, 4> lines{};  // per kLineDirections entry; found = qualifies
 };
 
-DitchCell TestUnseenCell(const TerrainView& v, int x, int y, const TraversabilityParams& p,
-                         int max_cells, double res) {
+// The ditch test of a gap at cell (x, y) whose ground lies at or below `u`.
+DitchCell TestGap(const TerrainView& v, int x, int y, double u, const TraversabilityParams& p,
+                  int max_cells, double res) {
   DitchCell cell;
-  const float u = v.B(x, y);
-  if (!std::isnan(v.H(x, y)) || !std::isfinite(u)) return cell;
   for (size_t k = 0; k < kLineDirections.size(); ++k) {
     const auto& d = kLineDirections[k];
     const bool diagonal = d[0] != 0 && d[1] != 0;
@@ -134,6 +134,13 @@ DitchCell TestUnseenCell(const TerrainView& v, int x, int y, const Traversabilit
     cell.ditch = true;
   }
   return cell;
+}
+
+DitchCell TestUnseenCell(const TerrainView& v, int x, int y, const TraversabilityParams& p,
+                         int max_cells, double res) {
+  const float u = v.B(x, y);
+  if (!std::isnan(v.H(x, y)) || !std::isfinite(u)) return DitchCell{};
+  return TestGap(v, x, y, u, p, max_cells, res);
 }
 
 // The unseen ditch cells of `outer` (the written rectangle grown by the search distance: the
@@ -272,6 +279,15 @@ const DitchCell* FindDitchBottom(const TerrainView& view, const UnseenCells& u, 
 }
 
 }  // namespace
+
+std::optional<SeenBottom> TestSeenBottom(const TerrainView& view, int x, int y,
+                                         const TraversabilityParams& params, double resolution_m) {
+  if (!view.Inside(x, y) || std::isnan(view.H(x, y))) return std::nullopt;
+  const DitchCell c = TestGap(view, x, y, view.H(x, y), params,
+                              DitchSearchCells(params, resolution_m), resolution_m);
+  if (!c.ditch || c.width_m > params.max_ditch_search_m + 1e-6) return std::nullopt;
+  return SeenBottom{c.rim_m - view.H(x, y), c.width_m};
+}
 
 int DitchSearchCells(const TraversabilityParams& params, double resolution_m) {
   return std::max(1, static_cast<int>(std::ceil(params.max_ditch_search_m / resolution_m - 1e-9)));

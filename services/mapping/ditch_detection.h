@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 
 #include "services/mapping/traversability.h"
 
@@ -27,6 +28,21 @@ struct TerrainView {
                  : std::numeric_limits<float>::quiet_NaN();
   }
 };
+
+/// A ditch whose bottom the sensor saw: the depth of the bottom cell below the lower rim and the
+/// narrowest width between the rims (m).
+struct SeenBottom {
+  double depth_m;
+  double width_m;
+};
+
+/// The ditch test of an unseen cell applied to a known one: (x, y) lies in a gap whose rims, along
+/// x, y or a diagonal, both stand at least min_ditch_depth_m above its height, with ground at
+/// rim level beyond them, and the gap is no valley (the flanks continued into it stay above it)
+/// nor a gentle dip (min_ditch_wall_slope_rad). Here max_ditch_search_m bounds the gap's width
+/// (the narrowest line's) as well as the search.
+std::optional<SeenBottom> TestSeenBottom(const TerrainView& view, int x, int y,
+                                         const TraversabilityParams& params, double resolution_m);
 
 /// Writes layers::kDitchDepth and layers::kDitchWidth for the cells of `rect` (NaN where no
 /// ditch), reading up to 2 * DitchSearchCells + 2 cells around it. Pass 1: unknown cells the

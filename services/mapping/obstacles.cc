@@ -14,6 +14,7 @@
 #include "common/check.h"
 #include "common/layers.h"
 #include "common/yaml_reader.h"
+#include "services/mapping/ditch_detection.h"
 #include "services/mapping/feature_classes.h"
 #include "services/mapping/obstacle_shape.h"
 #include "services/mapping/traversability.h"
@@ -229,7 +230,7 @@ std::vector<Found> FindFeatures(const Cells& cells, int object_gap_cells,
 class FeatureMeasurer {
  public:
   FeatureMeasurer(const GridMap& map, const Cells& cells, const std::vector<int32_t>& label,
-                  const ObstacleParams& params)
+                  const ObstacleParams& params, const float* ditch_depth, const float* ditch_width)
       : map_(map),
         cells_(cells),
         label_(label),
@@ -237,8 +238,8 @@ class FeatureMeasurer {
         sx_(map.size_x()),
         h_(map.at(layers::kElevation).data()),
         slope_(map.at(layers::kSlope).data()),
-        ddepth_(map.at(layers::kDitchDepth).data()),
-        dwidth_(map.at(layers::kDitchWidth).data()),
+        ddepth_(ditch_depth),
+        dwidth_(ditch_width),
         ring_stamp_(static_cast<size_t>(cells.sx) * cells.sy, 0) {}
 
   // The obstacle of a feature, or nullopt when it is too small or a noise patch.
@@ -459,6 +460,38 @@ std::optional<Obstacle> FeatureMeasurer::Measure(const Found& f) {
   return o;
 }
 
+// Known cells that lie in a ditch whose bottom was seen (internal::TestSeenBottom, at most
+// seen_ditch_max_width_m wide) become ditch cells with that depth and width; their rims
+// and faces join them as the rims of a ditch with an unseen gap do. Cells already in a ditch,
+// walls and drops are left as they are.
+void AddSeenDitches(const GridMap& map, const ObstacleParams& params, std::vector<float>* cls,
+                    std::vector<float>* ddepth, std::vector<float>* dwidth) {
+  if (!(params.seen_ditch_max_width_m > 0)) return;
+  TraversabilityParams ditch;
+  ditch.min_ditch_depth_m = params.min_drop_height_m;
+  ditch.max_ditch_search_m = params.seen_ditch_max_width_m;
+  const internal::TerrainView view{
+      map.at(layers::kElevation).data(),
+      map.HasLayer(layers::kGroundBound) ? map.at(layers::kGroundBound).data() : nullptr,
+      map.size_x(), map.size_y()};
+  const double res = map.resolution_m();
+  for (int y = 0; y < view.sy; ++y) {
+    for (int x = 0; x < view.sx; ++x) {
+      const int64_t i = x + static_cast<int64_t>(y) * view.sx;
+      const auto k = static_cast<uint8_t>((*cls)[i]);
+      if (std::isnan(view.h[i]) || !std::isnan((*ddepth)[i]) ||
+          !(k == internal::kNone || k == kStep || k == kRamp)) {
+        continue;
+      }
+      if (const auto bottom = internal::TestSeenBottom(view, x, y, ditch, res)) {
+        (*cls)[i] = kDitch;
+        (*ddepth)[i] = static_cast<float>(bottom->depth_m);
+        (*dwidth)[i] = static_cast<float>(bottom->width_m);
+      }
+    }
+  }
+}
+
 // Numbered by centroid (y, then x): the same map always gives the same ids.
 void NumberByCentroid(common::ObstacleRegistry* registry) {
   std::stable_sort(registry->obstacles.begin(), registry->obstacles.end(),
@@ -501,6 +534,8 @@ void ObstacleParams::Validate() const {
       "small step limits must be >= 0");
   CAIRN_THROW_UNLESS(surface_continuity_m > 0, "surface_continuity_m must be positive");
   CAIRN_THROW_UNLESS(outline_tolerance_cells >= 0, "outline_tolerance_cells must be >= 0");
+  CAIRN_THROW_UNLESS(std::isfinite(seen_ditch_max_width_m) && seen_ditch_max_width_m >= 0,
+                     "seen_ditch_max_width_m must be >= 0, got " << seen_ditch_max_width_m);
 }
 
 common::ObstacleRegistry ExtractObstacles(const GridMap& map_in, const ObstacleParams& params) {
@@ -523,10 +558,19 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map, const ObstaclePar
         kFeatureClassLayer, kFeatureEdgeLayer, kFeatureLowLayer, kFeatureHighLayer}) {
     CAIRN_THROW_UNLESS(map.HasLayer(name), "the map has no '" << name << "' layer");
   }
+  // Ditches whose bottom the sensor saw, which the ditch layers (the cost layer's) keep only
+  // beside a gap nobody saw: working copies of the classes and the ditch layers.
+  std::vector<float> cls(map.at(kFeatureClassLayer).data(),
+                         map.at(kFeatureClassLayer).data() + map.at(kFeatureClassLayer).size());
+  std::vector<float> ddepth(map.at(layers::kDitchDepth).data(),
+                            map.at(layers::kDitchDepth).data() + cls.size());
+  std::vector<float> dwidth(map.at(layers::kDitchWidth).data(),
+                            map.at(layers::kDitchWidth).data() + cls.size());
+  AddSeenDitches(map, params, &cls, &ddepth, &dwidth);
   Cells cells;
   cells.sx = map.size_x();
   cells.sy = map.size_y();
-  cells.cls = map.at(kFeatureClassLayer).data();
+  cells.cls = cls.data();
   cells.edge = map.at(kFeatureEdgeLayer).data();
   cells.low = map.at(kFeatureLowLayer).data();
   cells.high = map.at(kFeatureHighLayer).data();
@@ -534,7 +578,7 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map, const ObstaclePar
   const int object_gap_cells =
       static_cast<int>(std::floor(params.object_join_gap_m / map.resolution_m() + 1e-9));
   const std::vector<Found> found = FindFeatures(cells, object_gap_cells, &label);
-  FeatureMeasurer measurer(map, cells, label, params);
+  FeatureMeasurer measurer(map, cells, label, params, ddepth.data(), dwidth.data());
   common::ObstacleRegistry registry;
   for (const Found& f : found) {
     if (std::optional<Obstacle> o = measurer.Measure(f))
@@ -658,6 +702,7 @@ ObstacleParams LoadObstacleParams(common::YamlMap& m) {
   m.Get("min_small_step_elongation", &p.min_small_step_elongation);
   m.Get("surface_continuity_m", &p.surface_continuity_m);
   m.Get("outline_tolerance_cells", &p.outline_tolerance_cells);
+  m.Get("seen_ditch_max_width_m", &p.seen_ditch_max_width_m);
   m.Finish();
   return p;
 }

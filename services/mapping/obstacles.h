@@ -15,8 +15,8 @@
 /// Features are found from the elevation and the geometric layers (traversability.h), never
 /// from a profile:
 /// - ditch: cells of a negative obstacle (layers::kDitchDepth), with the unseen gap and the
-///   bottom the sensor saw; width is the gap between the rims, depth NaN when no bottom cell
-///   was seen;
+///   bottom the sensor saw, and trenches whose whole bottom was seen (seen_ditch_max_width_m);
+///   width is the gap between the rims, depth NaN when no bottom cell was seen;
 /// - step (up or down): a height difference over one or two cells along x or y (two when a
 ///   vertical face left an intermediate height in the cell it cuts) that stands out from the
 ///   differences just before and after it along the same line (a ramp rises evenly, a step
@@ -74,6 +74,11 @@ struct ObstacleParams {
   /// the larger surface it separates onto the smaller one (a block on the ground is a step up,
   /// the edge of a raised platform a step down).
   double surface_continuity_m{0.05};
+  /// The widest ditch (m) whose bottom the sensor saw that the registry lists as one: a trench
+  /// between two rims at least min_drop_height_m above its floor, with ground at rim level
+  /// beyond them (the cost layer judges such a floor by its steps). Wider gaps are floors
+  /// between raised ground. 0: only ditches with an unseen gap are listed.
+  double seen_ditch_max_width_m{1.2};
   /// Outline simplification tolerance, as a fraction of the resolution.
   double outline_tolerance_cells{0.5};
 

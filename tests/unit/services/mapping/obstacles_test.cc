@@ -164,6 +164,69 @@ TEST(ObstaclesTest, UnseenTrenchIsADitchForBoth) {
   EXPECT_TRUE(OfKind(r, ObstacleKind::kStepDown).empty());
 }
 
+// The trench of the terraces world seen whole: 0.6 m wide, 0.25 m deep, its floor known. One
+// ditch with its width and depth (no steps down and up at its faces); the rover (0.30 m ditches,
+// 0.08 m steps up) can neither bridge it nor drive through it.
+TEST(ObstaclesTest, ASeenTrenchIsOneDitchWithItsWidthAndDepth) {
+  const common::ObstacleRegistry r =
+      Extract(Corridor([](double x) { return (x > 6.0 && x < 6.6) ? -0.25 : 0.0; }));
+  const auto ditches = OfKind(r, ObstacleKind::kDitch);
+  ASSERT_EQ(ditches.size(), 1u);
+  const Obstacle& d = *ditches[0];
+  EXPECT_NEAR(d.width_m, 0.6, 1e-4);
+  EXPECT_NEAR(d.depth_m, 0.25, 1e-4);
+  EXPECT_NEAR(d.centroid_m.x(), 6.3, 0.15);
+  EXPECT_FALSE(Crossable(d, "pioneer3at"));
+  EXPECT_FALSE(Crossable(d, "rover"));
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kStepUp).empty());
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kStepDown).empty());
+  // Off: the faces are steps again.
+  ObstacleParams off;
+  off.seen_ditch_max_width_m = 0;
+  EXPECT_TRUE(
+      OfKind(
+          ExtractWith(Corridor([](double x) { return (x > 6.0 && x < 6.6) ? -0.25 : 0.0; }), off),
+          ObstacleKind::kDitch)
+          .empty());
+}
+
+// A seen slot narrower than the rover's ditch width is bridged; 6 cm deep and 1 m wide, the
+// rover drives through it (both steps within its limits) but the Pioneer (3 cm up) cannot.
+TEST(ObstaclesTest, SeenDitchesAreJudgedByWidthAndDepth) {
+  const common::ObstacleRegistry slot =
+      Extract(Corridor([](double x) { return (x > 6.0 && x < 6.2) ? -0.25 : 0.0; }));
+  const auto narrow = OfKind(slot, ObstacleKind::kDitch);
+  ASSERT_EQ(narrow.size(), 1u);
+  EXPECT_NEAR(narrow[0]->width_m, 0.2, 1e-4);
+  EXPECT_TRUE(Crossable(*narrow[0], "rover"));        // 0.20 <= 0.30
+  EXPECT_FALSE(Crossable(*narrow[0], "pioneer3at"));  // 0.20 > 0.10, 0.25 deep
+  const common::ObstacleRegistry dip =
+      Extract(Corridor([](double x) { return (x > 6.0 && x < 7.0) ? -0.06 : 0.0; }));
+  const auto shallow = OfKind(dip, ObstacleKind::kDitch);
+  ASSERT_EQ(shallow.size(), 1u);
+  EXPECT_NEAR(shallow[0]->depth_m, 0.06, 1e-4);
+  EXPECT_TRUE(Crossable(*shallow[0], "rover"));
+  EXPECT_FALSE(Crossable(*shallow[0], "pioneer3at"));
+}
+
+// Floor between two raised slabs further apart than seen_ditch_max_width_m (1.2 m) is floor, and a
+// valley between two slopes is no ditch either.
+TEST(ObstaclesTest, WideFloorsAndValleysAreNoDitches) {
+  const auto between =
+      Extract(Corridor([](double x) { return (x > 4.0 && x < 6.0) || x > 8.0 ? 0.2 : 0.0; }));
+  for (const Obstacle* d : OfKind(between, ObstacleKind::kDitch)) {
+    ADD_FAILURE() << "a ditch at " << d->centroid_m.transpose() << ", " << d->width_m << " m wide";
+  }
+  // 1 m apart, the same floor is a ditch between the slabs.
+  const auto trench =
+      Extract(Corridor([](double x) { return (x > 4.0 && x < 6.0) || x > 7.0 ? 0.2 : 0.0; }));
+  const auto ditches = OfKind(trench, ObstacleKind::kDitch);
+  ASSERT_EQ(ditches.size(), 1u);
+  EXPECT_NEAR(ditches[0]->width_m, 1.0, 1e-4);
+  const auto valley = Extract(Corridor([](double x) { return 0.05 * std::fabs(x - 6.0); }));
+  EXPECT_TRUE(OfKind(valley, ObstacleKind::kDitch).empty());
+}
+
 TEST(ObstaclesTest, CubeIsAWallOrObject) {
   const common::ObstacleRegistry r = Extract(MakeTerrain(40, 40, kRes, [](double x, double y) {
     return (x > 3.0 && x < 4.0 && y > 4.0 && y < 5.0) ? 1.0 : 0.0;
