@@ -64,7 +64,17 @@ GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double rim_
         // cell's height is a face's returns, not ground at the rim (the floor cells in front of
         // a step, raised by returns from its face, with an unhit cell between them). A rim cell
         // that holds the ditch's edge is crossed lower than its height, but well above the gap.
-        if (v.B(cx, cy) < rim_threshold - 0.5 * flatness_m) return line;
+        if (v.B(cx, cy) < rim_threshold - 0.5 * flatness_m) {
+          // ... unless it holds the gap's far face: the face's top returns fell in it, the rays
+          // that hit the face lower crossed it, and the ground beyond it is a clean rim at the
+          // face's height. Then it is part of the gap and the next cell is the rim.
+          const int nx = cx + sdx, ny = cy + sdy;
+          const bool face_cell = k < max_cells && v.Inside(nx, ny) && !std::isnan(v.H(nx, ny)) &&
+                                 std::fabs(double(v.H(nx, ny)) - hc) < flatness_m &&
+                                 !(v.B(nx, ny) < rim_threshold - 0.5 * flatness_m);
+          if (face_cell) continue;
+          return line;
+        }
         for (int e = 1; e <= 2; ++e) {
           const int ox = cx + e * sdx, oy = cy + e * sdy;
           if (!v.Inside(ox, oy)) return line;

@@ -279,7 +279,10 @@ void FeatureMeasurer::MeasureDitch(const std::vector<int64_t>& cells, Obstacle* 
       depth_seen = std::isnan(depth_seen) ? ddepth_[i] : std::max(depth_seen, double(ddepth_[i]));
     }
   }
-  o->width_m = internal::Median(widths);
+  // Each cell's width is that of the narrowest line through it whose rims qualify. Where the
+  // rims across are broken (a face cell, noise) only a diagonal may qualify, √2 wider: the
+  // lower quartile is the width across where the rims were seen best.
+  o->width_m = internal::Percentile(widths, 0.25);
   o->depth_m = depth_seen;
   o->height_m = std::isnan(depth_seen) ? 0.0 : depth_seen;
 }

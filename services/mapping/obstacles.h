@@ -16,7 +16,8 @@
 /// from a profile:
 /// - ditch: cells of a negative obstacle (layers::kDitchDepth), with the unseen gap and the
 ///   bottom the sensor saw, and trenches whose whole bottom was seen (seen_ditch_max_width_m);
-///   width is the gap between the rims, depth NaN when no bottom cell was seen;
+///   width is the gap between the rims (the lower quartile of its cells' narrowest lines),
+///   depth NaN when no bottom cell was seen;
 /// - step (up or down): a height difference over one or two cells along x or y (two when a
 ///   vertical face left an intermediate height in the cell it cuts) that stands out from the
 ///   differences just before and after it along the same line (a ramp rises evenly, a step

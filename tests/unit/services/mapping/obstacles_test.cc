@@ -223,6 +223,13 @@ TEST(ObstaclesTest, WideFloorsAndValleysAreNoDitches) {
   const auto ditches = OfKind(trench, ObstacleKind::kDitch);
   ASSERT_EQ(ditches.size(), 1u);
   EXPECT_NEAR(ditches[0]->width_m, 1.0, 1e-4);
+  // Nor is a dip in the top of a wall (1 m high, 0.2 m thick, 6 cm lower over 0.4 m): its cells
+  // are the wall's.
+  const auto wall_top = Extract(MakeTerrain(40, 30, kRes, [](double x, double y) {
+    if (y > 3.0 && y < 3.2) return (x > 3.0 && x < 3.4) ? 0.94 : 1.0;
+    return 0.0;
+  }));
+  EXPECT_TRUE(OfKind(wall_top, ObstacleKind::kDitch).empty());
   const auto valley = Extract(Corridor([](double x) { return 0.05 * std::fabs(x - 6.0); }));
   EXPECT_TRUE(OfKind(valley, ObstacleKind::kDitch).empty());
 }

@@ -565,6 +565,35 @@ TEST(TraversabilityTest, AnUnhitCellAmongAStepsFaceCellsIsNoDitch) {
   EXPECT_FALSE(std::isnan(map.at(layers::kDitchDepth)(14, 6)));
 }
 
+// The terraces world's 0.6 m trench seen from 0.9 m before it (values the mapper kept): the last
+// cell of the gap holds the far face's top returns (about rim height), and the rays that hit the
+// face lower crossed it 12 cm down; the deck beyond is clean. That cell is part of the gap: the
+// ditch spans all three cells, 0.6 m wide; without the face cell it was no ditch at all.
+TEST(TraversabilityTest, AGapsFarFaceCellIsPartOfTheGap) {
+  GridMap map = TrenchMap(0.6, 0.0);
+  Layer& h = map.at(layers::kElevation);
+  Layer& b = map.at(layers::kGroundBound);
+  for (int iy = 0; iy < map.size_y(); ++iy) {
+    b(10, iy) = -0.037f;
+    b(11, iy) = -0.080f;
+    h(12, iy) = 0.006f;
+    b(12, iy) = -0.121f;
+    for (int ix = 0; ix < map.size_x(); ++ix) {
+      if (ix < 10 || ix > 12) b(ix, iy) = -0.004f;
+    }
+  }
+  ComputeGeometricLayers(&map, {});
+  for (int iy = 0; iy < map.size_y(); ++iy) {
+    EXPECT_NEAR(map.at(layers::kDitchWidth)(11, iy), 0.6, 1e-5) << iy;
+    EXPECT_NEAR(map.at(layers::kDitchDepth)(11, iy), 0.08, 0.01) << iy;
+    EXPECT_FALSE(std::isnan(map.at(layers::kDitchDepth)(10, iy))) << iy;  // on the gap segment
+  }
+  // A face cell whose next cell is no clean rim (rays crossed it low too) ends the walk.
+  for (int iy = 0; iy < map.size_y(); ++iy) b(13, iy) = -0.1f;
+  ComputeGeometricLayers(&map, {});
+  EXPECT_TRUE(std::isnan(map.at(layers::kDitchDepth)(11, 6)));
+}
+
 TEST(TraversabilityTest, DropIntoAnUnseenGapIsAStepDown) {
   // A platform 0.3 m high ends at x = 2; beyond it nothing was seen, but rays went down to 0.
   GridMap map =
