@@ -486,6 +486,17 @@ void AddSeenDitches(const GridMap& map, const ObstacleParams& params, std::vecto
           !(k == internal::kNone || k == kStep || k == kRamp)) {
         continue;
       }
+      // A ditch's floor is the low ground around it: nothing within two cells lies a drop below
+      // it (within two cells of a trench's floor are its faces and rims). The top of a wall seen
+      // from afar, its sides unseen and its edges unclassified, is no floor.
+      bool lowest = true;
+      for (int dy = -2; dy <= 2 && lowest; ++dy) {
+        for (int dx = -2; dx <= 2; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          lowest &= !(view.Inside(nx, ny) && view.H(nx, ny) < view.h[i] - params.min_drop_height_m);
+        }
+      }
+      if (!lowest) continue;
       if (const auto bottom = internal::TestSeenBottom(view, x, y, ditch, res)) {
         (*cls)[i] = kDitch;
         (*ddepth)[i] = static_cast<float>(bottom->depth_m);

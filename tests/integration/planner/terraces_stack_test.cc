@@ -148,10 +148,11 @@ TEST_F(TerracesStackTest, NeverEntersADitchWiderThanItsProfileAllows) {
 
 // Disabled (issue 17, "ditches as ditches"): a ray reaches the bottom of a 0.25 m deep, 0.6 m
 // wide trench only from a lidar within about 0.8 m of its near rim (0.33 m high, lowest ring
-// 30.67 deg down). From afar the registry lists one ditch, 0.57 m wide, "bottom unseen"; driven
-// up to 0.9 m of the rim (a goal at x 9.2), the rover sees part of the bottom and the registry
-// lists no ditch at all (a far-rim "step up 0.02 m" instead): a ditch bottom is found only
-// beside unseen ditch cells.
+// 30.67 deg down), and the rover stops 0.9 m short of it (a goal at x 9.2): no bottom cell is
+// seen, so no depth. The registry lists the trench as ditches, "bottom unseen", but in 2 or 3
+// pieces 0.8 m wide: where the rays that hit the far face behind its cell border (range noise)
+// also crossed the deck's first cell, the rim is found a cell further. A trench whose floor is
+// seen is one ditch with its depth (ObstaclesTest.ASeenTrenchIsOneDitchWithItsWidthAndDepth).
 TEST_F(TerracesStackTest, DISABLED_TheRegistryNamesTheWideDitchWithItsWidthAndDepth) {
   UseProfile("rover", "rover", {});
   StartStack(4.0, 14.0, 0.0, HorizonNavigatorConfig());
@@ -188,9 +189,9 @@ TEST_F(TerracesStackTest, TheRoverBridgesADitchNarrowerThanItsProfileAllows) {
 }
 
 // Disabled (issue 17, "ditches as ditches"): after the rover drove over it, the registry lists
-// the narrow ditch as two ditches (centroids y 9.85 and 11.15 m), each 0.24 m wide (within a
-// cell of 0.15 m) and "bottom unseen": a 0.1 m deep, 0.15 m wide slot shows its bottom only to
-// rays steeper than the lidar's lowest beam at the distances it was seen from.
+// the narrow ditch once, 0.2 m wide (within a cell of 0.15 m), but "bottom unseen": a 0.1 m
+// deep, 0.15 m wide slot shows its bottom only to rays steeper than 33.7 deg, and the lidar's
+// lowest ring is 30.67 deg down.
 TEST_F(TerracesStackTest, DISABLED_TheRegistryNamesTheNarrowDitchOnceWithItsWidthAndDepth) {
   DriveTheRoverOverTheNarrowDitch();
   ExpectDitchInTheRegistry(2, 10.0, 10.15, 0.10);
