@@ -463,6 +463,19 @@ std::optional<Obstacle> FeatureMeasurer::Measure(const Found& f) {
   return o;
 }
 
+// A ditch's floor is the low ground around it: nothing within two cells lies `drop_m` below it
+// (within two cells of a trench's floor are its faces and rims). The top of a wall seen from
+// afar, its sides unseen and its edges unclassified, is no floor.
+bool LowestAround(const internal::TerrainView& view, int x, int y, double drop_m) {
+  const double floor_m = double(view.H(x, y)) - drop_m;
+  for (int dy = -2; dy <= 2; ++dy) {
+    for (int dx = -2; dx <= 2; ++dx) {
+      if (view.Inside(x + dx, y + dy) && view.H(x + dx, y + dy) < floor_m) return false;
+    }
+  }
+  return true;
+}
+
 // Known cells that lie in a ditch whose bottom was seen (internal::TestSeenBottom, at most
 // seen_ditch_max_width_m wide) become ditch cells with that depth and width; their rims
 // and faces join them as the rims of a ditch with an unseen gap do. Cells already in a ditch,
@@ -486,22 +499,12 @@ void AddSeenDitches(const GridMap& map, const ObstacleParams& params, std::vecto
           !(k == internal::kNone || k == kStep || k == kRamp)) {
         continue;
       }
-      // A ditch's floor is the low ground around it: nothing within two cells lies a drop below
-      // it (within two cells of a trench's floor are its faces and rims). The top of a wall seen
-      // from afar, its sides unseen and its edges unclassified, is no floor.
-      bool lowest = true;
-      for (int dy = -2; dy <= 2 && lowest; ++dy) {
-        for (int dx = -2; dx <= 2; ++dx) {
-          const int nx = x + dx, ny = y + dy;
-          lowest &= !(view.Inside(nx, ny) && view.H(nx, ny) < view.h[i] - params.min_drop_height_m);
-        }
-      }
-      if (!lowest) continue;
-      if (const auto bottom = internal::TestSeenBottom(view, x, y, ditch, res)) {
-        (*cls)[i] = kDitch;
-        (*ddepth)[i] = static_cast<float>(bottom->depth_m);
-        (*dwidth)[i] = static_cast<float>(bottom->width_m);
-      }
+      const auto bottom = internal::TestSeenBottom(view, x, y, ditch, res);
+      // The neighbourhood is read only for the rare cell that passes the gap test.
+      if (!bottom || !LowestAround(view, x, y, params.min_drop_height_m)) continue;
+      (*cls)[i] = kDitch;
+      (*ddepth)[i] = static_cast<float>(bottom->depth_m);
+      (*dwidth)[i] = static_cast<float>(bottom->width_m);
     }
   }
 }
