@@ -320,6 +320,7 @@ class CostRules {
   bool compensate_, exact_tilt_;
   double pitch_rad_, cp_, sp_, cos_heading_, sin_heading_;
   int reach_cells_;
+  double res_;
   std::array<int64_t, 4> neighbour_offset_{};
   std::array<double, 4> forward_m_{};
 };
@@ -361,7 +362,8 @@ CostRules::CostRules(const GridMap& map, const common::RobotProfile& profile,
       pitch_rad_(robot.pitch_rad),
       cp_(std::cos(robot.pitch_rad)),
       sp_(std::sin(robot.pitch_rad)),
-      reach_cells_(UnseenDropReachCells(map.resolution_m())) {
+      reach_cells_(UnseenDropReachCells(map.resolution_m())),
+      res_(map.resolution_m()) {
   if (blind_) {
     robot_cells_ = map.geometry().ContinuousIndexOf(*robot.xy_m);
     blind_cells_ = params.blind_zone_half_size_m / map.resolution_m();
@@ -441,7 +443,19 @@ float CostRules::UnseenDropMask(int x, int y, int k, int64_t j, float hc, double
     const int nx = x + s * kNeighbours[k][0], ny = y + s * kNeighbours[k][1];
     if (nx < 0 || ny < 0 || nx >= sx_ || ny >= sy_) break;
     const int64_t jj = nx + static_cast<int64_t>(ny) * sx_;
-    if (!std::isnan(h_[jj])) break;
+    if (!std::isnan(h_[jj])) {
+      // Known ground past an unseen run the profile bridges (the ditch rule: its wheels span
+      // the run whatever lies below): the crossing is a step from here to that ground. The
+      // foot of a step face seen from below is such a run: its cell mixes face and floor
+      // returns and is published unknown.
+      if ((s - 1) * res_ <= ditch_limit_ + tol_) {
+        double rise = double(h_[jj]) - hc;
+        if (exact_tilt_) rise = forward_m_[k] * s * sp_ + rise * cp_;
+        return StepLethal(x + static_cast<int64_t>(y) * sx_, jj, k, rise, ratio) ? StepMask(k, rise)
+                                                                                 : 0.f;
+      }
+      break;
+    }
     if (std::isfinite(bound_[jj])) lowest = std::min(lowest, bound_[jj]);
   }
   double drop = double(hc) - lowest;

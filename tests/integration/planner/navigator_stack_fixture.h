@@ -122,7 +122,7 @@ class NavigatorStackTest : public ::testing::Test {
                   const std::string& mapper_args = "") {
     const std::string dir = procs_.dir();
     std::ostringstream robot;
-    robot << kRobot << ":pioneer3at:pioneer3at:" << x << "," << y << "," << yaw_deg;
+    robot << kRobot << ":" << body_ << ":" << body_ << ":" << x << "," << y << "," << yaw_deg;
     const std::string graph = dir + "/" + world_ + ".yaml";
     {
       std::ofstream out(graph);
@@ -293,7 +293,7 @@ class NavigatorStackTest : public ::testing::Test {
 
   // Mapper and navigator serve the profile `name`: config/profiles/<base>.yaml with its name and
   // the `overrides` ("key" -> "value") changed, written to the test's folder. Call before
-  // StartStack. The simulated robot stays a Pioneer 3-AT.
+  // StartStack. The simulated robot stays a Pioneer 3-AT unless UseBody says otherwise.
   void UseProfile(const std::string& name, const std::string& base,
                   const std::vector<std::pair<std::string, std::string>>& overrides) {
     std::ifstream in(testing::SourcePath("config/profiles/" + base + ".yaml"));
@@ -312,6 +312,10 @@ class NavigatorStackTest : public ::testing::Test {
     std::ofstream(profile_arg_) << yaml;
     footprint_ = common::LoadRobotProfileFile(profile_arg_).footprint_m;
   }
+
+  // The simulator drives `model` (a robot of simulator/robots) instead of the Pioneer 3-AT.
+  // Call before StartStack.
+  void UseBody(const std::string& model) { body_ = model; }
 
   // The footprint polygon at a pose.
   std::vector<Vector2> FootprintAt(const Pose2& pose) const {
@@ -335,6 +339,7 @@ class NavigatorStackTest : public ::testing::Test {
   }
 
   std::string world_;
+  std::string body_{"pioneer3at"};         // the simulated robot model (simulator/robots)
   std::string profile_{"pioneer3at"};      // served and driven
   std::string profile_arg_{"pioneer3at"};  // its name or YAML path, as the processes take it
   std::string url_;

@@ -30,8 +30,9 @@ class TerracesStackTest : public NavigatorStackTest {
     }
   }
 
-  // Lane 2: the 0.15 m ditch that stops the pioneer3at; the rover's profile bridges 0.30 m.
+  // Lane 2: the 0.15 m ditch that stops the pioneer3at; the rover bridges 0.30 m.
   void DriveTheRoverOverTheNarrowDitch() {
+    UseBody("rover");
     UseProfile("rover", "rover", {});
     StartStack(4.0, 10.0, 0.0, HorizonNavigatorConfig());
     ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
@@ -142,18 +143,17 @@ TEST_F(TerracesStackTest, ClimbsTheRampBesideTheOneWayDropInsteadOfTheDrop) {
 TEST_F(TerracesStackTest, NeverEntersADitchWiderThanItsProfileAllows) {
   // Lane 3: a 0.6 m wide, 0.25 m deep ditch at x 10.0..10.6, wall to wall; the rover's profile
   // bridges 0.30 m (it crosses the 0.15 m ditch of lane 2, below).
+  UseBody("rover");
   UseProfile("rover", "rover", {});
   ExpectNoPathNeverEntering(4.0, 14.0, 16, 15.0, Box(10.0, 12.1, 10.6, 15.9), 110.0, true);
 }
 
-// Disabled (issue 17, "ditches as ditches"): a ray reaches the bottom of a 0.25 m deep, 0.6 m
-// wide trench only from a lidar within about 0.8 m of its near rim (0.33 m high, lowest ring
-// 30.67 deg down), and the rover stops 0.9 m short of it (a goal at x 9.2): no bottom cell is
-// seen, so no depth. The registry lists the trench as ditches, "bottom unseen", but in 2 or 3
-// pieces 0.8 m wide: where the rays that hit the far face behind its cell border (range noise)
-// also crossed the deck's first cell, the rim is found a cell further. A trench whose floor is
-// seen is one ditch with its depth (ObstaclesTest.ASeenTrenchIsOneDitchWithItsWidthAndDepth).
-TEST_F(TerracesStackTest, DISABLED_TheRegistryNamesTheWideDitchWithItsWidthAndDepth) {
+// The rover's lidar (0.62 m up) sees the trench's bottom from 0.9..1.3 m short of its near rim,
+// on the way to a goal 0.8 m short of it. The registry lists it once, 0.6 m wide and 0.25 m deep
+// (the seen-floor ditch of obstacles.seen_ditch_max_width_m). With the Pioneer 3-AT's lidar
+// (0.33 m up) the bottom is never seen from outside the trench.
+TEST_F(TerracesStackTest, TheRegistryNamesTheWideDitchWithItsWidthAndDepth) {
+  UseBody("rover");
   UseProfile("rover", "rover", {});
   StartStack(4.0, 14.0, 0.0, HorizonNavigatorConfig());
   ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
@@ -162,23 +162,26 @@ TEST_F(TerracesStackTest, DISABLED_TheRegistryNamesTheWideDitchWithItsWidthAndDe
   ExpectDitchInTheRegistry(3, 10.0, 10.6, 0.25);
 }
 
-// Disabled: from below, the ramp behind the platform lies in the platform's lidar shadow, and the
-// rays passing over it prove only that the ground lies more than unseen_drop_m below the platform
-// edge, which reads as a drop for every profile; the goal is then not connected. And the
-// simulated body is a Pioneer 3-AT, whose chassis clears the floor by 7.5 cm: with the unseen
-// rim planned through (map.look_at_unseen_drops) it drove at the 8 cm face at 0.47 m/s and did
-// not move. The test needs a body that can climb 8 cm.
-TEST_F(TerracesStackTest,
-       DISABLED_AProfileThatStepsUpTwelveCentimetresClimbsTheEightCentimetreDrop) {
-  // Lane 0 from the floor past the drop, with the pioneer3at's profile allowed 12 cm steps up:
-  // the drop is now the way back.
-  UseProfile("climber", "pioneer3at", {{"max_step_up_m", "0.12"}});
+// The simulated Pioneer 3-AT's chassis clears the floor by 7.5 cm, so it cannot mount the 8 cm
+// face whatever its profile allows: this runs the rover's body (0.15 m clearance, lidar on a
+// 0.62 m mast, which from the floor sees over the platform onto the ramp behind it) with the
+// rover's profile allowed 12 cm steps up. The floor cell at the face's foot mixes face and floor
+// returns and stays unknown; the rover bridges one cell (0.30 m ditches), so the crossing is the
+// step from the floor to the platform beyond it.
+TEST_F(TerracesStackTest, AProfileThatStepsUpTwelveCentimetresClimbsTheEightCentimetreDrop) {
+  // Lane 0 from the floor past the drop: the drop is now the way back.
+  UseBody("rover");
+  UseProfile("climber", "rover", {{"max_step_up_m", "0.12"}});
   StartStack(15.0, 2.0, 180.0, HorizonNavigatorConfig());
   ASSERT_TRUE(WaitFor([&] { return CostVersion() >= 5; }, 30.0, [&] { bus_.Pump(20); }));
   SendGoal(17, 4.0, 2.0);
   ASSERT_TRUE(WaitState(kStateReached, 150.0)) << StatusText();
   const auto poses = Poses();
   ASSERT_FALSE(poses.empty());
+  const double start_z = poses.front().position_m[2];
+  double top_z = start_z;
+  for (const auto& p : poses) top_z = std::max(top_z, p.position_m[2]);
+  EXPECT_GT(top_z - start_z, 0.06) << "it never climbed onto the platform";
   const auto& last = poses.back();
   EXPECT_LT(std::hypot(last.position_m[0] - 4.0, last.position_m[1] - 2.0), 0.5);
   ExpectClearOfTheWalls(0);

@@ -77,6 +77,37 @@ TEST_F(PhysicsTest, Pioneer3AtCannotMountTwentyCentimetreStepButRollsOverOneCent
   }
 }
 
+TEST_F(PhysicsTest, RoverMountsAnEightCentimetreStepButNotTwenty) {
+  // Its profile's step up is 8 cm: slowly or at full speed, head on or turning at it.
+  struct Run {
+    double step_m, v_mps, w_radps;
+  };
+  for (const Run run : {Run{0.08, 0.5, 0.0}, Run{0.08, 0.2, 0.0}, Run{0.08, 0.6, -0.45},
+                        Run{0.08, 0.25, 0.4}, Run{0.2, 0.5, 0.0}}) {
+    const double step = run.step_m;
+    char box[128];
+    std::snprintf(box, sizeof(box), R"(<geom type="box" size="6 6 %f" pos="8 0 %f"/>)", step / 2,
+                  step / 2);
+    Scenario s = InlineScenario(FlatWorld(box), "rover", "rover");
+    s.robots[0].sensors = SensorSet{};
+    MujocoSim sim(s);
+    SimOutputs out;
+    // Straight at the face; from 0.3 m short of it a turn for 1.5 s, then straight again.
+    Drive(sim, "rover", run.v_mps, 0.0, (2.0 - 0.35 - 0.3) / run.v_mps, &out);
+    Drive(sim, "rover", run.v_mps, run.w_radps, 1.5, &out);
+    Drive(sim, "rover", run.v_mps, 0.0, 12.0, &out);
+    SCOPED_TRACE(::testing::Message() << "v " << run.v_mps << " w " << run.w_radps);
+    const common::Pose3 pose = sim.RobotPose("rover");
+    if (step > 0.15) {
+      // The front wheels may reach its top (it is as high as their axles); the rear ones never.
+      EXPECT_LT(pose.position_m.x(), 2.0) << "climbed the 20 cm step";
+    } else {
+      EXPECT_GT(pose.position_m.x(), 3.0) << "stuck at the " << step << " m step";
+      EXPECT_NEAR(pose.position_m.z(), step + 0.2, 0.01) << step;
+    }
+  }
+}
+
 TEST_F(PhysicsTest, Pioneer3AtFallsOffADrop) {
   // A 0.2 m platform ending at x = 3; the robot starts on it.
   Scenario s = InlineScenario(FlatWorld(R"(<geom type="box" size="3 2 0.1" pos="0 0 0.1"/>)"),
@@ -99,7 +130,7 @@ TEST_F(PhysicsTest, Pioneer3AtFallsOffADrop) {
 }
 
 TEST_F(PhysicsTest, CommandedVelocitiesAreMetOnFlatGround) {
-  for (const char* model : {"pioneer3at", "p3dx", "kobuki"}) {
+  for (const char* model : {"pioneer3at", "rover", "p3dx", "kobuki"}) {
     Scenario s = InlineScenario(FlatWorld(), "r", model);
     s.robots[0].sensors = SensorSet{};
     MujocoSim sim(s);

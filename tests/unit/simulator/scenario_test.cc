@@ -109,7 +109,7 @@ TEST(ScenarioTest, RobotFlag) {
 TEST(ScenarioTest, ShippedRobotsLoadAndHelpListsWorlds) {
   const SimPaths paths = testing::TestPaths();
   const auto robots = paths.ShippedRobots();
-  EXPECT_EQ(robots, (std::vector<std::string>{"kobuki", "p3dx", "pioneer3at"}));
+  EXPECT_EQ(robots, (std::vector<std::string>{"kobuki", "p3dx", "pioneer3at", "rover"}));
   for (const std::string& name : robots) {
     const RobotModel m = LoadRobotModel(paths, name);
     EXPECT_FALSE(m.description.empty());

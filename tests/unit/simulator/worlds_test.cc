@@ -43,7 +43,7 @@ TEST_F(WorldsTest, EveryShippedWorldHostsEveryRobot) {
     // Free floor in each world (the apartment's living room, the arena's hall).
     const bool lanes = world == "tunnel" || world == "terraces";
     at.x_m = lanes ? 4.0 : world == "apartment" ? 1.5 : world == "arena" ? 5.0 : 0.0;
-    at.y_m = lanes ? 6.0 : world == "apartment" ? 3.0 : world == "arena" ? 3.0 : 0.0;
+    at.y_m = lanes ? 6.0 : world == "apartment" ? 2.5 : world == "arena" ? 4.0 : 0.0;
     int k = 0;
     for (const std::string& model : paths.ShippedRobots()) {
       SpawnPose p = at;

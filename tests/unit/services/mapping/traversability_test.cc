@@ -689,6 +689,44 @@ TEST(TraversabilityTest, TheRimSeesTheDropBeyondAMixedEdgeCell) {
   EXPECT_LT(Cost(map, "pioneer3at", 9, 6), layers::kCostLethal);
 }
 
+// An 8 cm step seen from below: its face's returns spill into the floor cell at its foot,
+// which is published unknown (a mixed cell) with the floor's bound. A profile that bridges that
+// one cell (max_ditch_width_m >= 0.2 m) judges the crossing as the step between the platform and
+// the floor beyond, in each direction; one that does not sees an unseen drop.
+TEST(TraversabilityTest, AProfileThatBridgesTheUnseenFootOfAStepJudgesTheStep) {
+  GridMap map = MakeTerrain(30, 12, kRes, [](double x, double) {
+    return x < 2.0 ? 0.08 : (x < 2.0 + kRes ? std::nan("") : 0.0);
+  });
+  Layer& b = map.AddLayer(layers::kGroundBound);
+  for (int iy = 0; iy < 12; ++iy) b(10, iy) = 0.005f;  // rays over the foot cell, at floor level
+  common::RobotProfile wide = ShippedProfile("pioneer3at");
+  wide.name = "wide";
+  wide.max_ditch_width_m = 0.3;
+  ComputeCostLayer(&map, wide, {});
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  // Down 8 cm (within 10) from the rim; up 8 cm (over 3) from the floor: that way only.
+  EXPECT_EQ(Mask(map, "wide", 9, 6), 0.f);
+  EXPECT_LT(Cost(map, "wide", 9, 6), layers::kCostLethal);
+  EXPECT_EQ(Mask(map, "wide", 11, 6), float(1u << 4)) << "bit 4: towards -x";
+  ExpectMaskMatchesCost(map, "wide");
+  // The same profile allowed 12 cm steps up crosses it both ways.
+  wide.max_step_up_m = 0.12;
+  ComputeCostLayer(&map, wide, {});
+  EXPECT_EQ(Mask(map, "wide", 11, 6), 0.f);
+  EXPECT_LT(Cost(map, "wide", 11, 6), layers::kCostLethal);
+  // The pioneer3at bridges 0.10 m: the rim stands over an unseen drop.
+  EXPECT_EQ(Mask(map, "pioneer3at", 9, 6), layers::kUnseenDrop);
+  // A 20 cm step is too much down for the wide profile as well: blocked both ways.
+  map.at(layers::kElevation).setConstant(0.0f);
+  for (int iy = 0; iy < 12; ++iy) {
+    for (int ix = 0; ix < 10; ++ix) map.at(layers::kElevation)(ix, iy) = 0.2f;
+    map.at(layers::kElevation)(10, iy) = std::nanf("");
+  }
+  ComputeGeometricLayers(&map, {});
+  ComputeCostLayer(&map, wide, {});
+  EXPECT_EQ(Mask(map, "wide", 9, 6), layers::kAllHeadingsBlocked);
+}
+
 // The live mapper recomputes windows of a larger map: with DependencyRadiusCells of margin the
 // window's values equal the whole-map computation.
 TEST(TraversabilityTest, WindowWithMarginMatchesWholeMap) {
