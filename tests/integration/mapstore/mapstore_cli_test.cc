@@ -218,5 +218,37 @@ TEST(MapstoreCliTest, ShareAndDiffUnderTwoProfiles) {
   EXPECT_NE(show.output.find("1 cached derivations"), std::string::npos) << show.output;
 }
 
+// An 8 cm step across a stored map: the pioneer3at may drive down it and never up (3 cm step
+// up), the rover crosses it both ways (8 cm up, 15 cm down). `share` lists that change, with the
+// direction the pioneer3at may take.
+TEST(MapstoreCliTest, ShareListsTheOneWayVerdictsThatChange) {
+  ProcessSet procs(cairn::testing::PrivateLcmUrl());
+  const std::string db = procs.dir() + "/site.db";
+  {
+    auto store = SqliteMapStore::Open(db);
+    ASSERT_TRUE(store.ok());
+    MapSnapshot s = TerrainSnapshot("lab", "terrace", 60, 40, 0.f);
+    for (int iy = 0; iy < 40; ++iy) {
+      for (int ix = 0; ix < 60; ++ix) {
+        s.base.at("elevation")(ix, iy) = ix < 30 ? 0.08f : 0.0f;
+        s.base.at("elevation_variance")(ix, iy) = 1e-6f;
+      }
+    }
+    ASSERT_TRUE((*store)->SaveMap(s, {"cli-test", 0, 0}).ok());
+    ASSERT_TRUE((*store)->PutProfile(ShippedProfile("pioneer3at"), {"cli-test", 0, 0}).ok());
+    ASSERT_TRUE((*store)->PutProfile(ShippedProfile("rover"), {"cli-test", 0, 0}).ok());
+  }
+  CliResult share = RunCli(
+      procs, {"share", "--db", db, "--site", "lab", "--map", "terrace", "--profile", "rover"},
+      120.0);
+  ASSERT_EQ(share.exit_code, 0) << share.output;
+  EXPECT_NE(share.output.find("1 obstacles change verdict from pioneer3at to rover"),
+            std::string::npos)
+      << share.output;
+  EXPECT_NE(share.output.find("pioneer3at: one-way"), std::string::npos) << share.output;
+  EXPECT_NE(share.output.find("crossable downwards only"), std::string::npos) << share.output;
+  EXPECT_NE(share.output.find("rover: crossable"), std::string::npos) << share.output;
+}
+
 }  // namespace
 }  // namespace cairn::mapstore::testing
