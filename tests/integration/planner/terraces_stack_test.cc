@@ -79,10 +79,13 @@ class TerracesStackTest : public NavigatorStackTest {
 // Disabled: the robot climbs the ramp, but from the platform the floor below the drop lies in the
 // edge's lidar shadow, and the rays over it prove only that it lies more than unseen_drop_m (5 cm)
 // below the rim: the rim reads as an unseen drop (lethal every way) and the goal is "not
-// connected" before the robot is close enough to see the floor. With the navigator planning to
-// the edge to look (map.look_at_unseen_drops: true) the robot stops 0.5 m short of the rim, and
-// the first floor cell below it (hit only from a lidar 0.44..0.51 m short of the edge) stays
-// unseen: planner/README.md, "Unseen drops".
+// connected" before the robot is close enough to see the floor. The pioneer3at bridges 0.10 m,
+// less than the one 0.2 m cell at the face's foot, so the foot rule of the rover (an unseen run
+// it bridges is judged as the step beyond it) does not apply. With the navigator planning to the
+// edge to look (map.look_at_unseen_drops: true) the robot stops about 0.5 m short of the rim
+// (the DWA drives on the strict map, where the unseen drops are lethal); from there one row of
+// foot cells is seen and becomes one-way (down only), its neighbours along the edge stay unseen:
+// planner/README.md, "Unseen drops".
 TEST_F(TerracesStackTest, DISABLED_DrivesUpTheRampAndOffTheEightCentimetreDrop) {
   // Lane 0: a 5 deg ramp up to an 8 cm platform that ends in an 8 cm drop at x = 12, wall to
   // wall. Down the drop is the only way to the goal, and 8 cm is within the 10 cm step down.
@@ -194,7 +197,9 @@ TEST_F(TerracesStackTest, TheRoverBridgesADitchNarrowerThanItsProfileAllows) {
 // Disabled (issue 17, "ditches as ditches"): after the rover drove over it, the registry lists
 // the narrow ditch once, 0.2 m wide (within a cell of 0.15 m), but "bottom unseen": a 0.1 m
 // deep, 0.15 m wide slot shows its bottom only to rays steeper than 33.7 deg, and the lidar's
-// lowest ring is 30.67 deg down.
+// lowest ring is 30.67 deg down, whatever its height. A 0.25 m wide, 6 cm deep slot (bottom seen
+// by the lowest four rings) was tried: its bottom cell mixes rim and bottom returns and stays
+// unknown, and the far face's cell makes the gap 0.4 m wide, over the rover's 0.30 m.
 TEST_F(TerracesStackTest, DISABLED_TheRegistryNamesTheNarrowDitchOnceWithItsWidthAndDepth) {
   DriveTheRoverOverTheNarrowDitch();
   ExpectDitchInTheRegistry(2, 10.0, 10.15, 0.10);
