@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include <gtest/gtest.h>
 
@@ -186,23 +187,30 @@ TEST(MapstoreCliTest, EveryCommandPrintsHelp) {
   EXPECT_NE(service.Log().find("--db"), std::string::npos);
 }
 
+// Saves lab/<name>, 60 x 40 cells of 0.2 m whose heights are height_m(ix) (variance 1e-6 m^2),
+// mapped with the pioneer3at, and stores the pioneer3at and rover profiles.
+void SaveLabMapWithTwoProfiles(const std::string& db, const std::string& name,
+                               const std::function<float(int)>& height_m) {
+  auto store = SqliteMapStore::Open(db);
+  ASSERT_TRUE(store.ok());
+  MapSnapshot s = TerrainSnapshot("lab", name, 60, 40, 0.f);
+  for (int iy = 0; iy < 40; ++iy) {
+    for (int ix = 0; ix < 60; ++ix) {
+      s.base.at("elevation")(ix, iy) = height_m(ix);
+      s.base.at("elevation_variance")(ix, iy) = 1e-6f;
+    }
+  }
+  ASSERT_TRUE((*store)->SaveMap(s, {"cli-test", 0, 0}).ok());
+  ASSERT_TRUE((*store)->PutProfile(ShippedProfile("pioneer3at"), {"cli-test", 0, 0}).ok());
+  ASSERT_TRUE((*store)->PutProfile(ShippedProfile("rover"), {"cli-test", 0, 0}).ok());
+}
+
 TEST(MapstoreCliTest, ShareAndDiffUnderTwoProfiles) {
   ProcessSet procs(cairn::testing::PrivateLcmUrl());
   const std::string db = procs.dir() + "/site.db";
-  {
-    auto store = SqliteMapStore::Open(db);
-    ASSERT_TRUE(store.ok());
-    MapSnapshot s = TerrainSnapshot("lab", "hill", 60, 40, 0.f);
-    const double rise = std::tan(10.0 * M_PI / 180.0) * 0.2;
-    for (int iy = 0; iy < 40; ++iy) {
-      for (int ix = 0; ix < 60; ++ix) {
-        s.base.at("elevation")(ix, iy) = static_cast<float>(std::clamp(ix - 15, 0, 25) * rise);
-      }
-    }
-    ASSERT_TRUE((*store)->SaveMap(s, {"cli-test", 0, 0}).ok());
-    ASSERT_TRUE((*store)->PutProfile(ShippedProfile("pioneer3at"), {"cli-test", 0, 0}).ok());
-    ASSERT_TRUE((*store)->PutProfile(ShippedProfile("rover"), {"cli-test", 0, 0}).ok());
-  }
+  const double rise = std::tan(10.0 * M_PI / 180.0) * 0.2;
+  SaveLabMapWithTwoProfiles(
+      db, "hill", [&](int ix) { return static_cast<float>(std::clamp(ix - 15, 0, 25) * rise); });
   CliResult share = RunCli(
       procs, {"share", "--db", db, "--site", "lab", "--map", "hill", "--profile", "rover"}, 120.0);
   ASSERT_EQ(share.exit_code, 0) << share.output;
@@ -224,20 +232,7 @@ TEST(MapstoreCliTest, ShareAndDiffUnderTwoProfiles) {
 TEST(MapstoreCliTest, ShareListsTheOneWayVerdictsThatChange) {
   ProcessSet procs(cairn::testing::PrivateLcmUrl());
   const std::string db = procs.dir() + "/site.db";
-  {
-    auto store = SqliteMapStore::Open(db);
-    ASSERT_TRUE(store.ok());
-    MapSnapshot s = TerrainSnapshot("lab", "terrace", 60, 40, 0.f);
-    for (int iy = 0; iy < 40; ++iy) {
-      for (int ix = 0; ix < 60; ++ix) {
-        s.base.at("elevation")(ix, iy) = ix < 30 ? 0.08f : 0.0f;
-        s.base.at("elevation_variance")(ix, iy) = 1e-6f;
-      }
-    }
-    ASSERT_TRUE((*store)->SaveMap(s, {"cli-test", 0, 0}).ok());
-    ASSERT_TRUE((*store)->PutProfile(ShippedProfile("pioneer3at"), {"cli-test", 0, 0}).ok());
-    ASSERT_TRUE((*store)->PutProfile(ShippedProfile("rover"), {"cli-test", 0, 0}).ok());
-  }
+  SaveLabMapWithTwoProfiles(db, "terrace", [](int ix) { return ix < 30 ? 0.08f : 0.0f; });
   CliResult share = RunCli(
       procs, {"share", "--db", db, "--site", "lab", "--map", "terrace", "--profile", "rover"},
       120.0);

@@ -42,6 +42,18 @@ std::string RampWorld(double slope_deg, double height_m, double x_end) {
 
 class PhysicsTest : public SimTest {};
 
+// A robot of `model` (no sensors) at the origin, facing a step `step_m` high from x = 2 on,
+// `half_m` deep and wide on each side.
+Scenario StepScenario(double step_m, double half_m, const std::string& id,
+                      const std::string& model) {
+  char box[160];
+  std::snprintf(box, sizeof(box), R"(<geom type="box" size="%f %f %f" pos="%f 0 %f"/>)", half_m,
+                half_m, step_m / 2, 2.0 + half_m, step_m / 2);
+  Scenario s = InlineScenario(FlatWorld(box), id, model);
+  s.robots[0].sensors = SensorSet{};
+  return s;
+}
+
 TEST_F(PhysicsTest, Pioneer3AtClimbsFiveAndTenDegreeRamps) {
   for (double slope : {5.0, 10.0}) {
     Scenario s = InlineScenario(RampWorld(slope, 0.3, 12.0), "p3at", "pioneer3at");
@@ -58,12 +70,7 @@ TEST_F(PhysicsTest, Pioneer3AtClimbsFiveAndTenDegreeRamps) {
 
 TEST_F(PhysicsTest, Pioneer3AtCannotMountTwentyCentimetreStepButRollsOverOneCentimetre) {
   for (double step : {0.2, 0.01}) {
-    char box[128];
-    std::snprintf(box, sizeof(box), R"(<geom type="box" size="2 2 %f" pos="4 0 %f"/>)", step / 2,
-                  step / 2);
-    Scenario s = InlineScenario(FlatWorld(box), "p3at", "pioneer3at");
-    s.robots[0].sensors = SensorSet{};
-    MujocoSim sim(s);
+    MujocoSim sim(StepScenario(step, 2.0, "p3at", "pioneer3at"));
     SimOutputs out;
     Drive(sim, "p3at", 0.5, 0.0, 12.0, &out);
     const common::Pose3 pose = sim.RobotPose("p3at");
@@ -85,12 +92,7 @@ TEST_F(PhysicsTest, RoverMountsAnEightCentimetreStepButNotTwenty) {
   for (const Run run : {Run{0.08, 0.5, 0.0}, Run{0.08, 0.2, 0.0}, Run{0.08, 0.6, -0.45},
                         Run{0.08, 0.25, 0.4}, Run{0.2, 0.5, 0.0}}) {
     const double step = run.step_m;
-    char box[128];
-    std::snprintf(box, sizeof(box), R"(<geom type="box" size="6 6 %f" pos="8 0 %f"/>)", step / 2,
-                  step / 2);
-    Scenario s = InlineScenario(FlatWorld(box), "rover", "rover");
-    s.robots[0].sensors = SensorSet{};
-    MujocoSim sim(s);
+    MujocoSim sim(StepScenario(step, 6.0, "rover", "rover"));
     SimOutputs out;
     // Straight at the face; from 0.3 m short of it a turn for 1.5 s, then straight again.
     Drive(sim, "rover", run.v_mps, 0.0, (2.0 - 0.35 - 0.3) / run.v_mps, &out);
