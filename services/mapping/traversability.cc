@@ -296,8 +296,11 @@ class CostRules {
   bool StepLethal(int64_t i, int64_t j, int k, double rise, double* ratio) const;
   // Towards an unknown neighbour the rays looked into: kUnseenDrop when the ground there lies
   // too far below (a lower bound), else 0.
-  float UnseenDropMask(int x, int y, int k, int64_t j, float hc, double* ratio) const;
-  double Tilted(int k, double rise) const { return forward_m_[k] * sp_ + rise * cp_; }
+  float UnseenDropMask(int x, int y, int64_t i, int k, int64_t j, float hc, double* ratio) const;
+  // A rise to the neighbour `cells` steps towards k, in the robot-levelled frame.
+  double Tilted(int k, double rise, int cells = 1) const {
+    return forward_m_[k] * cells * sp_ + rise * cp_;
+  }
 
   const TraversabilityParams& params_;
   const float* h_;
@@ -320,7 +323,7 @@ class CostRules {
   bool compensate_, exact_tilt_;
   double pitch_rad_, cp_, sp_, cos_heading_, sin_heading_;
   int reach_cells_;
-  double res_;
+  int bridged_cells_;  // the longest unseen run the profile spans (max_ditch_width_m)
   std::array<int64_t, 4> neighbour_offset_{};
   std::array<double, 4> forward_m_{};
 };
@@ -363,7 +366,7 @@ CostRules::CostRules(const GridMap& map, const common::RobotProfile& profile,
       cp_(std::cos(robot.pitch_rad)),
       sp_(std::sin(robot.pitch_rad)),
       reach_cells_(UnseenDropReachCells(map.resolution_m())),
-      res_(map.resolution_m()) {
+      bridged_cells_(static_cast<int>(std::floor((ditch_limit_ + tol_) / map.resolution_m()))) {
   if (blind_) {
     robot_cells_ = map.geometry().ContinuousIndexOf(*robot.xy_m);
     blind_cells_ = params.blind_zone_half_size_m / map.resolution_m();
@@ -435,7 +438,8 @@ bool CostRules::StepLethal(int64_t i, int64_t j, int k, double rise, double* rat
   return false;
 }
 
-float CostRules::UnseenDropMask(int x, int y, int k, int64_t j, float hc, double* ratio) const {
+float CostRules::UnseenDropMask(int x, int y, int64_t i, int k, int64_t j, float hc,
+                                double* ratio) const {
   // The sensor looked into this neighbour and found nothing down to bound[j], nor in the
   // unknown cells beyond it down to theirs.
   float lowest = bound_[j];
@@ -448,11 +452,10 @@ float CostRules::UnseenDropMask(int x, int y, int k, int64_t j, float hc, double
       // the run whatever lies below): the crossing is a step from here to that ground. The
       // foot of a step face seen from below is such a run: its cell mixes face and floor
       // returns and is published unknown.
-      if ((s - 1) * res_ <= ditch_limit_ + tol_) {
+      if (s - 1 <= bridged_cells_) {
         double rise = double(h_[jj]) - hc;
-        if (exact_tilt_) rise = forward_m_[k] * s * sp_ + rise * cp_;
-        return StepLethal(x + static_cast<int64_t>(y) * sx_, jj, k, rise, ratio) ? StepMask(k, rise)
-                                                                                 : 0.f;
+        if (exact_tilt_) rise = Tilted(k, rise, s);
+        return StepLethal(i, jj, k, rise, ratio) ? StepMask(k, rise) : 0.f;
       }
       break;
     }
@@ -479,7 +482,9 @@ float CostRules::NeighbourMask(int x, int y, int64_t i, int k, float hc, double*
     if (exact_tilt_) rise = Tilted(k, rise);
     return StepLethal(i, j, k, rise, ratio) ? StepMask(k, rise) : 0.f;
   }
-  if (bound_ != nullptr && std::isfinite(bound_[j])) return UnseenDropMask(x, y, k, j, hc, ratio);
+  if (bound_ != nullptr && std::isfinite(bound_[j])) {
+    return UnseenDropMask(x, y, i, k, j, hc, ratio);
+  }
   return 0.f;
 }
 
