@@ -25,11 +25,16 @@ std::map<std::string, ChannelRate> ChannelMeter::Rates(double now_s) {
     ChannelRate r;
     r.messages = e.messages;
     r.bytes = e.bytes;
-    // n messages in the window span n - 1 intervals, measured up to now so that a channel that
-    // went quiet decays towards zero.
+    // n messages in the window span n - 1 intervals between the first and the last. Time since
+    // the last message counts only beyond one mean interval, so that a live channel reads its
+    // true rate (not (n - 1) / window, which is low by 1 / window) and a channel that went quiet
+    // decays towards zero.
     const size_t n = e.window.size();
     if (n >= 2) {
-      const double span = std::max(now_s - e.window.front().first, 1e-6);
+      const double seen_s = e.window.back().first - e.window.front().first;
+      const double mean_dt = seen_s / static_cast<double>(n - 1);
+      const double overdue_s = std::max(0.0, (now_s - e.window.back().first) - mean_dt);
+      const double span = std::max(seen_s + overdue_s, 1e-6);
       int64_t bytes = 0;
       for (size_t i = 1; i < n; ++i) bytes += e.window[i].second;
       r.rate_hz = (n - 1) / span;

@@ -1,9 +1,10 @@
 // cairn-spy: a terminal spy for the cairn bus.
 
-#include <unistd.h>
-
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+
+#include <unistd.h>
 
 #include "common/flags.h"
 #include "services/launch/graph.h"
@@ -28,7 +29,9 @@ int main(int argc, char** argv) {
       "cairn-spy",
       "Shows every channel on the bus: decoded type (by fingerprint among the cairn types),\n"
       "messages/s, bandwidth, decode errors and the age of the last message. With --graph, each\n"
-      "channel's expected rate from the graph file, marked SLOW when below 80 % of it.");
+      "channel's expected rate from the graph file, marked SLOW when below 80 % of it. Expected\n"
+      "rates are in simulated time: when SIM.CLOCK shows the simulator running slower than real\n"
+      "time, they are judged at its pace.");
   flags.AddString("lcm-url", &lcm_url, "LCM bus (else LCM_DEFAULT_URL, else the default udpm URL)");
   flags.AddString("graph", &graph_file, "a cairn-launch graph whose expected_rates_hz to check");
   flags.AddBool("once", &once, "listen for --duration seconds, print one table and exit");
@@ -48,7 +51,8 @@ int main(int argc, char** argv) {
     options.follow_sim_clock = false;
     runtime::Node node(options);
     node.SetState(runtime::HealthState::kReady);
-    spy::Spy spy(expected);
+    // --once measures over its whole listening time; the live table over the last 3 s.
+    spy::Spy spy(expected, once ? std::max(duration_s, 1.0) : 3.0);
     node.SubscribeRaw(".*", [&](const std::string& channel, const void* data, int size, int64_t) {
       spy.OnMessage(channel, data, size, Now());
     });

@@ -1,7 +1,10 @@
 #include "services/spy/lcm/spy.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
+
+#include "cairn/lcmt_sim_clock.hpp"
 
 #include "cairn/lcmtypes_registry.hpp"
 
@@ -42,7 +45,23 @@ const char* TypeForFingerprint(int64_t fingerprint) {
   return t ? t->name : nullptr;
 }
 
-Spy::Spy(std::map<std::string, double> expected_rates_hz) : expected_(std::move(expected_rates_hz)) {}
+constexpr char kClockChannel[] = "SIM.CLOCK";
+
+Spy::Spy(std::map<std::string, double> expected_rates_hz, double window_s)
+    : meter_(window_s), window_s_(window_s), expected_(std::move(expected_rates_hz)) {}
+
+SimPace Spy::Pace(double now_s) {
+  while (!clock_.empty() && clock_.front().first < now_s - window_s_) clock_.pop_front();
+  SimPace pace;
+  if (clock_.size() < 2) return pace;
+  const double wall_s = clock_.back().first - clock_.front().first;
+  const double sim_s = clock_.back().second - clock_.front().second;
+  // Half a window of clock traffic at least, and time that moved forwards.
+  if (wall_s < 0.5 * window_s_ || sim_s <= 0.0) return pace;
+  pace.known = true;
+  pace.real_time_factor = sim_s / wall_s;
+  return pace;
+}
 
 void Spy::OnMessage(const std::string& channel, const void* data, int size, double now_s) {
   meter_.Record(channel, size, now_s);
@@ -50,7 +69,8 @@ void Spy::OnMessage(const std::string& channel, const void* data, int size, doub
   const auto* type = FindType(fp);
   if (type == nullptr) {
     char buf[64];
-    std::snprintf(buf, sizeof(buf), "? (fingerprint 0x%016llx)", static_cast<unsigned long long>(fp));
+    std::snprintf(buf, sizeof(buf), "? (fingerprint 0x%016llx)",
+                  static_cast<unsigned long long>(fp));
     if (types_.count(channel) == 0) types_[channel] = buf;
     ++decode_errors_[channel];
     return;
@@ -61,6 +81,13 @@ void Spy::OnMessage(const std::string& channel, const void* data, int size, doub
     return;
   }
   types_[channel] = type->name;
+  if (channel == kClockChannel && std::string(type->name) == "cairn.lcmt_sim_clock") {
+    cairn::lcmt_sim_clock clock;
+    if (clock.decode(data, 0, size) >= 0 && !clock.paused) {
+      if (!clock_.empty() && clock.utime * 1e-6 < clock_.back().second) clock_.clear();  // restart
+      clock_.emplace_back(now_s, clock.utime * 1e-6);
+    }
+  }
 }
 
 std::map<std::string, ChannelView> Spy::Snapshot(double now_s) {
@@ -73,12 +100,16 @@ std::map<std::string, ChannelView> Spy::Snapshot(double now_s) {
     v.decode_errors = decode_errors_[channel];
     views[channel] = v;
   }
+  // Expected rates are in simulated time; a simulator slower than real time delivers them that
+  // much slower on the wall clock. A faster one is not given credit.
+  const SimPace pace = Pace(now_s);
+  const double pace_factor = pace.known ? std::min(1.0, pace.real_time_factor) : 1.0;
   for (const auto& [channel, hz] : expected_) {
     ChannelView& v = views[channel];
     v.channel = channel;
     if (v.type.empty()) v.type = "(not seen)";
     v.expected_hz = hz;
-    v.slow = v.rate.rate_hz < 0.8 * hz;
+    v.slow = v.rate.rate_hz < 0.8 * hz * pace_factor;
   }
   return views;
 }
@@ -90,6 +121,13 @@ std::string Spy::Format(double now_s) {
                 "BANDWIDTH", "ERRORS", "AGE(s)", "EXPECTED");
   out << line;
   int slow = 0;
+  const SimPace pace = Pace(now_s);
+  if (pace.known) {
+    std::snprintf(line, sizeof(line), "simulated time at %.2fx real time%s\n",
+                  pace.real_time_factor,
+                  pace.real_time_factor < 1.0 ? " (expected rates judged at that pace)" : "");
+    out << line;
+  }
   for (const auto& [channel, v] : Snapshot(now_s)) {
     std::string expected;
     if (v.expected_hz > 0) {

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <map>
 #include <string>
 
@@ -22,17 +23,30 @@ struct ChannelView {
   bool slow{false};         ///< below 80 % of the expected rate (or never seen)
 };
 
+/// How fast simulated time ran against the wall over the spy's window, read from SIM.CLOCK.
+/// Expected rates in a graph file are in simulated time: when the simulator runs slower than real
+/// time, a channel arrives that much slower on the wall clock and is not slow for it.
+struct SimPace {
+  bool known{false};
+  double real_time_factor{1.0};  ///< simulated seconds per wall second
+};
+
 class Spy {
  public:
-  explicit Spy(std::map<std::string, double> expected_rates_hz = {});
+  /// window_s: the sliding window over which rates are measured.
+  explicit Spy(std::map<std::string, double> expected_rates_hz = {}, double window_s = 3.0);
   /// Records one message (bytes as received).
   void OnMessage(const std::string& channel, const void* data, int size, double now_s);
   std::map<std::string, ChannelView> Snapshot(double now_s);
+  /// The simulator's pace over the window (unknown without SIM.CLOCK traffic).
+  SimPace Pace(double now_s);
   /// The table printed by cairn-spy.
   std::string Format(double now_s);
 
  private:
   runtime::ChannelMeter meter_;
+  double window_s_;
+  std::deque<std::pair<double, double>> clock_;  ///< (wall s, sim s) of SIM.CLOCK messages
   std::map<std::string, std::string> types_;
   std::map<std::string, int64_t> decode_errors_;
   std::map<std::string, double> expected_;
