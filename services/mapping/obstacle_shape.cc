@@ -136,10 +136,10 @@ std::vector<Corner> FollowLoop(BoundaryEdges* e, size_t start) {
   return loop;
 }
 
-// The largest counter-clockwise loop of the edges (the outer boundary; holes run clockwise).
-std::vector<Corner> OuterLoop(BoundaryEdges* e) {
-  std::vector<Corner> best;
-  double best_area = 0;
+// The counter-clockwise loops of the edges (outer boundaries, one per piece; holes run
+// clockwise), largest first.
+std::vector<std::vector<Corner>> OuterLoops(BoundaryEdges* e) {
+  std::vector<std::pair<double, std::vector<Corner>>> loops;
   for (size_t start = 0; start < e->num_corners; ++start) {
     while (e->count[start] > 0) {
       std::vector<Corner> loop = FollowLoop(e, start);
@@ -149,13 +149,38 @@ std::vector<Corner> OuterLoop(BoundaryEdges* e) {
         const Corner& b = loop[(k + 1) % loop.size()];
         area += double(a.first) * b.second - double(b.first) * a.second;
       }
-      if (area > best_area) {
-        best_area = area;
-        best = std::move(loop);
-      }
+      if (area > 0) loops.emplace_back(area, std::move(loop));
     }
   }
-  return best;
+  std::stable_sort(loops.begin(), loops.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<std::vector<Corner>> out;
+  for (auto& l : loops) out.push_back(std::move(l.second));
+  return out;
+}
+
+// The convex hull of corners, counter-clockwise, without collinear points (Andrew's monotone
+// chain).
+std::vector<Corner> ConvexHull(std::vector<Corner> pts) {
+  std::sort(pts.begin(), pts.end());
+  pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+  if (pts.size() < 3) return pts;
+  auto cross = [](const Corner& o, const Corner& a, const Corner& b) {
+    return int64_t(a.first - o.first) * (b.second - o.second) -
+           int64_t(a.second - o.second) * (b.first - o.first);
+  };
+  std::vector<Corner> hull(2 * pts.size());
+  size_t k = 0;
+  for (size_t i = 0; i < pts.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+    hull[k++] = pts[i];
+  }
+  for (size_t i = pts.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross(hull[k - 2], hull[k - 1], pts[i]) <= 0) --k;
+    hull[k++] = pts[i];
+  }
+  hull.resize(k - 1);
+  return hull;
 }
 
 // Corner coordinates back to grid cells, dropping collinear corners.
@@ -204,7 +229,13 @@ std::vector<Vector2> SimplifyClosed(const std::vector<Vector2>& pts, double tol)
 std::vector<Vector2> TraceOutline(const std::vector<int64_t>& cells, int sx, double tol) {
   const CellMask mask = MaskOf(cells, sx);
   BoundaryEdges edges = EdgesOf(mask);
-  return SimplifyClosed(CornerPoints(OuterLoop(&edges), mask.x0, mask.y0), tol);
+  std::vector<std::vector<Corner>> loops = OuterLoops(&edges);
+  if (loops.empty()) return {};
+  if (loops.size() == 1) return SimplifyClosed(CornerPoints(loops[0], mask.x0, mask.y0), tol);
+  // Pieces of one object (faces seen apart, joined): the hull around all of them.
+  std::vector<Corner> all;
+  for (const auto& l : loops) all.insert(all.end(), l.begin(), l.end());
+  return CornerPoints(ConvexHull(std::move(all)), mask.x0, mask.y0);
 }
 
 double Median(std::vector<double> v) {

@@ -24,7 +24,8 @@ double PlaneSlope(const common::GridMap& map, const std::vector<int64_t>& cells)
 
 /// The outer boundary of a set of cells (indices into a grid `sx` cells wide) along the cell
 /// edges, counter-clockwise, in cell corner coordinates, simplified to `tol` cells (Douglas-
-/// Peucker). Cells touching at a corner stay one outline.
+/// Peucker). Cells touching at a corner stay one outline. Cells in several pieces (an object
+/// whose faces were seen apart): the convex hull around all of them.
 std::vector<common::Vector2> TraceOutline(const std::vector<int64_t>& cells, int sx, double tol);
 
 /// Measurements shared by every kind: centroid, outline, extents along the principal axes

@@ -7,6 +7,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -18,6 +19,7 @@
 #include "services/mapping/feature_classes.h"
 #include "services/mapping/obstacle_shape.h"
 #include "services/mapping/traversability.h"
+#include <Eigen/Eigenvalues>
 
 namespace cairn::mapping {
 namespace {
@@ -48,6 +50,7 @@ struct Cells {
   const float* edge{nullptr};  // height of the largest step/wall/drop at the cell
   const float* low{nullptr};   // lower side of that edge
   const float* high{nullptr};  // higher side of that edge
+  const float* h{nullptr};     // elevation (NaN: unknown)
   int64_t Index(int x, int y) const { return x + static_cast<int64_t>(y) * sx; }
   bool Inside(int x, int y) const { return x >= 0 && y >= 0 && x < sx && y < sy; }
   uint8_t Class(int64_t i) const { return static_cast<uint8_t>(cls[i]); }
@@ -155,17 +158,98 @@ void Absorb(const Cells& cells, std::initializer_list<uint8_t> classes, std::vec
   }
 }
 
-// Joins the components whose cells come within `gap_cells` of each other (Chebyshev), relabelling
-// the cells of each joined group with its first component's id: the faces of one object (a
-// house's walls, a rock's sides) that the sensor saw as pieces, with unseen or unclassified
-// cells between them.
-void JoinNearby(const Cells& c, int gap_cells, std::vector<int32_t>* label,
+// True when the cells strictly between a and b (a straight line) hold no seen ground at the
+// foot of a's edge: unknown cells (the object's unseen top or sides, its shadow) or raised ones
+// (its seen top) lie between the faces of one object; floor seen between two walls is a gap
+// the robot may pass (a doorway), and they stay two objects.
+bool NothingFreeBetween(const Cells& c, int64_t a, int64_t b, double continuity_m) {
+  const int ax = static_cast<int>(a % c.sx), ay = static_cast<int>(a / c.sx);
+  const int bx = static_cast<int>(b % c.sx), by = static_cast<int>(b / c.sx);
+  const int n = std::max(std::abs(bx - ax), std::abs(by - ay));
+  const double foot = std::isnan(c.low[a]) ? c.h[a] : c.low[a];
+  for (int t = 1; t < n; ++t) {
+    const int x = ax + static_cast<int>(std::lround(double(bx - ax) * t / n));
+    const int y = ay + static_cast<int>(std::lround(double(by - ay) * t / n));
+    const int64_t i = c.Index(x, y);
+    // Walls are the object's; anything else known at the foot's level is floor (a doorway's
+    // floor between two wall ends may read as a narrow trench).
+    if (std::isnan(c.h[i]) || c.Class(i) == internal::kWall) continue;
+    if (!(c.h[i] > foot + continuity_m)) return false;
+  }
+  return true;
+}
+
+// Joins the components whose cells come within `gap_cells` of each other (Chebyshev) with no
+// seen floor between them (NothingFreeBetween), relabelling the cells of each joined group with
+// its first component's id: the faces of one object (a house's walls, a rock's sides) that the
+// sensor saw as pieces, with unseen or unclassified cells between them.
+// The centre line of the piece labelled like cell a near it (its raised cells within `radius`
+// cells), when that much of it is elongated: a point on it and its direction (unit), in cells;
+// nullopt for a bulky object or a corner.
+struct Line {
+  Eigen::Vector2d point;
+  Eigen::Vector2d dir;
+};
+std::optional<Line> LocalAxis(const Cells& c, const std::vector<int32_t>& label, int64_t a,
+                              int radius) {
+  const int ax = static_cast<int>(a % c.sx), ay = static_cast<int>(a / c.sx);
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d outer = Eigen::Matrix2d::Zero();
+  int n = 0;
+  for (int dy = -radius; dy <= radius; ++dy) {
+    for (int dx = -radius; dx <= radius; ++dx) {
+      if (!c.Inside(ax + dx, ay + dy)) continue;
+      const int64_t i = c.Index(ax + dx, ay + dy);
+      // The wall itself, not the floor cells at its feet (they widen it into a blob at its end).
+      if (label[i] != label[a] || !(c.h[i] >= 0.5 * (double(c.low[i]) + c.high[i]))) continue;
+      const Eigen::Vector2d p(dx, dy);
+      sum += p;
+      outer += p * p.transpose();
+      ++n;
+    }
+  }
+  if (n < radius) return std::nullopt;
+  const Eigen::Vector2d mean = sum / n;
+  const Eigen::Matrix2d cov = outer / n - mean * mean.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(cov);
+  // Along at least four times across (variances): a wall over the radius; not a corner.
+  if (!(eig.eigenvalues()(1) >= 4.0 * std::max(eig.eigenvalues()(0), 1e-9))) return std::nullopt;
+  return Line{Eigen::Vector2d(ax, ay) + mean, eig.eigenvectors().col(1)};
+}
+
+// True when a and b end two pieces of one straight wall: near each end the piece runs along
+// the line between them (within 20 degrees) and the two pieces' centre lines agree (1.5 cells):
+// a wall with an opening in it, not two walls side by side, offset, or two bulky objects.
+bool InLine(const Cells& c, const std::vector<int32_t>& label, int64_t a, int64_t b, int run,
+            std::map<int64_t, std::optional<Line>>* axes) {
+  auto axis = [&](int64_t i) -> const std::optional<Line>& {
+    auto it = axes->find(i);
+    if (it == axes->end()) it = axes->emplace(i, LocalAxis(c, label, i, run)).first;
+    return it->second;
+  };
+  const std::optional<Line>& la = axis(a);
+  const std::optional<Line>& lb = axis(b);
+  if (!la || !lb) return false;
+  const Eigen::Vector2d d = lb->point - la->point;
+  if (d.norm() < 1e-9) return false;
+  const double cos_limit = std::cos(20.0 * M_PI / 180.0);
+  for (const Line* l : {&*la, &*lb}) {
+    if (std::fabs(l->dir.dot(d.normalized())) < cos_limit) return false;
+    if (std::fabs(l->dir.x() * d.y() - l->dir.y() * d.x()) > 1.5) return false;
+  }
+  return true;
+}
+
+void JoinNearby(const Cells& c, int gap_cells, int opening_cells, int run_cells,
+                double continuity_m, std::vector<int32_t>* label,
                 std::vector<std::vector<int64_t>>* comps) {
-  if (gap_cells <= 0 || comps->size() < 2) return;
+  const int reach = std::max(gap_cells, opening_cells);
+  if (reach <= 0 || comps->size() < 2) return;
   std::map<int32_t, size_t> index_of;  // label id -> component
   for (size_t k = 0; k < comps->size(); ++k) index_of[(*label)[(*comps)[k].front()]] = k;
   std::vector<size_t> parent(comps->size());
   for (size_t k = 0; k < parent.size(); ++k) parent[k] = k;
+  std::map<int64_t, std::optional<Line>> axes;  // LocalAxis of the cells looked at
   auto root = [&parent](size_t k) {
     while (parent[k] != k) k = parent[k] = parent[parent[k]];
     return k;
@@ -173,11 +257,16 @@ void JoinNearby(const Cells& c, int gap_cells, std::vector<int32_t>* label,
   for (size_t k = 0; k < comps->size(); ++k) {
     for (const int64_t i : (*comps)[k]) {
       const int cx = static_cast<int>(i % c.sx), cy = static_cast<int>(i / c.sx);
-      for (int dy = -gap_cells; dy <= gap_cells; ++dy) {
-        for (int dx = -gap_cells; dx <= gap_cells; ++dx) {
+      for (int dy = -reach; dy <= reach; ++dy) {
+        for (int dx = -reach; dx <= reach; ++dx) {
           if (!c.Inside(cx + dx, cy + dy)) continue;
-          const auto it = index_of.find((*label)[c.Index(cx + dx, cy + dy)]);
-          if (it == index_of.end() || it->second == k) continue;
+          const int64_t j = c.Index(cx + dx, cy + dy);
+          const auto it = index_of.find((*label)[j]);
+          if (it == index_of.end() || it->second == k || root(it->second) == root(k)) continue;
+          const int d = std::max(std::abs(dx), std::abs(dy));
+          const bool close = d <= gap_cells && NothingFreeBetween(c, i, j, continuity_m);
+          const bool opening = d <= opening_cells && InLine(c, *label, i, j, run_cells, &axes);
+          if (!close && !opening) continue;
           parent[root(it->second)] = root(k);
         }
       }
@@ -199,12 +288,63 @@ void JoinNearby(const Cells& c, int gap_cells, std::vector<int32_t>* label,
   comps->swap(joined);
 }
 
+// A step or ditch whose every cell lies within `gap_cells` of one wall or object is part of it:
+// the lower faces of a rock (under wall_min_height_m where the ground rises towards it), the
+// shadowed ground behind it, a wall's foot seen apart from the wall. The object takes its cells.
+// A feature that only touches an object (a step across a lane, from wall to wall) reaches
+// farther and stays itself.
+void JoinFringes(const Cells& c, int gap_cells, std::vector<int32_t>* label,
+                 std::vector<Found>* found) {
+  if (gap_cells <= 0) return;
+  std::map<int32_t, size_t> object_of;  // label id -> index in `found`
+  for (size_t k = 0; k < found->size(); ++k) {
+    if ((*found)[k].kind == ObstacleKind::kWallOrObject && !(*found)[k].cells.empty()) {
+      object_of[(*label)[(*found)[k].cells.front()]] = k;
+    }
+  }
+  if (object_of.empty()) return;
+  std::vector<bool> merged(found->size(), false);
+  for (size_t k = 0; k < found->size(); ++k) {
+    Found& f = (*found)[k];
+    if (f.kind != ObstacleKind::kStepUp && f.kind != ObstacleKind::kDitch) continue;
+    std::set<size_t> near;  // objects within reach of every cell so far
+    bool first = true;
+    for (const int64_t i : f.cells) {
+      std::set<size_t> here;
+      const int cx = static_cast<int>(i % c.sx), cy = static_cast<int>(i / c.sx);
+      for (int dy = -gap_cells; dy <= gap_cells; ++dy) {
+        for (int dx = -gap_cells; dx <= gap_cells; ++dx) {
+          if (!c.Inside(cx + dx, cy + dy)) continue;
+          const auto it = object_of.find((*label)[c.Index(cx + dx, cy + dy)]);
+          if (it != object_of.end() && (first || near.count(it->second))) here.insert(it->second);
+        }
+      }
+      near.swap(here);
+      first = false;
+      if (near.empty()) break;
+    }
+    if (near.empty()) continue;
+    Found& object = (*found)[*near.begin()];
+    const int32_t id = (*label)[object.cells.front()];
+    for (const int64_t i : f.cells) {
+      (*label)[i] = id;
+      object.cells.push_back(i);
+    }
+    merged[k] = true;
+  }
+  std::vector<Found> kept;
+  for (size_t k = 0; k < found->size(); ++k) {
+    if (!merged[k]) kept.push_back(std::move((*found)[k]));
+  }
+  found->swap(kept);
+}
+
 // The connected features, each cell in one (`label` holds its component's id). Ditches
 // first: step, drop and ramp cells near a ditch are its rims and walls (a wall face seen at an
 // angle looks like a short ramp). Then walls and objects: low steps at their feet are partly
 // seen faces. Then steps and drops, then ramps.
-std::vector<Found> FindFeatures(const Cells& cells, int object_gap_cells,
-                                std::vector<int32_t>* label) {
+std::vector<Found> FindFeatures(const Cells& cells, int object_gap_cells, int opening_cells,
+                                int run_cells, double continuity_m, std::vector<int32_t>* label) {
   std::vector<Found> found;
   int32_t next_label = 1;
   for (auto& comp : Components(cells, {kDitch}, label, &next_label)) {
@@ -212,7 +352,7 @@ std::vector<Found> FindFeatures(const Cells& cells, int object_gap_cells,
     found.push_back({ObstacleKind::kDitch, std::move(comp)});
   }
   std::vector<std::vector<int64_t>> objects = Components(cells, {kWall}, label, &next_label);
-  JoinNearby(cells, object_gap_cells, label, &objects);
+  JoinNearby(cells, object_gap_cells, opening_cells, run_cells, continuity_m, label, &objects);
   for (auto& comp : objects) {
     Absorb(cells, {kStep, kDrop}, label, &comp);
     found.push_back({ObstacleKind::kWallOrObject, std::move(comp)});
@@ -220,6 +360,7 @@ std::vector<Found> FindFeatures(const Cells& cells, int object_gap_cells,
   for (auto& comp : Components(cells, {kStep, kDrop}, label, &next_label)) {
     found.push_back({ObstacleKind::kStepUp, std::move(comp)});
   }
+  JoinFringes(cells, object_gap_cells, label, &found);
   for (auto& comp : Components(cells, {kRamp}, label, &next_label)) {
     found.push_back({ObstacleKind::kRamp, std::move(comp)});
   }
@@ -543,6 +684,11 @@ void ObstacleParams::Validate() const {
   CAIRN_THROW_UNLESS(min_ramp_area_m2 >= 0, "min_ramp_area_m2 must be >= 0");
   CAIRN_THROW_UNLESS(std::isfinite(object_join_gap_m) && object_join_gap_m >= 0,
                      "object_join_gap_m must be >= 0, got " << object_join_gap_m);
+  CAIRN_THROW_UNLESS(std::isfinite(object_opening_max_m) && object_opening_max_m >= 0 &&
+                         object_opening_max_m <= 5.0,
+                     "object_opening_max_m must be in [0, 5], got " << object_opening_max_m);
+  CAIRN_THROW_UNLESS(std::isfinite(object_opening_run_m) && object_opening_run_m > 0,
+                     "object_opening_run_m must be > 0, got " << object_opening_run_m);
   CAIRN_THROW_UNLESS(
       min_ramp_crease_fraction >= 0 && min_ramp_crease_fraction <= 1,
       "min_ramp_crease_fraction must be in [0, 1], got " << min_ramp_crease_fraction);
@@ -591,10 +737,16 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map, const ObstaclePar
   cells.edge = map.at(kFeatureEdgeLayer).data();
   cells.low = map.at(kFeatureLowLayer).data();
   cells.high = map.at(kFeatureHighLayer).data();
+  cells.h = map.at(layers::kElevation).data();
   std::vector<int32_t> label(static_cast<size_t>(cells.sx) * cells.sy, 0);
   const int object_gap_cells =
       static_cast<int>(std::floor(params.object_join_gap_m / map.resolution_m() + 1e-9));
-  const std::vector<Found> found = FindFeatures(cells, object_gap_cells, &label);
+  auto cells_of = [&](double m) {
+    return static_cast<int>(std::floor(m / map.resolution_m() + 1e-9));
+  };
+  const std::vector<Found> found = FindFeatures(
+      cells, object_gap_cells, cells_of(params.object_opening_max_m),
+      std::max(3, cells_of(params.object_opening_run_m)), params.surface_continuity_m, &label);
   FeatureMeasurer measurer(map, cells, label, params, ddepth.data(), dwidth.data());
   common::ObstacleRegistry registry;
   for (const Found& f : found) {
@@ -713,6 +865,8 @@ ObstacleParams LoadObstacleParams(common::YamlMap& m) {
   m.Get("min_drop_height_m", &p.min_drop_height_m);
   m.Get("min_ramp_area_m2", &p.min_ramp_area_m2);
   m.Get("object_join_gap_m", &p.object_join_gap_m);
+  m.Get("object_opening_max_m", &p.object_opening_max_m);
+  m.Get("object_opening_run_m", &p.object_opening_run_m);
   m.Get("min_ramp_crease_fraction", &p.min_ramp_crease_fraction);
   m.Get("small_step_height_m", &p.small_step_height_m);
   m.Get("min_small_step_length_m", &p.min_small_step_length_m);

@@ -553,10 +553,12 @@ def outdoor():
             # A long even slope to the east (about 6 deg over x 18..28).
             if x > 18:
                 z += min(x - 18, 10) * math.tan(math.radians(6.0))
-            # Gentle roughness, flat around the start.
+            # Gentle roughness, flat around the start, fading in between 4 and 6 m from it (a hard
+            # seam at 4 m left a 4 cm rise between two samples: a kerb nobody built).
             d = math.hypot(x, y)
-            if d > 4:
-                z += 0.04 * math.sin(0.9 * x + 0.3 * y) * math.cos(0.7 * y - 0.2 * x)
+            fade = min(1.0, max(0.0, (d - 4.0) / 2.0))
+            fade = fade * fade * (3.0 - 2.0 * fade)
+            z += fade * 0.04 * math.sin(0.9 * x + 0.3 * y) * math.cos(0.7 * y - 0.2 * x)
             row.append(z)
         heights.append(row)
     lo = min(min(row) for row in heights)

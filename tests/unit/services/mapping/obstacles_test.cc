@@ -1,6 +1,8 @@
 #include "services/mapping/obstacles.h"
 
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -265,21 +267,62 @@ TEST(ObstaclesTest, CubeIsAWallOrObject) {
   EXPECT_EQ(r.obstacles.size(), 1u);
 }
 
-// Two pieces of one 1 m high wall with a 1.2 m doorway between them: the edge cells at their ends
-// come within 0.6 m (object_join_gap_m, off by default) of each other, one object; 2 m apart,
-// two.
-TEST(ObstaclesTest, WallPiecesCloseTogetherAreOneObject) {
-  auto wall = [](double gap_m) {
-    return MakeTerrain(60, 40, kRes, [gap_m](double x, double y) {
+// Two pieces of one 1 m high wall. With nothing seen in the 0.4 m between them (the object's
+// unseen middle, its shadow) they come within object_join_gap_m (0.6 m, off by default) of each
+// other: one object, outlined around both pieces. With floor seen between them, a doorway 1.2 m
+// wide (the floor cells at its sides are edges of the wall: 0.8 m between the pieces' cells),
+// they stay two; with nothing seen over 2 m, too.
+TEST(ObstaclesTest, WallPiecesWithNothingSeenBetweenThemAreOneObject) {
+  const double kNaNHeight = std::numeric_limits<double>::quiet_NaN();
+  auto wall = [&](double gap_m, bool seen_between) {
+    return MakeTerrain(60, 40, kRes, [=](double x, double y) {
       const bool in_y = y > 4.0 && y < 4.2;
+      const bool in_gap = x > 4.0 && x < 4.0 + gap_m;
+      if (!seen_between && in_gap && y > 3.6 && y < 4.6) return kNaNHeight;
       return in_y && ((x > 2.0 && x < 4.0) || (x > 4.0 + gap_m && x < 6.0 + gap_m)) ? 1.0 : 0.0;
     });
   };
   ObstacleParams joined;
   joined.object_join_gap_m = 0.6;
-  EXPECT_EQ(OfKind(ExtractWith(wall(1.2), joined), ObstacleKind::kWallOrObject).size(), 1u);
-  EXPECT_EQ(OfKind(ExtractWith(wall(1.2), {}), ObstacleKind::kWallOrObject).size(), 2u);  // off
-  EXPECT_EQ(OfKind(ExtractWith(wall(2.0), joined), ObstacleKind::kWallOrObject).size(), 2u);
+  const auto one = OfKind(ExtractWith(wall(0.4, false), joined), ObstacleKind::kWallOrObject);
+  ASSERT_EQ(one.size(), 1u);
+  for (const common::Vector2& p :
+       {common::Vector2(2.5, 4.1), common::Vector2(4.2, 4.1), common::Vector2(6.1, 4.1)}) {
+    EXPECT_TRUE(Inside(one[0]->outline_m, p)) << p.transpose();
+  }
+  EXPECT_FALSE(Inside(one[0]->outline_m, {4.2, 5.0}));
+  EXPECT_EQ(OfKind(ExtractWith(wall(0.4, false), {}), ObstacleKind::kWallOrObject).size(),
+            2u);  // off
+  EXPECT_EQ(OfKind(ExtractWith(wall(1.2, true), joined), ObstacleKind::kWallOrObject).size(),
+            2u);  // a doorway
+  EXPECT_EQ(OfKind(ExtractWith(wall(2.0, false), joined), ObstacleKind::kWallOrObject).size(), 2u);
+}
+
+// A straight wall with a 1.2 m doorway (floor seen through it) is one wall when openings up to
+// 1.5 m join pieces in line; two walls 1.2 m apart side by side (a corridor) stay two, and so
+// does a wall whose pieces are offset sideways.
+TEST(ObstaclesTest, AWallWithADoorwayIsOneWall) {
+  auto terrain = [](std::function<bool(double, double)> wall) {
+    return MakeTerrain(60, 40, kRes, [wall](double x, double y) { return wall(x, y) ? 1.0 : 0.0; });
+  };
+  const GridMap doorway = terrain([](double x, double y) {
+    return y > 4.0 && y < 4.2 && ((x > 2.0 && x < 4.0) || (x > 5.2 && x < 7.2));
+  });
+  const GridMap corridor = terrain([](double x, double y) {
+    return x > 2.0 && x < 7.0 && ((y > 2.0 && y < 2.2) || (y > 3.4 && y < 3.6));
+  });
+  const GridMap offset = terrain([](double x, double y) {
+    return (y > 4.0 && y < 4.2 && x > 2.0 && x < 4.0) || (y > 5.0 && y < 5.2 && x > 5.2 && x < 7.2);
+  });
+  ObstacleParams openings;
+  openings.object_opening_max_m = 1.5;
+  const auto one = OfKind(ExtractWith(doorway, openings), ObstacleKind::kWallOrObject);
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_TRUE(Inside(one[0]->outline_m, {3.0, 4.1}));
+  EXPECT_TRUE(Inside(one[0]->outline_m, {6.0, 4.1}));
+  EXPECT_EQ(OfKind(ExtractWith(doorway, {}), ObstacleKind::kWallOrObject).size(), 2u);  // off
+  EXPECT_EQ(OfKind(ExtractWith(corridor, openings), ObstacleKind::kWallOrObject).size(), 2u);
+  EXPECT_EQ(OfKind(ExtractWith(offset, openings), ObstacleKind::kWallOrObject).size(), 2u);
 }
 
 TEST(ObstaclesTest, FlatNoisyGroundHoldsNoFeatures) {
