@@ -385,11 +385,12 @@ TEST_F(OutdoorTerrainTest, TheRouteNorthCostLayerMatchesTheTruth) {
   ExpectCostLayerMatchesTheTruth(Evaluate());
 }
 
-// Left (issue 17): the registry of the same drive still lists 13 features on smooth ground
-// (small step pieces; 130 before steps had to stand out of their heights' noise and ramps had to
-// crease into flatter ground), the house 3 times, rock_0 twice and rock_5 3 times (one entry per
-// piece of an object: "one feature, one entry" is not built; obstacles.object_join_gap_m joins
-// close pieces but is off). Run with --gtest_also_run_disabled_tests.
+// Left (issue 17): the registry of the same drive lists every object once (the house's walls
+// joined across its doorway, each rock with its lower faces) and one feature on smooth ground: a
+// 4-cell, 6 cm "step" on the hillside behind the shed at (7.75, 9.25), where a 3-cell shelf at
+// 1.32 m meets the slope rising beyond it (13 features before the one-object rules and the 1.5 cm
+// minimum step; 130 before steps had to stand out of their heights' noise). Run with
+// --gtest_also_run_disabled_tests.
 TEST_F(OutdoorTerrainTest, DISABLED_TheDemoRoutesRegistryListsEachObjectOnce) {
   const Evaluation e = DemoRoute(this);
   SCOPED_TRACE(Describe(e));
