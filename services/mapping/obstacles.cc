@@ -179,10 +179,6 @@ bool NothingFreeBetween(const Cells& c, int64_t a, int64_t b, double continuity_
   return true;
 }
 
-// Joins the components whose cells come within `gap_cells` of each other (Chebyshev) with no
-// seen floor between them (NothingFreeBetween), relabelling the cells of each joined group with
-// its first component's id: the faces of one object (a house's walls, a rock's sides) that the
-// sensor saw as pieces, with unseen or unclassified cells between them.
 // The centre line of the piece labelled like cell a near it (its raised cells within `radius`
 // cells), when that much of it is elongated: a point on it and its direction (unit), in cells;
 // nullopt for a bulky object or a corner.
@@ -240,6 +236,11 @@ bool InLine(const Cells& c, const std::vector<int32_t>& label, int64_t a, int64_
   return true;
 }
 
+// Joins the components whose cells come within `gap_cells` of each other (Chebyshev) with no
+// seen floor between them (NothingFreeBetween), relabelling the cells of each joined group with
+// its first component's id: the faces of one object (a house's walls, a rock's sides) that the
+// sensor saw as pieces, with unseen or unclassified cells between them; and, within
+// `opening_cells`, two pieces of one straight wall across an opening (InLine).
 void JoinNearby(const Cells& c, int gap_cells, int opening_cells, int run_cells,
                 double continuity_m, std::vector<int32_t>* label,
                 std::vector<std::vector<int64_t>>* comps) {
@@ -739,13 +740,11 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map, const ObstaclePar
   cells.high = map.at(kFeatureHighLayer).data();
   cells.h = map.at(layers::kElevation).data();
   std::vector<int32_t> label(static_cast<size_t>(cells.sx) * cells.sy, 0);
-  const int object_gap_cells =
-      static_cast<int>(std::floor(params.object_join_gap_m / map.resolution_m() + 1e-9));
   auto cells_of = [&](double m) {
     return static_cast<int>(std::floor(m / map.resolution_m() + 1e-9));
   };
   const std::vector<Found> found = FindFeatures(
-      cells, object_gap_cells, cells_of(params.object_opening_max_m),
+      cells, cells_of(params.object_join_gap_m), cells_of(params.object_opening_max_m),
       std::max(3, cells_of(params.object_opening_run_m)), params.surface_continuity_m, &label);
   FeatureMeasurer measurer(map, cells, label, params, ddepth.data(), dwidth.data());
   common::ObstacleRegistry registry;

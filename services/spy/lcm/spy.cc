@@ -50,8 +50,16 @@ constexpr char kClockChannel[] = "SIM.CLOCK";
 Spy::Spy(std::map<std::string, double> expected_rates_hz, double window_s)
     : meter_(window_s), window_s_(window_s), expected_(std::move(expected_rates_hz)) {}
 
-SimPace Spy::Pace(double now_s) {
+// At most this many clock samples are kept in the window (a flood of SIM.CLOCK drops the oldest).
+constexpr size_t kMaxClockSamples = 10000;
+
+void Spy::TrimClock(double now_s) {
   while (!clock_.empty() && clock_.front().first < now_s - window_s_) clock_.pop_front();
+  while (clock_.size() > kMaxClockSamples) clock_.pop_front();
+}
+
+SimPace Spy::Pace(double now_s) {
+  TrimClock(now_s);
   SimPace pace;
   if (clock_.size() < 2) return pace;
   const double wall_s = clock_.back().first - clock_.front().first;
@@ -75,18 +83,19 @@ void Spy::OnMessage(const std::string& channel, const void* data, int size, doub
     ++decode_errors_[channel];
     return;
   }
-  if (type->decode(data, size) < 0) {
+  // The clock is decoded once, into its type, for the simulator's pace; the rest only checked.
+  const bool clock_message = channel == kClockChannel && fp == cairn::lcmt_sim_clock::getHash();
+  cairn::lcmt_sim_clock clock;
+  if ((clock_message ? clock.decode(data, 0, size) : type->decode(data, size)) < 0) {
     ++decode_errors_[channel];
     if (types_.count(channel) == 0) types_[channel] = type->name;
     return;
   }
   types_[channel] = type->name;
-  if (channel == kClockChannel && std::string(type->name) == "cairn.lcmt_sim_clock") {
-    cairn::lcmt_sim_clock clock;
-    if (clock.decode(data, 0, size) >= 0 && !clock.paused) {
-      if (!clock_.empty() && clock.utime * 1e-6 < clock_.back().second) clock_.clear();  // restart
-      clock_.emplace_back(now_s, clock.utime * 1e-6);
-    }
+  if (clock_message && !clock.paused) {
+    if (!clock_.empty() && clock.utime * 1e-6 < clock_.back().second) clock_.clear();  // restart
+    clock_.emplace_back(now_s, clock.utime * 1e-6);
+    TrimClock(now_s);
   }
 }
 

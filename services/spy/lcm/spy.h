@@ -44,6 +44,8 @@ class Spy {
   std::string Format(double now_s);
 
  private:
+  void TrimClock(double now_s);
+
   runtime::ChannelMeter meter_;
   double window_s_;
   std::deque<std::pair<double, double>> clock_;  ///< (wall s, sim s) of SIM.CLOCK messages
