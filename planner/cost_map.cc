@@ -135,14 +135,24 @@ void CostMap::ReadDirected(const common::Layer& directed) {
   for (int64_t i = 0; i < n; ++i) {
     const float v = d[i];
     if (std::isnan(v) || v == 0.0f) continue;
+    int mask = 0;
     if (v == layers::kUnseenDrop) {
       ++unseen_drop_cells_;
-      c[i] = params_.unseen_drop_is_unknown ? std::numeric_limits<float>::quiet_NaN()
-                                            : params_.lethal_cost;
-      continue;
+      if (!params_.unseen_drop_is_unknown) {
+        c[i] = params_.lethal_cost;
+        continue;
+      }
+      // The rim may be driven over towards the ground out of sight, to look, never climbed
+      // from there: out of the rim, the headings away from each unknown 4-neighbour are refused.
+      mask = ClimbFromUnknownMask(i, d);
+      if (mask == 0) {
+        c[i] = std::numeric_limits<float>::quiet_NaN();
+        continue;
+      }
+    } else {
+      const bool whole = v >= 0.0f && v <= layers::kAllHeadingsBlocked && v == std::floor(v);
+      mask = whole ? static_cast<int>(v) : static_cast<int>(layers::kAllHeadingsBlocked);
     }
-    const bool whole = v >= 0.0f && v <= layers::kAllHeadingsBlocked && v == std::floor(v);
-    const int mask = whole ? static_cast<int>(v) : static_cast<int>(layers::kAllHeadingsBlocked);
     if (mask == static_cast<int>(layers::kAllHeadingsBlocked)) {
       c[i] = params_.lethal_cost;
       continue;
@@ -154,6 +164,23 @@ void CostMap::ReadDirected(const common::Layer& directed) {
       c[i] = c[i] >= params_.lethal_cost ? one_way : std::max(c[i], one_way);
     }
   }
+}
+
+int CostMap::ClimbFromUnknownMask(int64_t i, const float* directed) const {
+  const int sx = geometry_.size_x;
+  const int ix = static_cast<int>(i % sx), iy = static_cast<int>(i / sx);
+  const float* c = cost_.data();
+  // The 4-neighbours +x, -x, +y, -y, and the heading bit from each into the cell.
+  constexpr int kDx[4] = {1, -1, 0, 0}, kDy[4] = {0, 0, 1, -1}, kInto[4] = {4, 0, 6, 2};
+  int mask = 0;
+  for (int k = 0; k < 4; ++k) {
+    const int x = ix + kDx[k], y = iy + kDy[k];
+    if (x < 0 || y < 0 || x >= sx || y >= geometry_.size_y) continue;
+    // Another rim read as unknown ground is not ground out of sight.
+    const int64_t j = x + static_cast<int64_t>(y) * sx;
+    if (std::isnan(c[j]) && directed[j] != layers::kUnseenDrop) mask |= 1 << kInto[k];
+  }
+  return mask;
 }
 
 uint8_t CostMap::OneWayMask(const CellIndex& cell) const {

@@ -58,8 +58,10 @@ struct CostMapParams {
   /// reads as the highest graded cost below it.
   float one_way_cost{90.0f};
   /// How a directed layer's layers::kUnseenDrop cells read (a rim whose ground beyond fell out
-  /// of sight, not yet deeper than the profile's step down): false, blocking like 255; true,
-  /// unknown ground (NaN), so that a plan may lead there to look. The navigator builds the
+  /// of sight, not yet deeper than the profile's step down): false, blocking like 255; true, a
+  /// look-out that a plan may lead over to look: one-way, refusing the headings from each unknown
+  /// 4-neighbour into it (the climb from the unseen side), or unknown ground (NaN) when no
+  /// 4-neighbour is unknown. The navigator builds the
   /// snapshot its plans use this way when its map config allows (`look_at_unseen_drops`), and
   /// drives on the strict one.
   bool unseen_drop_is_unknown{false};
@@ -255,6 +257,9 @@ class CostMap {
   Quick QuickCheck(double x_cells, double y_cells, const Shape& shape) const;
   void ComputeComponents() const;
   void ReadDirected(const common::Layer& directed);
+  /// For a layers::kUnseenDrop cell `i` read as a look-out: the heading bits from each of its
+  /// unknown 4-neighbours into it (0 when none is unknown), `directed` the layer's cells.
+  int ClimbFromUnknownMask(int64_t i, const float* directed) const;
   bool DirectedReachable(const common::Vector2& a_world_m, const common::Vector2& b_world_m) const;
   int ClassFieldMarginCells() const;
   bool FootprintCrosses(double x_cells, double y_cells, double yaw_grid_rad, const Shape& shape,

@@ -218,6 +218,13 @@ class TerrainMap {
   /// True when the cell's normal fit interpolates: of its 8 neighbours (in any tile) at most
   /// two lack a height, and some have one on each side along both axes.
   bool NormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy) const;
+  /// The committed height of the cell (dx, dy) from (cx, cy) (index i in `tile`), NaN unknown.
+  float CommittedAt(const Tile& tile, size_t i, int64_t cx, int64_t cy, int dx, int dy) const;
+  /// Limits the fitted gradient (gx, gy) of a cell, axis by axis, by the one-sided height
+  /// differences to its neighbours (the MC limiter): an even ramp keeps its gradient, the foot
+  /// and the top of a step get none, so a carry along it cannot spread the face.
+  void LimitGradient(const Tile& tile, size_t i, int64_t cx, int64_t cy, double* gx,
+                     double* gy) const;
   /// NormalInterpolates, answered again without looking while nothing it reads changed.
   bool CachedNormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy);
   /// Copies `layers` of the global cell rectangle into a dense map (NaN outside tiles).
@@ -256,6 +263,12 @@ class TerrainMap {
   size_t interpolates_i_{0};
   uint64_t interpolates_epoch_{0};
   bool interpolates_{false};
+  // The carry's limited gradient of the last cell committed (LimitGradient), for the run of
+  // points in it. Reset by each Integrate.
+  const Tile* limited_tile_{nullptr};
+  size_t limited_i_{0};
+  double limited_gx_{0.0};
+  double limited_gy_{0.0};
   std::optional<common::Vector2> last_robot_xy_;
   common::GridMap scratch_;                   // recomputation windows
   mutable common::GridMap registry_scratch_;  // BuildRegistry's copy of the map

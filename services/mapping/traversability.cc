@@ -28,6 +28,10 @@ int UnseenDropReachCells(double resolution_m) {
   return std::max(1, static_cast<int>(std::ceil(kUnseenDropReachM / resolution_m - 1e-9)));
 }
 
+// A ray bound this far below the lower level beside an unseen foot cell proves a gap there
+// (within it: range noise on a ray that grazed the floor).
+constexpr double kFootBoundNoise_m = 0.02;
+
 // 4-neighbourhood: +x, -x, +y, -y (the seed's RIGHT, LEFT, UP, DOWN).
 constexpr std::array<std::array<int, 2>, 4> kNeighbours{{{1, 0}, {-1, 0}, {0, 1}, {0, -1}}};
 // The directed layer's heading bit of each of them (k * 45 deg counter-clockwise from +x).
@@ -456,6 +460,19 @@ float CostRules::UnseenDropMask(int x, int y, int64_t i, int k, int64_t j, float
         double rise = double(h_[jj]) - hc;
         if (exact_tilt_) rise = Tilted(k, rise, s);
         return StepLethal(i, jj, k, rise, ratio) ? StepMask(k, rise) : 0.f;
+      }
+      // One unseen cell between two levels, and no ray passed below the lower one: the foot
+      // of a face, hidden by its rim from above and mixed with the face from below. The
+      // crossing is the step between the two levels (one-way when it is within one limit).
+      // A drop beyond both limits is left to the rule below: the rays may prove it deeper.
+      if (s == 2) {
+        double rise = double(h_[jj]) - hc;
+        const double lower = std::min<double>(hc, h_[jj]);
+        if (!(bound_[j] < lower - kFootBoundNoise_m) &&
+            (rise > 0 || -rise <= std::max(up_limit_, down_limit_) + tol_)) {
+          if (exact_tilt_) rise = Tilted(k, rise, s);
+          return StepLethal(i, jj, k, rise, ratio) ? StepMask(k, rise) : 0.f;
+        }
       }
       break;
     }

@@ -76,17 +76,11 @@ class TerracesStackTest : public NavigatorStackTest {
   }
 };
 
-// Disabled: the robot climbs the ramp, but from the platform the floor below the drop lies in the
-// edge's lidar shadow, and the rays over it prove only that it lies more than unseen_drop_m (5 cm)
-// below the rim: the rim reads as an unseen drop (lethal every way) and the goal is "not
-// connected" before the robot is close enough to see the floor. The pioneer3at bridges 0.10 m,
-// less than the one 0.2 m cell at the face's foot, so the foot rule of the rover (an unseen run
-// it bridges is judged as the step beyond it) does not apply. With the navigator planning to the
-// edge to look (map.look_at_unseen_drops: true) the robot stops about 0.5 m short of the rim
-// (the DWA drives on the strict map, where the unseen drops are lethal); from there one row of
-// foot cells is seen and becomes one-way (down only), its neighbours along the edge stay unseen:
-// planner/README.md, "Unseen drops".
-TEST_F(TerracesStackTest, DISABLED_DrivesUpTheRampAndOffTheEightCentimetreDrop) {
+// From the platform the floor below the drop lies in the edge's lidar shadow: the rim reads as an
+// unseen drop, and the navigator (map.look_at_unseen_drops) plans over it to look. The floor
+// cell at the face's foot stays unknown; with no ray below the floor there it is judged as the
+// 8 cm step down from the rim to the floor beyond (planner/README.md, "Unseen drops").
+TEST_F(TerracesStackTest, DrivesUpTheRampAndOffTheEightCentimetreDrop) {
   // Lane 0: a 5 deg ramp up to an 8 cm platform that ends in an 8 cm drop at x = 12, wall to
   // wall. Down the drop is the only way to the goal, and 8 cm is within the 10 cm step down.
   // The 12 m horizon keeps the robot from looking for another way through the unexplored lanes.

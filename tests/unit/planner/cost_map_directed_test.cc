@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "common/layers.h"
 #include "planner/cost_map.h"
 #include "tests/unit/planner/test_maps.h"
 
@@ -208,6 +209,42 @@ TEST(CostMapDirectedTest, ConnectivityFollowsTheOneWaySteps) {
   const auto ramp = testing::OneWayStepCorridor(3.5).Build(PioneerFootprint());
   EXPECT_TRUE(ramp->MaybeConnected({9.0, 2.0}, {3.0, 2.0}));
   EXPECT_TRUE(ramp->MaybeConnected({3.0, 2.0}, {9.0, 2.0}));  // round by the ramp
+}
+
+// A rim marked as an unseen drop (layers::kUnseenDrop) with unknown ground beyond it at +x,
+// read as a look-out (unseen_drop_is_unknown): a plan may lead over it towards the unknown
+// ground, to look, and never from there back up over it. Read strictly it blocks both ways; with
+// no unknown neighbour it reads as unknown ground.
+TEST(CostMapDirectedTest, AnUnseenDropRimIsALookOutOnlyTowardsTheUnseenGround) {
+  DirectedTestLayer d(120, 40, 0.1);
+  d.layer.Rect(0.0, 0.0, 12.0, 0.3, 100.0f).Rect(0.0, 3.7, 12.0, 4.0, 100.0f);
+  d.Derive();
+  auto mark_rim = [&](bool unknown_beyond) {
+    for (int iy = 3; iy < 37; ++iy) {
+      d.layer.cost(59, iy) = 100.0f;
+      d.directed(59, iy) = layers::kUnseenDrop;
+      d.layer.cost(60, iy) = unknown_beyond ? NAN : 0.0f;
+      d.directed(60, iy) = unknown_beyond ? NAN : 0.0f;
+    }
+  };
+  mark_rim(true);
+  CostMapParams params;
+  params.unknown_is_traversable = true;
+  const auto strict = d.Build(PioneerFootprint(), params);
+  EXPECT_FALSE(strict->MaybeConnected({3.0, 2.0}, {9.0, 2.0}));
+  EXPECT_FALSE(strict->MaybeConnected({9.0, 2.0}, {3.0, 2.0}));
+  params.unseen_drop_is_unknown = true;
+  const auto look = d.Build(PioneerFootprint(), params);
+  EXPECT_EQ(look->unseen_drop_cells(), 34);
+  EXPECT_EQ(look->one_way_cells(), 34);
+  EXPECT_TRUE(look->MaybeConnected({3.0, 2.0}, {9.0, 2.0}));   // over the rim, to look
+  EXPECT_FALSE(look->MaybeConnected({9.0, 2.0}, {3.0, 2.0}));  // up from the unseen side: never
+  EXPECT_FALSE(look->MotionAllowed({6.3, 2.0, M_PI}, {5.7, 2.0, M_PI}));
+  EXPECT_TRUE(look->MotionAllowed({5.7, 2.0, 0.0}, {6.3, 2.0, 0.0}));
+  mark_rim(false);
+  const auto seen = d.Build(PioneerFootprint(), params);
+  EXPECT_TRUE(std::isnan(seen->cost()(59, 20)));
+  EXPECT_TRUE(seen->MaybeConnected({9.0, 2.0}, {3.0, 2.0}));
 }
 
 // The horizon search follows the one-way steps too: a goal up the step is not reachable however

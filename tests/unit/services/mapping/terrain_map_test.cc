@@ -127,6 +127,52 @@ TEST(TerrainMapTest, ARampSeenFromRestReadsEvenAtTheCellCentres) {
   EXPECT_GT(upstream, 0.007);
 }
 
+// The carry to the cell centre follows a plane fitted over 0.3 m, which across an 8 cm face is a
+// false ramp (about 20 deg here). Cells on either side of the face whose points lie near it must
+// not be carried along that plane: the floor cell would sink and the top cell rise by the plane's
+// rise over the points' offset (2 cm here), and a face seen at a grazing angle, its points off
+// the cell centres, smeared into sub-limit steps over several cells. On an even ramp the carry
+// stands (ARampSeenFromRestReadsEvenAtTheCellCentres).
+TEST(TerrainMapTest, CellsBesideAStepFaceAreNotCarriedAlongTheFaceFit) {
+  TerrainMapParams params = Params();
+  params.filter.min_variance_m2 = 1e-7;  // as config/mapping/mapper.yaml
+  TerrainMap map(params);
+  auto ground = [](double x) { return x >= 2.6 ? 0.08 : 0.0; };  // the face on a cell border
+  const common::Pose3 sensor = SensorAt(0.0, 0.0, 1.0);
+  auto point_at = [&](double x, double y) {
+    common::LidarPoint p;
+    p.x_m = static_cast<float>(x);
+    p.y_m = static_cast<float>(y);
+    p.z_m = static_cast<float>(ground(x) - 1.0);
+    return p;
+  };
+  // Every cell of x 1.0..4.0, y -1..1 at its centre, then derived (the normals).
+  std::vector<common::LidarPoint> centres;
+  for (double x = 1.1; x < 4.0; x += 0.2) {
+    for (double y = -0.9; y < 1.0; y += 0.2) centres.push_back(point_at(x, y));
+  }
+  map.Integrate(centres, sensor, 1, 0.1);
+  map.UpdateDerived();
+  // Then points near the face only: 8 cm off the centres of the cells on either side of it.
+  std::vector<common::LidarPoint> near_face;
+  for (int k = 0; k < 20; ++k) {
+    for (double y = -0.5; y < 0.6; y += 0.2) {
+      near_face.push_back(point_at(2.58, y));
+      near_face.push_back(point_at(2.62, y));
+    }
+  }
+  map.Integrate(near_face, sensor, 2, 0.2);
+  const GridMap out = map.Export({layers::kElevation, layers::kSlope});
+  for (double y = -0.5; y < 0.6; y += 0.2) {
+    const auto foot = out.IndexOf({2.5, y});
+    const auto top = out.IndexOf({2.7, y});
+    ASSERT_TRUE(foot && top);
+    EXPECT_GT(out.at(layers::kSlope)(foot->ix, foot->iy), 10 * kDeg) << "the fit across the face";
+    EXPECT_NEAR(out.at(layers::kElevation)(foot->ix, foot->iy), 0.0, 0.005) << "y " << y;
+    EXPECT_NEAR(out.at(layers::kElevation)(top->ix, top->iy), 0.08, 0.005) << "y " << y;
+  }
+}
+
 // A robot standing on flat floor sees a ring of it around the blind zone under it, the cells
 // at the ring's inner rim only from one side. Their heights must not lean on a normal fitted over
 // that one side: the carry to the cell centre would grow, revolution after revolution, into a

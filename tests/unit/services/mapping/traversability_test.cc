@@ -692,7 +692,8 @@ TEST(TraversabilityTest, TheRimSeesTheDropBeyondAMixedEdgeCell) {
 // An 8 cm step seen from below: its face's returns spill into the floor cell at its foot,
 // which is published unknown (a mixed cell) with the floor's bound. A profile that bridges that
 // one cell (max_ditch_width_m >= 0.2 m) judges the crossing as the step between the platform and
-// the floor beyond, in each direction; one that does not sees an unseen drop.
+// the floor beyond, in each direction; so does one that does not, while no ray passed below the
+// floor there (else the rim stands over an unseen drop).
 TEST(TraversabilityTest, AProfileThatBridgesTheUnseenFootOfAStepJudgesTheStep) {
   GridMap map = MakeTerrain(30, 12, kRes, [](double x, double) {
     return x < 2.0 ? 0.08 : (x < 2.0 + kRes ? std::nan("") : 0.0);
@@ -714,8 +715,16 @@ TEST(TraversabilityTest, AProfileThatBridgesTheUnseenFootOfAStepJudgesTheStep) {
   ComputeCostLayer(&map, wide, {});
   EXPECT_EQ(Mask(map, "wide", 11, 6), 0.f);
   EXPECT_LT(Cost(map, "wide", 11, 6), layers::kCostLethal);
-  // The pioneer3at bridges 0.10 m: the rim stands over an unseen drop.
-  EXPECT_EQ(Mask(map, "pioneer3at", 9, 6), layers::kUnseenDrop);
+  // The pioneer3at bridges 0.10 m, but one unseen cell whose rays passed at the floor's level
+  // is the foot of the face: the same step, down only.
+  EXPECT_EQ(Mask(map, "pioneer3at", 9, 6), 0.f);
+  EXPECT_EQ(Mask(map, "pioneer3at", 11, 6), float(1u << 4));
+  // A ray 3 cm below the floor there: a gap, not a foot, already deeper than the 10 cm step
+  // down from the rim.
+  for (int iy = 0; iy < 12; ++iy) b(10, iy) = -0.03f;
+  ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+  EXPECT_EQ(Mask(map, "pioneer3at", 9, 6), layers::kAllHeadingsBlocked);
+  for (int iy = 0; iy < 12; ++iy) b(10, iy) = 0.005f;
   // A 20 cm step is too much down for the wide profile as well: blocked both ways.
   map.at(layers::kElevation).setConstant(0.0f);
   for (int iy = 0; iy < 12; ++iy) {
