@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "common/check.h"
@@ -17,9 +18,10 @@ bool IsZero(const Velocity& v) {
   return std::abs(v.linear_mps) < 1e-9 && std::abs(v.angular_radps) < 1e-9;
 }
 
-std::string Format(const char* format, double value) {
+template <typename... Args>
+std::string Format(const char* format, Args... values) {
   char buf[160];
-  std::snprintf(buf, sizeof(buf), format, value);
+  std::snprintf(buf, sizeof(buf), format, values...);
   return buf;
 }
 
@@ -336,14 +338,34 @@ void Navigator::UpdatePathProgress() {
       path_.length_m() > 0.0 ? std::clamp(path_arc_m_ / path_.length_m(), 0.0, 1.0) : 1.0;
 }
 
-bool Navigator::PathBlockedAhead() const {
+bool Navigator::PathBlockedAhead(std::string* where) const {
   if (path_.empty() || !map_) return false;
   // Judged on the map plans are made on: a path that leads to look at an unseen drop is not
   // blocked by it (the local planner stops short of it).
   const CostMap& map = map_->planning_map();
   const size_t end = path_.IndexAt(path_arc_m_ + params_.path_check_ahead_m);
   for (size_t i = path_segment_ + 1; i <= end && i < path_.size(); ++i) {
-    if (!map.IsValid(path_.poses()[i])) return true;
+    const Pose2& pose = path_.poses()[i];
+    if (map.IsValid(pose)) continue;
+    if (where != nullptr) {
+      // Where, for the log: the blocking cells under the footprint there (their extent).
+      const std::vector<int64_t> cells = map.BlockingCellsUnder(pose);
+      const common::GridGeometry& g = map.geometry();
+      Vector2 lo(std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity());
+      Vector2 hi = -lo;
+      for (const int64_t c : cells) {
+        const Vector2 p =
+            g.CenterOf({static_cast<int>(c % g.size_x), static_cast<int>(c / g.size_x)});
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+      *where = Format(" at (%.2f, %.2f)", pose.x_m, pose.y_m);
+      if (!cells.empty()) {
+        *where += Format(": %zu blocking cells in x %.1f..%.1f, y %.1f..%.1f", cells.size(), lo.x(),
+                         hi.x(), lo.y(), hi.y());
+      }
+    }
+    return true;
   }
   return false;
 }
@@ -610,8 +632,9 @@ bool Navigator::StopOnStaleInputs(double now_s) {
 // Replan when the map changed under the path ahead, the robot strayed, or periodically.
 void Navigator::DecideReplan(double now_s) {
   if (status_.state == NavState::kDriving && !path_.empty() && replan_why_.empty()) {
-    if (map_changed_ && PathBlockedAhead()) {
-      replan_why_ = "the map changed under the path";
+    std::string where;
+    if (map_changed_ && PathBlockedAhead(&where)) {
+      replan_why_ = "the map changed under the path" + where;
     } else if (path_deviation_m_ > params_.max_path_deviation_m) {
       replan_why_ = Format("%.2f m off the path", path_deviation_m_);
     } else if (params_.replan_period_s > 0.0 &&

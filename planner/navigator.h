@@ -162,7 +162,9 @@ class Navigator {
   /// A place goal chosen on an earlier map moves when the map now shows obstacles near it.
   void MovePlaceGoalIfCrowded();
   void StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s);
-  bool PathBlockedAhead() const;
+  /// True when a pose of the path ahead is invalid on the planning map; `where` (if given)
+  /// gets " at (x, y)" of that pose and the extent of the blocking cells under it.
+  bool PathBlockedAhead(std::string* where = nullptr) const;
   void UpdatePathProgress();
   /// The no-progress timer starts again at now_s.
   void RestartProgressTimer(double now_s);

@@ -85,9 +85,20 @@ void LcmMapClient::Heard() {
     std::lock_guard<std::mutex> lock(mutex_);
     heard_utime_ = node_.NowUtime();
   }
-  Carry(policy_.OnLayerChanged(assembler_.version(params_.layer),
-                               assembler_.Complete(params_.layer), node_.NowUtime()));
+  Carry(
+      policy_.OnLayerChanged(assembler_.version(params_.layer), PairComplete(), node_.NowUtime()));
   RefreshDirected();
+}
+
+bool LcmMapClient::DirectedPending() const {
+  return !params_.directed_layer.empty() && assembler_.version(params_.directed_layer) > 0 &&
+         !assembler_.Complete(params_.directed_layer);
+}
+
+bool LcmMapClient::PairComplete() const {
+  // A cost version is whole only with the directed tiles announced beside it: without them its
+  // one-way cells would read as lethal walls (a lost directed tile is asked for again).
+  return assembler_.Complete(params_.layer) && !DirectedPending();
 }
 
 void LcmMapClient::Poll() {
@@ -101,7 +112,7 @@ void LcmMapClient::Poll() {
       AskForMissing(params_.directed_layer, now);
     }
   }
-  Carry(policy_.OnPoll(version, complete, now));
+  Carry(policy_.OnPoll(version, complete && !DirectedPending(), now));
   RefreshDirected();
 }
 
@@ -137,7 +148,13 @@ void LcmMapClient::RefreshDirected() {
   const int64_t version = assembler_.version(params_.directed_layer);
   if (version == 0) return;
   const bool complete = assembler_.Complete(params_.directed_layer);
-  if (version == built_directed_version_ && (built_directed_complete_ || !complete)) return;
+  // A pair still missing tiles on either side waits for them (a lost tile is asked for
+  // again): the snapshot in use keeps the pair it was built with, and the policy builds the
+  // next cost version without the missing directed tiles once its wait for them is over. New
+  // directed cells beside cost cells of the version before would make walls of one-way cells,
+  // or of cells that were one-way and are free now.
+  if (!complete || !assembler_.Complete(params_.layer)) return;
+  if (version == built_directed_version_ && built_directed_complete_) return;
   Carry(SnapshotAction::kBuild);
 }
 

@@ -27,10 +27,14 @@
 ///
 /// Beside a cost layer it also reads the profile's directed layer ("directed/<profile>", float
 /// tiles on the same channels) when `directed_layer` names it and the mapper publishes it: each
-/// snapshot carries the directed layer held when it is built, if it has the cost layer's grid
-/// (its missing tiles block every heading), and a directed version that changes or completes
-/// while the cost version stays makes a new snapshot of that cost version. Without directed
-/// tiles (an older mapper) the snapshots are the cost layer's alone.
+/// snapshot carries the directed layer held when it is built, if it has the cost layer's grid,
+/// and a directed version that completes while the cost version stays makes a new snapshot of
+/// that cost version. The two layers are one pair: a cost version counts as complete for the
+/// policy only when the directed version held has all its tiles too, so a lost directed tile is
+/// waited for (and asked for again) like a lost cost tile, up to the policy's
+/// incomplete_timeout_s; only then does a snapshot read the missing directed tiles as 0 (the
+/// cost layer alone, its one-way cells blocking every heading). Without directed tiles (an older
+/// mapper) the snapshots are the cost layer's alone.
 
 namespace cairn::planner {
 
@@ -76,6 +80,10 @@ class LcmMapClient : public MapSource {
   void Carry(SnapshotAction action);
   void AttachDirected(AssembledLayer* assembled);
   void RefreshDirected();
+  // True while the directed layer's newest version lacks tiles.
+  bool DirectedPending() const;
+  // The cost version complete, and the directed version beside it too.
+  bool PairComplete() const;
   void AskForMissing(const std::string& layer, int64_t now);
 
   runtime::Node& node_;

@@ -301,6 +301,10 @@ class CostRules {
   // Towards an unknown neighbour the rays looked into: kUnseenDrop when the ground there lies
   // too far below (a lower bound), else 0.
   float UnseenDropMask(int x, int y, int64_t i, int k, int64_t j, float hc, double* ratio) const;
+  // True when a slope within the stricter slope limit could join cell i to cell jj (two cells
+  // towards k, over one unseen cell) and their `rise`, once the part that each side's own
+  // slope towards k explains is taken away (UnseenDropMask's foot rule).
+  bool RampMayJoin(int x, int y, int64_t i, int k, int64_t jj, double rise) const;
   // A rise to the neighbour `cells` steps towards k, in the robot-levelled frame.
   double Tilted(int k, double rise, int cells = 1) const {
     return forward_m_[k] * cells * sp_ + rise * cp_;
@@ -328,6 +332,7 @@ class CostRules {
   double pitch_rad_, cp_, sp_, cos_heading_, sin_heading_;
   int reach_cells_;
   int bridged_cells_;  // the longest unseen run the profile spans (max_ditch_width_m)
+  double res_m_;
   std::array<int64_t, 4> neighbour_offset_{};
   std::array<double, 4> forward_m_{};
 };
@@ -370,7 +375,8 @@ CostRules::CostRules(const GridMap& map, const common::RobotProfile& profile,
       cp_(std::cos(robot.pitch_rad)),
       sp_(std::sin(robot.pitch_rad)),
       reach_cells_(UnseenDropReachCells(map.resolution_m())),
-      bridged_cells_(static_cast<int>(std::floor((ditch_limit_ + tol_) / map.resolution_m()))) {
+      bridged_cells_(static_cast<int>(std::floor((ditch_limit_ + tol_) / map.resolution_m()))),
+      res_m_(map.resolution_m()) {
   if (blind_) {
     robot_cells_ = map.geometry().ContinuousIndexOf(*robot.xy_m);
     blind_cells_ = params.blind_zone_half_size_m / map.resolution_m();
@@ -442,6 +448,26 @@ bool CostRules::StepLethal(int64_t i, int64_t j, int k, double rise, double* rat
   return false;
 }
 
+bool CostRules::RampMayJoin(int x, int y, int64_t i, int k, int64_t jj, double rise) const {
+  // What a slope at the stricter slope limit rises over one cell.
+  const double per_cell = std::tan(std::min(max_slope_, 1.4)) * res_m_;
+  // Each side's rise over its own outer neighbour (0 where that is unknown or outside the map),
+  // at most per_cell: the sides carried towards the unseen cell explain that much of the rise.
+  const auto side = [per_cell](double inner, double outer) {
+    return std::isnan(outer) ? 0.0 : std::clamp(inner - outer, -per_cell, per_cell);
+  };
+  double explained = side(h_[i], h_[i - neighbour_offset_[k]]);
+  const int ox = x + 3 * kNeighbours[k][0], oy = y + 3 * kNeighbours[k][1];
+  if (ox >= 0 && oy >= 0 && ox < sx_ && oy < sy_) {
+    explained += side(h_[jj + neighbour_offset_[k]], h_[jj]);
+  }
+  // Only a slope the same way explains part of the rise; what is left must fit a slope over
+  // the two cells between the centres.
+  const double left =
+      rise > 0 ? std::clamp(rise - explained, 0.0, rise) : std::clamp(rise - explained, rise, 0.0);
+  return std::fabs(left) <= 2.0 * per_cell;
+}
+
 float CostRules::UnseenDropMask(int x, int y, int64_t i, int k, int64_t j, float hc,
                                 double* ratio) const {
   // The sensor looked into this neighbour and found nothing down to bound[j], nor in the
@@ -462,14 +488,17 @@ float CostRules::UnseenDropMask(int x, int y, int64_t i, int k, int64_t j, float
         return StepLethal(i, jj, k, rise, ratio) ? StepMask(k, rise) : 0.f;
       }
       // One unseen cell between two levels, and no ray passed below the lower one: the foot
-      // of a face, hidden by its rim from above and mixed with the face from below. The
-      // crossing is the step between the two levels (one-way when it is within one limit).
-      // A drop beyond both limits is left to the rule below: the rays may prove it deeper.
+      // of a face, hidden by its rim from above and mixed with the face from below. Unless a
+      // slope the profile drives could join the two levels there (a ramp whose cell the rings
+      // skipped rises as much over two cells), the crossing is the step between the two
+      // levels (one-way when it is within one limit). A drop beyond both limits is left to
+      // the rule below: the rays may prove it deeper.
       if (s == 2) {
         double rise = double(h_[jj]) - hc;
         const double lower = std::min<double>(hc, h_[jj]);
         if (!(bound_[j] < lower - kFootBoundNoise_m) &&
-            (rise > 0 || -rise <= std::max(up_limit_, down_limit_) + tol_)) {
+            (rise > 0 || -rise <= std::max(up_limit_, down_limit_) + tol_) &&
+            !RampMayJoin(x, y, i, k, jj, rise)) {
           if (exact_tilt_) rise = Tilted(k, rise, s);
           return StepLethal(i, jj, k, rise, ratio) ? StepMask(k, rise) : 0.f;
         }
@@ -612,12 +641,14 @@ int DependencyRadiusCells(const TraversabilityParams& params, double resolution_
       std::ceil(std::max(params.normal_radius_m, params.wide_normal_radius_m) / resolution_m));
   // Known ditch bottoms look up to K cells for an unseen ditch cell, which looks K further for
   // its rims and two beyond them; the cost layer reads the 4-neighbours of each cell and the
-  // unknown cells beyond them (UnseenDropReachCells).
+  // unknown cells beyond them (CostRadiusCells).
   return std::max(normal, 2 * internal::DitchSearchCells(params, resolution_m) + 2) +
-         UnseenDropReachCells(resolution_m);
+         CostRadiusCells(resolution_m);
 }
 
-int CostRadiusCells(double resolution_m) { return UnseenDropReachCells(resolution_m); }
+// The unknown cells within UnseenDropReachCells, and the known cell past the far side of an
+// unseen foot (CostRules::RampMayJoin).
+int CostRadiusCells(double resolution_m) { return UnseenDropReachCells(resolution_m) + 1; }
 
 void ComputeGeometricLayers(GridMap* map, const TraversabilityParams& params) {
   CAIRN_THROW_UNLESS(map != nullptr, "no map");

@@ -208,12 +208,65 @@ TEST_F(LcmMapClientTest, ReadsTheDirectedLayerBesideTheCostLayer) {
   EXPECT_EQ(dut->Latest(), both);
 }
 
-TEST_F(LcmMapClientTest, MissingDirectedTilesBlockEveryHeadingAndAreAskedFor) {
+TEST_F(LcmMapClientTest, ACostVersionWaitsForTheDirectedTilesBesideIt) {
   auto dut = Client(DirectedParams());
   std::vector<cairn::lcmt_tile_resend_request> resends;
   node_.Subscribe<cairn::lcmt_tile_resend_request>(
       channels::ForRobot("r1", channels::kMapTileResend),
       [&](const cairn::lcmt_tile_resend_request& r) { resends.push_back(r); });
+  // A first pair, whole: in use.
+  const common::GridMap first = CostAndDirected();
+  const auto cost0 = tiler_.Update(first, layers::CostLayer("pioneer3at"),
+                                   runtime::TileEncoding::kFloat, ++utime_);
+  const auto directed0 = tiler_.Update(first, layers::DirectedLayer("pioneer3at"),
+                                       runtime::TileEncoding::kFloat, ++utime_);
+  for (const auto& t : directed0.tiles) dut->OnTile(t);
+  dut->OnManifest(directed0.manifest);
+  for (const auto& t : cost0.tiles) dut->OnTile(t);
+  dut->OnManifest(cost0.manifest);
+  const auto in_use = dut->Latest();
+  ASSERT_NE(in_use, nullptr);
+  ASSERT_EQ(in_use->one_way_cells(), 40);
+  // The next pair (the one-way column moved to ix = 35) loses directed tile (1, 0) (cells
+  // 20..39) on the way, as a burst of tiles can on a busy bus.
+  common::GridMap map = first;
+  for (int iy = 0; iy < 40; ++iy) {
+    map.at(layers::CostLayer("pioneer3at"))(30, iy) = 0.f;
+    map.at(layers::DirectedLayer("pioneer3at"))(30, iy) = 0.f;
+    map.at(layers::CostLayer("pioneer3at"))(35, iy) = 100.f;
+    map.at(layers::DirectedLayer("pioneer3at"))(35, iy) = 1.f;
+  }
+  const auto cost =
+      tiler_.Update(map, layers::CostLayer("pioneer3at"), runtime::TileEncoding::kFloat, ++utime_);
+  const auto directed = tiler_.Update(map, layers::DirectedLayer("pioneer3at"),
+                                      runtime::TileEncoding::kFloat, ++utime_);
+  for (const auto& t : directed.tiles) {
+    if (!(t.tile_ix == 1 && t.tile_iy == 0)) dut->OnTile(t);
+  }
+  dut->OnManifest(directed.manifest);
+  for (const auto& t : cost.tiles) dut->OnTile(t);
+  dut->OnManifest(cost.manifest);
+  // Its one-way cells would read as lethal walls without their directed tile: the pair in use
+  // stays until the tile comes, and the tile is asked for.
+  EXPECT_EQ(dut->Latest(), in_use) << "the new cost version waits for its directed tiles";
+  dut->Poll();
+  while (node_.lcm().handleTimeout(0) > 0) {
+  }
+  ASSERT_GE(resends.size(), 1u);
+  EXPECT_EQ(resends.back().layer, layers::DirectedLayer("pioneer3at"));
+  // The resent tile completes the pair: built with it.
+  for (const auto& t : directed.tiles) {
+    if (t.tile_ix == 1 && t.tile_iy == 0) dut->OnTile(t);
+  }
+  const auto whole = dut->Latest();
+  ASSERT_NE(whole, in_use);
+  EXPECT_EQ(whole->one_way_cells(), 40);
+  EXPECT_LT(whole->cost()(35, 5), 100.f) << "one-way, not a wall";
+  EXPECT_FLOAT_EQ(whole->cost()(30, 5), 0.f);
+}
+
+TEST_F(LcmMapClientTest, MissingDirectedTilesBlockEveryHeadingOnceTheWaitIsOver) {
+  auto dut = Client(DirectedParams());  // incomplete_timeout_s 0: the wait ends at the next poll
   const common::GridMap map = CostAndDirected();
   const auto cost =
       tiler_.Update(map, layers::CostLayer("pioneer3at"), runtime::TileEncoding::kFloat, ++utime_);
@@ -225,17 +278,14 @@ TEST_F(LcmMapClientTest, MissingDirectedTilesBlockEveryHeadingAndAreAskedFor) {
   dut->OnManifest(directed.manifest);
   for (const auto& t : cost.tiles) dut->OnTile(t);
   dut->OnManifest(cost.manifest);
+  EXPECT_EQ(dut->Latest(), nullptr) << "waits for the directed tile";
+  dut->Poll();
   const auto holes = dut->Latest();
   ASSERT_NE(holes, nullptr);
   ASSERT_TRUE(holes->has_directed());
   EXPECT_EQ(holes->missing_tiles(), 0) << "the cost layer is whole";
   EXPECT_FLOAT_EQ(holes->cost()(30, 5), 100.f) << "a missing directed tile blocks";
   EXPECT_LT(holes->cost()(30, 25), 100.f);
-  dut->Poll();
-  while (node_.lcm().handleTimeout(0) > 0) {
-  }
-  ASSERT_EQ(resends.size(), 1u);
-  EXPECT_EQ(resends[0].layer, layers::DirectedLayer("pioneer3at"));
   // The resent tile completes the directed layer: rebuilt with it.
   for (const auto& t : directed.tiles) {
     if (t.tile_ix == 1 && t.tile_iy == 0) dut->OnTile(t);

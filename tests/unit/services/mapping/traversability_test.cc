@@ -736,6 +736,44 @@ TEST(TraversabilityTest, AProfileThatBridgesTheUnseenFootOfAStepJudgesTheStep) {
   EXPECT_EQ(Mask(map, "wide", 9, 6), layers::kAllHeadingsBlocked);
 }
 
+// At range the lidar's rings skip cells of a ramp: one unseen cell between two levels that a
+// slope the profile drives could join is no step, though the two levels may differ by more
+// than the step limit (Pioneer 3-AT: 3 cm up, 8 deg; a 7 deg ramp rises 4.9 cm over two cells,
+// 6.9 cm where the cells beside the skipped one read 1 cm low and high, as samples off their
+// centres do). Flat ground on both sides of the same rise is a step.
+TEST(TraversabilityTest, AnUnseenCellOnARampIsNoStep) {
+  const double grade = std::tan(7.0 * M_PI / 180.0);
+  for (const double skipped_x : {2.3, 3.1}) {  // the ramp's first cell past its foot; mid-ramp
+    for (const double bias_m : {0.0, 0.01}) {
+      GridMap map = MakeTerrain(30, 12, kRes, [&](double x, double) {
+        if (std::fabs(x - skipped_x) < kRes / 2) return std::nan("");
+        const double h = x < 2.0 ? 0.0 : (x - 2.0) * grade;
+        if (std::fabs(x - (skipped_x - kRes)) < kRes / 2) return h - bias_m;
+        if (std::fabs(x - (skipped_x + kRes)) < kRes / 2) return h + bias_m;
+        return h;
+      });
+      Layer& b = map.AddLayer(layers::kGroundBound);
+      const int ix = static_cast<int>(skipped_x / kRes);
+      for (int iy = 0; iy < 12; ++iy) b(ix, iy) = static_cast<float>((skipped_x - 2.0) * grade);
+      ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+      const std::string where =
+          "skipped cell at x " + std::to_string(skipped_x) + ", bias " + std::to_string(bias_m);
+      EXPECT_EQ(Mask(map, "pioneer3at", ix - 1, 6), 0.f) << "up the ramp, " << where;
+      EXPECT_EQ(Mask(map, "pioneer3at", ix + 1, 6), 0.f) << "down the ramp, " << where;
+      EXPECT_LT(Cost(map, "pioneer3at", ix - 1, 6), layers::kCostLethal) << where;
+      ExpectMaskMatchesCost(map, "pioneer3at");
+    }
+  }
+  GridMap flat = MakeTerrain(30, 12, kRes, [&](double x, double) {
+    return x < 2.2 ? 0.0 : (x < 2.4 ? std::nan("") : 0.069);
+  });
+  Layer& b = flat.AddLayer(layers::kGroundBound);
+  for (int iy = 0; iy < 12; ++iy) b(11, iy) = 0.005f;
+  ComputeCostLayer(&flat, ShippedProfile("pioneer3at"), {});
+  EXPECT_EQ(Mask(flat, "pioneer3at", 10, 6), 1.f) << "bit 0: not up towards +x";
+  EXPECT_EQ(Mask(flat, "pioneer3at", 12, 6), 0.f) << "down is within 10 cm";
+}
+
 // The live mapper recomputes windows of a larger map: with DependencyRadiusCells of margin the
 // window's values equal the whole-map computation.
 TEST(TraversabilityTest, WindowWithMarginMatchesWholeMap) {
