@@ -235,21 +235,69 @@ int CostMap::ClassFieldMarginCells() const {
 
 // True when a cell under the footprint at the pose has one of `bits`.
 bool CostMap::FootprintCrosses(double x_cells, double y_cells, double yaw_grid_rad,
-                               const Shape& shape, uint8_t bits) const {
+                               const Shape& shape, uint8_t bits,
+                               const std::vector<StraddledBits>* straddled) const {
   thread_local std::vector<RowSpan> spans;
   shape.rasterizer.Rasterize(x_cells, y_cells, yaw_grid_rad, geometry_.resolution_m, &spans);
   const int sx = geometry_.size_x;
   for (const RowSpan& span : spans) {
     if (span.iy < 0 || span.iy >= geometry_.size_y) continue;
-    const uint8_t* row = one_way_mask_.data() + static_cast<int64_t>(span.iy) * sx;
+    const int64_t row_start = static_cast<int64_t>(span.iy) * sx;
+    const uint8_t* row = one_way_mask_.data() + row_start;
     for (int ix = std::max(0, span.ix_min); ix <= std::min(span.ix_max, sx - 1); ++ix) {
-      if (row[ix] & bits) return true;
+      if (!(row[ix] & bits)) continue;
+      if (straddled == nullptr || straddled->empty()) return true;
+      const int64_t cell = row_start + ix;
+      const auto it =
+          std::lower_bound(straddled->begin(), straddled->end(), cell,
+                           [](const StraddledBits& s, int64_t c) { return s.cell < c; });
+      const uint8_t exempt = it != straddled->end() && it->cell == cell ? it->bits : 0;
+      if (row[ix] & bits & static_cast<uint8_t>(~exempt)) return true;
     }
   }
   return false;
 }
 
+std::vector<CostMap::StraddledBits> CostMap::StraddledOneWayBits(const Pose2& pose_world) const {
+  std::vector<StraddledBits> out;
+  if (one_way_cells_ == 0) return out;
+  std::vector<RowSpan> spans;
+  const Vector2 g = ToGridCells(pose_world.position());
+  shapes_[0].rasterizer.Rasterize(g.x(), g.y(), ToGridYaw(pose_world.yaw_rad),
+                                  geometry_.resolution_m, &spans);
+  const auto covered = [&spans](int ix, int iy) {
+    for (const RowSpan& span : spans) {
+      if (span.iy == iy && ix >= span.ix_min && ix <= span.ix_max) return true;
+    }
+    return false;
+  };
+  const int sx = geometry_.size_x;
+  for (const RowSpan& span : spans) {
+    if (span.iy < 0 || span.iy >= geometry_.size_y) continue;
+    for (int ix = std::max(0, span.ix_min); ix <= std::min(span.ix_max, sx - 1); ++ix) {
+      const int64_t cell = ix + static_cast<int64_t>(span.iy) * sx;
+      const uint8_t mask = one_way_mask_[cell];
+      if (mask == 0) continue;
+      uint8_t bits = 0;
+      for (int k = 0; k < 8; ++k) {
+        const CellIndex step = HeadingStep(k);
+        if ((mask & (1u << k)) && covered(ix + step.ix, span.iy + step.iy)) bits |= 1u << k;
+      }
+      if (bits != 0) out.push_back({cell, bits});
+    }
+  }
+  std::sort(out.begin(), out.end(),
+            [](const StraddledBits& a, const StraddledBits& b) { return a.cell < b.cell; });
+  return out;
+}
+
 bool CostMap::MotionAllowed(const Pose2& from, const Pose2& to, FootprintKind kind) const {
+  static const std::vector<StraddledBits> kNone;
+  return MotionAllowed(from, to, kind, kNone);
+}
+
+bool CostMap::MotionAllowed(const Pose2& from, const Pose2& to, FootprintKind kind,
+                            const std::vector<StraddledBits>& straddled) const {
   if (one_way_cells_ == 0) return true;
   const Vector2 a = ToGridCells(from.position());
   const Vector2 d = ToGridCells(to.position()) - a;
@@ -280,7 +328,7 @@ bool CostMap::MotionAllowed(const Pose2& from, const Pose2& to, FootprintKind ki
       k += std::max(1, static_cast<int>(std::ceil(free_cells / sample_cells)) - 1);
       continue;
     }
-    if (FootprintCrosses(p.x(), p.y(), yaw0 + t * turn, shape, bits)) return false;
+    if (FootprintCrosses(p.x(), p.y(), yaw0 + t * turn, shape, bits, &straddled)) return false;
     ++k;
   }
   return true;

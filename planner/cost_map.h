@@ -188,6 +188,20 @@ class CostMap {
   /// lies within reach of the motion (one distance-field lookup per stretch of free space).
   bool MotionAllowed(const common::Pose2& from, const common::Pose2& to,
                      FootprintKind kind = FootprintKind::kRobot) const;
+  /// A one-way cell's refusals that a robot already straddles: the bits of `cell` whose
+  /// neighbour lies under the robot's footprint too.
+  struct StraddledBits {
+    int64_t cell{0};  ///< linear index
+    uint8_t bits{0};
+  };
+  /// The refusals the robot's footprint straddles at a pose (sorted by cell): it stands on both
+  /// sides of those edges already, so driving on does not cross them. What a robot whose map
+  /// changed under it (a step read from noisy heights beneath its body) needs to drive off;
+  /// refusals whose neighbour lies outside the footprint still hold.
+  std::vector<StraddledBits> StraddledOneWayBits(const common::Pose2& pose_world) const;
+  /// MotionAllowed with the `straddled` refusals (StraddledOneWayBits, sorted) not counted.
+  bool MotionAllowed(const common::Pose2& from, const common::Pose2& to, FootprintKind kind,
+                     const std::vector<StraddledBits>& straddled) const;
   /// Distance in cells from every cell centre to the nearest one-way cell that refuses motions
   /// of heading class `heading_class` (+infinity everywhere when none does), exact up to
   /// ClassFieldMarginCells() (at least 64 cells; farther cells hold that margin, a lower bound).
@@ -263,7 +277,7 @@ class CostMap {
   bool DirectedReachable(const common::Vector2& a_world_m, const common::Vector2& b_world_m) const;
   int ClassFieldMarginCells() const;
   bool FootprintCrosses(double x_cells, double y_cells, double yaw_grid_rad, const Shape& shape,
-                        uint8_t bits) const;
+                        uint8_t bits, const std::vector<StraddledBits>* straddled = nullptr) const;
 
   common::GridGeometry geometry_;
   common::Layer cost_;

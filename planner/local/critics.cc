@@ -27,10 +27,12 @@ double ClearanceCritic::Proximity(double clearance_m, double inscribed_m) const 
 void ClearanceCritic::Prepare(const CriticContext& context) {
   TrajectoryCritic::Prepare(context);
   escaping_.clear();
+  straddled_.clear();
   path_proximity_ = 0.0;
   if (context.map == nullptr) return;
   const CostMap& map = *context.map;
   if (!map.IsValid(context.pose)) escaping_ = map.BlockingCellsUnder(context.pose);
+  straddled_ = map.StraddledOneWayBits(context.pose);
   // The path's own proximity within reach: points every half cell along its local window.
   if (context.path == nullptr || context.path->size() < 2 || params_.inflation_m <= 0.0) return;
   const auto& poses = context.path->poses();
@@ -84,7 +86,8 @@ Score ClearanceCritic::Evaluate(const Trajectory& trajectory) const {
     const int between =
         std::max(k == 0 ? 1 : 0, static_cast<int>(std::ceil(step_m / max_step_m)) - 1);
     // On a map with one-way cells, the direction of travel between the poses too: a step the
-    // robot may only drive down blocks the climb like a lethal cell.
+    // robot may only drive down blocks the climb like a lethal cell, unless the robot already
+    // straddles that edge (it stands on both of its cells: the map changed under it).
     Pose2 from = previous;
     for (int j = 1; j <= between + 1 && c.valid; ++j) {
       const double f = static_cast<double>(j) / (between + 1);
@@ -98,7 +101,9 @@ Score ClearanceCritic::Evaluate(const Trajectory& trajectory) const {
         const FootprintCost mid = check(p);
         if (!mid.valid) c = mid;
       }
-      if (c.valid && !map.MotionAllowed(from, p)) c = {false, map.params().lethal_cost, false};
+      if (c.valid && !map.MotionAllowed(from, p, FootprintKind::kRobot, straddled_)) {
+        c = {false, map.params().lethal_cost, false};
+      }
       from = p;
     }
     if (k > 0) {

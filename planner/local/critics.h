@@ -123,6 +123,7 @@ class ClearanceCritic : public TrajectoryCritic {
 
   Params params_;
   std::vector<int64_t> escaping_;
+  std::vector<CostMap::StraddledBits> straddled_;  // refusals under the robot this cycle
   double path_proximity_{0.0};
 };
 

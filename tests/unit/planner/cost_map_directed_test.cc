@@ -107,6 +107,29 @@ TEST(CostMapDirectedTest, DrivingAlongAStraightStepAstrideItIsAllowed) {
   EXPECT_TRUE(map->MotionAllowed({5.0, 3.0, M_PI / 2}, {4.99, 7.0, M_PI / 2}));
 }
 
+// A robot standing astride a one-way edge (both of its cells under the footprint, as when the
+// map marks a step under a robot already on it) may drive on over it; one short of the edge
+// may not, and the edge's other refusals hold.
+TEST(CostMapDirectedTest, ARobotAstrideAOneWayEdgeMayDriveOnOverIt) {
+  const auto map = StepTowards(0).Build(PioneerFootprint());  // step line x = 5, up towards +x
+  const Pose2 astride{5.0, 5.0, 0.0};
+  const auto straddled = map->StraddledOneWayBits(astride);
+  ASSERT_FALSE(straddled.empty());
+  for (const auto& s : straddled) EXPECT_EQ(s.bits & 1u, 1u) << "bit 0: up towards +x";
+  const Pose2 ahead{5.6, 5.0, 0.0};
+  EXPECT_FALSE(map->MotionAllowed(astride, ahead));
+  EXPECT_TRUE(map->MotionAllowed(astride, ahead, FootprintKind::kRobot, straddled));
+  // The Pioneer's front a cell short of the step line: nothing straddled, the climb refused.
+  const Pose2 short_of{5.0 - 0.315 - 0.15, 5.0, 0.0};
+  const auto none = map->StraddledOneWayBits(short_of);
+  EXPECT_TRUE(none.empty());
+  EXPECT_FALSE(map->MotionAllowed(short_of, ahead, FootprintKind::kRobot, none));
+  // Straddled bits do not lend themselves to the same edge elsewhere: from astride at y = 5,
+  // a climb 2 m along the step is refused.
+  EXPECT_FALSE(
+      map->MotionAllowed({5.0 - 0.5, 7.0, 0.0}, {5.6, 7.0, 0.0}, FootprintKind::kRobot, straddled));
+}
+
 // MotionAllowed's reading (skipping stretches the distance fields prove clear) agrees with
 // rasterising the footprint at every sample.
 bool BruteForceAllowed(const CostMap& map, const Pose2& from, const Pose2& to) {
