@@ -191,40 +191,49 @@ uint8_t CostMap::OneWayMask(const CellIndex& cell) const {
 const Eigen::MatrixXf& CostMap::heading_block_distance_cells(int heading_class) const {
   CAIRN_DEMAND(heading_class >= 0 && heading_class < 8);
   std::call_once(class_once_[heading_class], [this, heading_class] {
-    // The transform runs over the refusing cells' bounding box grown by a margin; farther out
-    // the field holds the margin, a lower bound of the distance.
-    const int sx = geometry_.size_x, sy = geometry_.size_y;
-    const uint8_t bits = HeadingClassBits(heading_class);
-    int x0 = sx, y0 = sy, x1 = -1, y1 = -1;
-    for (size_t i = 0; i < one_way_mask_.size(); ++i) {
-      if (!(one_way_mask_[i] & bits)) continue;
-      const int ix = static_cast<int>(i % sx), iy = static_cast<int>(i / sx);
-      x0 = std::min(x0, ix);
-      x1 = std::max(x1, ix);
-      y0 = std::min(y0, iy);
-      y1 = std::max(y1, iy);
-    }
-    Eigen::MatrixXf& field = class_distance_[heading_class];
-    if (x1 < 0) {
-      field.setConstant(sx, sy, std::numeric_limits<float>::infinity());
-      return;
-    }
-    const int margin = ClassFieldMarginCells();
-    x0 = std::max(0, x0 - margin);
-    y0 = std::max(0, y0 - margin);
-    x1 = std::min(sx - 1, x1 + margin);
-    y1 = std::min(sy - 1, y1 + margin);
-    GridMask refusing(x1 - x0 + 1, y1 - y0 + 1);
-    for (int iy = y0; iy <= y1; ++iy) {
-      for (int ix = x0; ix <= x1; ++ix) {
-        refusing(ix - x0, iy - y0) =
-            (one_way_mask_[ix + static_cast<int64_t>(iy) * sx] & bits) ? 1 : 0;
-      }
-    }
-    field.setConstant(sx, sy, static_cast<float>(margin));
-    field.block(x0, y0, x1 - x0 + 1, y1 - y0 + 1) = DistanceTransform(refusing);
+    class_distance_[heading_class] = RefusalDistance(HeadingClassBits(heading_class));
   });
   return class_distance_[heading_class];
+}
+
+const Eigen::MatrixXf& CostMap::one_way_distance_cells() const {
+  std::call_once(one_way_once_, [this] { one_way_distance_ = RefusalDistance(0xFF); });
+  return one_way_distance_;
+}
+
+Eigen::MatrixXf CostMap::RefusalDistance(uint8_t bits) const {
+  // The transform runs over the refusing cells' bounding box grown by a margin; farther out
+  // the field holds the margin, a lower bound of the distance.
+  const int sx = geometry_.size_x, sy = geometry_.size_y;
+  int x0 = sx, y0 = sy, x1 = -1, y1 = -1;
+  for (size_t i = 0; i < one_way_mask_.size(); ++i) {
+    if (!(one_way_mask_[i] & bits)) continue;
+    const int ix = static_cast<int>(i % sx), iy = static_cast<int>(i / sx);
+    x0 = std::min(x0, ix);
+    x1 = std::max(x1, ix);
+    y0 = std::min(y0, iy);
+    y1 = std::max(y1, iy);
+  }
+  Eigen::MatrixXf field;
+  if (x1 < 0) {
+    field.setConstant(sx, sy, std::numeric_limits<float>::infinity());
+    return field;
+  }
+  const int margin = ClassFieldMarginCells();
+  x0 = std::max(0, x0 - margin);
+  y0 = std::max(0, y0 - margin);
+  x1 = std::min(sx - 1, x1 + margin);
+  y1 = std::min(sy - 1, y1 + margin);
+  GridMask refusing(x1 - x0 + 1, y1 - y0 + 1);
+  for (int iy = y0; iy <= y1; ++iy) {
+    for (int ix = x0; ix <= x1; ++ix) {
+      refusing(ix - x0, iy - y0) =
+          (one_way_mask_[ix + static_cast<int64_t>(iy) * sx] & bits) ? 1 : 0;
+    }
+  }
+  field.setConstant(sx, sy, static_cast<float>(margin));
+  field.block(x0, y0, x1 - x0 + 1, y1 - y0 + 1) = DistanceTransform(refusing);
+  return field;
 }
 
 int CostMap::ClassFieldMarginCells() const {
@@ -377,6 +386,15 @@ double CostMap::ClearanceAt(const Vector2& world_m) const {
 }
 
 double CostMap::SmoothClearanceAt(const Vector2& world_m) const {
+  return SmoothDistance(blocked_distance_, world_m);
+}
+
+double CostMap::SmoothOneWayClearanceAt(const Vector2& world_m) const {
+  if (one_way_cells_ == 0) return std::numeric_limits<double>::infinity();
+  return SmoothDistance(one_way_distance_cells(), world_m);
+}
+
+double CostMap::SmoothDistance(const Eigen::MatrixXf& d, const Vector2& world_m) const {
   const Vector2 g = ToGridCells(world_m);
   if (!(g.x() >= 0.0 && g.y() >= 0.0 && g.x() < geometry_.size_x && g.y() < geometry_.size_y)) {
     return 0.0;
@@ -389,7 +407,6 @@ double CostMap::SmoothClearanceAt(const Vector2& world_m) const {
   const int x1 = std::min(x0 + 1, geometry_.size_x - 1);
   const int y1 = std::min(y0 + 1, geometry_.size_y - 1);
   const double tx = fx - x0, ty = fy - y0;
-  const auto& d = blocked_distance_;
   if (std::isinf(d(x0, y0))) return std::numeric_limits<double>::infinity();
   const double v = (1 - tx) * (1 - ty) * d(x0, y0) + tx * (1 - ty) * d(x1, y0) +
                    (1 - tx) * ty * d(x0, y1) + tx * ty * d(x1, y1);

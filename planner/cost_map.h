@@ -214,6 +214,14 @@ class CostMap {
   /// The same distance field interpolated bilinearly between cell centres (m): continuous in
   /// the position, for costs that should not jump from cell to cell. 0 outside the grid.
   double SmoothClearanceAt(const common::Vector2& world_m) const;
+  /// Distance (m) to the nearest one-way cell, interpolated like SmoothClearanceAt: what keeps
+  /// the global planner's paths off the edges of steps they do not cross (a path along a ramp's
+  /// side is drivable only while no footprint of the local planner touches the edge's cells).
+  /// +infinity without one-way cells; beyond ClassFieldMarginCells() a lower bound. The field is
+  /// computed once, on first use.
+  double SmoothOneWayClearanceAt(const common::Vector2& world_m) const;
+  /// Distance in cells from every cell centre to the nearest one-way cell (as above).
+  const Eigen::MatrixXf& one_way_distance_cells() const;
   /// Distances in cells to the nearest blocking / non-free cell, per cell.
   const Eigen::MatrixXf& blocked_distance_cells() const { return blocked_distance_; }
   const Eigen::MatrixXf& nonfree_distance_cells() const { return nonfree_distance_; }
@@ -276,6 +284,11 @@ class CostMap {
   int ClimbFromUnknownMask(int64_t i, const float* directed) const;
   bool DirectedReachable(const common::Vector2& a_world_m, const common::Vector2& b_world_m) const;
   int ClassFieldMarginCells() const;
+  /// Distance in cells to the nearest one-way cell having one of `bits` (see
+  /// heading_block_distance_cells for the margin).
+  Eigen::MatrixXf RefusalDistance(uint8_t bits) const;
+  /// Bilinear interpolation of a distance field (cells) between cell centres, in metres.
+  double SmoothDistance(const Eigen::MatrixXf& field_cells, const common::Vector2& world_m) const;
   bool FootprintCrosses(double x_cells, double y_cells, double yaw_grid_rad, const Shape& shape,
                         uint8_t bits, const std::vector<StraddledBits>* straddled = nullptr) const;
 
@@ -300,6 +313,8 @@ class CostMap {
   std::vector<uint8_t> one_way_mask_;
   mutable std::array<std::once_flag, 8> class_once_;
   mutable std::array<Eigen::MatrixXf, 8> class_distance_;
+  mutable std::once_flag one_way_once_;
+  mutable Eigen::MatrixXf one_way_distance_;
   // Connectivity labels, built lazily (only the global planner needs them).
   mutable std::once_flag components_once_;
   mutable std::vector<int32_t> components_;

@@ -80,11 +80,19 @@ class FootprintValidityChecker : public ob::StateValidityChecker {
 // On a map with one-way cells (CostMap::MotionAllowed): OMPL's discrete check of the states
 // along a motion, then the direction of travel between consecutive states at the same
 // resolution (for Dubins and Reeds-Shepp curves, whose direction turns along the motion; a
-// reversing stretch is checked against the heading it drives to).
+// reversing stretch is checked against the heading it drives to). With the padded footprint,
+// as the states are, except near the start and the goal: the local planner's trajectories
+// stray from the path, and where a footprint grazing a step's edge is refused the way it
+// drives, a path with no margin to that edge strands it.
 class DirectedMotionValidator : public ob::DiscreteMotionValidator {
  public:
-  DirectedMotionValidator(const ob::SpaceInformationPtr& si, const CostMap& map)
-      : ob::DiscreteMotionValidator(si), map_(map) {}
+  DirectedMotionValidator(const ob::SpaceInformationPtr& si, const CostMap& map,
+                          const Vector2& start, const Vector2& goal, double escape_radius_m)
+      : ob::DiscreteMotionValidator(si),
+        map_(map),
+        start_(start),
+        goal_(goal),
+        escape2_(escape_radius_m * escape_radius_m) {}
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
     return ob::DiscreteMotionValidator::checkMotion(s1, s2) && FirstRefused(s1, s2) < 0;
   }
@@ -117,14 +125,24 @@ class DirectedMotionValidator : public ob::DiscreteMotionValidator {
         s = tmp;
       }
       const Pose2 pose = ToPose(s);
-      if (!map_.MotionAllowed(previous, pose)) refused = k - 1;
+      const bool near_end = NearEnd(previous.position()) || NearEnd(pose.position());
+      if (!map_.MotionAllowed(previous, pose,
+                              near_end ? FootprintKind::kRobot : FootprintKind::kPadded)) {
+        refused = k - 1;
+      }
       previous = pose;
     }
     si_->freeState(tmp);
     return refused;
   }
+  bool NearEnd(const Vector2& p) const {
+    return (p - start_).squaredNorm() <= escape2_ || (p - goal_).squaredNorm() <= escape2_;
+  }
 
   const CostMap& map_;
+  Vector2 start_;
+  Vector2 goal_;
+  double escape2_;
 };
 
 // SE(2) samples for narrow passages. A share of the positions comes from the ridge cells of
@@ -215,7 +233,10 @@ class TraversalCostObjective : public ob::StateCostIntegralObjective {
   double CostAt(const Vector2& p) const {
     double c = 1.0 + weight_ * map_.TraversalCostAt(p);
     if (clearance_weight_ > 0.0 && inflation_m_ > 0.0) {
-      const double d = map_.SmoothClearanceAt(p);
+      // One-way cells (a step's edge) keep paths off as blocking cells do: the local planner
+      // may not touch them in the headings they refuse, and a path that grazes one leaves it no
+      // room to follow.
+      const double d = std::min(map_.SmoothClearanceAt(p), map_.SmoothOneWayClearanceAt(p));
       if (std::isfinite(d)) {
         c += clearance_weight_ * std::clamp(1.0 - (d - inscribed_m_) / inflation_m_, 0.0, 1.0);
       }
@@ -425,7 +446,8 @@ OmplProblem SetUpProblem(const CostMap& map, const GlobalPlannerParams& params, 
   p.si->setStateValidityCheckingResolution(
       std::min(0.5, params.validity_resolution_m / p.space->getMaximumExtent()));
   if (map.one_way_cells() > 0) {
-    p.si->setMotionValidator(std::make_shared<DirectedMotionValidator>(p.si, map));
+    p.si->setMotionValidator(std::make_shared<DirectedMotionValidator>(
+        p.si, map, start.position(), goal.position(), params.escape_radius_m));
   }
 
   ob::ScopedState<ob::SE2StateSpace> start_state(p.space);

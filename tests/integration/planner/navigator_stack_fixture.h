@@ -6,7 +6,9 @@
 // simulator/worlds/<world>_lanes.yaml.
 
 #include <chrono>
+#include <cmath>
 #include <csignal>
+#include <cstdio>
 #include <fstream>
 #include <optional>
 #include <regex>
@@ -19,6 +21,7 @@
 
 #include "cairn/lcmt_goal.hpp"
 #include "cairn/lcmt_grid_manifest.hpp"
+#include "cairn/lcmt_grid_tile.hpp"
 #include "cairn/lcmt_nav_status.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
 #include "cairn/lcmt_path.hpp"
@@ -29,10 +32,12 @@
 #include "cairn/lcmt_velocity_command.hpp"
 
 #include "common/channels.h"
+#include "common/layers.h"
 #include "common/robot_profile.h"
 #include "planner/footprint.h"
 #include "services/launch/status.h"
 #include "services/runtime/conversions.h"
+#include "services/runtime/layer_assembler.h"
 #include "tests/support/geometry.h"
 #include "tests/support/harness.h"
 #include "tests/support/registry.h"
@@ -69,6 +74,9 @@ class NavigatorStackTest : public ::testing::Test {
     bus_.Keep(ch::ForRobot(kRobot, ch::kPose));
     bus_.Keep(ch::ForRobot(kRobot, ch::kCmdVel));
     bus_.Keep(ch::ForRobot(kRobot, ch::kMapManifest));
+    bus_.lcm().subscribe(ch::ForRobot(kRobot, ch::kMapTiles), &NavigatorStackTest::OnTile, this);
+    bus_.lcm().subscribe(ch::ForRobot(kRobot, ch::kMapManifest), &NavigatorStackTest::OnManifest,
+                         this);
   }
 
   // The mapper's shipped configuration with the cost layer published every 0.2 s (more often
@@ -249,6 +257,57 @@ class NavigatorStackTest : public ::testing::Test {
     const auto registry =
         bus_.Last<cairn::lcmt_obstacle_registry>(ch::ForRobot(kRobot, ch::kMapObstacles));
     if (registry) out << "\nthe mapper's registry:\n" << testing::Describe(*registry);
+    if (!poses.empty()) out << MapWindow(ToPose2(poses.back()));
+    return out.str();
+  }
+
+  // The cost and directed layers the test assembled, 1.5 m around a pose, north up, one column
+  // per cell: what the navigator last saw where it failed. Cost: '.' free, 1..9 graded (tens),
+  // '#' lethal, '?' unknown, 'R' the robot's cell. Directed: '.' 0, '#' all headings, '?' NaN,
+  // otherwise the mask in hex (bit k refuses heading k * 45 deg).
+  std::string MapWindow(const Pose2& robot) const {
+    const auto cost = tiles_.Layer(layers::CostLayer(profile_));
+    if (!cost) return "\nno cost layer assembled\n";
+    const auto directed = tiles_.Layer(layers::DirectedLayer(profile_));
+    const auto centre = cost->IndexOf(robot.position());
+    if (!centre) return "\nthe robot is outside the cost layer\n";
+    const int half = static_cast<int>(std::lround(1.5 / cost->resolution_m()));
+    std::ostringstream out;
+    out << "\ncost (left) and directed (right) layers around the robot, rows from y "
+        << cost->CenterOf({centre->ix, centre->iy + half}).y() << " down, columns from x "
+        << cost->CenterOf({centre->ix - half, centre->iy}).x() << ":\n";
+    const auto& c = cost->at(layers::CostLayer(profile_));
+    for (int iy = centre->iy + half; iy >= centre->iy - half; --iy) {
+      std::string left, right;
+      for (int ix = centre->ix - half; ix <= centre->ix + half; ++ix) {
+        if (!cost->Contains({ix, iy})) {
+          left += ' ';
+          right += "  ";
+          continue;
+        }
+        const float v = c(ix, iy);
+        char ch = std::isnan(v)              ? '?'
+                  : v >= layers::kCostLethal ? '#'
+                  : v <= 0.f                 ? '.'
+                             : static_cast<char>('1' + std::min(8, static_cast<int>(v / 10.f)));
+        if (ix == centre->ix && iy == centre->iy) ch = 'R';
+        left += ch;
+        if (!directed || directed->geometry() != cost->geometry()) continue;
+        const float d = directed->at(layers::DirectedLayer(profile_))(ix, iy);
+        char hex[4];
+        if (std::isnan(d)) {
+          right += " ?";
+        } else if (d >= layers::kAllHeadingsBlocked) {
+          right += d > layers::kAllHeadingsBlocked ? " U" : " #";
+        } else if (d <= 0.f) {
+          right += " .";
+        } else {
+          std::snprintf(hex, sizeof(hex), "%02x", static_cast<int>(d));
+          right += hex;
+        }
+      }
+      out << left << "   " << right << "\n";
+    }
     return out.str();
   }
 
@@ -338,6 +397,14 @@ class NavigatorStackTest : public ::testing::Test {
     return reply;
   }
 
+  void OnTile(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_grid_tile* t) {
+    if (layers::IsCostLayer(t->layer) || layers::IsDirectedLayer(t->layer)) tiles_.OnTile(*t);
+  }
+  void OnManifest(const lcm::ReceiveBuffer*, const std::string&,
+                  const cairn::lcmt_grid_manifest* m) {
+    if (layers::IsCostLayer(m->layer) || layers::IsDirectedLayer(m->layer)) tiles_.OnManifest(*m);
+  }
+
   std::string world_;
   std::string body_{"pioneer3at"};         // the simulated robot model (simulator/robots)
   std::string profile_{"pioneer3at"};      // served and driven
@@ -348,6 +415,7 @@ class NavigatorStackTest : public ::testing::Test {
   std::vector<Vector2> footprint_;
   std::string run_dir_;
   int64_t request_id_{0};
+  runtime::LayerAssembler tiles_;  // cost and directed layers, for MapWindow
 };
 
 }  // namespace cairn::planner::testing_stack

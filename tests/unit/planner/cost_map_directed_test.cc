@@ -1,7 +1,9 @@
 // CostMap with the directed layer (one-way steps): the crossing rule, MotionAllowed against a
 // brute-force reading, validity and cost of one-way cells, and directed connectivity.
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -232,6 +234,27 @@ TEST(CostMapDirectedTest, ConnectivityFollowsTheOneWaySteps) {
   const auto ramp = testing::OneWayStepCorridor(3.5).Build(PioneerFootprint());
   EXPECT_TRUE(ramp->MaybeConnected({9.0, 2.0}, {3.0, 2.0}));
   EXPECT_TRUE(ramp->MaybeConnected({3.0, 2.0}, {9.0, 2.0}));  // round by the ramp
+}
+
+TEST(CostMapDirectedTest, OneWayClearanceIsTheDistanceToTheNearestOneWayCell) {
+  const auto closed = testing::OneWayStepCorridor().Build(PioneerFootprint());
+  ASSERT_GT(closed->one_way_cells(), 0);
+  // The brute-force distance to the nearest one-way cell's centre, at cell centres.
+  const common::GridGeometry& g = closed->geometry();
+  for (const Vector2& p : {Vector2(2.05, 2.05), Vector2(5.25, 1.05), Vector2(9.95, 3.05)}) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int iy = 0; iy < g.size_y; ++iy) {
+      for (int ix = 0; ix < g.size_x; ++ix) {
+        if (closed->OneWayMask({ix, iy}) != 0) {
+          nearest = std::min(nearest, (g.CenterOf({ix, iy}) - p).norm());
+        }
+      }
+    }
+    EXPECT_NEAR(closed->SmoothOneWayClearanceAt(p), nearest, 0.02) << p.transpose();
+  }
+  // Without one-way cells, nothing is near.
+  const auto isotropic = testing::OneWayStepCorridor().layer.Build(PioneerFootprint());
+  EXPECT_TRUE(std::isinf(isotropic->SmoothOneWayClearanceAt({2.05, 2.05})));
 }
 
 // A rim marked as an unseen drop (layers::kUnseenDrop) with unknown ground beyond it at +x,

@@ -2,6 +2,11 @@
 // the direction it allows, route round by a ramp or answer "no path" the other way, and read
 // the cost layer alone exactly as before without the directed layer.
 
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "planner/global/global_planner.h"
@@ -100,6 +105,49 @@ TEST(DirectedPlanTest, ReedsSheppCrossesDownTheStepReversingOrNot) {
   ASSERT_EQ(down.status, PlanStatus::kSuccess) << down.message;
   ExpectDrivable(*map, down);
   EXPECT_EQ(dut.Plan(*map, {{4.0, 2.0, 0.0}, {8.0, 2.0, 0.0}, true}).status, PlanStatus::kNoPath);
+}
+
+// The smallest distance from the path's positions (every 5 cm along it) with x in [x0, x1] to
+// a one-way cell's centre.
+double ClosestToOneWayCells(const CostMap& map, const std::vector<Pose2>& poses, double x0,
+                            double x1) {
+  double closest = std::numeric_limits<double>::infinity();
+  const common::GridGeometry& g = map.geometry();
+  for (size_t i = 1; i < poses.size(); ++i) {
+    const Vector2 a = poses[i - 1].position(), b = poses[i].position();
+    const int n = std::max(1, static_cast<int>(std::ceil((b - a).norm() / 0.05)));
+    for (int k = 0; k <= n; ++k) {
+      const Vector2 p = a + (b - a) * (static_cast<double>(k) / n);
+      if (p.x() < x0 || p.x() > x1) continue;
+      for (int iy = 0; iy < g.size_y; ++iy) {
+        for (int ix = 0; ix < g.size_x; ++ix) {
+          if (map.OneWayMask({ix, iy}) == 0) continue;
+          closest = std::min(closest, (g.CenterOf({ix, iy}) - p).norm());
+        }
+      }
+    }
+  }
+  return closest;
+}
+
+TEST(DirectedPlanTest, PathsUpTheRampKeepOffItsSideEdge) {
+  // The straight way up the ramp runs 0.3 m from its side edge, where the floor below refuses
+  // the climb: a footprint that strays 5 cm towards the edge touches those cells and may no
+  // longer drive on. One-way cells keep paths off like blocking cells (clearance_weight).
+  const auto map = OneWayStepCorridor(3.5).Build(PioneerFootprint());
+  const GlobalPlanner dut(Params());
+  const PlanResult up = dut.Plan(*map, {{1.0, 3.8, 0.0}, {11.0, 3.8, 0.0}, false});
+  ASSERT_EQ(up.status, PlanStatus::kSuccess) << up.message;
+  ExpectDrivable(*map, up);
+  const double inscribed_m = map->footprint().inscribed_radius_m();
+  EXPECT_GT(ClosestToOneWayCells(*map, up.poses, 4.0, 6.0), inscribed_m + 0.25);
+  // The clearance term does not count one-way cells when it is off.
+  GlobalPlannerParams off = Params();
+  off.clearance_weight = 0.0;
+  const PlanResult hugging =
+      GlobalPlanner(off).Plan(*map, {{1.0, 3.8, 0.0}, {11.0, 3.8, 0.0}, false});
+  ASSERT_EQ(hugging.status, PlanStatus::kSuccess) << hugging.message;
+  EXPECT_LT(ClosestToOneWayCells(*map, hugging.poses, 4.0, 6.0), inscribed_m + 0.2);
 }
 
 TEST(DirectedPlanTest, GridAStarTakesDirectedSteps) {
