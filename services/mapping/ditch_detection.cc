@@ -33,6 +33,10 @@ struct GapLine {
   // The ground on each side continued into the gap at its own slope, at the cell: the higher
   // of the two is the lowest a smooth valley between the rims could lie there.
   double continued_m{0.0};
+  // Per side (+, -): the rim's height above the gap's floor, and the largest rise between
+  // consecutive known heights on the way there (the floor, the cells crossed, the rim).
+  double rise_m[2]{0.0, 0.0};
+  double wall_m[2]{0.0, 0.0};
 };
 
 // Walks from (x, y) along ±(dx, dy) through the gap: unknown cells and known cells lower than
@@ -40,15 +44,18 @@ struct GapLine {
 // unknown cell whose ground bound is at or above the threshold ends the walk without a rim:
 // the ground there may be at rim level, so the gap is not proven to continue. A rim must have
 // two cells of known ground beyond it within `flatness_m` of its height: the top of a wall
-// between two floors is no rim (else every corridor floor would lie in a "ditch").
-GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double rim_threshold,
-                 double flatness_m, int max_cells, double step_m) {
+// between two floors is no rim (else every corridor floor would lie in a "ditch"). `floor_m`:
+// the gap's height at (x, y) (its bound, or a seen bottom's height).
+GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double floor_m,
+                 double rim_threshold, double flatness_m, int max_cells, double step_m) {
   GapLine line;
   int k_side[2] = {0, 0};
   double rim_side[2] = {0.0, 0.0};
   double continued_side[2] = {0.0, 0.0};
+  double wall_side[2] = {0.0, 0.0};
   for (int side = 0; side < 2; ++side) {
     const int sdx = side == 0 ? dx : -dx, sdy = side == 0 ? dy : -dy;
+    double last_known = floor_m;
     for (int k = 1; k <= max_cells; ++k) {
       const int cx = x + k * sdx, cy = y + k * sdy;
       if (!v.Inside(cx, cy)) return line;
@@ -57,6 +64,8 @@ GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double rim_
         if (v.B(cx, cy) >= rim_threshold) return line;
         continue;
       }
+      wall_side[side] = std::max(wall_side[side], double(hc) - last_known);
+      last_known = hc;
       if (hc >= rim_threshold) {
         // A rim is ground that goes on beyond it at about its height for two more cells; a
         // wall or an object (ground again, or nothing known, behind it) bounds no ditch. Nor
@@ -98,6 +107,10 @@ GapLine FindRims(const TerrainView& v, int x, int y, int dx, int dy, double rim_
   line.rim_m = std::min(rim_side[0], rim_side[1]);
   line.width_m = (k_side[0] + k_side[1] - 1) * step_m;
   line.continued_m = std::max(continued_side[0], continued_side[1]);
+  for (int side = 0; side < 2; ++side) {
+    line.rise_m[side] = rim_side[side] - floor_m;
+    line.wall_m[side] = wall_side[side];
+  }
   return line;
 }
 
@@ -121,8 +134,8 @@ DitchCell TestGap(const TerrainView& v, int x, int y, double u, const Traversabi
     const bool diagonal = d[0] != 0 && d[1] != 0;
     const double step_m = diagonal ? res * M_SQRT2 : res;
     const int cells = diagonal ? std::max(1, static_cast<int>(max_cells / M_SQRT2)) : max_cells;
-    const GapLine line =
-        FindRims(v, x, y, d[0], d[1], u + p.min_ditch_depth_m, p.min_ditch_depth_m, cells, step_m);
+    const GapLine line = FindRims(v, x, y, d[0], d[1], u, u + p.min_ditch_depth_m,
+                                  p.min_ditch_depth_m, cells, step_m);
     if (!line.found) continue;
     const double depth = line.rim_m - u;
     if (depth + p.height_tolerance_m < p.min_ditch_depth_m) continue;
@@ -135,6 +148,12 @@ DitchCell TestGap(const TerrainView& v, int x, int y, double u, const Traversabi
     if (depth + p.height_tolerance_m < std::tan(p.min_ditch_wall_slope_rad) * 0.5 * line.width_m) {
       continue;
     }
+    // ... and a ditch has two walls: on each side most of the rise to the rim (half of it at
+    // least) happens at once, between two neighbouring known heights (or across unseen
+    // cells, where a wall may stand anywhere). Between a rock and the hillside rising gently
+    // beyond its shadow there is one wall, the rock's (its flat top passing for a far bank);
+    // the hillside's rise is spread over its cells.
+    if (line.wall_m[0] < 0.5 * line.rise_m[0] || line.wall_m[1] < 0.5 * line.rise_m[1]) continue;
     cell.lines[k] = line;
     if (!cell.ditch || line.width_m < cell.width_m) {
       cell.width_m = line.width_m;

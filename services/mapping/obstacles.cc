@@ -565,7 +565,10 @@ bool FeatureMeasurer::MeetsFlatterGround(const std::vector<int64_t>& cells) cons
 
 std::optional<Obstacle> FeatureMeasurer::Measure(const Found& f) {
   const double res = map_.resolution_m();
-  if (static_cast<int>(f.cells.size()) < params_.min_cells) return std::nullopt;
+  const bool small = static_cast<int>(f.cells.size()) < params_.min_cells;
+  if (small && (f.cells.size() < 2 || !(params_.min_small_feature_height_m > 0))) {
+    return std::nullopt;
+  }
   if (f.kind == ObstacleKind::kRamp &&
       f.cells.size() * res * res + 1e-9 < params_.min_ramp_area_m2) {
     return std::nullopt;
@@ -602,6 +605,7 @@ std::optional<Obstacle> FeatureMeasurer::Measure(const Found& f) {
        o.length_m < params_.min_small_step_elongation * o.width_m)) {
     return std::nullopt;  // a noise patch
   }
+  if (small && !(o.height_m >= params_.min_small_feature_height_m)) return std::nullopt;
   return o;
 }
 
@@ -676,6 +680,9 @@ void ObstacleParams::Validate() const {
                      "min_ramp_slope_rad must be in [0, pi/2), got " << min_ramp_slope_rad);
   CAIRN_THROW_UNLESS(min_step_height_m > 0, "min_step_height_m must be positive");
   CAIRN_THROW_UNLESS(min_cells >= 1, "min_cells must be >= 1, got " << min_cells);
+  CAIRN_THROW_UNLESS(
+      std::isfinite(min_small_feature_height_m),
+      "min_small_feature_height_m must be finite, got " << min_small_feature_height_m);
   CAIRN_THROW_UNLESS(step_contrast >= 1, "step_contrast must be >= 1, got " << step_contrast);
   CAIRN_THROW_UNLESS(std::isfinite(step_noise_sigmas) && step_noise_sigmas >= 0,
                      "step_noise_sigmas must be >= 0, got " << step_noise_sigmas);
@@ -858,6 +865,7 @@ ObstacleParams LoadObstacleParams(common::YamlMap& m) {
   m.Get("min_ramp_slope_rad", &p.min_ramp_slope_rad);
   m.Get("min_step_height_m", &p.min_step_height_m);
   m.Get("min_cells", &p.min_cells);
+  m.Get("min_small_feature_height_m", &p.min_small_feature_height_m);
   m.Get("step_contrast", &p.step_contrast);
   m.Get("step_noise_sigmas", &p.step_noise_sigmas);
   m.Get("wall_min_height_m", &p.wall_min_height_m);

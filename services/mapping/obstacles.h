@@ -42,7 +42,10 @@ struct ObstacleParams {
   /// small tilt errors between revolutions, seen as millimetre-high "steps" along lidar rings on
   /// smooth ground (the outdoor world listed a dozen of them).
   double min_step_height_m{0.006};
-  int min_cells{4};  ///< smaller components are noise
+  int min_cells{4};  ///< smaller components are noise ...
+  /// ... unless they stand this high (m) over two cells or more: a small rock seen from afar
+  /// as two or three cells of its face. <= 0: min_cells alone.
+  double min_small_feature_height_m{0.1};
   /// A height difference is a step when it exceeds this multiple of the differences just
   /// before and after it along the same line.
   double step_contrast{1.5};

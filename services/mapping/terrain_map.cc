@@ -148,6 +148,7 @@ TerrainMap::Tile* TerrainMap::GetTile(int tx, int ty) {
     tile->raw_bound.assign(n, kNaN);
     tile->conflict_bound.assign(n, kNaN);
     tile->scan.assign(n, 0u);
+    tile->carried.assign(n, 0);
     tile->elevation = tile->layers.at(layers::kElevation).data();
     tile->variance = tile->layers.at(layers::kElevationVariance).data();
     tile->count = tile->layers.at(layers::kObservationCount).data();
@@ -445,7 +446,7 @@ void TerrainMap::LimitGradient(const Tile& tile, size_t i, int64_t cx, int64_t c
 // noise spills the rim of a trench into its first cell, a wall's foot into the wall cell) and
 // is published unknown, so the gap keeps its true width. Larger conflicts are thin structures
 // the ray passed beside; they stay.
-void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
+void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy, bool only_to_carry) {
   float h = tile->filter_height[i];
   // The filter's height belongs where its points lay; on a plane of moderate slope (the last
   // derived for the cell) it is carried to the cell's centre, so an even ramp sampled along a
@@ -453,12 +454,20 @@ void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
   // Only a normal that interpolates is trusted: at the rim of unseen ground (the blind ring
   // around a standing robot) the fit extrapolates from one side, is steep from noise alone and
   // leans further with the cell's own height, so its carry would grow into a false step.
+  // `settled`: the commit had the last word a trusted normal gives (a carry, or none needed).
+  // `only_to_carry` (RecommitUnsettled): nothing changes unless the height is carried now.
+  bool settled = std::isnan(h);
+  bool carried_now = false;
   if (tile->normal_x != nullptr && tile->normal_y != nullptr && !std::isnan(h)) {
     const double nx = tile->normal_x[i], ny = tile->normal_y[i];
     const double nz2 = 1.0 - nx * nx - ny * ny;
     // A slope in (0, max_spread_slope_rad], as SlopeSpreadVariance > 0 asks, without an acos.
-    if (std::isfinite(nx) && std::isfinite(ny) && nz2 < 1.0 && nz2 >= min_spread_nz2_ &&
-        CachedNormalInterpolates(*tile, i, cx, cy)) {
+    const bool carries =
+        std::isfinite(nx) && std::isfinite(ny) && nz2 < 1.0 && nz2 >= min_spread_nz2_;
+    settled = std::isfinite(nx) && std::isfinite(ny) && !carries;
+    if (carries && CachedNormalInterpolates(*tile, i, cx, cy)) {
+      settled = true;
+      carried_now = true;
       // Runs of points fall in one cell: its limited gradient is kept for the run (the
       // neighbours' heights barely move meanwhile).
       if (limited_tile_ != tile || limited_i_ != i) {
@@ -472,6 +481,10 @@ void TerrainMap::CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy) {
       h = static_cast<float>(h - (limited_gx_ * tile->hit_dx[i] + limited_gy_ * tile->hit_dy[i]));
     }
   }
+  tile->carried[i] = settled ? 1 : 0;
+  // A recommit that carries nothing would only re-read the visibility bounds recorded since the
+  // cell's points came, which a commit applies to new points only.
+  if (only_to_carry && !carried_now) return;
   const float bound = tile->conflict_bound[i];
   if (!std::isnan(h) && bound < h - params_.visibility_tolerance_m &&
       h - bound < params_.max_visibility_conflict_m) {
@@ -624,6 +637,7 @@ void TerrainMap::Clear() {
   last_tile_ = nullptr;
   dirty_blocks_.clear();
   has_last_dirty_ = false;
+  last_region_.clear();
 }
 
 int64_t TerrainMap::known_cells() const {
@@ -639,7 +653,7 @@ size_t TerrainMap::memory_bytes() const {
   size_t bytes = 0;
   for (const auto& [key, tile] : tiles_) {
     bytes += tile->layers.layer_names().size() * sizeof(float) * tile->filter_height.size();
-    bytes += tile->filter_height.size() * (5 * sizeof(float) + sizeof(uint32_t));
+    bytes += tile->filter_height.size() * (5 * sizeof(float) + sizeof(uint32_t) + 1);
   }
   return bytes;
 }

@@ -214,7 +214,11 @@ class TerrainMap {
   /// cell (return_x, return_y) holds the return and gets none.
   void RecordBound(const common::Vector3& from, const common::Vector3& to, int64_t return_x,
                    int64_t return_y);
-  void CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy);
+  /// Publishes the cell's filtered height (carried to the cell's centre on a trusted normal);
+  /// with `only_to_carry`, only when it is carried now (a recommit).
+  void CommitHeight(Tile* tile, size_t i, int64_t cx, int64_t cy, bool only_to_carry = false);
+  /// Commits again the cells of `rects` whose last commit had no trusted normal.
+  void RecommitUnsettled(const std::vector<CellRect>& rects);
   /// True when the cell's normal fit interpolates: of its 8 neighbours (in any tile) at most
   /// two lack a height, and some have one on each side along both axes.
   bool NormalInterpolates(const Tile& tile, size_t i, int64_t cx, int64_t cy) const;
@@ -270,7 +274,8 @@ class TerrainMap {
   double limited_gx_{0.0};
   double limited_gy_{0.0};
   std::optional<common::Vector2> last_robot_xy_;
-  common::GridMap scratch_;                   // recomputation windows
+  std::set<Key> last_region_;  ///< the blocks the last UpdateDerived derived (RecommitUnsettled)
+  common::GridMap scratch_;    // recomputation windows
   mutable common::GridMap registry_scratch_;  // BuildRegistry's copy of the map
   int block_cells_{25};
 };

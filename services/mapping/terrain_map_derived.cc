@@ -205,7 +205,7 @@ int64_t TerrainMap::RecomputeGeometry(const std::vector<CellRect>& rects) {
   }
   // ... then the feature layers from them.
   std::vector<std::string> feature_in{layers::kElevation, layers::kElevationVariance,
-                                     layers::kGroundBound};
+                                      layers::kGroundBound};
   for (const auto& n : GeometricLayers()) feature_in.push_back(n);
   const int fm = FeatureRadiusCells() + 1;
   for (const CellRect& r : rects) {
@@ -217,9 +217,41 @@ int64_t TerrainMap::RecomputeGeometry(const std::vector<CellRect>& rects) {
   return cells;
 }
 
+// A cell seen only before its normal could be trusted (the first revolutions, or a lone cell
+// whose neighbours came later) kept the height of where its points lay: a hillside seen once
+// along a ring line reads as a contour of equal heights, a terrace. Committed again with the
+// normals derived since, it is carried to its centre like every cell seen later; a changed
+// height marks its block dirty, so the derived layers follow within the same update.
+void TerrainMap::RecommitUnsettled(const std::vector<CellRect>& rects) {
+  const int T = params_.tile_size_cells;
+  limited_tile_ = nullptr;
+  interpolates_tile_ = nullptr;
+  for (const CellRect& r : rects) {  // one tile each (RectsOfBlocks)
+    if (r.x1 <= r.x0 || r.y1 <= r.y0) continue;
+    const int64_t tx = FloorDiv(r.x0, T), ty = FloorDiv(r.y0, T);
+    auto it = tiles_.find({static_cast<int>(tx), static_cast<int>(ty)});
+    if (it == tiles_.end()) continue;
+    Tile* tile = it->second.get();
+    const int64_t x1 = std::min<int64_t>(r.x1, (tx + 1) * T);
+    const int64_t y1 = std::min<int64_t>(r.y1, (ty + 1) * T);
+    for (int64_t cy = r.y0; cy < y1; ++cy) {
+      for (int64_t cx = r.x0; cx < x1; ++cx) {
+        const size_t i = static_cast<size_t>((cx - tx * T) + (cy - ty * T) * T);
+        if (tile->carried[i] || std::isnan(tile->filter_height[i])) continue;
+        CommitHeight(tile, i, cx, cy, /*only_to_carry=*/true);
+      }
+    }
+  }
+  limited_tile_ = nullptr;
+  interpolates_tile_ = nullptr;
+}
+
 DerivedStats TerrainMap::UpdateDerived(const RobotContext& robot) {
   DerivedStats stats;
-  const std::set<Key> region = TakeChangedRegion();
+  // Cells of the last update's region that were committed without a trusted normal, committed
+  // again with the normals it derived, before this update derives from their heights.
+  RecommitUnsettled(RectsOfBlocks(last_region_));
+  std::set<Key> region = TakeChangedRegion();
   // Cost-only blocks: the blind zone at the robot's previous and current position, and with
   // IMU compensation the robot's surroundings (the pitch changes every cell's slope there).
   std::set<Key> cost_region = region;
@@ -239,6 +271,7 @@ DerivedStats TerrainMap::UpdateDerived(const RobotContext& robot) {
   for (const CellRect& r : cost_rects) {
     stats.cost_cells += static_cast<int64_t>(r.x1 - r.x0) * (r.y1 - r.y0) * all.size();
   }
+  last_region_ = std::move(region);
   return stats;
 }
 

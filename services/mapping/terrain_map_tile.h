@@ -53,6 +53,9 @@ struct TerrainMap::Tile {
   std::vector<float> raw_bound;
   std::vector<float> conflict_bound;  // as raw_bound, from rays ending two or more cells on
   std::vector<uint32_t> scan;         // low 32 bits of the scan id, 0 = none yet
+  // 1 where the last commit carried the height to the cell's centre (CommitHeight): a cell
+  // committed before its normal could be trusted is committed again once it can.
+  std::vector<uint8_t> carried;
   float* elevation{nullptr};
   float* variance{nullptr};
   float* count{nullptr};

@@ -64,6 +64,26 @@ bool Inside(const std::vector<common::Vector2>& poly, const common::Vector2& p) 
   return in;
 }
 
+// A small rock far off: two cells of ground and one of the rock's face seen at the end of a
+// lidar ring, nothing around. Fewer cells than min_cells (4) are noise unless they stand
+// min_small_feature_height_m (0.1 m) high.
+TEST(ObstaclesTest, ASmallFeatureIsListedOnlyWhenItStandsHigh) {
+  auto patch = [](double rock_m) {
+    return MakeTerrain(30, 30, kRes, [rock_m](double x, double y) {
+      if (y < 3.0 || y >= 3.2 || x < 2.0 || x >= 2.6) return std::nan("");
+      return x >= 2.4 ? rock_m : 0.0;
+    });
+  };
+  const common::ObstacleRegistry high = ExtractWith(patch(0.12), {});
+  ASSERT_EQ(high.obstacles.size(), 1u);
+  EXPECT_LT(high.obstacles[0].num_cells, ObstacleParams{}.min_cells);
+  EXPECT_NEAR(high.obstacles[0].height_m, 0.12, 1e-4);
+  EXPECT_TRUE(ExtractWith(patch(0.06), {}).obstacles.empty());
+  ObstacleParams min_cells_alone;
+  min_cells_alone.min_small_feature_height_m = 0.0;
+  EXPECT_TRUE(ExtractWith(patch(0.12), min_cells_alone).obstacles.empty());
+}
+
 // Seed 000 scenario 13: a 10 deg ramp (3 m long, then a platform) is a ramp; not crossable for
 // the P3-AT (8 deg), crossable for the rover (12 deg).
 TEST(ObstaclesTest, TenDegreeRampSplitsThePioneerAndTheRover) {

@@ -173,6 +173,52 @@ TEST(TerrainMapTest, CellsBesideAStepFaceAreNotCarriedAlongTheFaceFit) {
   }
 }
 
+// A hillside seen once, before any normal existed (the first revolution, or cells a ring line
+// crossed and never again), holds the heights of where its points lay: along a ring's contour,
+// every cell off its centre the same way, so the ramp reads as terraces. The next update commits
+// such cells again with the normals derived since, carried to their centres like every cell
+// seen later.
+TEST(TerrainMapTest, CellsSeenBeforeTheirNormalAreCarriedOnceItIsDerived) {
+  TerrainMapParams params = Params();
+  params.filter.min_variance_m2 = 1e-7;  // as config/mapping/mapper.yaml
+  TerrainMap map(params);
+  const double t = std::tan(10 * kDeg);
+  const common::Pose3 sensor = SensorAt(0.0, 0.0, 1.0);
+  // One point per cell of x 1.0..4.0, y -1..1, 8 cm uphill of its centre (1.4 cm higher).
+  std::vector<common::LidarPoint> points;
+  for (double x = 1.1; x < 4.0; x += 0.2) {
+    for (double y = -0.9; y < 1.0; y += 0.2) {
+      common::LidarPoint p;
+      p.x_m = static_cast<float>(x + 0.08);
+      p.y_m = static_cast<float>(y);
+      p.z_m = static_cast<float>(t * (x + 0.08) - 1.0);
+      points.push_back(p);
+    }
+  }
+  map.Integrate(points, sensor, 1, 0.1);
+  auto worst_error = [&] {
+    const GridMap out = map.Export({layers::kElevation});
+    double worst = 0.0;
+    int cells = 0;
+    for (double x = 1.7; x < 3.4; x += 0.2) {  // inner cells: their normals interpolate
+      for (double y = -0.5; y < 0.6; y += 0.2) {
+        const auto c = out.IndexOf({x, y});
+        EXPECT_TRUE(c.has_value());
+        if (!c) continue;
+        const double h = out.at(layers::kElevation)(c->ix, c->iy);
+        worst = std::max(worst, std::fabs(h - t * out.geometry().CenterOf(*c).x()));
+        ++cells;
+      }
+    }
+    EXPECT_GT(cells, 40);
+    return worst;
+  };
+  map.UpdateDerived();
+  EXPECT_GT(worst_error(), 0.012) << "committed before any normal: where the points lay";
+  map.UpdateDerived();  // nothing new seen
+  EXPECT_LT(worst_error(), 0.003) << "committed again with the derived normals";
+}
+
 // A robot standing on flat floor sees a ring of it around the blind zone under it, the cells
 // at the ring's inner rim only from one side. Their heights must not lean on a normal fitted over
 // that one side: the carry to the cell centre would grow, revolution after revolution, into a

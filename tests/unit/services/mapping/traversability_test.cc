@@ -463,6 +463,35 @@ TEST(TraversabilityTest, AShadowInAValleyIsNoDitch) {
   EXPECT_FALSE(std::isnan(level.at(layers::kDitchDepth)(12, 6)));
 }
 
+// Issue 17: the shadow at the foot of a rock, seen from beside it, between the rock's flat top
+// (25 cm, 1 m across) and the hillside rising gently (4 deg) beyond the shadow. The rock's top
+// passes for a bank and the hillside reaches 5 cm above the rays within a metre, but only the
+// rock side has a wall: natural ground, no ditch. With a 6 cm bank standing where the hillside
+// rose, both sides have walls and the gap is a ditch.
+TEST(TraversabilityTest, TheShadowBetweenARockAndAGentleRiseIsNoDitch) {
+  const double t = std::tan(4 * kDeg);
+  for (const bool bank : {false, true}) {
+    auto ground = [&](double x) {
+      if (x >= 2.0 && x < 3.0) return 0.25;  // the rock's top
+      if (x < 3.0) return 0.0;
+      return bank ? (x >= 3.4 ? 0.06 : 0.0) : (x - 3.0) * t;
+    };
+    GridMap map = MakeTerrain(40, 12, kRes, [&](double x, double) {
+      return (x >= 3.0 && x < 3.2) ? std::nan("") : ground(x);  // the shadow
+    });
+    Layer& b = map.AddLayer(layers::kGroundBound);
+    const Layer& h = map.at(layers::kElevation);
+    for (int iy = 0; iy < map.size_y(); ++iy) {
+      for (int ix = 0; ix < map.size_x(); ++ix) {
+        if (std::isnan(h(ix, iy)))
+          b(ix, iy) = static_cast<float>(ground((ix + 0.5) * kRes) + 0.005);
+      }
+    }
+    ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+    EXPECT_EQ(std::isnan(map.at(layers::kDitchDepth)(15, 6)), !bank) << "bank " << bank;
+  }
+}
+
 // Issue 17: a 6 deg slope seen as sparse noisy rings (every other row of cells known, heights
 // off by up to 6 mm). The 3 x 3 window holds one line of cells; the fit takes the wider window
 // and reads the slope within 1 deg.
