@@ -632,7 +632,7 @@ def terraces():
         return k * LANE_WIDTH + WALL_T / 2, (k + 1) * LANE_WIDTH - WALL_T / 2
 
     # Decks (top z = 0) everywhere but the ditches, which cut lanes 2 and 3 wall to wall.
-    narrow = (10.0, 10.15, 0.10)  # x0, x1, depth: lane 2 (a Pioneer 3-AT wheel bridges it)
+    narrow = (10.0, 10.25, 0.08)  # x0, x1, depth: lane 2 (bottom seen by rings below 22 deg)
     wide = (10.0, 10.6, 0.25)     # lane 3
     cuts = {2: narrow, 3: wide}
     geoms.append(aabb("deck_start", -1, LANE_X0, -1, y_max + 1, -0.3, 0.0, FLOOR_RGBA))

@@ -90,6 +90,14 @@ class NavigatorStackTest : public ::testing::Test {
                               "\npublish_period_s: 0.2");
     yaml = std::regex_replace(yaml, std::regex("\\nprofiles: \\[[^\\]]*\\]"),
                               "\nprofiles: [" + profile_arg_ + "]");
+    if (terrain_resolution_m_ > 0) {
+      const std::string before = yaml;
+      yaml = std::regex_replace(
+          yaml, std::regex("\nterrain:\n  resolution_m: [0-9.]+"),
+          "\nterrain:\n  resolution_m: " + std::to_string(terrain_resolution_m_));
+      EXPECT_NE(yaml, before)
+          << "mapper.yaml no longer starts its terrain section with resolution_m";
+    }
     const std::string path = procs_.dir() + "/mapper.yaml";
     std::ofstream(path) << yaml;
     return path;
@@ -375,6 +383,8 @@ class NavigatorStackTest : public ::testing::Test {
   // The simulator drives `model` (a robot of simulator/robots) instead of the Pioneer 3-AT.
   // Call before StartStack.
   void UseBody(const std::string& model) { body_ = model; }
+  // The terrain layer's cell size for this test (0: the shipped config's).
+  void UseTerrainResolution(double resolution_m) { terrain_resolution_m_ = resolution_m; }
 
   // The footprint polygon at a pose.
   std::vector<Vector2> FootprintAt(const Pose2& pose) const {
@@ -407,6 +417,7 @@ class NavigatorStackTest : public ::testing::Test {
 
   std::string world_;
   std::string body_{"pioneer3at"};         // the simulated robot model (simulator/robots)
+  double terrain_resolution_m_{0.0};       // UseTerrainResolution
   std::string profile_{"pioneer3at"};      // served and driven
   std::string profile_arg_{"pioneer3at"};  // its name or YAML path, as the processes take it
   std::string url_;

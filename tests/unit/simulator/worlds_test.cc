@@ -130,10 +130,11 @@ TEST_F(WorldsTest, TerracesLanesMatchTheirContract) {
   // Lane 1: the same with 12 cm.
   EXPECT_NEAR(SurfaceZ(sim, 11.9, 6.0), 0.12, 1e-9);
   EXPECT_NEAR(SurfaceZ(sim, 12.1, 6.0), 0.0, 1e-9);
-  // Lanes 2 and 3: ditches 0.15 m wide and 0.1 m deep, 0.6 m wide and 0.25 m deep.
-  EXPECT_NEAR(SurfaceZ(sim, 10.1, 10.0), -0.10, 1e-9);
+  // Lanes 2 and 3: ditches 0.25 m wide and 8 cm deep, 0.6 m wide and 0.25 m deep.
+  EXPECT_NEAR(SurfaceZ(sim, 10.1, 10.0), -0.08, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 10.2, 10.0), -0.08, 1e-9);
   EXPECT_NEAR(SurfaceZ(sim, 9.95, 10.0), 0.0, 1e-9);
-  EXPECT_NEAR(SurfaceZ(sim, 10.2, 10.0), 0.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 10.3, 10.0), 0.0, 1e-9);
   EXPECT_NEAR(SurfaceZ(sim, 10.3, 14.0), -0.25, 1e-9);
   EXPECT_NEAR(SurfaceZ(sim, 10.65, 14.0), 0.0, 1e-9);
   // Lane 4: the drop on the south half, a 5 deg ramp down on the north half.
