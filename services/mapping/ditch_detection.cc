@@ -162,6 +162,19 @@ DitchCell TestGap(const TerrainView& v, int x, int y, double u, const Traversabi
     cell.depth_m = std::max(cell.depth_m, depth);
     cell.ditch = true;
   }
+  // A gap bounded along one diagonal alone lies in a concave corner, where two faces meet at a
+  // right angle (a platform's drop beside a ramp's side): the floor there is open along both
+  // axes. A trench bounds its floor along an axis too (it runs within 45 deg of one), or along
+  // both diagonals (a trench along an axis, at its end against a wall).
+  if (cell.ditch) {
+    int axes = 0, diagonals = 0;
+    for (size_t k = 0; k < kLineDirections.size(); ++k) {
+      if (!cell.lines[k].found) continue;
+      const bool diagonal = kLineDirections[k][0] != 0 && kLineDirections[k][1] != 0;
+      ++(diagonal ? diagonals : axes);
+    }
+    if (axes == 0 && diagonals < 2) return DitchCell{};
+  }
   return cell;
 }
 

@@ -492,6 +492,44 @@ TEST(TraversabilityTest, TheShadowBetweenARockAndAGentleRiseIsNoDitch) {
   }
 }
 
+// Issue 17: the floor in a concave corner, where a platform's 8 cm drop (x < 2) meets the side
+// of a raised lane half (y >= 2.4), with the cells at the foot of both faces unseen (rays bound
+// them at the floor). Only the diagonal between the two faces has a rim on each side: open floor
+// along both axes, no ditch. With a bank at x >= 2.8 too, the floor is bounded along x: a
+// trench, and a ditch.
+TEST(TraversabilityTest, TheFloorInAConcaveCornerIsNoDitch) {
+  for (const bool bank : {false, true}) {
+    auto ground = [&](double x, double y) {
+      if (x < 2.0 || y >= 2.4) return 0.08;
+      return bank && x >= 2.8 ? 0.08 : 0.0;
+    };
+    GridMap map = MakeTerrain(40, 30, kRes, [&](double x, double y) {
+      const bool foot = x >= 2.0 && x < 2.4 && y < 2.4 && y >= 0.8;  // along the drop's face
+      const bool side = y >= 2.0 && y < 2.4 && x >= 2.0 && x < 3.6;  // along the raised half
+      return (foot || side) ? std::nan("") : ground(x, y);
+    });
+    Layer& b = map.AddLayer(layers::kGroundBound);
+    const Layer& h = map.at(layers::kElevation);
+    for (int iy = 0; iy < map.size_y(); ++iy) {
+      for (int ix = 0; ix < map.size_x(); ++ix) {
+        if (std::isnan(h(ix, iy))) b(ix, iy) = static_cast<float>(0.005);
+      }
+    }
+    ComputeCostLayer(&map, ShippedProfile("pioneer3at"), {});
+    const Layer& depth = map.at(layers::kDitchDepth);
+    int ditch_cells = 0;
+    for (int iy = 0; iy < map.size_y(); ++iy) {
+      for (int ix = 0; ix < map.size_x(); ++ix) ditch_cells += std::isnan(depth(ix, iy)) ? 0 : 1;
+    }
+    if (bank) {
+      EXPECT_GT(ditch_cells, 0);
+      EXPECT_FALSE(std::isnan(depth(10, 6)));  // (2.1, 1.3): between the drop and the bank
+    } else {
+      EXPECT_EQ(ditch_cells, 0);
+    }
+  }
+}
+
 // Issue 17: a 6 deg slope seen as sparse noisy rings (every other row of cells known, heights
 // off by up to 6 mm). The 3 x 3 window holds one line of cells; the fit takes the wider window
 // and reads the slope within 1 deg.
