@@ -51,30 +51,41 @@ class OmplLogForwarder : public ompl::msg::OutputHandler {
   }
 };
 
+// Near the start and the goal (within the escape radius) the robot's own footprint is checked,
+// elsewhere the padded one.
+class EscapeZones {
+ public:
+  EscapeZones(const Vector2& start, const Vector2& goal, double escape_radius_m)
+      : start_(start), goal_(goal), radius2_(escape_radius_m * escape_radius_m) {}
+  FootprintKind KindAt(const Vector2& p) const {
+    return Near(p) ? FootprintKind::kRobot : FootprintKind::kPadded;
+  }
+  bool Near(const Vector2& p) const {
+    return (p - start_).squaredNorm() <= radius2_ || (p - goal_).squaredNorm() <= radius2_;
+  }
+
+ private:
+  Vector2 start_;
+  Vector2 goal_;
+  double radius2_;
+};
+
 // A state is valid when its position lies on the grid and the padded footprint clears the
 // layer; near the start and the goal the robot's own footprint is enough.
 class FootprintValidityChecker : public ob::StateValidityChecker {
  public:
   FootprintValidityChecker(const ob::SpaceInformationPtr& si, const CostMap& map,
-                           const Vector2& start, const Vector2& goal, double escape_radius_m)
-      : ob::StateValidityChecker(si),
-        map_(map),
-        start_(start),
-        goal_(goal),
-        escape2_(escape_radius_m * escape_radius_m) {}
+                           const EscapeZones& zones)
+      : ob::StateValidityChecker(si), map_(map), zones_(zones) {}
   bool isValid(const ob::State* state) const override {
     const Pose2 p = ToPose(state);
     if (!map_.Contains(p.position())) return false;
-    const bool near_end = (p.position() - start_).squaredNorm() <= escape2_ ||
-                          (p.position() - goal_).squaredNorm() <= escape2_;
-    return map_.IsValid(p, near_end ? FootprintKind::kRobot : FootprintKind::kPadded);
+    return map_.IsValid(p, zones_.KindAt(p.position()));
   }
 
  private:
   const CostMap& map_;
-  Vector2 start_;
-  Vector2 goal_;
-  double escape2_;
+  EscapeZones zones_;
 };
 
 // On a map with one-way cells (CostMap::MotionAllowed): OMPL's discrete check of the states
@@ -87,12 +98,8 @@ class FootprintValidityChecker : public ob::StateValidityChecker {
 class DirectedMotionValidator : public ob::DiscreteMotionValidator {
  public:
   DirectedMotionValidator(const ob::SpaceInformationPtr& si, const CostMap& map,
-                          const Vector2& start, const Vector2& goal, double escape_radius_m)
-      : ob::DiscreteMotionValidator(si),
-        map_(map),
-        start_(start),
-        goal_(goal),
-        escape2_(escape_radius_m * escape_radius_m) {}
+                          const EscapeZones& zones)
+      : ob::DiscreteMotionValidator(si), map_(map), zones_(zones) {}
   bool checkMotion(const ob::State* s1, const ob::State* s2) const override {
     return ob::DiscreteMotionValidator::checkMotion(s1, s2) && FirstRefused(s1, s2) < 0;
   }
@@ -125,7 +132,7 @@ class DirectedMotionValidator : public ob::DiscreteMotionValidator {
         s = tmp;
       }
       const Pose2 pose = ToPose(s);
-      const bool near_end = NearEnd(previous.position()) || NearEnd(pose.position());
+      const bool near_end = zones_.Near(previous.position()) || zones_.Near(pose.position());
       if (!map_.MotionAllowed(previous, pose,
                               near_end ? FootprintKind::kRobot : FootprintKind::kPadded)) {
         refused = k - 1;
@@ -135,14 +142,9 @@ class DirectedMotionValidator : public ob::DiscreteMotionValidator {
     si_->freeState(tmp);
     return refused;
   }
-  bool NearEnd(const Vector2& p) const {
-    return (p - start_).squaredNorm() <= escape2_ || (p - goal_).squaredNorm() <= escape2_;
-  }
 
   const CostMap& map_;
-  Vector2 start_;
-  Vector2 goal_;
-  double escape2_;
+  EscapeZones zones_;
 };
 
 // SE(2) samples for narrow passages. A share of the positions comes from the ridge cells of
@@ -441,13 +443,12 @@ OmplProblem SetUpProblem(const CostMap& map, const GlobalPlannerParams& params, 
   p.setup = std::make_unique<og::SimpleSetup>(p.space);
   og::SimpleSetup& setup = *p.setup;
   p.si = setup.getSpaceInformation();
-  setup.setStateValidityChecker(std::make_shared<FootprintValidityChecker>(
-      p.si, map, start.position(), goal.position(), params.escape_radius_m));
+  const EscapeZones zones(start.position(), goal.position(), params.escape_radius_m);
+  setup.setStateValidityChecker(std::make_shared<FootprintValidityChecker>(p.si, map, zones));
   p.si->setStateValidityCheckingResolution(
       std::min(0.5, params.validity_resolution_m / p.space->getMaximumExtent()));
   if (map.one_way_cells() > 0) {
-    p.si->setMotionValidator(std::make_shared<DirectedMotionValidator>(
-        p.si, map, start.position(), goal.position(), params.escape_radius_m));
+    p.si->setMotionValidator(std::make_shared<DirectedMotionValidator>(p.si, map, zones));
   }
 
   ob::ScopedState<ob::SE2StateSpace> start_state(p.space);
