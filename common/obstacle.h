@@ -19,6 +19,9 @@ enum class ObstacleKind : int8_t {
   kStepDown = 3,
   kDitch = 4,
   kWallOrObject = 5,
+  /// A raised platform with the ramps and faces around it (ramp, platform and drop), listed once
+  /// with its parts (Obstacle::parts).
+  kTerrace = 6,
 };
 
 const char* ObstacleKindName(ObstacleKind kind);  ///< "ramp", "step_up", ...
@@ -49,6 +52,37 @@ inline const char* VerdictWord(const ObstacleVerdict& v) {
   return v.crossable ? "crossable" : (IsOneWay(v) ? "one-way" : "blocked");
 }
 
+/// One part of a terrace: a ramp or a face that leads onto the terrace's platform, judged per
+/// profile both ways (onto the platform and off it). The verdict is crossable when the profile
+/// may drive it both ways; a part it may drive one way only has a one-way verdict ("; one-way:
+/// off the platform only, heading 0 deg"); otherwise it is blocked.
+struct ObstaclePart {
+  ObstacleKind kind{ObstacleKind::kStepUp};  ///< kRamp, or kStepUp: a face rising onto the platform
+  Vector2 centroid_m{Vector2::Zero()};
+  std::vector<Vector2> outline_m;  ///< polygon, world frame
+  double slope_rad{0.0};           ///< a ramp's slope
+  double height_m{0.0};            ///< what it rises onto the platform
+  double width_m{0.0};
+  double length_m{0.0};
+  double area_m2{0.0};
+  int32_t num_cells{0};
+  /// The heading (rad, world frame, counter-clockwise from +x) of travel onto the platform over
+  /// this part; off it is the opposite heading.
+  double heading_in_rad{0.0};
+  std::vector<ObstacleVerdict> verdicts;
+
+  const ObstacleVerdict* VerdictFor(const std::string& profile) const {
+    for (const auto& v : verdicts) {
+      if (v.profile == profile) return &v;
+    }
+    return nullptr;
+  }
+};
+
+/// The most parts one terrace may carry (a registry read from a file or the bus is checked
+/// against it).
+inline constexpr int kMaxObstacleParts = 64;
+
 struct Obstacle {
   int32_t id{0};
   ObstacleKind kind{ObstacleKind::kWallOrObject};
@@ -62,6 +96,10 @@ struct Obstacle {
   double area_m2{0.0};
   int32_t num_cells{0};
   std::vector<ObstacleVerdict> verdicts;
+  /// A terrace's parts (empty for every other kind). The terrace's verdict is what the planner
+  /// does with the whole: crossable (two parts lead onto the platform and off it both ways),
+  /// one-way (onto it over one part and off over another, not back), or blocked.
+  std::vector<ObstaclePart> parts;
 
   /// The verdict for a profile, or nullptr.
   const ObstacleVerdict* VerdictFor(const std::string& profile) const {

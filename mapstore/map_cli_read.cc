@@ -73,6 +73,18 @@ void PrintObstacles(const common::ObstacleRegistry& obstacles) {
     t.Add({std::to_string(o.id), common::ObstacleKindName(o.kind), Fmt("%.2f", o.centroid_m.x()),
            Fmt("%.2f", o.centroid_m.y()), Fmt("%.1f", o.slope_rad * 180.0 / M_PI),
            Fmt("%.3f", o.height_m), Fmt("%.2f", o.width_m), Join(verdicts, " ")});
+    // A terrace's parts, numbered id.k, each with its verdicts both ways.
+    for (size_t k = 0; k < o.parts.size(); ++k) {
+      const common::ObstaclePart& p = o.parts[k];
+      std::vector<std::string> part_verdicts;
+      for (const auto& v : p.verdicts) {
+        part_verdicts.push_back(v.profile + ":" + common::VerdictWord(v));
+      }
+      t.Add({std::to_string(o.id) + "." + std::to_string(k + 1),
+             std::string("  ") + common::ObstacleKindName(p.kind), Fmt("%.2f", p.centroid_m.x()),
+             Fmt("%.2f", p.centroid_m.y()), Fmt("%.1f", p.slope_rad * 180.0 / M_PI),
+             Fmt("%.3f", p.height_m), Fmt("%.2f", p.width_m), Join(part_verdicts, " ")});
+    }
   }
   t.Print();
 }

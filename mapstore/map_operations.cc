@@ -39,6 +39,15 @@ common::ObstacleRegistry RegistryFor(const common::ObstacleRegistry& stored,
     verdict.profile_hash = hash;
     if (verdict.crossable) verdict.reason.clear();
     o.verdicts = {verdict};
+    std::vector<common::ObstacleVerdict> parts;
+    if (!o.parts.empty() && deriver.judge_parts) parts = deriver.judge_parts(source, profile);
+    for (size_t k = 0; k < o.parts.size(); ++k) {
+      o.parts[k].verdicts.clear();
+      if (k >= parts.size()) continue;
+      parts[k].profile = profile.name;
+      parts[k].profile_hash = hash;
+      o.parts[k].verdicts.push_back(std::move(parts[k]));
+    }
     out.obstacles.push_back(std::move(o));
   }
   std::sort(out.obstacles.begin(), out.obstacles.end(),

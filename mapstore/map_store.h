@@ -237,6 +237,11 @@ struct ProfileDeriver {
   std::function<common::ObstacleVerdict(const common::Obstacle& obstacle,
                                         const common::RobotProfile& profile)>
       judge;
+  /// A terrace's parts judged for a profile, one verdict per part in order (optional: without it
+  /// a registry judged for another profile keeps no part verdicts).
+  std::function<std::vector<common::ObstacleVerdict>(const common::Obstacle& obstacle,
+                                                     const common::RobotProfile& profile)>
+      judge_parts;
 
   bool valid() const { return !code_version.empty() && derive && judge; }
 };

@@ -18,6 +18,9 @@ ProfileDeriver MappingDeriver() {
   d.judge = [](const common::Obstacle& obstacle, const common::RobotProfile& profile) {
     return mapping::JudgeObstacle(obstacle, profile);
   };
+  d.judge_parts = [](const common::Obstacle& obstacle, const common::RobotProfile& profile) {
+    return mapping::JudgeParts(obstacle, profile);
+  };
   return d;
 }
 

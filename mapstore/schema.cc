@@ -173,6 +173,40 @@ constexpr char kSchemaV2ToV3[] = R"SQL(
 ALTER TABLE blobs ADD COLUMN stored_crc32 INTEGER;
 )SQL";
 
+// Version 3 -> 4: obstacles may be terraces (kind 6) and carry their parts (SerializeParts; NULL
+// for every other kind). SQLite cannot change a CHECK in place: the verdicts and obstacles are
+// copied aside, the table is made again and both are copied back (children first out, last in,
+// so no foreign key is ever broken).
+constexpr char kSchemaV3ToV4[] = R"SQL(
+CREATE TEMP TABLE v3_obstacles AS SELECT * FROM main.obstacles;
+CREATE TEMP TABLE v3_obstacle_verdicts AS SELECT * FROM main.obstacle_verdicts;
+DELETE FROM main.obstacle_verdicts;
+DROP TABLE main.obstacles;
+CREATE TABLE main.obstacles(
+  map_version_id INTEGER NOT NULL REFERENCES map_versions(id),
+  obstacle_id INTEGER NOT NULL,
+  kind INTEGER NOT NULL CHECK(kind BETWEEN 1 AND 6),
+  centroid_x_m REAL,
+  centroid_y_m REAL,
+  slope_rad REAL,
+  height_m REAL,
+  width_m REAL,
+  length_m REAL,
+  depth_m REAL,
+  area_m2 REAL,
+  num_cells INTEGER NOT NULL,
+  outline BLOB NOT NULL,
+  parts BLOB,
+  PRIMARY KEY(map_version_id, obstacle_id)) WITHOUT ROWID;
+INSERT INTO main.obstacles(map_version_id, obstacle_id, kind, centroid_x_m, centroid_y_m,
+    slope_rad, height_m, width_m, length_m, depth_m, area_m2, num_cells, outline, parts)
+  SELECT map_version_id, obstacle_id, kind, centroid_x_m, centroid_y_m, slope_rad, height_m,
+         width_m, length_m, depth_m, area_m2, num_cells, outline, NULL FROM temp.v3_obstacles;
+INSERT INTO main.obstacle_verdicts SELECT * FROM temp.v3_obstacle_verdicts;
+DROP TABLE temp.v3_obstacles;
+DROP TABLE temp.v3_obstacle_verdicts;
+)SQL";
+
 // The version 2 tables, for the version 1 migration (later steps then apply as for any version 2
 // file).
 common::Status CreateV2(sqlite::Database* db) { return db->Exec(kSchemaV2); }
@@ -334,12 +368,20 @@ common::Status MigrateV2ToV3(sqlite::Database* db, int64_t utime) {
   return AuditMigration(db, utime, "schema 2 -> 3");
 }
 
+common::Status MigrateV3ToV4(sqlite::Database* db, int64_t utime) {
+  common::Status s = db->Exec(kSchemaV3ToV4);
+  if (!s.ok()) return s;
+  return AuditMigration(db, utime, "schema 3 -> 4");
+}
+
 }  // namespace
 
 common::Status Create(sqlite::Database* db) {
   common::Status s = db->Exec(kSchemaV2);
   if (!s.ok()) return s;
   s = db->Exec(kSchemaV2ToV3);
+  if (!s.ok()) return s;
+  s = db->Exec(kSchemaV3ToV4);
   if (!s.ok()) return s;
   return db->Exec("PRAGMA application_id = " + std::to_string(kApplicationId) +
                   "; PRAGMA user_version = " + std::to_string(kCurrentVersion) + ";");
@@ -354,6 +396,9 @@ common::Status Migrate(sqlite::Database* db, int from_version, int64_t utime) {
         break;
       case 2:
         s = MigrateV2ToV3(db, utime);
+        break;
+      case 3:
+        s = MigrateV3ToV4(db, utime);
         break;
       default:
         return common::InternalError("no migration from schema version " + std::to_string(v));

@@ -13,7 +13,10 @@
 /// an older version is migrated step by step (1 -> 2 -> ...) in one transaction; a newer
 /// version is refused.
 ///
-/// Version 3 (current): version 2 with blobs.stored_crc32, StoredBlobCrc32 of each row (bytes and
+/// Version 4 (current): version 3 whose obstacles may be terraces (kind 6) with their parts
+/// (obstacles.parts, registry_codec.h SerializeParts; NULL for every other kind).
+///
+/// Version 3: version 2 with blobs.stored_crc32, StoredBlobCrc32 of each row (bytes and
 /// header), so that a read checks a blob without decompressing it. Migrating from 2 fills it in.
 /// See tests/unit/mapstore/fixtures/v2.db.
 ///
@@ -45,7 +48,7 @@
 namespace cairn::mapstore::schema {
 
 inline constexpr int64_t kApplicationId = 0x4341524E;  // "CARN"
-inline constexpr int kCurrentVersion = 3;
+inline constexpr int kCurrentVersion = 4;
 
 /// Creates the current schema in an empty database (inside the caller's transaction).
 common::Status Create(sqlite::Database* db);

@@ -215,7 +215,8 @@ Result<common::ObstacleRegistry> SqliteMapStore::LoadObstacles(const MapRef& ref
   registry.map_version = row->version;
   sqlite::Statement st = db_->Prepare(
       "SELECT obstacle_id, kind, centroid_x_m, centroid_y_m, slope_rad, height_m, width_m, "
-      "length_m, depth_m, area_m2, num_cells, outline FROM obstacles WHERE map_version_id = ? "
+      "length_m, depth_m, area_m2, num_cells, outline, parts FROM obstacles "
+      "WHERE map_version_id = ? "
       "ORDER BY obstacle_id");
   st.Bind(1, row->id);
   std::map<int32_t, size_t> index;
@@ -237,6 +238,20 @@ Result<common::ObstacleRegistry> SqliteMapStore::LoadObstacles(const MapRef& ref
                                   outline.status().message());
     }
     o.outline_m = std::move(outline).value();
+    if (!st.IsNull(12)) {
+      auto parts = ParseParts(st.Blob(12));
+      if (!parts.ok()) {
+        return common::CorruptError("obstacle " + std::to_string(o.id) + ": " +
+                                    parts.status().message());
+      }
+      o.parts = std::move(parts).value();
+    }
+    if (o.kind < common::ObstacleKind::kRamp || o.kind > common::ObstacleKind::kTerrace ||
+        o.parts.empty() != (o.kind != common::ObstacleKind::kTerrace)) {
+      return common::CorruptError("obstacle " + std::to_string(o.id) + " of kind " +
+                                  std::to_string(static_cast<int>(o.kind)) + " has " +
+                                  std::to_string(o.parts.size()) + " parts");
+    }
     index[o.id] = registry.obstacles.size();
     registry.obstacles.push_back(std::move(o));
   }

@@ -195,8 +195,8 @@ Status SqliteMapStore::InsertObstacles(int64_t version_id,
                                        const common::ObstacleRegistry& registry) {
   sqlite::Statement ob = db_->Prepare(
       "INSERT INTO obstacles(map_version_id, obstacle_id, kind, centroid_x_m, centroid_y_m, "
-      "slope_rad, height_m, width_m, length_m, depth_m, area_m2, num_cells, outline) "
-      "VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+      "slope_rad, height_m, width_m, length_m, depth_m, area_m2, num_cells, outline, parts) "
+      "VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   sqlite::Statement vd = db_->Prepare(
       "INSERT INTO obstacle_verdicts(map_version_id, obstacle_id, profile, profile_hash, "
       "crossable, reason) VALUES(?, ?, ?, ?, ?, ?)");
@@ -208,6 +208,12 @@ Status SqliteMapStore::InsertObstacles(int64_t version_id,
     ob.Bind(4, o.centroid_m.x()).Bind(5, o.centroid_m.y()).Bind(6, o.slope_rad);
     ob.Bind(7, o.height_m).Bind(8, o.width_m).Bind(9, o.length_m).Bind(10, o.depth_m);
     ob.Bind(11, o.area_m2).Bind(12, o.num_cells).BindBlob(13, outline.data(), outline.size());
+    const std::string parts = o.parts.empty() ? std::string() : SerializeParts(o.parts);
+    if (o.parts.empty()) {
+      ob.BindNull(14);
+    } else {
+      ob.BindBlob(14, parts.data(), parts.size());
+    }
     if (!(st = ob.Run()).ok()) return st;
     for (const common::ObstacleVerdict& verdict : o.verdicts) {
       vd.Reset();

@@ -67,9 +67,25 @@ Status ValidateSnapshot(const MapSnapshot& snapshot) {
   std::map<int32_t, int> ids;
   for (const common::Obstacle& o : snapshot.obstacles.obstacles) {
     const int kind = static_cast<int>(o.kind);
-    if (kind < 1 || kind > 5) {
+    if (kind < 1 || kind > static_cast<int>(common::ObstacleKind::kTerrace)) {
       return InvalidArgumentError("obstacle " + std::to_string(o.id) + " has unknown kind " +
                                   std::to_string(kind));
+    }
+    if ((o.kind == common::ObstacleKind::kTerrace) == o.parts.empty() ||
+        o.parts.size() > static_cast<size_t>(common::kMaxObstacleParts)) {
+      return InvalidArgumentError("obstacle " + std::to_string(o.id) + " has " +
+                                  std::to_string(o.parts.size()) + " parts (a terrace has 1 to " +
+                                  std::to_string(common::kMaxObstacleParts) +
+                                  ", every other kind none)");
+    }
+    for (const common::ObstaclePart& p : o.parts) {
+      if (p.kind != common::ObstacleKind::kRamp && p.kind != common::ObstacleKind::kStepUp) {
+        return InvalidArgumentError("a part of obstacle " + std::to_string(o.id) +
+                                    " is neither a ramp nor a face");
+      }
+      for (const common::ObstacleVerdict& v : p.verdicts) {
+        if (!(s = ValidateName("verdict profile", v.profile)).ok()) return s;
+      }
     }
     if (++ids[o.id] > 1) {
       return InvalidArgumentError("obstacle id " + std::to_string(o.id) + " appears twice");

@@ -98,12 +98,20 @@ bool ParseDouble(const std::string& s, double* out) {
   return end != nullptr && *end == '\0';
 }
 
+// A terrace's parts follow it, one row each: `id` numbers the part within the terrace (from 1)
+// and `part_of` is the terrace's id (empty on every other row).
 constexpr char kCsvHeader[] =
     "id,kind,centroid_x_m,centroid_y_m,slope_rad,height_m,width_m,length_m,depth_m,area_m2,"
+    "num_cells,outline_m,verdicts,part_of,heading_in_rad";
+constexpr size_t kCsvFields = 15;
+// The header of CSVs written before terraces (no parts), still read.
+constexpr char kCsvHeaderV1[] =
+    "id,kind,centroid_x_m,centroid_y_m,slope_rad,height_m,width_m,length_m,depth_m,area_m2,"
     "num_cells,outline_m,verdicts";
+constexpr size_t kCsvFieldsV1 = 13;
 
 Result<common::ObstacleKind> KindFromName(const std::string& name) {
-  for (int k = 1; k <= 5; ++k) {
+  for (int k = 1; k <= 6; ++k) {
     const auto kind = static_cast<common::ObstacleKind>(k);
     if (name == common::ObstacleKindName(kind)) return kind;
   }
@@ -112,22 +120,40 @@ Result<common::ObstacleKind> KindFromName(const std::string& name) {
 
 std::string Fmt(double v) { return ShortestDecimal(v); }
 
-// One CSV row of an obstacle.
-std::string CsvRow(const common::Obstacle& o) {
-  std::string outline, verdicts;
-  for (const auto& v : o.outline_m) {
+std::string OutlineField(const std::vector<common::Vector2>& polygon) {
+  std::string outline;
+  for (const auto& v : polygon) {
     outline += (outline.empty() ? "" : ";") + Fmt(v.x()) + " " + Fmt(v.y());
   }
-  for (const auto& v : o.verdicts) {
+  return CsvQuote(outline);
+}
+
+std::string VerdictsField(const std::vector<common::ObstacleVerdict>& list) {
+  std::string verdicts;
+  for (const auto& v : list) {
     verdicts += (verdicts.empty() ? "" : ";") + EscapeItem(v.profile) + "|" +
                 EscapeItem(v.profile_hash) + "|" + (v.crossable ? "crossable" : "blocked") + "|" +
                 EscapeItem(v.reason);
   }
+  return CsvQuote(verdicts);
+}
+
+// The CSV rows of an obstacle: its own, then one per part.
+std::string CsvRows(const common::Obstacle& o) {
   std::ostringstream out;
   out << o.id << "," << common::ObstacleKindName(o.kind) << "," << Fmt(o.centroid_m.x()) << ","
       << Fmt(o.centroid_m.y()) << "," << Fmt(o.slope_rad) << "," << Fmt(o.height_m) << ","
       << Fmt(o.width_m) << "," << Fmt(o.length_m) << "," << Fmt(o.depth_m) << "," << Fmt(o.area_m2)
-      << "," << o.num_cells << "," << CsvQuote(outline) << "," << CsvQuote(verdicts) << "\n";
+      << "," << o.num_cells << "," << OutlineField(o.outline_m) << "," << VerdictsField(o.verdicts)
+      << ",,\n";
+  for (size_t k = 0; k < o.parts.size(); ++k) {
+    const common::ObstaclePart& p = o.parts[k];
+    out << k + 1 << "," << common::ObstacleKindName(p.kind) << "," << Fmt(p.centroid_m.x()) << ","
+        << Fmt(p.centroid_m.y()) << "," << Fmt(p.slope_rad) << "," << Fmt(p.height_m) << ","
+        << Fmt(p.width_m) << "," << Fmt(p.length_m) << ",0," << Fmt(p.area_m2) << "," << p.num_cells
+        << "," << OutlineField(p.outline_m) << "," << VerdictsField(p.verdicts) << "," << o.id
+        << "," << Fmt(p.heading_in_rad) << "\n";
+  }
   return out.str();
 }
 
@@ -197,7 +223,7 @@ Result<std::string> WriteObstaclesCsv(const std::string& folder, const std::stri
   auto path = OutputPath(folder, stem, ".csv");
   if (!path.ok()) return path.status();
   std::string out = std::string(kCsvHeader) + "\n";
-  for (const common::Obstacle& o : registry.obstacles) out += CsvRow(o);
+  for (const common::Obstacle& o : registry.obstacles) out += CsvRows(o);
   const Status s = WriteFileAtomically(*path, out);
   if (!s.ok()) return s;
   return *path;
@@ -208,10 +234,13 @@ Result<common::ObstacleRegistry> ReadObstaclesCsv(const std::string& path) {
   if (!data.ok()) return data.status();
   std::istringstream in(*data);
   std::string line;
-  if (!std::getline(in, line) || (line != kCsvHeader && line != std::string(kCsvHeader) + "\r")) {
+  if (!std::getline(in, line)) line.clear();
+  if (!line.empty() && line.back() == '\r') line.pop_back();
+  if (line != kCsvHeader && line != kCsvHeaderV1) {
     return InvalidArgumentError(path + ": not an obstacle CSV (the first line must be '" +
                                 kCsvHeader + "')");
   }
+  const size_t num_fields = line == kCsvHeader ? kCsvFields : kCsvFieldsV1;
   common::ObstacleRegistry registry;
   int line_no = 1;
   std::vector<std::string> fields;
@@ -219,12 +248,56 @@ Result<common::ObstacleRegistry> ReadObstaclesCsv(const std::string& path) {
     ++line_no;
     if (line.empty() || line == "\r") continue;
     const std::string where = path + ":" + std::to_string(line_no) + ": ";
-    if (!ParseCsvLine(line, &fields) || fields.size() != 13) {
-      return InvalidArgumentError(where + "expected 13 fields");
+    if (!ParseCsvLine(line, &fields) || fields.size() != num_fields) {
+      return InvalidArgumentError(where + "expected " + std::to_string(num_fields) + " fields");
     }
     auto obstacle = ParseObstacle(fields, where);
     if (!obstacle.ok()) return obstacle.status();
-    registry.obstacles.push_back(std::move(obstacle).value());
+    if (num_fields == kCsvFieldsV1 || fields[13].empty()) {
+      if (obstacle->kind == common::ObstacleKind::kTerrace && !fields[14].empty()) {
+        return InvalidArgumentError(where + "a terrace has no heading_in_rad (its parts do)");
+      }
+      registry.obstacles.push_back(std::move(obstacle).value());
+      continue;
+    }
+    // A part: of the terrace just before it.
+    if (registry.obstacles.empty() ||
+        registry.obstacles.back().kind != common::ObstacleKind::kTerrace ||
+        fields[13] != std::to_string(registry.obstacles.back().id)) {
+      return InvalidArgumentError(where + "a part of terrace " + fields[13] +
+                                  " must follow that terrace or its other parts");
+    }
+    common::Obstacle& terrace = registry.obstacles.back();
+    double heading = 0;
+    if (obstacle->kind != common::ObstacleKind::kRamp &&
+        obstacle->kind != common::ObstacleKind::kStepUp) {
+      return InvalidArgumentError(where + "a part is a ramp or a step_up, not " + fields[1]);
+    }
+    if (!ParseDouble(fields[14], &heading)) {
+      return InvalidArgumentError(where + "heading_in_rad does not parse");
+    }
+    if (terrace.parts.size() >= static_cast<size_t>(common::kMaxObstacleParts)) {
+      return InvalidArgumentError(where + "a terrace has at most " +
+                                  std::to_string(common::kMaxObstacleParts) + " parts");
+    }
+    common::ObstaclePart p;
+    p.kind = obstacle->kind;
+    p.centroid_m = obstacle->centroid_m;
+    p.outline_m = std::move(obstacle->outline_m);
+    p.slope_rad = obstacle->slope_rad;
+    p.height_m = obstacle->height_m;
+    p.width_m = obstacle->width_m;
+    p.length_m = obstacle->length_m;
+    p.area_m2 = obstacle->area_m2;
+    p.num_cells = obstacle->num_cells;
+    p.heading_in_rad = heading;
+    p.verdicts = std::move(obstacle->verdicts);
+    terrace.parts.push_back(std::move(p));
+  }
+  for (const auto& o : registry.obstacles) {
+    if (o.kind == common::ObstacleKind::kTerrace && o.parts.empty()) {
+      return InvalidArgumentError(path + ": terrace " + std::to_string(o.id) + " has no part rows");
+    }
   }
   return registry;
 }

@@ -90,6 +90,18 @@ void DrawOverlay(const common::GridMap& map, const PngOverlay& overlay, int scal
       const auto b = to_pixel(o.outline_m[(i + 1) % o.outline_m.size()]);
       canvas->Line(a.first, a.second, b.first, b.second, colour, 2);
     }
+    // A terrace's parts, thin, each in its own verdict's colour.
+    for (const auto& p : o.parts) {
+      Rgb part_colour = kNoVerdict;
+      if (const auto* v = p.VerdictFor(overlay.verdict_profile)) {
+        part_colour = v->crossable ? kCrossable : kBlocked;
+      }
+      for (size_t i = 0; i < p.outline_m.size(); ++i) {
+        const auto a = to_pixel(p.outline_m[i]);
+        const auto b = to_pixel(p.outline_m[(i + 1) % p.outline_m.size()]);
+        canvas->Line(a.first, a.second, b.first, b.second, part_colour, 1);
+      }
+    }
     std::string kind = common::ObstacleKindName(o.kind);
     for (auto& ch : kind) ch = ch == '_' ? ' ' : ch;
     const auto c = to_pixel(o.centroid_m);

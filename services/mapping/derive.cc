@@ -6,7 +6,7 @@
 namespace cairn::mapping {
 
 // Bump whenever a change to traversability.cc or obstacles.cc could change a derived value.
-const char kMappingCodeVersion[] = "cairn-terrain-3";
+const char kMappingCodeVersion[] = "cairn-terrain-4";
 
 DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::RobotProfile& profile,
                                   const TraversabilityParams& traversability,

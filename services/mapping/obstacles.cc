@@ -18,6 +18,7 @@
 #include "services/mapping/ditch_detection.h"
 #include "services/mapping/feature_classes.h"
 #include "services/mapping/obstacle_shape.h"
+#include "services/mapping/terraces.h"
 #include "services/mapping/traversability.h"
 #include <Eigen/Eigenvalues>
 
@@ -596,6 +597,7 @@ std::optional<Obstacle> FeatureMeasurer::Measure(const Found& f) {
       MeasureRamp(f.cells, &o);
       if (!MeetsFlatterGround(f.cells)) return std::nullopt;  // a hillside
       break;
+    case ObstacleKind::kTerrace:  // joined from measured features (terraces.h), never found
     case ObstacleKind::kStepDown:
       break;
   }
@@ -707,6 +709,8 @@ void ObstacleParams::Validate() const {
   CAIRN_THROW_UNLESS(outline_tolerance_cells >= 0, "outline_tolerance_cells must be >= 0");
   CAIRN_THROW_UNLESS(std::isfinite(seen_ditch_max_width_m) && seen_ditch_max_width_m >= 0,
                      "seen_ditch_max_width_m must be >= 0, got " << seen_ditch_max_width_m);
+  CAIRN_THROW_UNLESS(std::isfinite(max_terrace_area_m2) && max_terrace_area_m2 >= 0,
+                     "max_terrace_area_m2 must be >= 0, got " << max_terrace_area_m2);
 }
 
 common::ObstacleRegistry ExtractObstacles(const GridMap& map_in, const ObstacleParams& params) {
@@ -754,11 +758,14 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map, const ObstaclePar
       cells, cells_of(params.object_join_gap_m), cells_of(params.object_opening_max_m),
       std::max(3, cells_of(params.object_opening_run_m)), params.surface_continuity_m, &label);
   FeatureMeasurer measurer(map, cells, label, params, ddepth.data(), dwidth.data());
-  common::ObstacleRegistry registry;
+  std::vector<internal::MeasuredFeature> measured;
   for (const Found& f : found) {
     if (std::optional<Obstacle> o = measurer.Measure(f))
-      registry.obstacles.push_back(std::move(*o));
+      measured.push_back({std::move(*o), f.cells});
   }
+  internal::JoinTerraces(map, label, params, &measured);
+  common::ObstacleRegistry registry;
+  for (auto& m : measured) registry.obstacles.push_back(std::move(m.obstacle));
   NumberByCentroid(&registry);
   return registry;
 }
@@ -831,6 +838,8 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
       }
       break;
     }
+    case ObstacleKind::kTerrace:
+      return internal::JudgeTerrace(o, profile, hash);
     case ObstacleKind::kWallOrObject:
       if (!(o.height_m <= profile.max_step_up_m + kTol)) {
         v.crossable = false;
@@ -841,6 +850,14 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
   return v;
 }
 }  // namespace
+
+std::vector<common::ObstacleVerdict> JudgeParts(const Obstacle& o,
+                                                const common::RobotProfile& profile) {
+  std::vector<common::ObstacleVerdict> out;
+  const std::string hash = profile.ContentHash();
+  for (const auto& part : o.parts) out.push_back(internal::JudgePart(part, profile, hash).verdict);
+  return out;
+}
 
 void LabelObstacles(common::ObstacleRegistry* registry,
                     const std::vector<common::RobotProfile>& profiles) {
@@ -856,6 +873,14 @@ void LabelObstacles(common::ObstacleRegistry* registry,
                    [&](const common::ObstacleVerdict& v) { return v.profile == profile.name; }),
                vs.end());
       vs.push_back(JudgeWithHash(o, profile, hashes[k]));
+      for (auto& part : o.parts) {
+        auto& pv = part.verdicts;
+        pv.erase(std::remove_if(
+                     pv.begin(), pv.end(),
+                     [&](const common::ObstacleVerdict& v) { return v.profile == profile.name; }),
+                 pv.end());
+        pv.push_back(internal::JudgePart(part, profile, hashes[k]).verdict);
+      }
     }
   }
 }
@@ -881,6 +906,7 @@ ObstacleParams LoadObstacleParams(common::YamlMap& m) {
   m.Get("surface_continuity_m", &p.surface_continuity_m);
   m.Get("outline_tolerance_cells", &p.outline_tolerance_cells);
   m.Get("seen_ditch_max_width_m", &p.seen_ditch_max_width_m);
+  m.Get("max_terrace_area_m2", &p.max_terrace_area_m2);
   m.Finish();
   return p;
 }

@@ -28,6 +28,9 @@
 ///   terrain, not a ramp: see min_ramp_crease_fraction); its slope is the larger of the sustained
 ///   slope (75th percentile of the interior cells, so a steep section is not averaged away) and the
 ///   slope of the plane fitted to its heights (robust where only part of it was seen).
+/// - terrace: the ramps and steps that lead onto one raised level platform, one entry with those
+///   as its parts (terraces.h); its verdict is the whole's: crossable, one-way (onto it over one
+///   part, off over another) or blocked.
 
 namespace cairn::common {
 class YamlMap;
@@ -94,6 +97,12 @@ struct ObstacleParams {
   /// beyond them (the cost layer judges such a floor by its steps). Wider gaps are floors
   /// between raised ground. 0: only ditches with an unseen gap are listed.
   double seen_ditch_max_width_m{1.2};
+  /// The largest platform (m²) whose ramps and faces are one registry entry, a terrace with its
+  /// parts (a ramp, the platform it leads onto and the drop at the far end; a slab and its faces):
+  /// a level region outside every feature, not the ground (the largest such region), that two or
+  /// more ramps or steps reach at their high side. Larger raised regions are ground whose edges
+  /// are listed one by one. 0: off.
+  double max_terrace_area_m2{100.0};
   /// Outline simplification tolerance, as a fraction of the resolution.
   double outline_tolerance_cells{0.5};
 
@@ -133,11 +142,22 @@ common::ObstacleRegistry ExtractObstacles(const common::GridMap& map, const Obst
 /// Whether `profile` can cross `obstacle`, with the reason when not:
 /// ramp: slope < min(max_slope_up, max_slope_down); step up: height <= max_step_up;
 /// step down: height <= max_step_down; ditch: width <= max_ditch_width (bridged) or a seen
-/// bottom no deeper than both step limits; wall or object: height <= max_step_up.
+/// bottom no deeper than both step limits; wall or object: height <= max_step_up; terrace: from
+/// its parts (each judged onto the platform against the up limits and off it against the down
+/// limits): crossable when two parts may be driven both ways, one-way when one part leads onto it
+/// and another off it, else blocked.
+/// LabelObstacles also labels each part of a terrace.
 common::ObstacleVerdict JudgeObstacle(const common::Obstacle& obstacle,
                                       const common::RobotProfile& profile);
 
-/// Replaces each obstacle's verdict for each of `profiles` (other verdicts are kept).
+/// The verdicts of a terrace's parts for `profile`, one per part in order (none for other
+/// kinds): crossable when the profile may drive the part both ways, one-way when onto the
+/// platform or off it only.
+std::vector<common::ObstacleVerdict> JudgeParts(const common::Obstacle& obstacle,
+                                                const common::RobotProfile& profile);
+
+/// Replaces each obstacle's verdict for each of `profiles` (other verdicts are kept), and each
+/// part's.
 void LabelObstacles(common::ObstacleRegistry* registry,
                     const std::vector<common::RobotProfile>& profiles);
 

@@ -44,6 +44,20 @@ std::string RegistryYaml(const common::ObstacleRegistry& registry) {
           << ", crossable: " << (v.crossable ? "true" : "false") << ", reason: \"" << v.reason
           << "\"}\n";
     }
+    if (o.parts.empty()) continue;
+    obs << "    parts:\n";
+    for (const auto& p : o.parts) {
+      obs << "      - kind: " << common::ObstacleKindName(p.kind) << "\n        centroid_m: ["
+          << Num(p.centroid_m.x()) << ", " << Num(p.centroid_m.y())
+          << "]\n        slope_rad: " << Num(p.slope_rad)
+          << "\n        height_m: " << Num(p.height_m)
+          << "\n        heading_in_rad: " << Num(p.heading_in_rad) << "\n        verdicts:\n";
+      for (const auto& v : p.verdicts) {
+        obs << "          - {profile: " << v.profile
+            << ", crossable: " << (v.crossable ? "true" : "false") << ", reason: \"" << v.reason
+            << "\"}\n";
+      }
+    }
   }
   return obs.str();
 }

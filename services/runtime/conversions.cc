@@ -265,18 +265,87 @@ cairn::lcmt_obstacle ToLcm(const common::Obstacle& o) {
     mv.reason = v.reason;
     m.verdicts.push_back(mv);
   }
+  m.num_parts = static_cast<int32_t>(o.parts.size());
+  for (const auto& p : o.parts) {
+    cairn::lcmt_obstacle_part mp{};
+    mp.kind = static_cast<int8_t>(p.kind);
+    mp.centroid_m[0] = p.centroid_m.x();
+    mp.centroid_m[1] = p.centroid_m.y();
+    mp.num_outline = static_cast<int32_t>(p.outline_m.size());
+    for (const auto& v : p.outline_m) {
+      mp.outline_x_m.push_back(v.x());
+      mp.outline_y_m.push_back(v.y());
+    }
+    mp.slope_rad = p.slope_rad;
+    mp.height_m = p.height_m;
+    mp.width_m = p.width_m;
+    mp.length_m = p.length_m;
+    mp.area_m2 = p.area_m2;
+    mp.num_cells = p.num_cells;
+    mp.heading_in_rad = p.heading_in_rad;
+    mp.num_verdicts = static_cast<int32_t>(p.verdicts.size());
+    for (const auto& v : p.verdicts) {
+      cairn::lcmt_obstacle_verdict mv{};
+      mv.profile = v.profile;
+      mv.profile_hash = v.profile_hash;
+      mv.crossable = v.crossable;
+      mv.reason = v.reason;
+      mp.verdicts.push_back(mv);
+    }
+    m.parts.push_back(std::move(mp));
+  }
   return m;
 }
+
+static_assert(cairn::lcmt_obstacle::MAX_PARTS == common::kMaxObstacleParts,
+              "the message's part limit is the registry's");
+
+namespace {
+Result<common::ObstaclePart> PartFromLcm(const cairn::lcmt_obstacle_part& m) {
+  if (m.num_outline < 0 || m.outline_x_m.size() != static_cast<size_t>(m.num_outline) ||
+      m.outline_y_m.size() != static_cast<size_t>(m.num_outline) || m.num_verdicts < 0 ||
+      m.verdicts.size() != static_cast<size_t>(m.num_verdicts)) {
+    return InvalidArgumentError("obstacle part arrays disagree with their counts");
+  }
+  if (m.kind != cairn::lcmt_obstacle::KIND_RAMP && m.kind != cairn::lcmt_obstacle::KIND_STEP_UP) {
+    return InvalidArgumentError("obstacle part has kind " + std::to_string(m.kind) +
+                                " (a part is a ramp or a face: kinds 1 and 2)");
+  }
+  common::ObstaclePart p;
+  p.kind = static_cast<common::ObstacleKind>(m.kind);
+  p.centroid_m = {m.centroid_m[0], m.centroid_m[1]};
+  for (int i = 0; i < m.num_outline; ++i)
+    p.outline_m.emplace_back(m.outline_x_m[i], m.outline_y_m[i]);
+  p.slope_rad = m.slope_rad;
+  p.height_m = m.height_m;
+  p.width_m = m.width_m;
+  p.length_m = m.length_m;
+  p.area_m2 = m.area_m2;
+  p.num_cells = m.num_cells;
+  p.heading_in_rad = m.heading_in_rad;
+  for (const auto& mv : m.verdicts) {
+    p.verdicts.push_back({mv.profile, mv.profile_hash, mv.crossable != 0, mv.reason});
+  }
+  return p;
+}
+}  // namespace
 
 Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& m) {
   if (m.num_outline < 0 || m.outline_x_m.size() != static_cast<size_t>(m.num_outline) ||
       m.outline_y_m.size() != static_cast<size_t>(m.num_outline) || m.num_verdicts < 0 ||
-      m.verdicts.size() != static_cast<size_t>(m.num_verdicts)) {
+      m.verdicts.size() != static_cast<size_t>(m.num_verdicts) || m.num_parts < 0 ||
+      m.parts.size() != static_cast<size_t>(m.num_parts)) {
     return InvalidArgumentError("obstacle arrays disagree with their counts");
   }
-  if (m.kind < cairn::lcmt_obstacle::KIND_RAMP ||
-      m.kind > cairn::lcmt_obstacle::KIND_WALL_OR_OBJECT) {
+  if (m.kind < cairn::lcmt_obstacle::KIND_RAMP || m.kind > cairn::lcmt_obstacle::KIND_TERRACE) {
     return InvalidArgumentError("obstacle has unknown kind " + std::to_string(m.kind));
+  }
+  if (m.num_parts > cairn::lcmt_obstacle::MAX_PARTS ||
+      (m.num_parts > 0) != (m.kind == cairn::lcmt_obstacle::KIND_TERRACE)) {
+    return InvalidArgumentError("obstacle of kind " + std::to_string(m.kind) + " has " +
+                                std::to_string(m.num_parts) + " parts (a terrace has 1 to " +
+                                std::to_string(cairn::lcmt_obstacle::MAX_PARTS) +
+                                ", every other kind none)");
   }
   common::Obstacle o;
   o.id = m.id;
@@ -293,6 +362,11 @@ Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& m) {
   o.num_cells = m.num_cells;
   for (const auto& mv : m.verdicts) {
     o.verdicts.push_back({mv.profile, mv.profile_hash, mv.crossable != 0, mv.reason});
+  }
+  for (const auto& mp : m.parts) {
+    auto p = PartFromLcm(mp);
+    if (!p.ok()) return p.status();
+    o.parts.push_back(std::move(p).value());
   }
   return o;
 }
@@ -329,6 +403,11 @@ bool FitRegistryToMessageLimit(cairn::lcmt_obstacle_registry* msg) {
     o.num_outline = 0;
     o.outline_x_m.clear();
     o.outline_y_m.clear();
+    for (auto& p : o.parts) {
+      p.num_outline = 0;
+      p.outline_x_m.clear();
+      p.outline_y_m.clear();
+    }
   }
   return true;
 }

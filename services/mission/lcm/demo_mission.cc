@@ -17,8 +17,8 @@
 #include "common/channels.h"
 #include "common/layers.h"
 #include "common/robot_profile.h"
-#include "mapstore/map_io.h"
 #include "mapstore/lcm/mapstore_client.h"
+#include "mapstore/map_io.h"
 #include "services/runtime/conversions.h"
 
 namespace cairn::mission {
@@ -365,8 +365,8 @@ bool DemoMission::ShareMap(mapstore::MapstoreClient* client, MissionReport* repo
 bool DemoMission::Render(const std::string& name, const common::GridMap& map,
                          const std::string& layer, const mapstore::io::PngOverlay& overlay,
                          MissionReport* report) {
-  auto png = mapstore::io::WritePng(params_.out_dir, name,
-                                    CropToKnown(map, layers::kElevation, 5), layer, overlay);
+  auto png = mapstore::io::WritePng(params_.out_dir, name, CropToKnown(map, layers::kElevation, 5),
+                                    layer, overlay);
   if (!png.ok()) {
     report->error = "rendering " + name + " failed: " + png.status().ToString();
     return false;
@@ -391,10 +391,19 @@ bool DemoMission::RenderAndList(mapstore::MapstoreClient* client,
       return false;
     }
     for (const auto& o : loaded->obstacles.obstacles) {
-      obstacles[o.id] = o;
+      auto [it, fresh] = obstacles.emplace(o.id, o);
+      if (!fresh && it->second.parts.size() == o.parts.size()) {
+        for (size_t k = 0; k < o.parts.size(); ++k) {
+          auto& kept = it->second.parts[k].verdicts;
+          kept.insert(kept.end(), o.parts[k].verdicts.begin(), o.parts[k].verdicts.end());
+        }
+      }
       const auto* v = o.VerdictFor(name);
       verdicts[o.id][name] =
-          v == nullptr ? "?" : (v->crossable ? "crossable" : "blocked (" + v->reason + ")");
+          v == nullptr
+              ? "?"
+              : (v->crossable ? std::string("crossable")
+                              : std::string(common::VerdictWord(*v)) + " (" + v->reason + ")");
     }
     if (!elevation_done && loaded->layers.HasLayer(layers::kElevation)) {
       mapstore::io::PngOverlay overlay;
@@ -422,6 +431,24 @@ bool DemoMission::RenderAndList(mapstore::MapstoreClient* client,
     line << head;
     for (const auto& name : profiles) line << "  " << name << ": " << verdicts[id][name];
     report->obstacle_lines.push_back(line.str());
+    // A terrace's parts, each with every profile's verdict.
+    for (size_t k = 0; k < o.parts.size(); ++k) {
+      const common::ObstaclePart& p = o.parts[k];
+      std::ostringstream part;
+      std::snprintf(head, sizeof(head),
+                    "  #%d.%zu %-10s at (%5.1f, %5.1f)  slope %4.1f deg  height %5.2f m  onto it "
+                    "heading %3.0f deg",
+                    id, k + 1, common::ObstacleKindName(p.kind), p.centroid_m.x(), p.centroid_m.y(),
+                    p.slope_rad * 180.0 / M_PI, p.height_m,
+                    std::fmod(p.heading_in_rad * 180.0 / M_PI + 360.0, 360.0));
+      part << head;
+      for (const auto& v : p.verdicts) {
+        part << "  " << v.profile << ": "
+             << (v.crossable ? std::string("crossable")
+                             : std::string(common::VerdictWord(v)) + " (" + v.reason + ")");
+      }
+      report->obstacle_lines.push_back(part.str());
+    }
   }
   return true;
 }

@@ -3,7 +3,11 @@
 // Lanes, starts and goals: simulator/worlds/terraces_lanes.yaml. The verdicts depend on the
 // direction of travel: an 8 cm drop may be driven down, never up.
 
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <optional>
+#include <string>
 
 #include <gtest/gtest.h>
 
@@ -76,7 +80,52 @@ class TerracesStackTest : public NavigatorStackTest {
     EXPECT_NEAR(ditch->width_m, x1 - x0, 0.1);
     EXPECT_NEAR(ditch->depth_m, depth_m, 0.02);
   }
+
+  // The registry lists the ramp, platform and far end of `lane` (x 7.5..13.5) as one entry, a
+  // terrace with a ramp among its parts, and nothing else there but the lane walls. Returns it.
+  std::optional<cairn::lcmt_obstacle> TerraceInTheRegistry(int lane) {
+    const double y0 = 4.0 * lane, y1 = y0 + 4.0;
+    std::optional<cairn::lcmt_obstacle> terrace;
+    std::string listed;
+    WaitFor(
+        [&] {
+          const auto r =
+              bus_.Last<cairn::lcmt_obstacle_registry>(ch::ForRobot(kRobot, ch::kMapObstacles));
+          if (!r) return false;
+          terrace.reset();
+          int others = 0;
+          listed.clear();
+          for (const auto& o : r->obstacles) {
+            if (o.kind == cairn::lcmt_obstacle::KIND_WALL_OR_OBJECT ||
+                !testing::CentroidIn(o, 7.5, 13.5, y0 + 0.3, y1 - 0.3)) {
+              continue;
+            }
+            listed += " " + std::to_string(o.id) + ":kind" + std::to_string(o.kind) + "@(" +
+                      std::to_string(o.centroid_m[0]) + "," + std::to_string(o.centroid_m[1]) + ")";
+            if (o.kind == cairn::lcmt_obstacle::KIND_TERRACE && !terrace) {
+              terrace = o;
+            } else {
+              ++others;
+            }
+          }
+          if (!terrace || others > 0) return false;
+          for (const auto& p : terrace->parts) {
+            if (p.kind == cairn::lcmt_obstacle::KIND_RAMP) return true;
+          }
+          return false;
+        },
+        20.0, [&] { bus_.Pump(20); });
+    EXPECT_TRUE(terrace.has_value()) << "listed in lane " << lane << ":" << listed;
+    return terrace;
+  }
 };
+
+// The heading in a one-way verdict's "crossable heading H deg only", or NaN.
+double OneWayHeadingDeg(const std::string& reason) {
+  const std::string key = "crossable heading ";
+  const size_t at = reason.find(key);
+  return at == std::string::npos ? std::nan("") : std::atof(reason.c_str() + at + key.size());
+}
 
 // From the platform the floor below the drop lies in the edge's lidar shadow: the rim reads as an
 // unseen drop, and the navigator (map.look_at_unseen_drops) plans over it to look. The floor
@@ -100,6 +149,16 @@ TEST_F(TerracesStackTest, DrivesUpTheRampAndOffTheEightCentimetreDrop) {
   EXPECT_LT(std::hypot(last.position_m[0] - 15.0, last.position_m[1] - 2.0), 0.5);
   EXPECT_NEAR(last.position_m[2] - start_z, 0.0, 0.02) << "not back on the floor";
   ExpectClearOfTheWalls(0);
+  // One feature, one entry: the ramp, the platform and the drop are one terrace, and its verdict
+  // is what the robot just did: crossable eastwards only, up the ramp and off the drop.
+  const auto terrace = TerraceInTheRegistry(0);
+  ASSERT_TRUE(terrace.has_value());
+  const auto* v = testing::Verdict(*terrace, profile_);
+  ASSERT_NE(v, nullptr);
+  EXPECT_FALSE(v->crossable);
+  EXPECT_NE(v->reason.find("; one-way: "), std::string::npos) << v->reason;
+  const double heading = OneWayHeadingDeg(v->reason);
+  EXPECT_LE(std::min(heading, 360.0 - heading), 20.0) << v->reason;
 }
 
 TEST_F(TerracesStackTest, NeverClimbsTheEightCentimetreDropFromBelow) {
@@ -137,6 +196,15 @@ TEST_F(TerracesStackTest, ClimbsTheRampBesideTheOneWayDropInsteadOfTheDrop) {
         << "climbed the drop at x " << p.position_m[0] << ", y " << p.position_m[1];
   }
   ExpectClearOfTheWalls(4);
+  // One entry for the whole: crossable (over its two ramps), its drop one-way.
+  const auto terrace = TerraceInTheRegistry(4);
+  ASSERT_TRUE(terrace.has_value());
+  const auto* v = testing::Verdict(*terrace, profile_);
+  ASSERT_NE(v, nullptr);
+  EXPECT_TRUE(v->crossable) << v->reason;
+  int ramps = 0;
+  for (const auto& p : terrace->parts) ramps += p.kind == cairn::lcmt_obstacle::KIND_RAMP;
+  EXPECT_EQ(ramps, 2);
 }
 
 TEST_F(TerracesStackTest, NeverEntersADitchWiderThanItsProfileAllows) {

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "mapstore/names.h"
+#include "tests/support/sample_obstacles.h"
 
 namespace cairn::mapstore {
 namespace {
@@ -242,6 +243,28 @@ TEST(BlobCodecTest, TilesCoverTheGridOnceAndPasteBack) {
   EXPECT_EQ(crop(0, 0), layer(12, 3));
   EXPECT_EQ(crop(5, 7), layer(17, 10));
   EXPECT_TRUE(TilesOf(g, 10, CellBox{30, 0, 40, 5}).empty());
+}
+
+// A terrace keeps its parts with their headings and verdicts; a part count over the limit is
+// refused before anything is allocated.
+TEST(BlobCodecTest, ATerraceRoundTripsWithItsParts) {
+  common::ObstacleRegistry r;
+  r.obstacles = {cairn::testing::SampleTerrace()};
+  auto back = ParseRegistry(SerializeRegistry(r));
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  ASSERT_EQ(back->obstacles.size(), 1u);
+  const common::Obstacle& t = back->obstacles[0];
+  EXPECT_EQ(t.kind, common::ObstacleKind::kTerrace);
+  ASSERT_EQ(t.parts.size(), 2u);
+  EXPECT_EQ(t.parts[1].kind, common::ObstacleKind::kStepUp);
+  EXPECT_EQ(t.parts[1].heading_in_rad, 3.14159);
+  EXPECT_EQ(t.parts[0].outline_m, r.obstacles[0].parts[0].outline_m);
+  EXPECT_EQ(t.parts[1].verdicts, r.obstacles[0].parts[1].verdicts);
+  std::string many(4, '\0');
+  const uint32_t count = common::kMaxObstacleParts + 1;
+  std::memcpy(&many[0], &count, 4);
+  EXPECT_EQ(ParseParts(many).status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(ParseParts(many).status().message().find("parts"), std::string::npos);
 }
 
 TEST(BlobCodecTest, RegistryRoundTripsAndRefusesGarbage) {

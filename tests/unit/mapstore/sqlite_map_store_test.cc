@@ -19,6 +19,7 @@
 #include "mapstore/blob_codec.h"
 #include "mapstore/map_operations.h"
 #include "mapstore/schema.h"
+#include "tests/support/sample_obstacles.h"
 #include "tests/unit/mapstore/fake_deriver.h"
 
 namespace cairn::mapstore {
@@ -97,6 +98,37 @@ TEST(SqliteMapStoreTest, PersistsAcrossReopenInWalMode) {
   EXPECT_STREQ(reinterpret_cast<const char*>(sqlite3_column_text(st, 0)), "wal");
   sqlite3_finalize(st);
   sqlite3_close(raw);
+}
+
+// A terrace is stored with its parts (headings and verdicts) and read back whole; a parts blob
+// that is not parts is refused where it is read.
+TEST(SqliteMapStoreTest, ATerraceIsStoredWithItsParts) {
+  const std::string path = TempDir() + "/site.db";
+  auto dut = OpenOrDie(path);
+  ASSERT_TRUE(dut);
+  MapSnapshot snapshot = SampleSnapshot("corridor");
+  snapshot.obstacles.obstacles.push_back(cairn::testing::SampleTerrace());
+  snapshot.obstacles.obstacles.back().id = 1000;  // after the sample's own
+  const common::Status saved = dut->SaveMap(snapshot, kCtx).status();
+  ASSERT_TRUE(saved.ok()) << saved.ToString();
+  auto back = dut->LoadObstacles({"lab", "corridor", 0});
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  const common::Obstacle* terrace = nullptr;
+  for (const auto& o : back->obstacles) {
+    if (o.kind == common::ObstacleKind::kTerrace) terrace = &o;
+  }
+  ASSERT_NE(terrace, nullptr);
+  const common::Obstacle want = cairn::testing::SampleTerrace();
+  ASSERT_EQ(terrace->parts.size(), want.parts.size());
+  EXPECT_EQ(terrace->parts[1].heading_in_rad, want.parts[1].heading_in_rad);
+  EXPECT_EQ(terrace->parts[1].verdicts, want.parts[1].verdicts);
+  EXPECT_EQ(terrace->verdicts, want.verdicts);
+  dut.reset();
+  RawExec(path, "UPDATE obstacles SET parts = x'0500' WHERE kind = 6;");
+  auto reopened = OpenOrDie(path);
+  ASSERT_TRUE(reopened);
+  auto refused = reopened->LoadObstacles({"lab", "corridor", 0});
+  EXPECT_EQ(refused.status().code(), StatusCode::kCorrupt);
 }
 
 TEST(SqliteMapStoreTest, RefusesFilesThatAreNotCairnDatabases) {
@@ -725,7 +757,10 @@ TEST(SqliteMapStoreTest, OpeningTheVersion2FixtureMigratesIt) {
   auto audit = dut->ListAudit(1);
   ASSERT_TRUE(audit.ok() && !audit->empty());
   EXPECT_EQ((*audit)[0].op, "migrate");
-  EXPECT_EQ((*audit)[0].detail, "schema 2 -> 3");
+  EXPECT_EQ((*audit)[0].detail, "schema 3 -> 4");
+  auto steps = dut->ListAudit(2);
+  ASSERT_TRUE(steps.ok() && steps->size() == 2u);
+  EXPECT_EQ((*steps)[1].detail, "schema 2 -> 3");
   dut.reset();
 
   // A blob whose bytes change after the migration is refused where it is read, without

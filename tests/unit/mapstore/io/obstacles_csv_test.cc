@@ -2,12 +2,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
 
 #include "mapstore/in_memory_map_store.h"
 #include "mapstore/map_transfer.h"
+#include "tests/support/sample_obstacles.h"
 #include "tests/unit/mapstore/fake_deriver.h"
 #include "tests/unit/mapstore/io/io_test_support.h"
 
@@ -54,6 +56,48 @@ TEST(ObstaclesCsvTest, ObstacleCsvRoundTripsExactly) {
   EXPECT_TRUE(back->obstacles[1].verdicts.empty());
   WriteText(dir + "/bad.csv", "id,kind\n1,ramp\n");
   EXPECT_EQ(ReadObstaclesCsv(dir + "/bad.csv").status().code(), StatusCode::kInvalidArgument);
+}
+
+// A terrace's parts follow it as rows of their own (part_of its id) and come back in order; a
+// part row with no terrace before it is refused with its line.
+TEST(ObstaclesCsvTest, ATerraceAndItsPartsRoundTrip) {
+  const std::string dir = TempDir();
+  common::ObstacleRegistry r;
+  common::Obstacle wall;
+  wall.id = 8;
+  wall.kind = common::ObstacleKind::kWallOrObject;
+  r.obstacles = {cairn::testing::SampleTerrace(), wall};
+  auto path = WriteObstaclesCsv(dir, "terrace", r);
+  ASSERT_TRUE(path.ok()) << path.status().ToString();
+  auto back = ReadObstaclesCsv(*path);
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  ASSERT_EQ(back->obstacles.size(), 2u);
+  const common::Obstacle& t = back->obstacles[0];
+  ASSERT_EQ(t.parts.size(), 2u);
+  for (size_t k = 0; k < 2; ++k) {
+    const common::ObstaclePart& want = r.obstacles[0].parts[k];
+    EXPECT_EQ(t.parts[k].kind, want.kind);
+    EXPECT_EQ(t.parts[k].centroid_m, want.centroid_m);
+    EXPECT_EQ(t.parts[k].outline_m, want.outline_m);
+    EXPECT_EQ(t.parts[k].heading_in_rad, want.heading_in_rad);
+    EXPECT_EQ(t.parts[k].verdicts, want.verdicts);
+  }
+  EXPECT_EQ(t.verdicts, r.obstacles[0].verdicts);
+  EXPECT_TRUE(back->obstacles[1].parts.empty());
+  // The same rows with the wall first: its parts would follow the wall.
+  std::ifstream in(*path);
+  std::string header, terrace_row, part1, part2, wall_row;
+  std::getline(in, header);
+  std::getline(in, terrace_row);
+  std::getline(in, part1);
+  std::getline(in, part2);
+  std::getline(in, wall_row);
+  WriteText(dir + "/orphan.csv", header + "\n" + wall_row + "\n" + part1 + "\n");
+  auto orphan = ReadObstaclesCsv(dir + "/orphan.csv");
+  EXPECT_EQ(orphan.status().code(), StatusCode::kInvalidArgument);
+  EXPECT_NE(orphan.status().message().find(":3:"), std::string::npos) << orphan.status().message();
+  WriteText(dir + "/bare.csv", header + "\n" + terrace_row + "\n");
+  EXPECT_EQ(ReadObstaclesCsv(dir + "/bare.csv").status().code(), StatusCode::kInvalidArgument);
 }
 
 TEST(ObstaclesCsvTest, ExportedAndImportedThroughTheRegistry) {

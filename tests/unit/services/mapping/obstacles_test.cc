@@ -118,12 +118,34 @@ TEST(ObstaclesTest, FiveDegreeRampIsCrossableForBoth) {
   EXPECT_TRUE(Crossable(*ramps[0], "rover"));
 }
 
-// A block across the corridor, `height` high and 1 m deep: both its edges are steps up (the
-// ground around it is at the low level).
+// A block across the corridor, 0.2 m high and 1 m deep: a slab with its faces, one terrace whose
+// two faces are steps up of 0.2 m (the ground around it is at the low level), blocked for both
+// profiles with no way onto it. With terraces off, the faces are two steps up.
 TEST(ObstaclesTest, TwentyCentimetreStepIsAStepUpForNeither) {
-  const common::ObstacleRegistry r =
-      Extract(Corridor([](double x) { return (x > 6.0 && x < 7.0) ? 0.2 : 0.0; }));
-  const auto steps = OfKind(r, ObstacleKind::kStepUp);
+  const GridMap block = Corridor([](double x) { return (x > 6.0 && x < 7.0) ? 0.2 : 0.0; });
+  const common::ObstacleRegistry r = Extract(block);
+  ASSERT_EQ(r.obstacles.size(), 1u);
+  const Obstacle& slab = r.obstacles[0];
+  ASSERT_EQ(slab.kind, ObstacleKind::kTerrace);
+  ASSERT_EQ(slab.parts.size(), 2u);
+  for (const auto& face : slab.parts) {
+    EXPECT_EQ(face.kind, ObstacleKind::kStepUp);
+    EXPECT_NEAR(face.height_m, 0.2, 1e-4);
+    EXPECT_NEAR(face.length_m, 4.0, 0.05);
+    EXPECT_FALSE(face.VerdictFor("pioneer3at")->crossable);
+  }
+  EXPECT_NEAR(std::min(slab.parts[0].centroid_m.x(), slab.parts[1].centroid_m.x()), 6.0, 0.25);
+  EXPECT_NEAR(std::max(slab.parts[0].centroid_m.x(), slab.parts[1].centroid_m.x()), 7.0, 0.25);
+  EXPECT_FALSE(Crossable(slab, "pioneer3at"));
+  EXPECT_FALSE(Crossable(slab, "rover"));
+  EXPECT_EQ(slab.VerdictFor("rover")->reason.rfind("no way onto the platform: ", 0), 0u)
+      << slab.VerdictFor("rover")->reason;
+
+  ObstacleParams no_terraces;
+  no_terraces.max_terrace_area_m2 = 0.0;
+  common::ObstacleRegistry pieces = ExtractWith(block, no_terraces);
+  LabelObstacles(&pieces, {ShippedProfile("pioneer3at"), ShippedProfile("rover")});
+  const auto steps = OfKind(pieces, ObstacleKind::kStepUp);
   ASSERT_EQ(steps.size(), 2u);
   for (const Obstacle* s : steps) {
     EXPECT_NEAR(s->height_m, 0.2, 1e-4);
@@ -133,8 +155,8 @@ TEST(ObstaclesTest, TwentyCentimetreStepIsAStepUpForNeither) {
   }
   EXPECT_NEAR(steps[0]->centroid_m.x(), 6.0, 0.25);
   EXPECT_NEAR(steps[1]->centroid_m.x(), 7.0, 0.25);
-  EXPECT_TRUE(OfKind(r, ObstacleKind::kRamp).empty());
-  EXPECT_TRUE(OfKind(r, ObstacleKind::kWallOrObject).empty());
+  EXPECT_TRUE(OfKind(pieces, ObstacleKind::kRamp).empty());
+  EXPECT_TRUE(OfKind(pieces, ObstacleKind::kWallOrObject).empty());
 }
 
 TEST(ObstaclesTest, OneCentimetreStepIsCrossable) {
@@ -384,6 +406,128 @@ common::Obstacle Make(ObstacleKind kind) {
   common::Obstacle o;
   o.kind = kind;
   return o;
+}
+
+// Terraces: lane 0 of the terraces world in a 4 m corridor. A 5 deg ramp rises from x 8.0 to the
+// platform at `drop_m`, which runs to x 12.0 and drops back to the ground there. North of
+// `ramp_down_from_y_m` the far end is a 5 deg ramp down instead of the drop (lane 4).
+GridMap Terrace(double drop_m, double ramp_down_from_y_m = 1e9) {
+  const double t = std::tan(5 * kDeg);
+  const double up_end = 8.0 + drop_m / t;
+  return MakeTerrain(80, 20, kRes, [=](double x, double y) {
+    if (x < 8.0) return 0.0;
+    if (x < up_end) return (x - 8.0) * t;
+    if (x < 12.0) return drop_m;
+    if (y >= ramp_down_from_y_m && x < 12.0 + drop_m / t) return drop_m - (x - 12.0) * t;
+    return 0.0;
+  });
+}
+
+const common::ObstaclePart* PartOfKind(const Obstacle& o, ObstacleKind kind, double x_m) {
+  const common::ObstaclePart* best = nullptr;
+  for (const auto& p : o.parts) {
+    if (p.kind == kind && (best == nullptr || std::fabs(p.centroid_m.x() - x_m) <
+                                                  std::fabs(best->centroid_m.x() - x_m))) {
+      best = &p;
+    }
+  }
+  return best;
+}
+
+double HeadingDeg(double rad) { return std::remainder(rad, 2 * M_PI) / kDeg; }
+
+// The lane: a ramp up and an 8 cm drop at the far end of the platform are one entry, a
+// terrace with its two parts, and its verdict is what the planner does: the Pioneer 3-AT (3 cm
+// up, 10 cm down) may cross it eastwards only, up the ramp and off the drop; the rover (8 cm up)
+// both ways. Each part says which way it may be driven.
+TEST(ObstaclesTest, ARampItsPlatformAndItsDropAreOneTerrace) {
+  const common::ObstacleRegistry r = Extract(Terrace(0.08));
+  ASSERT_EQ(r.obstacles.size(), 1u);
+  const Obstacle& t = r.obstacles[0];
+  ASSERT_EQ(t.kind, ObstacleKind::kTerrace);
+  ASSERT_EQ(t.parts.size(), 2u);
+  const common::ObstaclePart* ramp = PartOfKind(t, ObstacleKind::kRamp, 8.5);
+  const common::ObstaclePart* face = PartOfKind(t, ObstacleKind::kStepUp, 12.0);
+  ASSERT_NE(ramp, nullptr);
+  ASSERT_NE(face, nullptr);
+  EXPECT_NEAR(ramp->slope_rad / kDeg, 5.0, 0.5);
+  EXPECT_NEAR(face->height_m, 0.08, 0.005);
+  EXPECT_NEAR(face->centroid_m.x(), 12.0, 0.3);
+  EXPECT_NEAR(HeadingDeg(ramp->heading_in_rad), 0.0, 10.0);               // onto it eastwards
+  EXPECT_NEAR(std::fabs(HeadingDeg(face->heading_in_rad)), 180.0, 10.0);  // westwards
+  EXPECT_NEAR(t.height_m, 0.08, 0.01);
+  EXPECT_TRUE(Inside(t.outline_m, {10.5, 2.0}));  // the platform is in the entry
+  EXPECT_TRUE(Inside(t.outline_m, ramp->centroid_m));
+
+  const common::ObstacleVerdict* pioneer = t.VerdictFor("pioneer3at");
+  ASSERT_NE(pioneer, nullptr);
+  EXPECT_TRUE(common::IsOneWay(*pioneer)) << pioneer->reason;
+  EXPECT_NE(pioneer->reason.find("crossable heading 0 deg only"), std::string::npos)
+      << pioneer->reason;
+  EXPECT_NE(pioneer->reason.find("step up 0.080 m > 0.030 m"), std::string::npos)
+      << pioneer->reason;
+  EXPECT_TRUE(Crossable(t, "rover"));
+  ASSERT_NE(ramp->VerdictFor("pioneer3at"), nullptr);
+  EXPECT_TRUE(ramp->VerdictFor("pioneer3at")->crossable);
+  ASSERT_NE(face->VerdictFor("pioneer3at"), nullptr);
+  EXPECT_TRUE(common::IsOneWay(*face->VerdictFor("pioneer3at")));
+  EXPECT_NE(face->VerdictFor("pioneer3at")->reason.find("off the platform only, heading 0 deg"),
+            std::string::npos)
+      << face->VerdictFor("pioneer3at")->reason;
+  EXPECT_TRUE(face->VerdictFor("rover")->crossable);
+}
+
+// A 12 cm drop: the Pioneer may drive up the ramp and back, but not across (12 cm is over both
+// of its step limits); the rover (8 cm up, 15 cm down) eastwards only.
+TEST(ObstaclesTest, ATerraceWhoseDropIsTooHighIsBlockedWithTheReason) {
+  const common::ObstacleRegistry r = Extract(Terrace(0.12));
+  const auto terraces = OfKind(r, ObstacleKind::kTerrace);
+  ASSERT_EQ(terraces.size(), 1u);
+  EXPECT_EQ(r.obstacles.size(), 1u);
+  const common::ObstacleVerdict* pioneer = terraces[0]->VerdictFor("pioneer3at");
+  ASSERT_NE(pioneer, nullptr);
+  EXPECT_FALSE(pioneer->crossable);
+  EXPECT_FALSE(common::IsOneWay(*pioneer)) << pioneer->reason;
+  EXPECT_NE(pioneer->reason.find("(ramp) only"), std::string::npos) << pioneer->reason;
+  EXPECT_NE(pioneer->reason.find("step 0.120 m > 0.030 m up and > 0.100 m down"), std::string::npos)
+      << pioneer->reason;
+  const common::ObstacleVerdict* rover = terraces[0]->VerdictFor("rover");
+  EXPECT_TRUE(common::IsOneWay(*rover)) << rover->reason;
+}
+
+// Lane 4: the far end is half drop, half ramp down. The terrace is crossable both ways (over the
+// two ramps); its drop is one-way, off the platform only.
+TEST(ObstaclesTest, ATerraceWithTwoRampsIsCrossableAndItsDropOneWay) {
+  const common::ObstacleRegistry r = Extract(Terrace(0.08, 2.0));
+  const auto terraces = OfKind(r, ObstacleKind::kTerrace);
+  ASSERT_EQ(terraces.size(), 1u);
+  EXPECT_EQ(r.obstacles.size(), 1u);
+  const Obstacle& t = *terraces[0];
+  EXPECT_TRUE(Crossable(t, "pioneer3at")) << t.VerdictFor("pioneer3at")->reason;
+  int ramps = 0, one_way_faces = 0;
+  for (const auto& p : t.parts) {
+    if (p.kind == ObstacleKind::kRamp) {
+      ++ramps;
+      EXPECT_TRUE(p.VerdictFor("pioneer3at")->crossable);
+    } else if (common::IsOneWay(*p.VerdictFor("pioneer3at"))) {
+      ++one_way_faces;
+    }
+  }
+  EXPECT_EQ(ramps, 2);
+  EXPECT_GE(one_way_faces, 1);
+}
+
+// A slab the height of a step stays level ground's business when it is as large as the ground:
+// terraces are platforms no larger than max_terrace_area_m2, and 0 turns them off.
+TEST(ObstaclesTest, TerracesCanBeTurnedOff) {
+  ObstacleParams off;
+  off.max_terrace_area_m2 = 0.0;
+  const common::ObstacleRegistry r = ExtractWith(Terrace(0.08), off);
+  EXPECT_TRUE(OfKind(r, ObstacleKind::kTerrace).empty());
+  EXPECT_EQ(OfKind(r, ObstacleKind::kRamp).size(), 1u);
+  ObstacleParams small;
+  small.max_terrace_area_m2 = 5.0;  // the platform is about 3 m by 4 m
+  EXPECT_TRUE(OfKind(ExtractWith(Terrace(0.08), small), ObstacleKind::kTerrace).empty());
 }
 
 TEST(JudgeObstacleTest, BoundariesPerKind) {

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "services/runtime/tiler.h"
+#include "tests/support/sample_obstacles.h"
 
 namespace cairn::runtime {
 namespace {
@@ -12,7 +13,8 @@ namespace {
 common::Pose3 SomePose() {
   common::Pose3 p;
   p.position_m = {1.5, -2.25, 0.4};
-  p.orientation = common::Quaternion(Eigen::AngleAxisd(0.3, common::Vector3(0.2, 0.1, 1).normalized()));
+  p.orientation =
+      common::Quaternion(Eigen::AngleAxisd(0.3, common::Vector3(0.2, 0.1, 1).normalized()));
   return p;
 }
 
@@ -126,7 +128,8 @@ TEST(ConversionsTest, ObstacleRegistryRoundTrip) {
   o.depth_m = NAN;
   o.area_m2 = 4.0;
   o.num_cells = 100;
-  o.verdicts = {{"pioneer3at", "abc", false, "slope 10.0 deg > 8.0 deg"}, {"rover", "def", true, ""}};
+  o.verdicts = {{"pioneer3at", "abc", false, "slope 10.0 deg > 8.0 deg"},
+                {"rover", "def", true, ""}};
   r.obstacles.push_back(o);
   auto back = FromLcm(ToLcm(r, 1, "r1", "live"));
   ASSERT_TRUE(back.ok());
@@ -141,6 +144,35 @@ TEST(ConversionsTest, ObstacleRegistryRoundTrip) {
   auto bad = ToLcm(o);
   bad.kind = 9;
   EXPECT_FALSE(FromLcm(bad).ok());
+}
+
+// A terrace crosses the bus with its parts; a message whose part count is over the limit, that
+// gives parts to another kind, or whose part is not a ramp or a face is refused (rule 8).
+TEST(ConversionsTest, ATerraceCrossesTheBusWithItsParts) {
+  const common::Obstacle t = cairn::testing::SampleTerrace();
+  auto back = FromLcm(ToLcm(t));
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  ASSERT_EQ(back->parts.size(), 2u);
+  EXPECT_EQ(back->parts[1].heading_in_rad, t.parts[1].heading_in_rad);
+  EXPECT_EQ(back->parts[1].verdicts, t.parts[1].verdicts);
+  EXPECT_EQ(back->parts[0].outline_m, t.parts[0].outline_m);
+  auto many = ToLcm(t);
+  many.parts.resize(cairn::lcmt_obstacle::MAX_PARTS + 1, many.parts[0]);
+  many.num_parts = static_cast<int32_t>(many.parts.size());
+  EXPECT_FALSE(FromLcm(many).ok());
+  auto lying = ToLcm(t);
+  lying.num_parts = 3;
+  EXPECT_FALSE(FromLcm(lying).ok());
+  auto ramp_with_parts = ToLcm(t);
+  ramp_with_parts.kind = cairn::lcmt_obstacle::KIND_RAMP;
+  EXPECT_FALSE(FromLcm(ramp_with_parts).ok());
+  auto ditch_part = ToLcm(t);
+  ditch_part.parts[0].kind = cairn::lcmt_obstacle::KIND_DITCH;
+  EXPECT_FALSE(FromLcm(ditch_part).ok());
+  auto terrace_alone = ToLcm(t);
+  terrace_alone.parts.clear();
+  terrace_alone.num_parts = 0;
+  EXPECT_FALSE(FromLcm(terrace_alone).ok());
 }
 
 TEST(ConversionsTest, ARegistryOverTheBusLimitLosesItsOutlinesOnly) {
