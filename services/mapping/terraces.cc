@@ -107,11 +107,39 @@ std::string Format(const char* fmt, double a, double b = 0.0, double c = 0.0) {
   return buf;
 }
 
+// What a face rises onto its platform: from the lowest known ground up to kFallCells beyond each
+// of its cells (away from the platform) to the platform's level, the median over its cells. A
+// face whose foot lay in the edge's lidar shadow when it was measured reads lower between the
+// surfaces beside it (the cells at its foot mix both levels) than the drop the platform ends in.
+constexpr int kFallCells = 4;
+double FallBeyond(const common::GridMap& map, const std::vector<int64_t>& cells, Vector2 outward,
+                  double platform_m) {
+  const int sx = map.size_x(), sy = map.size_y();
+  const float* h = map.at(layers::kElevation).data();
+  if (!(outward.norm() > 0)) return 0.0;
+  outward.normalize();
+  std::vector<double> falls;
+  for (int64_t i : cells) {
+    const double cx = static_cast<double>(i % sx), cy = static_cast<double>(i / sx);
+    double lowest = std::numeric_limits<double>::infinity();
+    for (int t = 0; t <= kFallCells; ++t) {
+      const int x = static_cast<int>(std::lround(cx + t * outward.x()));
+      const int y = static_cast<int>(std::lround(cy + t * outward.y()));
+      if (x < 0 || y < 0 || x >= sx || y >= sy) break;
+      const float v = h[x + static_cast<int64_t>(y) * sx];
+      if (!std::isnan(v)) lowest = std::min(lowest, double(v));
+    }
+    if (std::isfinite(lowest)) falls.push_back(platform_m - lowest);
+  }
+  return falls.empty() ? 0.0 : Median(falls);
+}
+
 // The terrace of a group of features and the platforms they lead onto.
 Obstacle BuildTerrace(const common::GridMap& map, const ObstacleParams& params,
                       const std::vector<MeasuredFeature>& features, const std::vector<int>& members,
                       const std::vector<int64_t>& platform_cells,
-                      const std::map<int, Vector2>& heading_in) {
+                      const std::map<int, Vector2>& heading_in,
+                      const std::map<int, double>& platform_height) {
   Obstacle t;
   t.kind = ObstacleKind::kTerrace;
   std::vector<int64_t> cells = platform_cells;
@@ -137,7 +165,13 @@ Obstacle BuildTerrace(const common::GridMap& map, const ObstacleParams& params,
     p.area_m2 = o.area_m2;
     p.num_cells = o.num_cells;
     const Vector2 d = heading_in.at(k);
-    p.heading_in_rad = std::atan2(d.y(), d.x());
+    // Cell offsets are in the grid's frame; the heading is the world's.
+    p.heading_in_rad =
+        std::remainder(std::atan2(d.y(), d.x()) + map.geometry().origin.yaw_rad, 2 * M_PI);
+    if (p.kind == ObstacleKind::kStepUp) {
+      p.height_m =
+          std::max(p.height_m, FallBeyond(map, features[k].cells, -d, platform_height.at(k)));
+    }
     t.slope_rad = std::max(t.slope_rad, p.slope_rad);
     t.height_m = std::max(t.height_m, p.height_m);
     t.parts.push_back(std::move(p));
@@ -163,6 +197,8 @@ void JoinTerraces(const common::GridMap& map, const std::vector<int32_t>& label,
   const int sx = map.size_x(), sy = map.size_y();
   const double res = map.resolution_m();
   const float* h = map.at(layers::kElevation).data();
+  const float* low = map.HasLayer(kFeatureLowLayer) ? map.at(kFeatureLowLayer).data() : nullptr;
+  const float* high = map.HasLayer(kFeatureHighLayer) ? map.at(kFeatureHighLayer).data() : nullptr;
   const Regions regions =
       LabelLevelRegions(map, label, params.min_ramp_slope_rad, params.surface_continuity_m);
   if (regions.size.size() < 2) return;
@@ -184,7 +220,18 @@ void JoinTerraces(const common::GridMap& map, const std::vector<int32_t>& label,
       if (!std::isnan(h[i])) heights.push_back(h[i]);
     }
     if (heights.empty()) continue;
-    const double mid = Median(heights);
+    // The level halfway up the feature: of a ramp, the middle of its heights; of a step, the
+    // middle of its two sides (the cells of a drop into a gap lie on its high side alone).
+    double mid = Median(heights) + 0.25 * f.obstacle.height_m;
+    if (f.obstacle.kind != ObstacleKind::kRamp && low != nullptr && high != nullptr) {
+      std::vector<double> lows, highs;
+      for (int64_t i : f.cells) {
+        if (std::isnan(low[i]) || std::isnan(high[i])) continue;
+        lows.push_back(low[i]);
+        highs.push_back(high[i]);
+      }
+      if (!lows.empty()) mid = 0.5 * (Median(lows) + Median(highs));
+    }
     std::map<int32_t, Contact> mine;
     for (int64_t i : f.cells) {
       const int cx = static_cast<int>(i % sx), cy = static_cast<int>(i / sx);
@@ -201,8 +248,8 @@ void JoinTerraces(const common::GridMap& map, const std::vector<int32_t>& label,
       }
     }
     for (const auto& [r, c] : mine) {
-      // The platform is on the feature's high side: above its middle by a quarter of its rise.
-      if (regions.MeanHeight(r) > mid + 0.25 * f.obstacle.height_m) contacts[{r, int(k)}] = c;
+      // The platform is on the feature's high side.
+      if (regions.MeanHeight(r) > mid) contacts[{r, int(k)}] = c;
     }
   }
   // Features that lead onto one platform are one terrace.
@@ -219,10 +266,15 @@ void JoinTerraces(const common::GridMap& map, const std::vector<int32_t>& label,
   if (platforms.empty()) return;
   std::map<int, std::vector<int>> groups;  // root -> members
   std::map<int, Vector2> heading_in;       // feature -> summed direction onto its platforms
+  std::map<int, double> platform_height;   // feature -> the highest platform it leads onto
   for (int32_t r : platforms) {
     for (int k : onto[r]) {
       groups[Find(&parent, k)].push_back(k);
       heading_in[k] += contacts[{r, k}].direction;
+      const auto it = platform_height.find(k);
+      platform_height[k] = it == platform_height.end()
+                               ? regions.MeanHeight(r)
+                               : std::max(it->second, regions.MeanHeight(r));
     }
   }
   std::map<int, std::vector<int64_t>> platform_cells;  // root -> platform cells
@@ -240,7 +292,8 @@ void JoinTerraces(const common::GridMap& map, const std::vector<int32_t>& label,
     std::sort(members.begin(), members.end());
     members.erase(std::unique(members.begin(), members.end()), members.end());
     MeasuredFeature t;
-    t.obstacle = BuildTerrace(map, params, *features, members, platform_cells[root], heading_in);
+    t.obstacle = BuildTerrace(map, params, *features, members, platform_cells[root], heading_in,
+                              platform_height);
     for (int k : members) {
       joined[k] = true;
       t.cells.insert(t.cells.end(), (*features)[k].cells.begin(), (*features)[k].cells.end());

@@ -67,15 +67,15 @@ class OutdoorTerrainTest : public ::testing::Test {
     profile_ = common::LoadRobotProfileFile(root + "/config/profiles/pioneer3at.yaml");
   }
 
-  // Drives and maps; leaves the map in map_ and the simulator in sim_.
-  void DriveAndMap(const std::vector<Drive>& drives) {
+  // Drives and maps in `world`; leaves the map in map_ and the simulator in sim_.
+  void DriveAndMap(const std::vector<Drive>& drives, const std::string& world = "outdoor") {
     const sim::SimPaths paths = sim::SimPaths::InTree(CAIRN_SOURCE_DIR);
     map_ = std::make_unique<mapping::TerrainMap>(config_.params.core.terrain.map);
     map_->AddProfile(profile_);
     for (const Drive& d : drives) {
       sim::Scenario scenario;
-      scenario.world = "outdoor";
-      scenario.world_path = paths.WorldPath("outdoor");
+      scenario.world = world;
+      scenario.world_path = paths.WorldPath(world);
       scenario.seed = 17;
       sim::RobotSpec robot = sim::MakeRobotSpec("p1", "pioneer3at", "",
                                                 {d.x_m, d.y_m, d.yaw_rad, std::nullopt}, paths);
@@ -408,6 +408,50 @@ TEST_F(OutdoorTerrainTest, TheDemoRoutesRegistryListsEachObjectOnce) {
   const Evaluation e = DemoRoute(this);
   SCOPED_TRACE(Describe(e));
   EXPECT_TRUE(e.registry_failures.empty());
+}
+
+// One feature, one entry, in the terraces world (issue 17): driven up lane 0's 5 deg ramp, over
+// its platform and off its 8 cm drop, the map's registry lists the ramp, platform and drop as one
+// terrace whose parts are the ramp and the 8 cm face (its full drop, not the mixed cells at its
+// foot), one-way for the Pioneer 3-AT: eastwards only.
+TEST_F(OutdoorTerrainTest, TheTerracesLaneZeroIsOneTerraceOneWayEast) {
+  DriveAndMap({{4.0, 2.0, 0.0, 0.4, 28.0}}, "terraces");
+  const common::ObstacleRegistry registry = map_->BuildRegistry();
+  std::ostringstream listed;
+  const common::Obstacle* terrace = nullptr;
+  int others = 0;
+  for (const auto& o : registry.obstacles) {
+    if (o.kind == common::ObstacleKind::kWallOrObject || o.centroid_m.x() < 7.5 ||
+        o.centroid_m.x() > 13.5 || o.centroid_m.y() < 0.3 || o.centroid_m.y() > 3.7) {
+      continue;
+    }
+    listed << "\n" << common::ObstacleKindName(o.kind) << " at (" << o.centroid_m.x() << ", "
+           << o.centroid_m.y() << ") height " << o.height_m << " slope " << o.slope_rad;
+    for (const auto& p : o.parts) {
+      listed << "\n  " << common::ObstacleKindName(p.kind) << " at (" << p.centroid_m.x() << ", "
+             << p.centroid_m.y() << ") height " << p.height_m << " onto heading "
+             << p.heading_in_rad * 180 / kPi;
+    }
+    if (o.kind == common::ObstacleKind::kTerrace && terrace == nullptr) {
+      terrace = &o;
+    } else {
+      ++others;
+    }
+  }
+  SCOPED_TRACE(listed.str());
+  ASSERT_NE(terrace, nullptr);
+  EXPECT_EQ(others, 0);
+  const common::ObstaclePart* face = nullptr;
+  const common::ObstaclePart* ramp = nullptr;
+  for (const auto& p : terrace->parts) {
+    (p.kind == common::ObstacleKind::kRamp ? ramp : face) = &p;
+  }
+  ASSERT_NE(ramp, nullptr);
+  ASSERT_NE(face, nullptr);
+  EXPECT_NEAR(face->height_m, 0.08, 0.02);
+  const common::ObstacleVerdict* v = terrace->VerdictFor(profile_.name);
+  ASSERT_NE(v, nullptr);
+  EXPECT_TRUE(common::IsOneWay(*v)) << v->reason;
 }
 
 }  // namespace

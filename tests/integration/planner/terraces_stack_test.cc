@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -120,6 +121,26 @@ class TerracesStackTest : public NavigatorStackTest {
   }
 };
 
+// A terrace and its parts, one line each, for failure messages.
+std::string DescribeTerrace(const cairn::lcmt_obstacle& t, const std::string& profile) {
+  std::ostringstream out;
+  auto verdict = [&](const std::vector<cairn::lcmt_obstacle_verdict>& vs) {
+    for (const auto& v : vs) {
+      if (v.profile == profile) return (v.crossable ? std::string("crossable") : v.reason);
+    }
+    return std::string("?");
+  };
+  out << "terrace " << t.id << " at (" << t.centroid_m[0] << ", " << t.centroid_m[1]
+      << "): " << verdict(t.verdicts);
+  for (const auto& p : t.parts) {
+    out << "\n  part kind " << int(p.kind) << " at (" << p.centroid_m[0] << ", " << p.centroid_m[1]
+        << ") height " << p.height_m << " m slope " << p.slope_rad << " rad, " << p.num_cells
+        << " cells, onto heading " << p.heading_in_rad * 180 / M_PI
+        << " deg: " << verdict(p.verdicts);
+  }
+  return out.str();
+}
+
 // The heading in a one-way verdict's "crossable heading H deg only", or NaN.
 double OneWayHeadingDeg(const std::string& reason) {
   const std::string key = "crossable heading ";
@@ -155,10 +176,11 @@ TEST_F(TerracesStackTest, DrivesUpTheRampAndOffTheEightCentimetreDrop) {
   ASSERT_TRUE(terrace.has_value());
   const auto* v = testing::Verdict(*terrace, profile_);
   ASSERT_NE(v, nullptr);
-  EXPECT_FALSE(v->crossable);
-  EXPECT_NE(v->reason.find("; one-way: "), std::string::npos) << v->reason;
+  EXPECT_FALSE(v->crossable) << DescribeTerrace(*terrace, profile_);
+  EXPECT_NE(v->reason.find("; one-way: "), std::string::npos)
+      << DescribeTerrace(*terrace, profile_);
   const double heading = OneWayHeadingDeg(v->reason);
-  EXPECT_LE(std::min(heading, 360.0 - heading), 20.0) << v->reason;
+  EXPECT_LE(std::min(heading, 360.0 - heading), 20.0) << DescribeTerrace(*terrace, profile_);
 }
 
 TEST_F(TerracesStackTest, NeverClimbsTheEightCentimetreDropFromBelow) {
@@ -201,10 +223,10 @@ TEST_F(TerracesStackTest, ClimbsTheRampBesideTheOneWayDropInsteadOfTheDrop) {
   ASSERT_TRUE(terrace.has_value());
   const auto* v = testing::Verdict(*terrace, profile_);
   ASSERT_NE(v, nullptr);
-  EXPECT_TRUE(v->crossable) << v->reason;
+  EXPECT_TRUE(v->crossable) << DescribeTerrace(*terrace, profile_);
   int ramps = 0;
   for (const auto& p : terrace->parts) ramps += p.kind == cairn::lcmt_obstacle::KIND_RAMP;
-  EXPECT_EQ(ramps, 2);
+  EXPECT_EQ(ramps, 2) << DescribeTerrace(*terrace, profile_);
 }
 
 TEST_F(TerracesStackTest, NeverEntersADitchWiderThanItsProfileAllows) {

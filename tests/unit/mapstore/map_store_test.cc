@@ -10,6 +10,7 @@
 #include "mapstore/in_memory_map_store.h"
 #include "mapstore/map_operations.h"
 #include "mapstore/sqlite_map_store.h"
+#include "tests/support/sample_obstacles.h"
 #include "tests/unit/mapstore/fake_deriver.h"
 
 namespace cairn::mapstore {
@@ -447,6 +448,42 @@ TYPED_TEST(MapStoreTest, SharingCountsAOneWayVerdictAsAChange) {
     EXPECT_FALSE(common::IsOneWay(o.verdicts[0])) << o.id;
     EXPECT_TRUE(common::IsOneWay(o.verdicts[1])) << o.id;
     EXPECT_STREQ(common::VerdictWord(o.verdicts[1]), "one-way");
+  }
+}
+
+// A stored terrace shared with another profile: the whole and each part are judged for it (the
+// parts' stored verdicts are the source profile's and are not carried over).
+TYPED_TEST(MapStoreTest, SharingJudgesATerracesPartsForTheTargetProfile) {
+  ProfileDeriver deriver = FakeDeriver();
+  deriver.judge_parts = [](const common::Obstacle& o, const common::RobotProfile& profile) {
+    std::vector<common::ObstacleVerdict> out;
+    for (const auto& p : o.parts) {
+      common::ObstacleVerdict v;
+      v.crossable = p.height_m <= profile.max_step_up_m;
+      if (!v.crossable) v.reason = "step up";
+      out.push_back(v);
+    }
+    return out;
+  };
+  MapSnapshot s = SampleSnapshot("corridor");
+  s.obstacles.obstacles.push_back(cairn::testing::SampleTerrace());
+  s.obstacles.obstacles.back().id = 1000;
+  this->Save(s);
+  ASSERT_TRUE(this->dut_->PutProfile(Profile("pioneer3at", 8.0, 0.03), this->ctx_).ok());
+  ASSERT_TRUE(this->dut_->PutProfile(Profile("rover", 12.0, 0.08), this->ctx_).ok());
+  auto shared = ShareMap(*this->dut_, deriver, {"lab", "corridor", 0}, "rover", this->ctx_);
+  ASSERT_TRUE(shared.ok()) << shared.status().ToString();
+  const common::Obstacle* terrace = nullptr;
+  for (const auto& o : shared->derived.registry.obstacles) {
+    if (o.id == 1000) terrace = &o;
+  }
+  ASSERT_NE(terrace, nullptr);
+  ASSERT_EQ(terrace->parts.size(), 2u);
+  for (const auto& p : terrace->parts) {
+    ASSERT_EQ(p.verdicts.size(), 1u);
+    EXPECT_EQ(p.verdicts[0].profile, "rover");
+    EXPECT_TRUE(p.verdicts[0].crossable);  // 0.08 m <= the rover's 0.08 m step up
+    EXPECT_FALSE(p.verdicts[0].profile_hash.empty());
   }
 }
 
