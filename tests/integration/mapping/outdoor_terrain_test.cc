@@ -425,7 +425,8 @@ TEST_F(OutdoorTerrainTest, TheTerracesLaneZeroIsOneTerraceOneWayEast) {
         o.centroid_m.x() > 13.5 || o.centroid_m.y() < 0.3 || o.centroid_m.y() > 3.7) {
       continue;
     }
-    listed << "\n" << common::ObstacleKindName(o.kind) << " at (" << o.centroid_m.x() << ", "
+    listed << "\n"
+           << common::ObstacleKindName(o.kind) << " at (" << o.centroid_m.x() << ", "
            << o.centroid_m.y() << ") height " << o.height_m << " slope " << o.slope_rad;
     for (const auto& p : o.parts) {
       listed << "\n  " << common::ObstacleKindName(p.kind) << " at (" << p.centroid_m.x() << ", "
