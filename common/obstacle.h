@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -95,6 +96,11 @@ struct Obstacle {
   double depth_m{0.0};  ///< NaN when the bottom was never seen
   double area_m2{0.0};
   int32_t num_cells{0};
+  /// Of a ramp or a step: the heading (rad, world frame, counter-clockwise from +x) of travel down
+  /// it, from its high side to its low side; NaN for other kinds, or where the feature falls
+  /// every way (a step around a block). A one-way verdict names it ("crossable downhill only,
+  /// heading 90 deg +- 45 deg").
+  double downhill_heading_rad{std::numeric_limits<double>::quiet_NaN()};
   std::vector<ObstacleVerdict> verdicts;
   /// A terrace's parts (empty for every other kind). The terrace's verdict is what the planner
   /// does with the whole: crossable (two parts lead onto the platform and off it both ways),

@@ -53,7 +53,8 @@ class Reader {
 };
 
 constexpr uint32_t kRegistryMagicV1 = 0x31475243;  // "CRG1": no parts
-constexpr uint32_t kRegistryMagic = 0x32475243;    // "CRG2": each obstacle ends with its parts
+// "CRG2": each obstacle ends with its downhill heading and its parts.
+constexpr uint32_t kRegistryMagic = 0x32475243;
 
 void PutVerdicts(const std::vector<common::ObstacleVerdict>& verdicts, Writer* w) {
   w->Put<uint32_t>(static_cast<uint32_t>(verdicts.size()));
@@ -170,6 +171,7 @@ std::string SerializeRegistry(const common::ObstacleRegistry& registry) {
     w.Put<int32_t>(o.num_cells);
     w.PutString(SerializePolygon(o.outline_m));
     PutVerdicts(o.verdicts, &w);
+    w.Put<double>(o.downhill_heading_rad);
     w.PutString(SerializeParts(o.parts));
   }
   return w.Take();
@@ -200,7 +202,9 @@ common::Result<common::ObstacleRegistry> ParseRegistry(const std::string& bytes)
     }
     if (magic == kRegistryMagic) {
       std::string parts, error;
-      if (!r.GetString(&parts)) return common::CorruptError("truncated obstacle parts");
+      if (!r.Get(&o.downhill_heading_rad) || !r.GetString(&parts)) {
+        return common::CorruptError("truncated obstacle heading or parts");
+      }
       auto parsed = ParseParts(parts);
       if (!parsed.ok()) return parsed.status();
       o.parts = std::move(parsed).value();

@@ -174,9 +174,9 @@ ALTER TABLE blobs ADD COLUMN stored_crc32 INTEGER;
 )SQL";
 
 // Version 3 -> 4: obstacles may be terraces (kind 6) and carry their parts (SerializeParts; NULL
-// for every other kind). SQLite cannot change a CHECK in place: the verdicts and obstacles are
-// copied aside, the table is made again and both are copied back (children first out, last in,
-// so no foreign key is ever broken).
+// for every other kind) and a downhill heading (NULL: none). SQLite cannot change a CHECK in place:
+// the verdicts and obstacles are copied aside, the table is made again and both are copied back
+// (children first out, last in, so no foreign key is ever broken).
 constexpr char kSchemaV3ToV4[] = R"SQL(
 CREATE TEMP TABLE v3_obstacles AS SELECT * FROM main.obstacles;
 CREATE TEMP TABLE v3_obstacle_verdicts AS SELECT * FROM main.obstacle_verdicts;
@@ -197,11 +197,14 @@ CREATE TABLE main.obstacles(
   num_cells INTEGER NOT NULL,
   outline BLOB NOT NULL,
   parts BLOB,
+  downhill_heading_rad REAL,
   PRIMARY KEY(map_version_id, obstacle_id)) WITHOUT ROWID;
 INSERT INTO main.obstacles(map_version_id, obstacle_id, kind, centroid_x_m, centroid_y_m,
-    slope_rad, height_m, width_m, length_m, depth_m, area_m2, num_cells, outline, parts)
+    slope_rad, height_m, width_m, length_m, depth_m, area_m2, num_cells, outline, parts,
+    downhill_heading_rad)
   SELECT map_version_id, obstacle_id, kind, centroid_x_m, centroid_y_m, slope_rad, height_m,
-         width_m, length_m, depth_m, area_m2, num_cells, outline, NULL FROM temp.v3_obstacles;
+         width_m, length_m, depth_m, area_m2, num_cells, outline, NULL, NULL
+  FROM temp.v3_obstacles;
 INSERT INTO main.obstacle_verdicts SELECT * FROM temp.v3_obstacle_verdicts;
 DROP TABLE temp.v3_obstacles;
 DROP TABLE temp.v3_obstacle_verdicts;

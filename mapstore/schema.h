@@ -14,7 +14,8 @@
 /// version is refused.
 ///
 /// Version 4 (current): version 3 whose obstacles may be terraces (kind 6) with their parts
-/// (obstacles.parts, registry_codec.h SerializeParts; NULL for every other kind).
+/// (obstacles.parts, registry_codec.h SerializeParts; NULL for every other kind), and carry the
+/// heading down a ramp or step (obstacles.downhill_heading_rad; NULL: none).
 ///
 /// Version 3: version 2 with blobs.stored_crc32, StoredBlobCrc32 of each row (bytes and
 /// header), so that a read checks a blob without decompressing it. Migrating from 2 fills it in.

@@ -215,7 +215,7 @@ Result<common::ObstacleRegistry> SqliteMapStore::LoadObstacles(const MapRef& ref
   registry.map_version = row->version;
   sqlite::Statement st = db_->Prepare(
       "SELECT obstacle_id, kind, centroid_x_m, centroid_y_m, slope_rad, height_m, width_m, "
-      "length_m, depth_m, area_m2, num_cells, outline, parts FROM obstacles "
+      "length_m, depth_m, area_m2, num_cells, outline, parts, downhill_heading_rad FROM obstacles "
       "WHERE map_version_id = ? "
       "ORDER BY obstacle_id");
   st.Bind(1, row->id);
@@ -238,6 +238,7 @@ Result<common::ObstacleRegistry> SqliteMapStore::LoadObstacles(const MapRef& ref
                                   outline.status().message());
     }
     o.outline_m = std::move(outline).value();
+    if (!st.IsNull(13)) o.downhill_heading_rad = st.Double(13);
     if (!st.IsNull(12)) {
       auto parts = ParseParts(st.Blob(12));
       if (!parts.ok()) {

@@ -2,6 +2,7 @@
 // compressed tiles adopted) before the write lock; then one transaction inserts the version, its
 // layers and tiles, its obstacles and its OctoMap, and the audit line.
 
+#include <cmath>
 #include <map>
 #include <optional>
 
@@ -195,8 +196,8 @@ Status SqliteMapStore::InsertObstacles(int64_t version_id,
                                        const common::ObstacleRegistry& registry) {
   sqlite::Statement ob = db_->Prepare(
       "INSERT INTO obstacles(map_version_id, obstacle_id, kind, centroid_x_m, centroid_y_m, "
-      "slope_rad, height_m, width_m, length_m, depth_m, area_m2, num_cells, outline, parts) "
-      "VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
+      "slope_rad, height_m, width_m, length_m, depth_m, area_m2, num_cells, outline, parts, "
+      "downhill_heading_rad) VALUES(?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?)");
   sqlite::Statement vd = db_->Prepare(
       "INSERT INTO obstacle_verdicts(map_version_id, obstacle_id, profile, profile_hash, "
       "crossable, reason) VALUES(?, ?, ?, ?, ?, ?)");
@@ -213,6 +214,11 @@ Status SqliteMapStore::InsertObstacles(int64_t version_id,
       ob.BindNull(14);
     } else {
       ob.BindBlob(14, parts.data(), parts.size());
+    }
+    if (std::isfinite(o.downhill_heading_rad)) {
+      ob.Bind(15, o.downhill_heading_rad);
+    } else {
+      ob.BindNull(15);
     }
     if (!(st = ob.Run()).ok()) return st;
     for (const common::ObstacleVerdict& verdict : o.verdicts) {

@@ -99,11 +99,12 @@ bool ParseDouble(const std::string& s, double* out) {
 }
 
 // A terrace's parts follow it, one row each: `id` numbers the part within the terrace (from 1)
-// and `part_of` is the terrace's id (empty on every other row).
+// and `part_of` is the terrace's id (empty on every other row). `downhill_heading_rad` is a ramp's
+// or step's (nan: none), empty on part rows.
 constexpr char kCsvHeader[] =
     "id,kind,centroid_x_m,centroid_y_m,slope_rad,height_m,width_m,length_m,depth_m,area_m2,"
-    "num_cells,outline_m,verdicts,part_of,heading_in_rad";
-constexpr size_t kCsvFields = 15;
+    "num_cells,outline_m,verdicts,part_of,heading_in_rad,downhill_heading_rad";
+constexpr size_t kCsvFields = 16;
 // The header of CSVs written before terraces (no parts), still read.
 constexpr char kCsvHeaderV1[] =
     "id,kind,centroid_x_m,centroid_y_m,slope_rad,height_m,width_m,length_m,depth_m,area_m2,"
@@ -145,14 +146,14 @@ std::string CsvRows(const common::Obstacle& o) {
       << Fmt(o.centroid_m.y()) << "," << Fmt(o.slope_rad) << "," << Fmt(o.height_m) << ","
       << Fmt(o.width_m) << "," << Fmt(o.length_m) << "," << Fmt(o.depth_m) << "," << Fmt(o.area_m2)
       << "," << o.num_cells << "," << OutlineField(o.outline_m) << "," << VerdictsField(o.verdicts)
-      << ",,\n";
+      << ",,," << Fmt(o.downhill_heading_rad) << "\n";
   for (size_t k = 0; k < o.parts.size(); ++k) {
     const common::ObstaclePart& p = o.parts[k];
     out << k + 1 << "," << common::ObstacleKindName(p.kind) << "," << Fmt(p.centroid_m.x()) << ","
         << Fmt(p.centroid_m.y()) << "," << Fmt(p.slope_rad) << "," << Fmt(p.height_m) << ","
         << Fmt(p.width_m) << "," << Fmt(p.length_m) << ",0," << Fmt(p.area_m2) << "," << p.num_cells
         << "," << OutlineField(p.outline_m) << "," << VerdictsField(p.verdicts) << "," << o.id
-        << "," << Fmt(p.heading_in_rad) << "\n";
+        << "," << Fmt(p.heading_in_rad) << ",\n";
   }
   return out.str();
 }
@@ -254,8 +255,11 @@ Result<common::ObstacleRegistry> ReadObstaclesCsv(const std::string& path) {
     auto obstacle = ParseObstacle(fields, where);
     if (!obstacle.ok()) return obstacle.status();
     if (num_fields == kCsvFieldsV1 || fields[13].empty()) {
-      if (obstacle->kind == common::ObstacleKind::kTerrace && !fields[14].empty()) {
-        return InvalidArgumentError(where + "a terrace has no heading_in_rad (its parts do)");
+      if (num_fields == kCsvFields && !fields[14].empty()) {
+        return InvalidArgumentError(where + "only a part has a heading_in_rad");
+      }
+      if (num_fields == kCsvFields && !ParseDouble(fields[15], &obstacle->downhill_heading_rad)) {
+        return InvalidArgumentError(where + "downhill_heading_rad does not parse");
       }
       registry.obstacles.push_back(std::move(obstacle).value());
       continue;

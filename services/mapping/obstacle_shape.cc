@@ -279,6 +279,38 @@ double PlaneSlope(const GridMap& map, const std::vector<int64_t>& cells) {
   return std::atan(std::hypot(sol(0), sol(1)));
 }
 
+double DownhillHeading(const GridMap& map, const std::vector<int64_t>& cells) {
+  const int sx = map.size_x(), sy = map.size_y();
+  const float* h = map.at(layers::kElevation).data();
+  auto known = [&](int x, int y) {
+    return x >= 0 && y >= 0 && x < sx && y < sy && !std::isnan(h[x + static_cast<int64_t>(y) * sx]);
+  };
+  auto at = [&](int x, int y) { return double(h[x + static_cast<int64_t>(y) * sx]); };
+  // The rise per cell along one axis through (x, y): between the farthest known cells up to two
+  // cells to either side.
+  auto rise = [&](int x, int y, int dx, int dy, double* out) {
+    int a = 2, b = 2;
+    while (a > 0 && !known(x + a * dx, y + a * dy)) --a;
+    while (b > 0 && !known(x - b * dx, y - b * dy)) --b;
+    if (a + b == 0) return false;
+    *out = (at(x + a * dx, y + a * dy) - at(x - b * dx, y - b * dy)) / (a + b);
+    return true;
+  };
+  Vector2 sum = Vector2::Zero();
+  int n = 0;
+  for (int64_t i : cells) {
+    const int x = static_cast<int>(i % sx), y = static_cast<int>(i / sx);
+    double gx = 0, gy = 0;
+    const bool has_x = rise(x, y, 1, 0, &gx), has_y = rise(x, y, 0, 1, &gy);
+    const Vector2 g(has_x ? gx : 0.0, has_y ? gy : 0.0);
+    if (!(g.norm() > 1e-6)) continue;
+    sum -= g.normalized();
+    ++n;
+  }
+  if (n == 0 || sum.norm() < 0.7 * n) return std::numeric_limits<double>::quiet_NaN();
+  return std::remainder(std::atan2(sum.y(), sum.x()) + map.geometry().origin.yaw_rad, 2 * M_PI);
+}
+
 // Measurements shared by every kind: centroid, outline, extents along the principal axes,
 // area and cell count.
 void MeasureShape(const GridMap& map, const std::vector<int64_t>& cells, const ObstacleParams& p,

@@ -22,6 +22,12 @@ double Percentile(std::vector<double> v, double q);
 /// `cells` (indices into `map`, x fastest); 0 when the fit is degenerate.
 double PlaneSlope(const common::GridMap& map, const std::vector<int64_t>& cells);
 
+/// The heading (rad, world frame) of travel down a ramp or step over `cells`: the mean of the
+/// cells' downhill directions (the elevation's gradient over up to two cells either way), when
+/// they agree (the mean is at least 0.7 long); NaN otherwise (a step around a block falls every
+/// way).
+double DownhillHeading(const common::GridMap& map, const std::vector<int64_t>& cells);
+
 /// The outer boundary of a set of cells (indices into a grid `sx` cells wide) along the cell
 /// edges, counter-clockwise, in cell corner coordinates, simplified to `tol` cells (Douglas-
 /// Peucker). Cells touching at a corner stay one outline. Cells in several pieces (an object

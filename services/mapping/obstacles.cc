@@ -592,10 +592,12 @@ std::optional<Obstacle> FeatureMeasurer::Measure(const Found& f) {
       break;
     case ObstacleKind::kStepUp:
       MeasureStep(f.cells, &o);
+      o.downhill_heading_rad = internal::DownhillHeading(map_, f.cells);
       break;
     case ObstacleKind::kRamp:
       MeasureRamp(f.cells, &o);
       if (!MeetsFlatterGround(f.cells)) return std::nullopt;  // a hillside
+      o.downhill_heading_rad = internal::DownhillHeading(map_, f.cells);
       break;
     case ObstacleKind::kTerrace:  // joined from measured features (terraces.h), never found
     case ObstacleKind::kStepDown:
@@ -673,6 +675,15 @@ std::string Format(const char* fmt, double a, double b = 0.0) {
   char buf[128];
   std::snprintf(buf, sizeof(buf), fmt, a, b);
   return buf;
+}
+
+// ", heading 90 deg +- 45 deg" for a heading (rad), "" when it is unknown (NaN).
+std::string HeadingText(double heading_rad) {
+  if (!std::isfinite(heading_rad)) return "";
+  double deg = std::fmod(heading_rad * kRadToDeg, 360.0);
+  if (deg < 0) deg += 360.0;
+  if (deg >= 359.5) deg = 0.0;
+  return Format(", heading %.0f deg +- 45 deg", deg);
 }
 
 }  // namespace
@@ -796,9 +807,10 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
         v.reason = Format("slope %.1f deg >= %.1f deg", o.slope_rad * kRadToDeg, limit * kRadToDeg);
         // Within the other limit: the directed layer lets the robot drive it that way.
         if (o.slope_rad < std::max(profile.max_slope_up_rad, profile.max_slope_down_rad)) {
-          v.reason += profile.max_slope_up_rad < profile.max_slope_down_rad
-                          ? std::string(common::kOneWayMarker) + "crossable downhill only"
-                          : std::string(common::kOneWayMarker) + "crossable uphill only";
+          const bool downhill = profile.max_slope_up_rad < profile.max_slope_down_rad;
+          v.reason += std::string(common::kOneWayMarker) +
+                      (downhill ? "crossable downhill only" : "crossable uphill only") +
+                      HeadingText(o.downhill_heading_rad + (downhill ? 0.0 : M_PI));
         }
       }
       break;
@@ -810,7 +822,8 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
         if (o.height_m <= profile.max_step_down_m + kTol) {
           v.reason +=
               common::kOneWayMarker +
-              Format("crossable downwards only (<= %.3f m step down)", profile.max_step_down_m);
+              Format("crossable downwards only (<= %.3f m step down)", profile.max_step_down_m) +
+              HeadingText(o.downhill_heading_rad);
         }
       }
       break;
@@ -820,7 +833,8 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
         v.reason = Format("step down %.3f m > %.3f m", o.height_m, profile.max_step_down_m);
         if (o.height_m <= profile.max_step_up_m + kTol) {
           v.reason += common::kOneWayMarker +
-                      Format("crossable upwards only (<= %.3f m step up)", profile.max_step_up_m);
+                      Format("crossable upwards only (<= %.3f m step up)", profile.max_step_up_m) +
+                      HeadingText(o.downhill_heading_rad + M_PI);
         }
       }
       break;

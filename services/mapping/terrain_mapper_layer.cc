@@ -33,7 +33,8 @@ std::string RegistryYaml(const common::ObstacleRegistry& registry) {
         << "]\n    slope_rad: " << Num(o.slope_rad) << "\n    height_m: " << Num(o.height_m)
         << "\n    width_m: " << Num(o.width_m) << "\n    length_m: " << Num(o.length_m)
         << "\n    depth_m: " << Num(o.depth_m) << "\n    area_m2: " << Num(o.area_m2)
-        << "\n    num_cells: " << o.num_cells << "\n    outline_m: [";
+        << "\n    num_cells: " << o.num_cells
+        << "\n    downhill_heading_rad: " << Num(o.downhill_heading_rad) << "\n    outline_m: [";
     for (size_t k = 0; k < o.outline_m.size(); ++k) {
       obs << (k ? ", " : "") << "[" << Num(o.outline_m[k].x()) << ", " << Num(o.outline_m[k].y())
           << "]";

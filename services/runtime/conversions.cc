@@ -256,6 +256,7 @@ cairn::lcmt_obstacle ToLcm(const common::Obstacle& o) {
   m.depth_m = o.depth_m;
   m.area_m2 = o.area_m2;
   m.num_cells = o.num_cells;
+  m.downhill_heading_rad = o.downhill_heading_rad;
   m.num_verdicts = static_cast<int32_t>(o.verdicts.size());
   for (const auto& v : o.verdicts) {
     cairn::lcmt_obstacle_verdict mv{};
@@ -360,6 +361,7 @@ Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& m) {
   o.depth_m = m.depth_m;
   o.area_m2 = m.area_m2;
   o.num_cells = m.num_cells;
+  o.downhill_heading_rad = m.downhill_heading_rad;
   for (const auto& mv : m.verdicts) {
     o.verdicts.push_back({mv.profile, mv.profile_hash, mv.crossable != 0, mv.reason});
   }

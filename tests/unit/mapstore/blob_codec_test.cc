@@ -276,6 +276,7 @@ TEST(BlobCodecTest, RegistryRoundTripsAndRefusesGarbage) {
   o.centroid_m = {1.25, -3.5};
   o.outline_m = {{0, 0}, {1, 0}, {1, 1}};
   o.depth_m = NAN;
+  o.downhill_heading_rad = 0.5;
   o.verdicts = {{"rover", "h", false, "ditch 0.4 m > 0.3 m"}, {"tank", "k", true, ""}};
   r.obstacles = {o, o};
   r.obstacles[1].id = 13;
@@ -287,6 +288,7 @@ TEST(BlobCodecTest, RegistryRoundTripsAndRefusesGarbage) {
   EXPECT_EQ(back->obstacles[1].id, 13);
   EXPECT_EQ(back->obstacles[0].outline_m, o.outline_m);
   EXPECT_TRUE(std::isnan(back->obstacles[0].depth_m));
+  EXPECT_EQ(back->obstacles[0].downhill_heading_rad, 0.5);
   EXPECT_EQ(back->obstacles[0].verdicts, o.verdicts);
   for (size_t cut : {size_t{0}, size_t{3}, bytes.size() / 2, bytes.size() - 1}) {
     EXPECT_EQ(ParseRegistry(bytes.substr(0, cut)).status().code(), StatusCode::kCorrupt) << cut;

@@ -100,8 +100,8 @@ TEST(SqliteMapStoreTest, PersistsAcrossReopenInWalMode) {
   sqlite3_close(raw);
 }
 
-// A terrace is stored with its parts (headings and verdicts) and read back whole; a parts blob
-// that is not parts is refused where it is read.
+// A terrace is stored with its parts (headings and verdicts) and read back whole, and a ramp with
+// its downhill heading; a parts blob that is not parts is refused where it is read.
 TEST(SqliteMapStoreTest, ATerraceIsStoredWithItsParts) {
   const std::string path = TempDir() + "/site.db";
   auto dut = OpenOrDie(path);
@@ -109,6 +109,7 @@ TEST(SqliteMapStoreTest, ATerraceIsStoredWithItsParts) {
   MapSnapshot snapshot = SampleSnapshot("corridor");
   snapshot.obstacles.obstacles.push_back(cairn::testing::SampleTerrace());
   snapshot.obstacles.obstacles.back().id = 1000;  // after the sample's own
+  snapshot.obstacles.obstacles.front().downhill_heading_rad = 0.75;
   const common::Status saved = dut->SaveMap(snapshot, kCtx).status();
   ASSERT_TRUE(saved.ok()) << saved.ToString();
   auto back = dut->LoadObstacles({"lab", "corridor", 0});
@@ -123,6 +124,12 @@ TEST(SqliteMapStoreTest, ATerraceIsStoredWithItsParts) {
   EXPECT_EQ(terrace->parts[1].heading_in_rad, want.parts[1].heading_in_rad);
   EXPECT_EQ(terrace->parts[1].verdicts, want.parts[1].verdicts);
   EXPECT_EQ(terrace->verdicts, want.verdicts);
+  EXPECT_TRUE(std::isnan(terrace->downhill_heading_rad));
+  for (const auto& o : back->obstacles) {
+    if (o.id == snapshot.obstacles.obstacles.front().id) {
+      EXPECT_EQ(o.downhill_heading_rad, 0.75);
+    }
+  }
   dut.reset();
   RawExec(path, "UPDATE obstacles SET parts = x'0500' WHERE kind = 6;");
   auto reopened = OpenOrDie(path);

@@ -33,6 +33,7 @@ TEST(ObstaclesCsvTest, ObstacleCsvRoundTripsExactly) {
   o.height_m = 0.2;
   o.depth_m = std::nan("");
   o.num_cells = 33;
+  o.downhill_heading_rad = -2.0943951023931953;
   o.verdicts = {{"pioneer3at", "abc", false, "slope 10.0 deg > 8.0 deg; \"steep\" | really"},
                 {"rover", "def", true, ""}};
   common::Obstacle wall;
@@ -52,6 +53,8 @@ TEST(ObstaclesCsvTest, ObstacleCsvRoundTripsExactly) {
   EXPECT_EQ(b.slope_rad, o.slope_rad);
   EXPECT_TRUE(std::isnan(b.depth_m));
   EXPECT_EQ(b.num_cells, 33);
+  EXPECT_EQ(b.downhill_heading_rad, o.downhill_heading_rad);
+  EXPECT_TRUE(std::isnan(back->obstacles[1].downhill_heading_rad));
   EXPECT_EQ(b.verdicts, o.verdicts);
   EXPECT_TRUE(back->obstacles[1].verdicts.empty());
   WriteText(dir + "/bad.csv", "id,kind\n1,ramp\n");

@@ -102,6 +102,11 @@ TEST(ObstaclesTest, TenDegreeRampSplitsThePioneerAndTheRover) {
   EXPECT_FALSE(Crossable(ramp, "pioneer3at"));
   EXPECT_TRUE(Crossable(ramp, "rover"));
   EXPECT_NE(ramp.VerdictFor("pioneer3at")->reason.find("slope"), std::string::npos);
+  // It rises eastwards: down it is west, and the Pioneer (no downhill limit) may drive it that way.
+  EXPECT_NEAR(std::fabs(std::remainder(ramp.downhill_heading_rad, 2 * M_PI)) / kDeg, 180.0, 5.0);
+  EXPECT_NE(ramp.VerdictFor("pioneer3at")->reason.find("crossable downhill only, heading 180 deg"),
+            std::string::npos)
+      << ramp.VerdictFor("pioneer3at")->reason;
   EXPECT_TRUE(Inside(ramp.outline_m, ramp.centroid_m));
   EXPECT_TRUE(OfKind(r, ObstacleKind::kStepUp).empty());
   EXPECT_TRUE(OfKind(r, ObstacleKind::kWallOrObject).empty());
@@ -204,6 +209,7 @@ TEST(ObstaclesTest, StepDownOfALowerArea) {
   const auto downs = OfKind(r, ObstacleKind::kStepDown);
   ASSERT_EQ(downs.size(), 1u);
   EXPECT_NEAR(downs[0]->height_m, 0.2, 1e-4);
+  EXPECT_NEAR(std::remainder(downs[0]->downhill_heading_rad, 2 * M_PI) / kDeg, 0.0, 5.0);
   EXPECT_FALSE(Crossable(*downs[0], "pioneer3at"));  // 0.20 > 0.10
   EXPECT_FALSE(Crossable(*downs[0], "rover"));       // 0.20 > 0.15
 }
@@ -569,6 +575,10 @@ TEST(JudgeObstacleTest, BoundariesPerKind) {
             "step up 0.031 m > 0.030 m; one-way: crossable downwards only (<= 0.100 m step down)");
   EXPECT_TRUE(common::IsOneWay(v));
   EXPECT_STREQ(common::VerdictWord(v), "one-way");
+  up.downhill_heading_rad = M_PI / 2;  // the way down, when the registry knows it
+  EXPECT_EQ(JudgeObstacle(up, pioneer).reason,
+            "step up 0.031 m > 0.030 m; one-way: crossable downwards only (<= 0.100 m step down), "
+            "heading 90 deg +- 45 deg");
   up.height_m = 0.12;  // over both limits: no way across
   EXPECT_EQ(JudgeObstacle(up, pioneer).reason, "step up 0.120 m > 0.030 m");
   EXPECT_FALSE(common::IsOneWay(JudgeObstacle(up, pioneer)));

@@ -128,6 +128,7 @@ TEST(ConversionsTest, ObstacleRegistryRoundTrip) {
   o.depth_m = NAN;
   o.area_m2 = 4.0;
   o.num_cells = 100;
+  o.downhill_heading_rad = 1.25;
   o.verdicts = {{"pioneer3at", "abc", false, "slope 10.0 deg > 8.0 deg"},
                 {"rover", "def", true, ""}};
   r.obstacles.push_back(o);
@@ -139,6 +140,7 @@ TEST(ConversionsTest, ObstacleRegistryRoundTrip) {
   EXPECT_EQ(b.kind, common::ObstacleKind::kRamp);
   EXPECT_EQ(b.outline_m.size(), 4u);
   EXPECT_TRUE(std::isnan(b.depth_m));
+  EXPECT_EQ(b.downhill_heading_rad, 1.25);
   EXPECT_EQ(b.verdicts, o.verdicts);
   EXPECT_EQ(b.VerdictFor("rover")->crossable, true);
   auto bad = ToLcm(o);
