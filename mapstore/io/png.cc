@@ -80,28 +80,21 @@ void DrawOverlay(const common::GridMap& map, const PngOverlay& overlay, int scal
     return std::make_pair(static_cast<int>(std::lround(c.x() * scale)),
                           static_cast<int>(std::lround((h - c.y()) * scale)));
   };
+  // An outline in its verdict's colour (grey without one for the overlay's profile).
+  auto draw = [&](const std::vector<common::Vector2>& outline, const common::ObstacleVerdict* v,
+                  int width) {
+    const Rgb colour = v == nullptr ? kNoVerdict : (v->crossable ? kCrossable : kBlocked);
+    for (size_t i = 0; i < outline.size(); ++i) {
+      const auto a = to_pixel(outline[i]);
+      const auto b = to_pixel(outline[(i + 1) % outline.size()]);
+      canvas->Line(a.first, a.second, b.first, b.second, colour, width);
+    }
+    return colour;
+  };
   for (const auto& o : overlay.obstacles) {
-    Rgb colour = kNoVerdict;
-    if (const auto* v = o.VerdictFor(overlay.verdict_profile)) {
-      colour = v->crossable ? kCrossable : kBlocked;
-    }
-    for (size_t i = 0; i < o.outline_m.size(); ++i) {
-      const auto a = to_pixel(o.outline_m[i]);
-      const auto b = to_pixel(o.outline_m[(i + 1) % o.outline_m.size()]);
-      canvas->Line(a.first, a.second, b.first, b.second, colour, 2);
-    }
+    const Rgb colour = draw(o.outline_m, o.VerdictFor(overlay.verdict_profile), 2);
     // A terrace's parts, thin, each in its own verdict's colour.
-    for (const auto& p : o.parts) {
-      Rgb part_colour = kNoVerdict;
-      if (const auto* v = p.VerdictFor(overlay.verdict_profile)) {
-        part_colour = v->crossable ? kCrossable : kBlocked;
-      }
-      for (size_t i = 0; i < p.outline_m.size(); ++i) {
-        const auto a = to_pixel(p.outline_m[i]);
-        const auto b = to_pixel(p.outline_m[(i + 1) % p.outline_m.size()]);
-        canvas->Line(a.first, a.second, b.first, b.second, part_colour, 1);
-      }
-    }
+    for (const auto& p : o.parts) draw(p.outline_m, p.VerdictFor(overlay.verdict_profile), 1);
     std::string kind = common::ObstacleKindName(o.kind);
     for (auto& ch : kind) ch = ch == '_' ? ' ' : ch;
     const auto c = to_pixel(o.centroid_m);

@@ -238,133 +238,114 @@ Result<common::Pose3> FromLcm(const cairn::lcmt_odometry& m) {
   return PoseFromArrays(m.position_m, m.orientation_wxyz);
 }
 
-cairn::lcmt_obstacle ToLcm(const common::Obstacle& o) {
-  cairn::lcmt_obstacle m{};
-  m.id = o.id;
-  m.kind = static_cast<int8_t>(o.kind);
-  m.centroid_m[0] = o.centroid_m.x();
-  m.centroid_m[1] = o.centroid_m.y();
-  m.num_outline = static_cast<int32_t>(o.outline_m.size());
+static_assert(cairn::lcmt_obstacle::MAX_PARTS == common::kMaxObstacleParts,
+              "the message's part limit is the registry's");
+
+namespace {
+
+// What an obstacle and a terrace's part share on the bus: kind, centroid, outline, size and
+// verdicts (`In` is common::Obstacle or ObstaclePart, `Msg` lcmt_obstacle or lcmt_obstacle_part).
+template <typename In, typename Msg>
+void SharedToLcm(const In& o, Msg* m) {
+  m->kind = static_cast<int8_t>(o.kind);
+  m->centroid_m[0] = o.centroid_m.x();
+  m->centroid_m[1] = o.centroid_m.y();
+  m->num_outline = static_cast<int32_t>(o.outline_m.size());
   for (const auto& v : o.outline_m) {
-    m.outline_x_m.push_back(v.x());
-    m.outline_y_m.push_back(v.y());
+    m->outline_x_m.push_back(v.x());
+    m->outline_y_m.push_back(v.y());
   }
-  m.slope_rad = o.slope_rad;
-  m.height_m = o.height_m;
-  m.width_m = o.width_m;
-  m.length_m = o.length_m;
-  m.depth_m = o.depth_m;
-  m.area_m2 = o.area_m2;
-  m.num_cells = o.num_cells;
-  m.downhill_heading_rad = o.downhill_heading_rad;
-  m.num_verdicts = static_cast<int32_t>(o.verdicts.size());
+  m->slope_rad = o.slope_rad;
+  m->height_m = o.height_m;
+  m->width_m = o.width_m;
+  m->length_m = o.length_m;
+  m->area_m2 = o.area_m2;
+  m->num_cells = o.num_cells;
+  m->num_verdicts = static_cast<int32_t>(o.verdicts.size());
   for (const auto& v : o.verdicts) {
     cairn::lcmt_obstacle_verdict mv{};
     mv.profile = v.profile;
     mv.profile_hash = v.profile_hash;
     mv.crossable = v.crossable;
     mv.reason = v.reason;
-    m.verdicts.push_back(mv);
+    m->verdicts.push_back(mv);
   }
-  m.num_parts = static_cast<int32_t>(o.parts.size());
-  for (const auto& p : o.parts) {
-    cairn::lcmt_obstacle_part mp{};
-    mp.kind = static_cast<int8_t>(p.kind);
-    mp.centroid_m[0] = p.centroid_m.x();
-    mp.centroid_m[1] = p.centroid_m.y();
-    mp.num_outline = static_cast<int32_t>(p.outline_m.size());
-    for (const auto& v : p.outline_m) {
-      mp.outline_x_m.push_back(v.x());
-      mp.outline_y_m.push_back(v.y());
-    }
-    mp.slope_rad = p.slope_rad;
-    mp.height_m = p.height_m;
-    mp.width_m = p.width_m;
-    mp.length_m = p.length_m;
-    mp.area_m2 = p.area_m2;
-    mp.num_cells = p.num_cells;
-    mp.heading_in_rad = p.heading_in_rad;
-    mp.num_verdicts = static_cast<int32_t>(p.verdicts.size());
-    for (const auto& v : p.verdicts) {
-      cairn::lcmt_obstacle_verdict mv{};
-      mv.profile = v.profile;
-      mv.profile_hash = v.profile_hash;
-      mv.crossable = v.crossable;
-      mv.reason = v.reason;
-      mp.verdicts.push_back(mv);
-    }
-    m.parts.push_back(std::move(mp));
-  }
-  return m;
 }
 
-static_assert(cairn::lcmt_obstacle::MAX_PARTS == common::kMaxObstacleParts,
-              "the message's part limit is the registry's");
-
-namespace {
-Result<common::ObstaclePart> PartFromLcm(const cairn::lcmt_obstacle_part& m) {
+// The inverse; false when an array disagrees with its count.
+template <typename Msg, typename Out>
+bool SharedFromLcm(const Msg& m, Out* o) {
   if (m.num_outline < 0 || m.outline_x_m.size() != static_cast<size_t>(m.num_outline) ||
       m.outline_y_m.size() != static_cast<size_t>(m.num_outline) || m.num_verdicts < 0 ||
       m.verdicts.size() != static_cast<size_t>(m.num_verdicts)) {
-    return InvalidArgumentError("obstacle part arrays disagree with their counts");
+    return false;
   }
+  o->kind = static_cast<common::ObstacleKind>(m.kind);
+  o->centroid_m = {m.centroid_m[0], m.centroid_m[1]};
+  for (int i = 0; i < m.num_outline; ++i) {
+    o->outline_m.emplace_back(m.outline_x_m[i], m.outline_y_m[i]);
+  }
+  o->slope_rad = m.slope_rad;
+  o->height_m = m.height_m;
+  o->width_m = m.width_m;
+  o->length_m = m.length_m;
+  o->area_m2 = m.area_m2;
+  o->num_cells = m.num_cells;
+  for (const auto& mv : m.verdicts) {
+    o->verdicts.push_back({mv.profile, mv.profile_hash, mv.crossable != 0, mv.reason});
+  }
+  return true;
+}
+
+Result<common::ObstaclePart> PartFromLcm(const cairn::lcmt_obstacle_part& m) {
   if (m.kind != cairn::lcmt_obstacle::KIND_RAMP && m.kind != cairn::lcmt_obstacle::KIND_STEP_UP) {
     return InvalidArgumentError("obstacle part has kind " + std::to_string(m.kind) +
                                 " (a part is a ramp or a face: kinds 1 and 2)");
   }
   common::ObstaclePart p;
-  p.kind = static_cast<common::ObstacleKind>(m.kind);
-  p.centroid_m = {m.centroid_m[0], m.centroid_m[1]};
-  for (int i = 0; i < m.num_outline; ++i)
-    p.outline_m.emplace_back(m.outline_x_m[i], m.outline_y_m[i]);
-  p.slope_rad = m.slope_rad;
-  p.height_m = m.height_m;
-  p.width_m = m.width_m;
-  p.length_m = m.length_m;
-  p.area_m2 = m.area_m2;
-  p.num_cells = m.num_cells;
-  p.heading_in_rad = m.heading_in_rad;
-  for (const auto& mv : m.verdicts) {
-    p.verdicts.push_back({mv.profile, mv.profile_hash, mv.crossable != 0, mv.reason});
+  if (!SharedFromLcm(m, &p)) {
+    return InvalidArgumentError("obstacle part arrays disagree with their counts");
   }
+  p.heading_in_rad = m.heading_in_rad;
   return p;
 }
+
 }  // namespace
 
-Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& m) {
-  if (m.num_outline < 0 || m.outline_x_m.size() != static_cast<size_t>(m.num_outline) ||
-      m.outline_y_m.size() != static_cast<size_t>(m.num_outline) || m.num_verdicts < 0 ||
-      m.verdicts.size() != static_cast<size_t>(m.num_verdicts) || m.num_parts < 0 ||
-      m.parts.size() != static_cast<size_t>(m.num_parts)) {
-    return InvalidArgumentError("obstacle arrays disagree with their counts");
+cairn::lcmt_obstacle ToLcm(const common::Obstacle& o) {
+  cairn::lcmt_obstacle m{};
+  m.id = o.id;
+  SharedToLcm(o, &m);
+  m.depth_m = o.depth_m;
+  m.downhill_heading_rad = o.downhill_heading_rad;
+  m.num_parts = static_cast<int32_t>(o.parts.size());
+  for (const auto& p : o.parts) {
+    cairn::lcmt_obstacle_part mp{};
+    SharedToLcm(p, &mp);
+    mp.heading_in_rad = p.heading_in_rad;
+    m.parts.push_back(std::move(mp));
   }
+  return m;
+}
+
+Result<common::Obstacle> FromLcm(const cairn::lcmt_obstacle& m) {
   if (m.kind < cairn::lcmt_obstacle::KIND_RAMP || m.kind > cairn::lcmt_obstacle::KIND_TERRACE) {
     return InvalidArgumentError("obstacle has unknown kind " + std::to_string(m.kind));
   }
-  if (m.num_parts > cairn::lcmt_obstacle::MAX_PARTS ||
+  if (m.num_parts < 0 || m.parts.size() != static_cast<size_t>(m.num_parts) ||
+      m.num_parts > cairn::lcmt_obstacle::MAX_PARTS ||
       (m.num_parts > 0) != (m.kind == cairn::lcmt_obstacle::KIND_TERRACE)) {
-    return InvalidArgumentError("obstacle of kind " + std::to_string(m.kind) + " has " +
-                                std::to_string(m.num_parts) + " parts (a terrace has 1 to " +
-                                std::to_string(cairn::lcmt_obstacle::MAX_PARTS) +
-                                ", every other kind none)");
+    return InvalidArgumentError(
+        "obstacle of kind " + std::to_string(m.kind) + " has " + std::to_string(m.parts.size()) +
+        " parts (num_parts " + std::to_string(m.num_parts) + "; a terrace has 1 to " +
+        std::to_string(cairn::lcmt_obstacle::MAX_PARTS) + ", every other kind none)");
   }
   common::Obstacle o;
   o.id = m.id;
-  o.kind = static_cast<common::ObstacleKind>(m.kind);
-  o.centroid_m = {m.centroid_m[0], m.centroid_m[1]};
-  for (int i = 0; i < m.num_outline; ++i)
-    o.outline_m.emplace_back(m.outline_x_m[i], m.outline_y_m[i]);
-  o.slope_rad = m.slope_rad;
-  o.height_m = m.height_m;
-  o.width_m = m.width_m;
-  o.length_m = m.length_m;
+  if (!SharedFromLcm(m, &o))
+    return InvalidArgumentError("obstacle arrays disagree with their counts");
   o.depth_m = m.depth_m;
-  o.area_m2 = m.area_m2;
-  o.num_cells = m.num_cells;
   o.downhill_heading_rad = m.downhill_heading_rad;
-  for (const auto& mv : m.verdicts) {
-    o.verdicts.push_back({mv.profile, mv.profile_hash, mv.crossable != 0, mv.reason});
-  }
   for (const auto& mp : m.parts) {
     auto p = PartFromLcm(mp);
     if (!p.ok()) return p.status();
