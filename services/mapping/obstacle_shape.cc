@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <utility>
 
@@ -277,6 +278,18 @@ double PlaneSlope(const GridMap& map, const std::vector<int64_t>& cells) {
   const Eigen::Vector3d sol = ata.ldlt().solve(atb);
   if (!sol.allFinite()) return 0.0;
   return std::atan(std::hypot(sol(0), sol(1)));
+}
+
+std::string FormatNumbers(const char* fmt, double a, double b, double c) {
+  char buf[160];
+  std::snprintf(buf, sizeof(buf), fmt, a, b, c);
+  return buf;
+}
+
+double HeadingDeg(double heading_rad) {
+  double deg = std::fmod(heading_rad * 180.0 / M_PI, 360.0);
+  if (deg < 0) deg += 360.0;
+  return deg >= 359.5 ? 0.0 : deg;
 }
 
 double DownhillHeading(const GridMap& map, const std::vector<int64_t>& cells) {

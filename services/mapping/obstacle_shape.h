@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "common/grid_map.h"
@@ -9,9 +10,15 @@
 
 /// @file
 /// Shape measurements of the obstacle registry's features (internal to the mapping core):
-/// statistics of a feature's values, the plane through its heights, its outline.
+/// statistics of a feature's values, the plane through its heights, its outline, and the numbers
+/// in its verdicts' text.
 
 namespace cairn::mapping::internal {
+
+/// printf-style text of up to three numbers (verdict reasons: "step up 0.080 m > 0.030 m").
+std::string FormatNumbers(const char* fmt, double a, double b = 0.0, double c = 0.0);
+/// A heading (rad) in whole degrees in [0, 360) as the verdicts print it (359.5 and up is 0).
+double HeadingDeg(double heading_rad);
 
 /// Median (the mean of the two middle values for an even count); NaN for none.
 double Median(std::vector<double> v);

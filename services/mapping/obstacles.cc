@@ -671,19 +671,12 @@ void NumberByCentroid(common::ObstacleRegistry* registry) {
   for (auto& o : registry->obstacles) o.id = id++;
 }
 
-std::string Format(const char* fmt, double a, double b = 0.0) {
-  char buf[128];
-  std::snprintf(buf, sizeof(buf), fmt, a, b);
-  return buf;
-}
+using internal::FormatNumbers;
 
 // ", heading 90 deg +- 45 deg" for a heading (rad), "" when it is unknown (NaN).
 std::string HeadingText(double heading_rad) {
   if (!std::isfinite(heading_rad)) return "";
-  double deg = std::fmod(heading_rad * kRadToDeg, 360.0);
-  if (deg < 0) deg += 360.0;
-  if (deg >= 359.5) deg = 0.0;
-  return Format(", heading %.0f deg +- 45 deg", deg);
+  return FormatNumbers(", heading %.0f deg +- 45 deg", internal::HeadingDeg(heading_rad));
 }
 
 }  // namespace
@@ -804,7 +797,8 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
       const double limit = std::min(profile.max_slope_up_rad, profile.max_slope_down_rad);
       if (!(o.slope_rad < limit)) {
         v.crossable = false;
-        v.reason = Format("slope %.1f deg >= %.1f deg", o.slope_rad * kRadToDeg, limit * kRadToDeg);
+        v.reason =
+            FormatNumbers("slope %.1f deg >= %.1f deg", o.slope_rad * kRadToDeg, limit * kRadToDeg);
         // Within the other limit: the directed layer lets the robot drive it that way.
         if (o.slope_rad < std::max(profile.max_slope_up_rad, profile.max_slope_down_rad)) {
           const bool downhill = profile.max_slope_up_rad < profile.max_slope_down_rad;
@@ -818,23 +812,24 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
     case ObstacleKind::kStepUp:
       if (!(o.height_m <= profile.max_step_up_m + kTol)) {
         v.crossable = false;
-        v.reason = Format("step up %.3f m > %.3f m", o.height_m, profile.max_step_up_m);
+        v.reason = FormatNumbers("step up %.3f m > %.3f m", o.height_m, profile.max_step_up_m);
         if (o.height_m <= profile.max_step_down_m + kTol) {
-          v.reason +=
-              common::kOneWayMarker +
-              Format("crossable downwards only (<= %.3f m step down)", profile.max_step_down_m) +
-              HeadingText(o.downhill_heading_rad);
+          v.reason += common::kOneWayMarker +
+                      FormatNumbers("crossable downwards only (<= %.3f m step down)",
+                                    profile.max_step_down_m) +
+                      HeadingText(o.downhill_heading_rad);
         }
       }
       break;
     case ObstacleKind::kStepDown:
       if (!(o.height_m <= profile.max_step_down_m + kTol)) {
         v.crossable = false;
-        v.reason = Format("step down %.3f m > %.3f m", o.height_m, profile.max_step_down_m);
+        v.reason = FormatNumbers("step down %.3f m > %.3f m", o.height_m, profile.max_step_down_m);
         if (o.height_m <= profile.max_step_up_m + kTol) {
-          v.reason += common::kOneWayMarker +
-                      Format("crossable upwards only (<= %.3f m step up)", profile.max_step_up_m) +
-                      HeadingText(o.downhill_heading_rad + M_PI);
+          v.reason +=
+              common::kOneWayMarker +
+              FormatNumbers("crossable upwards only (<= %.3f m step up)", profile.max_step_up_m) +
+              HeadingText(o.downhill_heading_rad + M_PI);
         }
       }
       break;
@@ -845,10 +840,11 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
           o.depth_m <= std::min(profile.max_step_down_m, profile.max_step_up_m) + kTol;
       if (!bridged && !drivable) {
         v.crossable = false;
-        v.reason = std::isfinite(o.depth_m) ? Format("ditch %.2f m wide > %.2f m and too deep",
-                                                     o.width_m, profile.max_ditch_width_m)
-                                            : Format("ditch %.2f m wide > %.2f m, bottom unseen",
-                                                     o.width_m, profile.max_ditch_width_m);
+        v.reason = std::isfinite(o.depth_m)
+                       ? FormatNumbers("ditch %.2f m wide > %.2f m and too deep", o.width_m,
+                                       profile.max_ditch_width_m)
+                       : FormatNumbers("ditch %.2f m wide > %.2f m, bottom unseen", o.width_m,
+                                       profile.max_ditch_width_m);
       }
       break;
     }
@@ -857,7 +853,8 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
     case ObstacleKind::kWallOrObject:
       if (!(o.height_m <= profile.max_step_up_m + kTol)) {
         v.crossable = false;
-        v.reason = Format("wall or object %.2f m high > %.3f m", o.height_m, profile.max_step_up_m);
+        v.reason =
+            FormatNumbers("wall or object %.2f m high > %.3f m", o.height_m, profile.max_step_up_m);
       }
       break;
   }
@@ -873,6 +870,17 @@ std::vector<common::ObstacleVerdict> JudgeParts(const Obstacle& o,
   return out;
 }
 
+namespace {
+// Replaces the verdict of `v.profile` in `verdicts` (others are kept).
+void ReplaceVerdict(common::ObstacleVerdict v, std::vector<common::ObstacleVerdict>* verdicts) {
+  verdicts->erase(
+      std::remove_if(verdicts->begin(), verdicts->end(),
+                     [&](const common::ObstacleVerdict& w) { return w.profile == v.profile; }),
+      verdicts->end());
+  verdicts->push_back(std::move(v));
+}
+}  // namespace
+
 void LabelObstacles(common::ObstacleRegistry* registry,
                     const std::vector<common::RobotProfile>& profiles) {
   CAIRN_THROW_UNLESS(registry != nullptr, "no registry");
@@ -880,20 +888,9 @@ void LabelObstacles(common::ObstacleRegistry* registry,
   for (const auto& profile : profiles) hashes.push_back(profile.ContentHash());
   for (auto& o : registry->obstacles) {
     for (size_t k = 0; k < profiles.size(); ++k) {
-      const common::RobotProfile& profile = profiles[k];
-      auto& vs = o.verdicts;
-      vs.erase(std::remove_if(
-                   vs.begin(), vs.end(),
-                   [&](const common::ObstacleVerdict& v) { return v.profile == profile.name; }),
-               vs.end());
-      vs.push_back(JudgeWithHash(o, profile, hashes[k]));
+      ReplaceVerdict(JudgeWithHash(o, profiles[k], hashes[k]), &o.verdicts);
       for (auto& part : o.parts) {
-        auto& pv = part.verdicts;
-        pv.erase(std::remove_if(
-                     pv.begin(), pv.end(),
-                     [&](const common::ObstacleVerdict& v) { return v.profile == profile.name; }),
-                 pv.end());
-        pv.push_back(internal::JudgePart(part, profile, hashes[k]).verdict);
+        ReplaceVerdict(internal::JudgePart(part, profiles[k], hashes[k]).verdict, &part.verdicts);
       }
     }
   }

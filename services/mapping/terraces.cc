@@ -3,12 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <map>
 #include <numeric>
 #include <string>
-#include <unordered_map>
 #include <utility>
 
 #include "common/layers.h"
@@ -78,10 +76,8 @@ Regions LabelLevelRegions(const common::GridMap& map, const std::vector<int32_t>
   return r;
 }
 
-// Where one feature meets one region: how many of its cells reach it, and the sum of the unit
-// vectors from those cells into it.
+// Where one feature meets one region: the sum of the unit vectors from its cells into it.
 struct Contact {
-  int64_t count{0};
   Vector2 direction{Vector2::Zero()};
 };
 
@@ -93,18 +89,6 @@ int Find(std::vector<int>* parent, int a) {
 bool LeadsUp(ObstacleKind kind) {
   return kind == ObstacleKind::kRamp || kind == ObstacleKind::kStepUp ||
          kind == ObstacleKind::kStepDown;
-}
-
-double HeadingDeg(double rad) {
-  double deg = std::fmod(rad * kRadToDeg, 360.0);
-  if (deg < 0) deg += 360.0;
-  return deg >= 359.5 ? 0.0 : deg;
-}
-
-std::string Format(const char* fmt, double a, double b = 0.0, double c = 0.0) {
-  char buf[160];
-  std::snprintf(buf, sizeof(buf), fmt, a, b, c);
-  return buf;
 }
 
 // What a face rises onto its platform: from the lowest known ground up to kFallCells beyond each
@@ -241,9 +225,7 @@ void JoinTerraces(const common::GridMap& map, const std::vector<int32_t>& label,
           if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= sx || ny >= sy) continue;
           const int32_t r = regions.id[nx + static_cast<int64_t>(ny) * sx];
           if (!candidate(r)) continue;
-          Contact& c = mine[r];
-          ++c.count;
-          c.direction += Vector2(dx, dy).normalized();
+          mine[r].direction += Vector2(dx, dy).normalized();
         }
       }
     }
@@ -325,23 +307,23 @@ PartJudgement JudgePart(const ObstaclePart& part, const common::RobotProfile& pr
   if (j.verdict.crossable) return j;
   std::string& why = j.verdict.reason;
   if (!j.onto && !j.off) {
-    why = ramp ? Format("slope %.1f deg >= %.1f deg up and >= %.1f deg down",
-                        part.slope_rad * kRadToDeg, profile.max_slope_up_rad * kRadToDeg,
-                        profile.max_slope_down_rad * kRadToDeg)
-               : Format("step %.3f m > %.3f m up and > %.3f m down", part.height_m,
-                        profile.max_step_up_m, profile.max_step_down_m);
+    why = ramp ? FormatNumbers("slope %.1f deg >= %.1f deg up and >= %.1f deg down",
+                               part.slope_rad * kRadToDeg, profile.max_slope_up_rad * kRadToDeg,
+                               profile.max_slope_down_rad * kRadToDeg)
+               : FormatNumbers("step %.3f m > %.3f m up and > %.3f m down", part.height_m,
+                               profile.max_step_up_m, profile.max_step_down_m);
   } else if (!j.onto) {
-    why = ramp ? Format("slope %.1f deg >= %.1f deg up", part.slope_rad * kRadToDeg,
-                        profile.max_slope_up_rad * kRadToDeg)
-               : Format("step up %.3f m > %.3f m", part.height_m, profile.max_step_up_m);
-    why += common::kOneWayMarker + Format("off the platform only, heading %.0f deg",
-                                          HeadingDeg(part.heading_in_rad + M_PI));
+    why = ramp ? FormatNumbers("slope %.1f deg >= %.1f deg up", part.slope_rad * kRadToDeg,
+                               profile.max_slope_up_rad * kRadToDeg)
+               : FormatNumbers("step up %.3f m > %.3f m", part.height_m, profile.max_step_up_m);
+    why += common::kOneWayMarker + FormatNumbers("off the platform only, heading %.0f deg",
+                                                 HeadingDeg(part.heading_in_rad + M_PI));
   } else {
-    why = ramp ? Format("slope %.1f deg >= %.1f deg down", part.slope_rad * kRadToDeg,
-                        profile.max_slope_down_rad * kRadToDeg)
-               : Format("step down %.3f m > %.3f m", part.height_m, profile.max_step_down_m);
-    why += common::kOneWayMarker +
-           Format("onto the platform only, heading %.0f deg", HeadingDeg(part.heading_in_rad));
+    why = ramp ? FormatNumbers("slope %.1f deg >= %.1f deg down", part.slope_rad * kRadToDeg,
+                               profile.max_slope_down_rad * kRadToDeg)
+               : FormatNumbers("step down %.3f m > %.3f m", part.height_m, profile.max_step_down_m);
+    why += common::kOneWayMarker + FormatNumbers("onto the platform only, heading %.0f deg",
+                                                 HeadingDeg(part.heading_in_rad));
   }
   return j;
 }
@@ -380,9 +362,10 @@ common::ObstacleVerdict JudgeTerrace(const Obstacle& terrace, const common::Robo
     for (size_t b = 0; b < js.size(); ++b) {
       if (a == b || !js[a].onto || !js[b].off) continue;
       const Vector2 d = terrace.parts[b].centroid_m - terrace.parts[a].centroid_m;
-      v.reason = limits + common::kOneWayMarker +
-                 Format("crossable heading %.0f deg only", HeadingDeg(std::atan2(d.y(), d.x()))) +
-                 ": onto it over " + name(a) + ", off over " + name(b);
+      v.reason =
+          limits + common::kOneWayMarker +
+          FormatNumbers("crossable heading %.0f deg only", HeadingDeg(std::atan2(d.y(), d.x()))) +
+          ": onto it over " + name(a) + ", off over " + name(b);
       return v;
     }
   }

@@ -299,6 +299,12 @@ std::string CallError(const common::Result<cairn::lcmt_mapstore_reply>& reply) {
   return reply->status == cairn::lcmt_mapstore_reply::STATUS_OK ? "" : reply->message;
 }
 
+// "crossable", or "one-way (reason)" / "blocked (reason)".
+std::string VerdictText(const common::ObstacleVerdict& v) {
+  return v.crossable ? std::string("crossable")
+                     : std::string(common::VerdictWord(v)) + " (" + v.reason + ")";
+}
+
 }  // namespace
 
 bool DemoMission::PutProfiles(mapstore::MapstoreClient* client,
@@ -399,11 +405,7 @@ bool DemoMission::RenderAndList(mapstore::MapstoreClient* client,
         }
       }
       const auto* v = o.VerdictFor(name);
-      verdicts[o.id][name] =
-          v == nullptr
-              ? "?"
-              : (v->crossable ? std::string("crossable")
-                              : std::string(common::VerdictWord(*v)) + " (" + v->reason + ")");
+      verdicts[o.id][name] = v == nullptr ? "?" : VerdictText(*v);
     }
     if (!elevation_done && loaded->layers.HasLayer(layers::kElevation)) {
       mapstore::io::PngOverlay overlay;
@@ -443,9 +445,7 @@ bool DemoMission::RenderAndList(mapstore::MapstoreClient* client,
                     std::fmod(p.heading_in_rad * 180.0 / M_PI + 360.0, 360.0));
       part << head;
       for (const auto& v : p.verdicts) {
-        part << "  " << v.profile << ": "
-             << (v.crossable ? std::string("crossable")
-                             : std::string(common::VerdictWord(v)) + " (" + v.reason + ")");
+        part << "  " << v.profile << ": " << VerdictText(v);
       }
       report->obstacle_lines.push_back(part.str());
     }
