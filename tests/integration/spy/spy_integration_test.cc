@@ -1,13 +1,12 @@
 // cairn-spy and the Java types jar against real traffic between real processes.
 
-#include <sys/wait.h>
-
 #include <fstream>
 #include <regex>
 #include <set>
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
 #include "cairn/lcmtypes_registry.hpp"
 #include "tests/support/harness.h"
@@ -21,13 +20,16 @@ TEST(SpyIntegrationTest, OnceListsEveryChannelWithItsDecodedType) {
   ProcessSet procs(PrivateLcmUrl());
   // Publishes every type for ~10 s; cairn-spy listens for 2 s in the middle.
   ChildProcess& publisher = procs.StartRaw(
-      "publish_samples", {std::string(CAIRN_BINARY_DIR) + "/tests/publish_samples", procs.url(), "200"});
+      "publish_samples",
+      {std::string(CAIRN_BINARY_DIR) + "/tests/publish_samples", procs.url(), "200"});
   ChildProcess& spy = procs.Start("cairn-spy", {"--once", "--duration", "2"});
   ASSERT_TRUE(spy.WaitExit(30.0).has_value());
   const std::string table = spy.Log();
   for (const auto& t : cairn::AllLcmTypes()) {
-    const std::string row = "SAMPLE." + ShortName(t.name) + R"(\s+)" + std::string(t.name) + R"(\s+[0-9.]+)";
-    EXPECT_TRUE(std::regex_search(table, std::regex(row))) << "no row for " << t.name << "\n" << table;
+    const std::string row =
+        "SAMPLE." + ShortName(t.name) + R"(\s+)" + std::string(t.name) + R"(\s+[0-9.]+)";
+    EXPECT_TRUE(std::regex_search(table, std::regex(row))) << "no row for " << t.name << "\n"
+                                                           << table;
   }
   publisher.Stop();
 }
@@ -58,32 +60,39 @@ TEST(SpyIntegrationTest, JarHasEveryTypeAndJavaDecodesARecordedLog) {
 
   // Record every type with lcm-logger, then decode the log in Java.
   const std::string log = procs.dir() + "/samples.lcmlog";
-  ChildProcess& logger = procs.StartRaw(
-      "lcm-logger", {"/usr/bin/lcm-logger", "-f", "--lcm-url=" + procs.url(), log});
+  ChildProcess& logger =
+      procs.StartRaw("lcm-logger", {"/usr/bin/lcm-logger", "-f", "--lcm-url=" + procs.url(), log});
   Bus bus(procs.url());
-  ChildProcess& publisher = procs.StartRaw(
-      "publish_samples", {std::string(CAIRN_BINARY_DIR) + "/tests/publish_samples", procs.url(), "40"});
+  ChildProcess& publisher =
+      procs.StartRaw("publish_samples",
+                     {std::string(CAIRN_BINARY_DIR) + "/tests/publish_samples", procs.url(), "40"});
   // Wait until the publisher is done and our own subscriber saw every sample.
   ASSERT_TRUE(WaitFor([&] { return !publisher.Running(); }, 60.0, [&] { bus.Pump(20); }));
-  ASSERT_TRUE(WaitFor([&] {
-    for (const auto& t : cairn::AllLcmTypes()) {
-      if (bus.Count("SAMPLE." + ShortName(t.name)) < 1) return false;
-    }
-    return true;
-  }, 10.0, [&] { bus.Pump(20); }));
+  std::string missing;  // the types not seen yet, for the failure message
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        missing.clear();
+        for (const auto& t : cairn::AllLcmTypes()) {
+          if (bus.Count("SAMPLE." + ShortName(t.name)) < 1) missing += " " + ShortName(t.name);
+        }
+        return missing.empty();
+      },
+      10.0, [&] { bus.Pump(20); }))
+      << "never seen:" << missing;
   logger.Signal(SIGINT);
   ASSERT_TRUE(logger.WaitExit(10.0).has_value());
 
-  ChildProcess& java = procs.StartRaw(
-      "java", {"/usr/bin/java", "-cp",
-               "/usr/share/java/lcm.jar:" + jar + ":" + std::string(CAIRN_BINARY_DIR) + "/tests/java",
-               "DecodeLog", jar, log});
+  ChildProcess& java = procs.StartRaw("java", {"/usr/bin/java", "-cp",
+                                               "/usr/share/java/lcm.jar:" + jar + ":" +
+                                                   std::string(CAIRN_BINARY_DIR) + "/tests/java",
+                                               "DecodeLog", jar, log});
   auto exit = java.WaitExit(120.0);
   ASSERT_TRUE(exit.has_value());
   const std::string out = java.Log();
   EXPECT_TRUE(WIFEXITED(*exit) && WEXITSTATUS(*exit) == 0) << out;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(decoded (\d+) failed 0 classes (\d+))"))) << out;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(decoded (\d+) failed 0 classes (\d+))")))
+      << out;
   EXPECT_GE(std::stoi(m[1]), static_cast<int>(cairn::AllLcmTypes().size()));
   EXPECT_EQ(std::stoi(m[2]), static_cast<int>(cairn::AllLcmTypes().size()));
 }
