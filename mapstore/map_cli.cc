@@ -26,6 +26,8 @@ const std::vector<Command>& Commands() {
       {"import", "read a file in a registered format into a new version", CmdImport},
       {"share", "derive a map for another profile; verdicts that change", CmdShare},
       {"diff", "compare two versions, or one version under two profiles", CmdDiff},
+      {"eval", "judge a map against a simulator world's geometry (precision, recall, ...)",
+       CmdEval},
       {"check", "integrity check (exit 1 when damaged)", CmdCheck},
       {"vacuum", "drop unreferenced blobs, compact the file", CmdVacuum},
       {"migrate", "migrate an older schema", CmdMigrate},

@@ -11,6 +11,8 @@
 ///   cairn-map import   a YAML + PGM map (hand-drawn static maps too), .bt/.ot, .csv
 ///   cairn-map share    derive a map for another profile and list the verdicts that change
 ///   cairn-map diff     two versions, or one version under two profiles
+///   cairn-map eval     a map against a simulator world's ground truth (mapstore/map_eval.h,
+///                      simulator/ground_truth.h): precision, recall, coverage, IoU, walls
 ///   cairn-map check    integrity: PRAGMA integrity_check, foreign keys, every blob checksum
 ///   cairn-map vacuum   drop unreferenced blobs and compact the file
 ///   cairn-map migrate  bring an older schema to the current one

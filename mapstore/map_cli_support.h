@@ -61,6 +61,7 @@ int Need(const std::string& value, const char* flag);
 int CmdList(int argc, char** argv);
 int CmdShow(int argc, char** argv);
 int CmdDiff(int argc, char** argv);
+int CmdEval(int argc, char** argv);
 int CmdProfiles(int argc, char** argv);
 int CmdAudit(int argc, char** argv);
 int CmdPlaces(int argc, char** argv);

@@ -8,6 +8,8 @@
 
 #include "mapstore/map_io.h"
 #include "mapstore/sqlite_map_store.h"
+#include "simulator/ground_truth.h"
+#include "simulator/scenario.h"
 #include "tests/integration/mapstore/mapstore_fixture.h"
 
 namespace cairn::mapstore::testing {
@@ -161,7 +163,7 @@ TEST(MapstoreCliTest, CheckRefusesForeignFilesAndFindsDamage) {
 TEST(MapstoreCliTest, EveryCommandPrintsHelp) {
   ProcessSet procs(cairn::testing::PrivateLcmUrl());
   for (const char* command :
-       {"list", "show", "export", "import", "share", "diff", "check", "vacuum", "migrate",
+       {"list", "show", "export", "import", "share", "diff", "eval", "check", "vacuum", "migrate",
         "profiles", "put-profile", "delete", "audit", "places"}) {
     CliResult r = RunCli(procs, {command, "--help"});
     EXPECT_EQ(r.exit_code, 0) << command;
@@ -243,6 +245,112 @@ TEST(MapstoreCliTest, ShareListsTheOneWayVerdictsThatChange) {
   EXPECT_NE(share.output.find("pioneer3at: one-way"), std::string::npos) << share.output;
   EXPECT_NE(share.output.find("crossable downwards only"), std::string::npos) << share.output;
   EXPECT_NE(share.output.find("rover: crossable"), std::string::npos) << share.output;
+}
+
+// The arena's 12 x 10 m at 0.1 m from (-0.5, -0.5), 130 x 110 cells.
+common::GridGeometry ArenaGrid() {
+  common::GridGeometry g;
+  g.resolution_m = 0.1;
+  g.size_x = 130;
+  g.size_y = 110;
+  g.origin = {-0.5, -0.5, 0.0};
+  return g;
+}
+
+// Stores lab/arena whose occupancy is the arena's ground truth (100 on obstacles, 0 free) and
+// whose elevation is the true ground + 2 cm on the free cells.
+void SaveArenaFromTruth(const std::string& db) {
+  const common::GridMap truth = sim::RasteriseGroundTruth(
+      sim::SimPaths::InTree(CAIRN_SOURCE_DIR).WorldPath("arena"), ArenaGrid());
+  MapSnapshot s;
+  s.site = "lab";
+  s.name = "arena";
+  s.provenance.source_robot = "rover1";
+  s.provenance.source_profile = "pioneer3at";
+  s.provenance.code_version = "test";
+  s.base = common::GridMap(ArenaGrid());
+  common::Layer& occ = s.base.AddLayer(layers::kOccupancy);
+  common::Layer& z = s.base.AddLayer(layers::kElevation);
+  common::Layer& var = s.base.AddLayer(layers::kElevationVariance);
+  const common::Layer& t = truth.at(sim::kTruthOccupiedLayer);
+  const common::Layer& ground = truth.at(sim::kTruthGroundLayer);
+  for (Eigen::Index i = 0; i < t.size(); ++i) {
+    occ.data()[i] = t.data()[i] * 100.f;
+    if (t.data()[i] == 0.f) {
+      z.data()[i] = ground.data()[i] + 0.02f;
+      var.data()[i] = 1e-4f;
+    }
+  }
+  auto store = SqliteMapStore::Open(db);
+  ASSERT_TRUE(store.ok());
+  ASSERT_TRUE((*store)->SaveMap(s, {"cli-test", 0, 0}).ok());
+}
+
+TEST(MapstoreCliTest, EvalAMapMadeFromTheTruthScoresPerfectly) {
+  ProcessSet procs(cairn::testing::PrivateLcmUrl());
+  const std::string db = procs.dir() + "/site.db";
+  SaveArenaFromTruth(db);
+  CliResult table = RunCli(procs,
+                           {"eval", "--db", db, "--site", "lab", "--map", "arena", "--world",
+                            "arena", "--start", "6.05,3.05"},
+                           120.0);
+  ASSERT_EQ(table.exit_code, 0) << table.output;
+  // The table's columns, one space apart.
+  std::string text;
+  for (char ch : table.output) {
+    if (ch != ' ' || text.empty() || text.back() != ' ') text += ch;
+  }
+  for (const char* line :
+       {"occupied precision 100.0%", "occupied recall 100.0%", "free precision 100.0%",
+        "coverage 100.0%", "occupied IoU 100.0%", "double walls 0 ", "elevation error 0.020 m",
+        "layer occupancy: 130 x 110 cells of 0.1 m"}) {
+    EXPECT_NE(text.find(line), std::string::npos) << line << " in\n" << table.output;
+  }
+  CliResult json = RunCli(procs,
+                          {"eval", "--db", db, "--site", "lab", "--map", "arena", "--world",
+                           "arena", "--start", "6.05,3.05", "--json"},
+                          120.0);
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  for (const char* field :
+       {"\"occupied_precision\": 1,", "\"occupied_recall\": 1,", "\"free_precision\": 1,",
+        "\"coverage\": 1,", "\"occupied_iou\": 1,", "\"double_wall_crossings\": 0,",
+        "\"truth_cells\": 14300,", "\"mean_abs_m\": 0.02"}) {
+    EXPECT_NE(json.output.find(field), std::string::npos) << field << " in\n" << json.output;
+  }
+  EXPECT_EQ(json.output.front(), '{') << json.output;
+}
+
+TEST(MapstoreCliTest, EvalFailsCleanly) {
+  ProcessSet procs(cairn::testing::PrivateLcmUrl());
+  const std::string db = procs.dir() + "/site.db";
+  SaveArenaFromTruth(db);
+  const std::vector<std::string> base = {"eval", "--db", db, "--site", "lab", "--map", "arena"};
+  auto run = [&](std::vector<std::string> extra) {
+    std::vector<std::string> args = base;
+    args.insert(args.end(), extra.begin(), extra.end());
+    return RunCli(procs, args, 120.0);
+  };
+  CliResult world = run({"--world", "atlantis", "--start", "6,3"});
+  EXPECT_EQ(world.exit_code, 1) << world.output;
+  EXPECT_NE(world.output.find("unknown world 'atlantis'"), std::string::npos) << world.output;
+  EXPECT_NE(world.output.find("arena"), std::string::npos) << world.output;  // the list
+  CliResult file = run({"--world", procs.dir() + "/missing.xml", "--start", "6,3"});
+  EXPECT_EQ(file.exit_code, 1) << file.output;
+  EXPECT_NE(file.output.find("not found"), std::string::npos) << file.output;
+  CliResult layer = run({"--world", "arena", "--start", "6,3", "--layer", "static"});
+  EXPECT_EQ(layer.exit_code, 1) << layer.output;
+  EXPECT_NE(layer.output.find("has no layer 'static'"), std::string::npos) << layer.output;
+  CliResult outside = run({"--world", "arena", "--start", "40,3"});
+  EXPECT_EQ(outside.exit_code, 1) << outside.output;
+  EXPECT_NE(outside.output.find("outside"), std::string::npos) << outside.output;
+  CliResult in_wall = run({"--world", "arena", "--start", "6.05,-0.05"});
+  EXPECT_EQ(in_wall.exit_code, 1) << in_wall.output;
+  EXPECT_NE(in_wall.output.find("not free"), std::string::npos) << in_wall.output;
+  CliResult syntax = run({"--world", "arena", "--start", "six"});
+  EXPECT_EQ(syntax.exit_code, 2) << syntax.output;
+  CliResult no_world = run({"--start", "6,3"});
+  EXPECT_EQ(no_world.exit_code, 2) << no_world.output;
+  EXPECT_NE(no_world.output.find("--world"), std::string::npos) << no_world.output;
 }
 
 }  // namespace
