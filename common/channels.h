@@ -41,6 +41,7 @@ inline constexpr char kCmdVel[] = "CMD_VEL";
 inline constexpr char kGoal[] = "GOAL";
 inline constexpr char kPath[] = "PATH";
 inline constexpr char kNavStatus[] = "NAV_STATUS";
+inline constexpr char kExploreStatus[] = "EXPLORE_STATUS";  // cairn-explorer progress
 inline constexpr char kMapTiles[] = "MAP.TILES";             // grid-map layer tiles
 inline constexpr char kMapManifest[] = "MAP.MANIFEST";       // layer versions and tile checksums
 inline constexpr char kMapTileResend[] = "MAP.TILE_RESEND";  // receivers ask for missed tiles

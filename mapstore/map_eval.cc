@@ -94,6 +94,10 @@ int64_t DoubleWallsAlong(int n, MapOcc map_occ, TruthOcc truth_occ, const MapEva
   for (size_t i = 0; i + 1 < runs.size(); ++i) {
     const int gap = runs[i + 1].begin - runs[i].end;
     if (gap < p.double_wall_min_gap_cells || gap > p.double_wall_max_gap_cells) continue;
+    // Two faces of one thin wall, its inside unseen: the gap lies within the truth's wall.
+    bool gap_free = false;
+    for (int k = runs[i].end; k < runs[i + 1].begin && !gap_free; ++k) gap_free = !truth_occ(k);
+    if (!gap_free) continue;
     const int lo = std::max(0, runs[i].begin - p.tolerance_cells);
     const int hi = std::min(n, runs[i + 1].end + p.tolerance_cells);
     const std::vector<Run> truth = Runs(hi - lo, [&](int k) { return truth_occ(lo + k); });

@@ -498,13 +498,14 @@ def arena():
     # A partial wall making an alcove in the lower right.
     g.append(aabb("wall_alcove", 8.0, 8.0 + t, 0.0, 3.0, 0, h))
     # Clutter: armchair at the bottom, balls, a chair in the upper-left room, a table upper right.
+    # The balls (r 0.2 m) rise above the P3-DX's laser plane (0.30 m), as seed 003's map shows them.
     g.append(aabb("armchair_seat", 3.2, 4.2, 0.3, 1.1, 0, 0.45, "0.55 0.3 0.3 1"))
     g.append(aabb("armchair_back", 3.2, 4.2, 0.15, 0.3, 0, 0.9, "0.55 0.3 0.3 1"))
     g.append(aabb("armchair_arm_left", 3.05, 3.2, 0.15, 1.1, 0, 0.65, "0.55 0.3 0.3 1"))
     g.append(aabb("armchair_arm_right", 4.2, 4.35, 0.15, 1.1, 0, 0.65, "0.55 0.3 0.3 1"))
     balls = [(1.5, 2.5), (6.5, 1.2), (9.8, 4.5), (5.5, 4.2), (10.8, 1.0), (2.2, 4.8)]
     for i, (bx, by) in enumerate(balls):
-        g.append(f'    <geom name="ball_{i}" type="sphere" size="0.12" pos="{f(bx)} {f(by)} 0.12" '
+        g.append(f'    <geom name="ball_{i}" type="sphere" size="0.2" pos="{f(bx)} {f(by)} 0.2" '
                  'rgba="0.85 0.6 0.1 1"/>')
     # Chair (thin legs) in the upper-left room, visible through the doorway at x 2.5..3.5.
     for i, (dx, dy) in enumerate([(-0.2, -0.2), (0.2, -0.2), (-0.2, 0.2), (0.2, 0.2)]):

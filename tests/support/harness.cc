@@ -154,6 +154,11 @@ std::string ChildProcess::Log() const {
 
 ProcessSet::ProcessSet(std::string url) : url_(std::move(url)), dir_(TestTempDir()) {}
 
+ProcessSet::ProcessSet(std::string url, std::string dir)
+    : url_(std::move(url)), dir_(std::move(dir)) {
+  std::filesystem::create_directories(dir_);
+}
+
 ProcessSet::~ProcessSet() {
   for (auto it = processes_.rbegin(); it != processes_.rend(); ++it) (*it)->Stop(5.0);
   if (::testing::Test::HasFailure()) PrintLogs();

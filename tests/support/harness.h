@@ -73,6 +73,9 @@ class ChildProcess {
 class ProcessSet {
  public:
   explicit ProcessSet(std::string url);
+  /// Logs in `dir` (created if missing) instead of the test's own folder: for several sets side
+  /// by side in one test.
+  ProcessSet(std::string url, std::string dir);
   ~ProcessSet();
   const std::string& url() const { return url_; }
   const std::string& dir() const { return dir_; }

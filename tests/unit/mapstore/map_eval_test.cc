@@ -151,6 +151,11 @@ TEST(MapEvalTest, DoubledWall) {
   EXPECT_EQ(
       EvaluateMap(FieldMap({10, 13}), FieldTruth({10, 13}), At(0.05, 0.05)).double_wall_crossings,
       0);
+  // The two faces of a thin wall (truth columns 10..13) seen from both sides, its inside
+  // unseen: one wall, not two.
+  EXPECT_EQ(EvaluateMap(FieldMap({10, 13}), FieldTruth({10, 11, 12, 13}), At(0.05, 0.05))
+                .double_wall_crossings,
+            0);
   // Gap limits are params.
   MapEvalParams wide = At(0.05, 0.05);
   wide.double_wall_max_gap_cells = 7;

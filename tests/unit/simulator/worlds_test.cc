@@ -219,7 +219,7 @@ TEST_F(WorldsTest, ArenaHasRoomsAndClutter) {
   EXPECT_NEAR(SurfaceZ(sim, 6.0, 6.07), 1.0, 1e-9);  // the wall between hall and rooms
   EXPECT_NEAR(SurfaceZ(sim, 3.0, 6.07), 0.0, 1e-9);  // its doorway
   EXPECT_NEAR(SurfaceZ(sim, 9.5, 8.5), 0.76, 1e-9);  // the table
-  EXPECT_NEAR(SurfaceZ(sim, 1.5, 2.5), 0.24, 1e-9);  // a ball
+  EXPECT_NEAR(SurfaceZ(sim, 1.5, 2.5), 0.4, 1e-9);  // a ball (r 0.2 m)
   EXPECT_NEAR(SurfaceZ(sim, 3.7, 0.7), 0.45, 1e-9);  // the armchair seat
 }
 

@@ -1,0 +1,141 @@
+#include "services/explore/explorer_config.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace cairn::explore {
+
+using common::ConfigError;
+using common::YamlMap;
+
+namespace {
+
+void RequirePositive(double v, const char* name) {
+  if (!(v > 0.0) || !std::isfinite(v)) {
+    throw std::invalid_argument(std::string("explorer: ") + name + " must be positive");
+  }
+}
+
+void LoadReactive(YamlMap map, ReactiveParams* p) {
+  map.Get("safety_distance_m", &p->safety_distance_m);
+  map.Get("front_lateral_divisor", &p->front_lateral_divisor);
+  map.Get("critical_distance_m", &p->critical_distance_m);
+  map.Get("block_time_limit_s", &p->block_time_limit_s);
+  map.Get("cruise_speed_mps", &p->cruise_speed_mps);
+  map.Get("centring_speed_mps", &p->centring_speed_mps);
+  map.Get("centring_turn_rate_radps", &p->centring_turn_rate_radps);
+  map.Get("side_distance_m", &p->side_distance_m);
+  map.Get("turn_rate_radps", &p->turn_rate_radps);
+  map.Get("reverse_speed_mps", &p->reverse_speed_mps);
+  map.Get("clean_min_range_m", &p->clean_min_range_m);
+  map.Get("clean_max_range_m", &p->clean_max_range_m);
+  map.Get("clean_replacement_m", &p->clean_replacement_m);
+  map.Get("legacy_nan", &p->legacy_nan);
+  map.Finish();
+}
+
+void LoadFrontier(YamlMap map, FrontierModeParams* p) {
+  map.Get("layer", &p->layer);
+  map.Get("occupied_threshold_og", &p->occupied_threshold_og);
+  map.Get("free_threshold_og", &p->free_threshold_og);
+  map.Get("min_frontier_size_m", &p->frontier.min_frontier_size_m);
+  map.Get("potential_scale", &p->frontier.potential_scale);
+  map.Get("gain_scale", &p->frontier.gain_scale);
+  map.Get("clearance_m", &p->frontier.clearance_m);
+  map.Get("blacklist_radius_m", &p->frontier.blacklist_radius_m);
+  map.Get("free_around_robot_m", &p->free_around_robot_m);
+  map.Get("choose_period_s", &p->choose_period_s);
+  map.Get("goal_tolerance_m", &p->goal_tolerance_m);
+  map.Get("progress_timeout_s", &p->progress_timeout_s);
+  map.Get("switch_margin", &p->switch_margin);
+  map.Get("finish_wait_s", &p->finish_wait_s);
+  map.Finish();
+}
+
+}  // namespace
+
+ExploreMode ExploreModeFromName(const std::string& name) {
+  if (name == "reactive") return ExploreMode::kReactive;
+  if (name == "stateless") return ExploreMode::kStateless;
+  if (name == "frontier") return ExploreMode::kFrontier;
+  throw std::invalid_argument("unknown exploration mode '" + name +
+                              "' (known: reactive, stateless, frontier)");
+}
+
+const char* ExploreModeName(ExploreMode mode) {
+  switch (mode) {
+    case ExploreMode::kReactive:
+      return "reactive";
+    case ExploreMode::kStateless:
+      return "stateless";
+    case ExploreMode::kFrontier:
+      return "frontier";
+  }
+  return "?";
+}
+
+void FrontierModeParams::Validate() const {
+  if (layer.empty()) throw std::invalid_argument("explorer: frontier.layer is empty");
+  if (!(free_threshold_og >= 0.0 && free_threshold_og < occupied_threshold_og &&
+        occupied_threshold_og <= 100.0)) {
+    throw std::invalid_argument(
+        "explorer: frontier thresholds need 0 <= free_threshold_og < occupied_threshold_og "
+        "<= 100");
+  }
+  frontier.Validate();
+  if (!(free_around_robot_m >= 0.0) || !std::isfinite(free_around_robot_m)) {
+    throw std::invalid_argument("explorer: frontier.free_around_robot_m must be >= 0");
+  }
+  RequirePositive(choose_period_s, "frontier.choose_period_s");
+  RequirePositive(goal_tolerance_m, "frontier.goal_tolerance_m");
+  RequirePositive(progress_timeout_s, "frontier.progress_timeout_s");
+  if (!(switch_margin >= 0.0) || !std::isfinite(switch_margin)) {
+    throw std::invalid_argument("explorer: frontier.switch_margin must be >= 0");
+  }
+  if (!(finish_wait_s >= 0.0) || !std::isfinite(finish_wait_s)) {
+    throw std::invalid_argument("explorer: frontier.finish_wait_s must be >= 0");
+  }
+}
+
+void ExplorerConfig::Validate() const {
+  if (!(duration_s >= 0.0) || !std::isfinite(duration_s)) {
+    throw std::invalid_argument("explorer: duration_s must be >= 0");
+  }
+  RequirePositive(status_rate_hz, "status_rate_hz");
+  RequirePositive(scan_timeout_s, "scan_timeout_s");
+  reactive.Validate();
+  frontier.Validate();
+}
+
+ExplorerConfig LoadExplorerConfig(YamlMap& root) {
+  ExplorerConfig c;
+  if (root.Has("mode")) {
+    const YAML::Node node = root.Raw("mode");
+    try {
+      c.mode = ExploreModeFromName(node.as<std::string>());
+    } catch (const std::invalid_argument& e) {
+      root.Fail(node, e.what());
+    } catch (const YAML::Exception&) {
+      root.Fail(node, "bad value for 'mode'");
+    }
+  }
+  root.Get("duration_s", &c.duration_s);
+  root.Get("status_rate_hz", &c.status_rate_hz);
+  root.Get("scan_timeout_s", &c.scan_timeout_s);
+  LoadReactive(root.Child("reactive"), &c.reactive);
+  LoadFrontier(root.Child("frontier"), &c.frontier);
+  root.Finish();
+  try {
+    c.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(root.file() + ": " + e.what());
+  }
+  return c;
+}
+
+ExplorerConfig LoadExplorerConfigFile(const std::string& path) {
+  YamlMap root = YamlMap::LoadFile(path);
+  return LoadExplorerConfig(root);
+}
+
+}  // namespace cairn::explore

@@ -1,0 +1,131 @@
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "common/grid_map.h"
+#include "services/explore/work_area.h"
+#include <Eigen/Core>
+
+/// @file
+/// The 2-D information map of seed 002 (chapter 4): every analysed 3-D point falls on a cell of
+/// a 0.3 m grid over the work area, and each cell keeps the statistics of its points, from which
+/// come the navigability C_nc, the quality Q_a and the explored state.
+///
+///   C_nc = R_fo (0.5 + F_c / 2) + (1 - R_fo) (0.5 - B_c / 2),  R_fo = n_pf / (n_pf + n_po)
+///
+/// where F_c is the mean F of the points with F > tau_F (n_pf of them) and B_c the mean B of the
+/// points with B > tau_B (n_po). A cell with no such point is 0.5 (unknown navigability), and
+/// Q_a is the mean D of all its points. Cells outside the work area are kept (the robot may drive
+/// there) but count for neither coverage nor gain.
+
+namespace cairn::explore {
+
+/// One analysed point of a scan (world frame), the input of the map.
+struct ScoredPoint {
+  Eigen::Vector3f position_m{0.f, 0.f, 0.f};
+  Eigen::Vector3f normal{0.f, 0.f, 0.f};  ///< unit; zero when unknown
+  float navigability{0.f};                ///< F(p)
+  float obstacle{0.f};                    ///< B(p)
+  float quality{0.f};                     ///< D(p)
+};
+
+struct InfoMapParams {
+  double cell_size_m{0.3};
+  double tau_f{0.65};    ///< points with F above it count as navigable
+  double tau_b{0.83};    ///< points with B above it count as obstacle
+  double margin_m{3.0};  ///< grid margin around the work area's bounding box
+
+  /// @throws std::invalid_argument naming the bad field.
+  void Validate() const;
+};
+
+/// Layer names (GridMap form, as stored and exported).
+namespace info_layers {
+inline constexpr char kNavigability[] = "explore/navigability";         ///< C_nc; NaN unexplored
+inline constexpr char kQuality[] = "explore/quality";                   ///< Q_a; NaN unexplored
+inline constexpr char kExplored[] = "explore/explored";                 ///< 1 explored, 0 not
+inline constexpr char kWorkArea[] = "explore/work_area";                ///< 1 inside, 0 outside
+inline constexpr char kPoints[] = "explore/points";                     ///< n_p
+inline constexpr char kNavigablePoints[] = "explore/navigable_points";  ///< n_pf
+inline constexpr char kObstaclePoints[] = "explore/obstacle_points";    ///< n_po
+inline constexpr char kSumNavigability[] = "explore/sum_navigability";  ///< sum F over n_pf
+inline constexpr char kSumObstacle[] = "explore/sum_obstacle";          ///< sum B over n_po
+inline constexpr char kSumQuality[] = "explore/sum_quality";            ///< sum D
+inline constexpr char kSumX[] = "explore/sum_x";                        ///< sums of positions
+inline constexpr char kSumY[] = "explore/sum_y";
+inline constexpr char kSumZ[] = "explore/sum_z";
+inline constexpr char kSumNormalX[] = "explore/sum_normal_x";  ///< sums of unit normals
+inline constexpr char kSumNormalY[] = "explore/sum_normal_y";
+inline constexpr char kSumNormalZ[] = "explore/sum_normal_z";
+}  // namespace info_layers
+
+class InfoMap {
+ public:
+  /// @throws std::invalid_argument for a bad work area or bad params.
+  InfoMap(const WorkArea& area, const InfoMapParams& params = {});
+
+  /// Adds the points that fall on the grid (others and non-finite ones are skipped) and updates
+  /// the cells they touch. Returns how many points were used.
+  int64_t AddPoints(const std::vector<ScoredPoint>& points);
+
+  const common::GridGeometry& geometry() const { return geometry_; }
+  const WorkArea& work_area() const { return area_; }
+  const InfoMapParams& params() const { return params_; }
+  int size_x() const { return geometry_.size_x; }
+  int size_y() const { return geometry_.size_y; }
+  int64_t num_cells() const { return geometry_.num_cells(); }
+  int64_t Linear(const common::CellIndex& c) const { return geometry_.LinearIndex(c); }
+  common::CellIndex Cell(int64_t linear) const {
+    return {static_cast<int>(linear % geometry_.size_x),
+            static_cast<int>(linear / geometry_.size_x)};
+  }
+
+  /// C_nc of a cell: 0.5 where no qualifying point fell.
+  float Navigability(int64_t cell) const { return navigability_[cell]; }
+  /// Q_a, NaN where unexplored.
+  float Quality(int64_t cell) const { return quality_[cell]; }
+  bool Explored(int64_t cell) const { return points_[cell] > 0.f; }
+  bool InWorkArea(int64_t cell) const { return in_area_[cell] != 0; }
+  /// Mean position of the cell's points (NaN when unexplored).
+  Eigen::Vector3f Centroid(int64_t cell) const;
+  /// Unit mean normal of the cell's points (zero when none).
+  Eigen::Vector3f MeanNormal(int64_t cell) const;
+
+  int64_t work_area_cells() const { return work_area_cells_; }
+  int64_t explored_work_area_cells() const { return explored_in_area_; }
+  /// Explored cells of the work area over its cells, in [0, 1].
+  double Coverage() const;
+  /// Mean Q_a over the explored cells of the work area (0 when none).
+  double MeanQuality() const;
+
+  /// The map as GridMap layers (info_layers), for storage, export and rendering.
+  common::GridMap ToGridMap() const;
+  /// Rebuilds a map from ToGridMap()'s layers.
+  /// @throws std::invalid_argument when a layer is missing or the geometry disagrees.
+  static InfoMap FromGridMap(const common::GridMap& grid, const WorkArea& area,
+                             const InfoMapParams& params = {});
+
+ private:
+  void UpdateCell(int64_t cell);
+
+  WorkArea area_;
+  InfoMapParams params_;
+  common::GridGeometry geometry_;
+  std::vector<uint8_t> in_area_;
+  int64_t work_area_cells_{0};
+  int64_t explored_in_area_{0};
+  // Statistics (struct of arrays, one entry per cell).
+  std::vector<float> points_, navigable_points_, obstacle_points_;
+  std::vector<float> sum_navigability_, sum_obstacle_, sum_quality_;
+  std::vector<float> sum_x_, sum_y_, sum_z_, sum_nx_, sum_ny_, sum_nz_;
+  // Derived.
+  std::vector<float> navigability_, quality_;
+};
+
+/// C_nc from a cell's statistics (eq. 4.4): 0.5 when neither count is positive.
+double CellNavigability(double navigable_points, double sum_navigability, double obstacle_points,
+                        double sum_obstacle);
+
+}  // namespace cairn::explore

@@ -1,0 +1,82 @@
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "cairn/lcmt_explore_status.hpp"
+#include "cairn/lcmt_laser_scan.hpp"
+#include "cairn/lcmt_nav_status.hpp"
+#include "cairn/lcmt_pose.hpp"
+
+#include "common/robot_profile.h"
+#include "planner/lcm/lcm_map_client.h"
+#include "services/explore/explorer_config.h"
+#include "services/explore/frontier_explorer.h"
+#include "services/explore/reactive_explorer.h"
+#include "services/runtime/node.h"
+
+/// @file
+/// ExplorerService: cairn-explorer's LCM side, one robot per process.
+///
+/// Reactive modes (reactive, stateless):
+///   reads  <robot>.SCAN (lcmt_laser_scan), <robot>.POSE (for the distance driven);
+///   writes <robot>.CMD_VEL (lcmt_velocity_command, one per scan; zero when the scans stop, at
+///          the end and on shutdown).
+/// Frontier mode:
+///   reads  <robot>.MAP.OCCUPANCY / <robot>.MAP.MANIFEST (the 2-D occupancy layer),
+///          <robot>.POSE, <robot>.NAV_STATUS (the navigator's result for each goal);
+///   writes <robot>.GOAL (lcmt_goal: a frontier's goal, or a cancel), <robot>.MAP.TILE_RESEND.
+/// Both write <robot>.EXPLORE_STATUS (lcmt_explore_status) at status_rate_hz and on every
+/// change of state. Times are simulation time (the scans' stamps, SIM.CLOCK).
+
+namespace cairn::explore {
+
+class ExplorerService {
+ public:
+  /// Subscribes on `node` and adds the timers.
+  /// @throws std::invalid_argument for an invalid configuration or profile.
+  ExplorerService(runtime::Node& node, ExplorerConfig config, common::RobotProfile profile);
+  ~ExplorerService();
+  ExplorerService(const ExplorerService&) = delete;
+  ExplorerService& operator=(const ExplorerService&) = delete;
+
+  /// Handlers and the periodic step (public for tests over memq://).
+  void OnScan(const cairn::lcmt_laser_scan& msg);
+  void OnPose(const cairn::lcmt_pose& msg);
+  void OnNavStatus(const cairn::lcmt_nav_status& msg);
+  void Tick();
+  void PublishStatus();
+  /// Stops the robot (reactive: a zero command; frontier: cancels the goal).
+  void Halt(const std::string& why);
+
+  bool done() const { return done_; }
+  const cairn::lcmt_explore_status& status() const { return status_; }
+
+ private:
+  double NowS() const;
+  void PublishCommand(double v_mps, double omega_radps);
+  void Finish(const std::string& why);
+  void SendGoal(const FrontierAction& action);
+  void SetBehaviour(const std::string& behaviour, const std::string& message = "");
+
+  runtime::Node& node_;
+  ExplorerConfig config_;
+  common::RobotProfile profile_;
+  std::string robot_;
+  ReactiveExplorer reactive_;
+  StatelessExplorer stateless_;
+  FrontierExplorer frontier_;
+  std::unique_ptr<planner::LcmMapClient> map_client_;
+  cairn::lcmt_explore_status status_{};
+  std::optional<double> start_s_;
+  std::optional<double> last_scan_node_s_;
+  bool stopped_for_silence_{false};
+  std::optional<common::Vector2> last_xy_;
+  common::Vector2 robot_xy_{0.0, 0.0};
+  bool have_pose_{false};
+  bool done_{false};
+};
+
+}  // namespace cairn::explore

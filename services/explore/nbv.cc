@@ -1,0 +1,400 @@
+#include "services/explore/nbv.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <stdexcept>
+
+namespace cairn::explore {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+void RequireUnit(double v, const char* name) {
+  if (!(v >= 0.0 && v <= 1.0)) {
+    throw std::invalid_argument(std::string("nbv: ") + name + " must lie in [0, 1]");
+  }
+}
+
+void RequirePositive(double v, const char* name) {
+  if (!(v > 0.0) || !std::isfinite(v)) {
+    throw std::invalid_argument(std::string("nbv: ") + name + " must be positive");
+  }
+}
+
+struct Preset {
+  const char* name;
+  const char* source;
+  NbvWeights weights;
+  NbvStrategy strategy;
+};
+
+// Seed 002's tables 6-2 (simple world), 6-4 (structured), 6-6 (unstructured), 6-8 (CARTIF)
+// and 6-9 (El Pinarón), plus the greedy-mapping baseline of table 6-2's experiment IV.
+const Preset kPresets[] = {
+    {"simple-balanced", "6.2.1.I", {0.43, 0.35, 0.22, 0.09}, NbvStrategy::kUtility},
+    {"simple-information", "6.2.1.II", {0.65, 0.25, 0.10, 0.09}, NbvStrategy::kUtility},
+    {"simple-quality", "6.2.1.III", {0.36, 0.50, 0.14, 0.09}, NbvStrategy::kUtility},
+    {"greedy", "6.2.1.IV", {1.0, 0.0, 0.0, 0.09}, NbvStrategy::kGreedy},
+    {"structured-zones-quality", "6.2.2.I", {0.20, 0.55, 0.25, 0.09}, NbvStrategy::kUtility},
+    {"structured-information", "6.2.2.II", {0.65, 0.25, 0.10, 0.08}, NbvStrategy::kUtility},
+    {"unstructured-balanced", "6.2.3.I", {0.40, 0.35, 0.25, 0.125}, NbvStrategy::kUtility},
+    {"unstructured-information", "6.2.3.II", {0.65, 0.30, 0.05, 0.08}, NbvStrategy::kUtility},
+    {"cartif-fast", "6.3.1.I", {0.84, 0.10, 0.05, 0.05}, NbvStrategy::kUtility},
+    {"cartif-quality", "6.3.1.II", {0.35, 0.40, 0.15, 0.40}, NbvStrategy::kUtility},
+    {"pinaron", "6.3.2.I", {0.55, 0.30, 0.15, 0.16}, NbvStrategy::kUtility},
+};
+
+}  // namespace
+
+void NbvParams::Validate() const {
+  RequireUnit(weights.w_a, "w_a");
+  RequireUnit(weights.w_q, "w_q");
+  RequireUnit(weights.w_o, "w_o");
+  RequirePositive(weights.w_c, "w_c");
+  RequirePositive(d_max_m, "d_max_m");
+  RequireUnit(min_global_quality, "min_global_quality");
+  RequireUnit(safe_cnc, "safe_cnc");
+  RequirePositive(candidate_spacing_m, "candidate_spacing_m");
+  if (candidate_fraction < 1) {
+    throw std::invalid_argument("nbv: candidate_fraction must be >= 1");
+  }
+  if (!(candidate_clearance_m >= 0.0) || !std::isfinite(candidate_clearance_m)) {
+    throw std::invalid_argument("nbv: candidate_clearance_m must be >= 0");
+  }
+  RequireUnit(occlusion_cnc, "occlusion_cnc");
+  RequirePositive(gain_range_m, "gain_range_m");
+  if (!(scanner_height_m >= 0.0) || !std::isfinite(scanner_height_m)) {
+    throw std::invalid_argument("nbv: scanner_height_m must be >= 0");
+  }
+  RequirePositive(pan_step_rad, "pan_step_rad");
+  RequirePositive(tilt_step_rad, "tilt_step_rad");
+  RequirePositive(a_max_m2, "a_max_m2");
+  RequireUnit(w_a_quality, "w_a_quality");
+  RequireUnit(w_n_quality, "w_n_quality");
+  if (w_a_quality + w_n_quality <= 0.0) {
+    throw std::invalid_argument("nbv: w_a_quality and w_n_quality cannot both be 0");
+  }
+  RequireUnit(greedy_min_gain, "greedy_min_gain");
+}
+
+NbvParams NbvPreset(const std::string& name, NbvParams base) {
+  for (const Preset& p : kPresets) {
+    if (name == p.name) {
+      base.weights = p.weights;
+      base.strategy = p.strategy;
+      return base;
+    }
+  }
+  std::string known;
+  for (const Preset& p : kPresets) known += std::string(known.empty() ? "" : ", ") + p.name;
+  throw std::invalid_argument("nbv: unknown preset '" + name + "' (known: " + known + ")");
+}
+
+std::vector<std::string> NbvPresetNames() {
+  std::vector<std::string> names;
+  for (const Preset& p : kPresets) names.emplace_back(p.name);
+  return names;
+}
+
+double Utility(const NbvWeights& w, double info_gain, double quality_gain, double zone_gain,
+               double path_cost) {
+  const double numerator = w.w_a * info_gain + w.w_q * quality_gain + w.w_o * zone_gain;
+  return numerator / (w.w_c * std::max(path_cost, 1e-9));
+}
+
+double StopThreshold(double w_c, double d_max_m) { return 0.5 / (w_c * d_max_m); }
+
+double CombineQuality(double area_score, double incidence_score, double w_a, double w_n) {
+  const double a = w_a * area_score, n = w_n * incidence_score;
+  return std::sqrt(a * a + n * n) / std::sqrt(w_a * w_a + w_n * w_n);
+}
+
+std::vector<int64_t> NavigationTree::PathTo(int64_t cell) const {
+  std::vector<int64_t> path;
+  if (cell < 0 || cell >= static_cast<int64_t>(cost.size()) || !Reachable(cell)) return path;
+  for (int64_t c = cell; c != -1; c = parent[c]) path.push_back(c);
+  std::reverse(path.begin(), path.end());
+  return path;
+}
+
+NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe_cnc) {
+  if (root < 0 || root >= map.num_cells()) {
+    throw std::invalid_argument("navigation tree: the root cell is off the map");
+  }
+  NavigationTree tree;
+  tree.root = root;
+  tree.cost.assign(static_cast<size_t>(map.num_cells()), std::numeric_limits<float>::infinity());
+  tree.parent.assign(static_cast<size_t>(map.num_cells()), -1);
+  using Entry = std::pair<float, int64_t>;
+  std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
+  tree.cost[root] = 0.f;
+  open.push({0.f, root});
+  const int sx = map.size_x(), sy = map.size_y();
+  const float res = static_cast<float>(map.geometry().resolution_m);
+  const float safe = static_cast<float>(safe_cnc);
+  while (!open.empty()) {
+    const auto [c, i] = open.top();
+    open.pop();
+    if (c > tree.cost[i]) continue;
+    const int ix = static_cast<int>(i % sx), iy = static_cast<int>(i / sx);
+    const int64_t neighbours[4] = {ix > 0 ? i - 1 : -1, ix + 1 < sx ? i + 1 : -1,
+                                   iy > 0 ? i - sx : -1, iy + 1 < sy ? i + sx : -1};
+    for (int64_t j : neighbours) {
+      if (j < 0) continue;
+      const float cnc = map.Navigability(j);
+      if (!map.Explored(j) || !(cnc > safe)) continue;
+      const float next = c + res / cnc;
+      if (next < tree.cost[j]) {
+        tree.cost[j] = next;
+        tree.parent[j] = i;
+        open.push({next, j});
+      }
+    }
+  }
+  return tree;
+}
+
+std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& params,
+                                      const common::Vector2& robot_m, std::mt19937_64* rng) {
+  const float safe = static_cast<float>(params.safe_cnc);
+  auto is_safe = [&](int64_t i) { return map.Explored(i) && map.Navigability(i) > safe; };
+  const double res = map.geometry().resolution_m;
+  const int clearance_cells = static_cast<int>(std::ceil(params.candidate_clearance_m / res));
+  std::vector<int64_t> safe_cells;
+  for (int64_t i = 0; i < map.num_cells(); ++i) {
+    if (is_safe(i)) safe_cells.push_back(i);
+  }
+  const size_t limit = safe_cells.size() / static_cast<size_t>(params.candidate_fraction);
+  std::shuffle(safe_cells.begin(), safe_cells.end(), *rng);
+  std::vector<int64_t> chosen;
+  std::vector<common::Vector2> chosen_xy;
+  const double spacing2 = params.candidate_spacing_m * params.candidate_spacing_m;
+  for (int64_t i : safe_cells) {
+    if (chosen.size() >= limit) break;
+    if (!map.InWorkArea(i)) continue;
+    const common::CellIndex cell = map.Cell(i);
+    const common::Vector2 xy = map.geometry().CenterOf(cell);
+    if ((xy - robot_m).squaredNorm() <= spacing2) continue;
+    bool far = true;
+    for (const auto& other : chosen_xy) {
+      if ((xy - other).squaredNorm() <= spacing2) {
+        far = false;
+        break;
+      }
+    }
+    if (!far) continue;
+    bool clear = true;
+    for (int dy = -clearance_cells; dy <= clearance_cells && clear; ++dy) {
+      for (int dx = -clearance_cells; dx <= clearance_cells; ++dx) {
+        if ((dx * dx + dy * dy) * res * res >
+            params.candidate_clearance_m * params.candidate_clearance_m + 1e-9) {
+          continue;
+        }
+        const common::CellIndex n{cell.ix + dx, cell.iy + dy};
+        if (!map.geometry().Contains(n) || !is_safe(map.Linear(n))) {
+          clear = false;
+          break;
+        }
+      }
+    }
+    if (!clear) continue;
+    chosen.push_back(i);
+    chosen_xy.push_back(xy);
+  }
+  return chosen;
+}
+
+ViewEvaluator::ViewEvaluator(const InfoMap& map, const NbvParams& params)
+    : map_(map), params_(params), stamp_(static_cast<size_t>(map.num_cells()), 0) {
+  params_.Validate();
+}
+
+ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>& zones) {
+  ViewGains gains;
+  if (++epoch_ == 0) {
+    std::fill(stamp_.begin(), stamp_.end(), 0);
+    epoch_ = 1;
+  }
+  visible_.clear();
+  const common::GridGeometry& g = map_.geometry();
+  const double res = g.resolution_m;
+  const double range = params_.gain_range_m;
+  const common::CellIndex c = map_.Cell(cell);
+  const common::Vector2 origin = g.CenterOf(c);
+  const Eigen::Vector3f ground = map_.Centroid(cell);
+  const float ground_z = std::isfinite(ground.z()) ? ground.z() : 0.f;
+  const Eigen::Vector3f scanner(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
+                                ground_z + static_cast<float>(params_.scanner_height_m));
+  const float occlusion = static_cast<float>(params_.occlusion_cnc);
+
+  // Visible cells: rays every ~0.7 cells of arc at the range's end, stepping half a cell.
+  const int rays = std::max(16, static_cast<int>(std::ceil(2.0 * kPi * range / (0.7 * res))));
+  const int steps = static_cast<int>(std::ceil(range / (0.5 * res)));
+  const double inv_res = 1.0 / res;
+  const double x0 = (origin.x() - g.origin.x_m) * inv_res;
+  const double y0 = (origin.y() - g.origin.y_m) * inv_res;
+  for (int r = 0; r < rays; ++r) {
+    const double angle = 2.0 * kPi * r / rays;
+    const double dx = 0.5 * std::cos(angle), dy = 0.5 * std::sin(angle);
+    for (int s = 0; s <= steps; ++s) {
+      const double fx = x0 + dx * s, fy = y0 + dy * s;
+      if (fx < 0.0 || fy < 0.0) break;
+      const int ix = static_cast<int>(fx), iy = static_cast<int>(fy);
+      if (ix >= g.size_x || iy >= g.size_y) break;
+      const int64_t i = ix + static_cast<int64_t>(iy) * g.size_x;
+      if (stamp_[i] != epoch_) {
+        stamp_[i] = epoch_;
+        visible_.push_back(i);
+      }
+      if (i != cell && map_.Explored(i) && map_.Navigability(i) < occlusion) break;
+    }
+  }
+
+  // Cells of the work area within range: the normaliser of A and Q.
+  const int reach = static_cast<int>(std::ceil(range * inv_res));
+  int64_t in_range = 0;
+  const int64_t reach2 = static_cast<int64_t>(std::floor(range * range * inv_res * inv_res));
+  for (int dy = std::max(-reach, -c.iy); dy <= std::min(reach, g.size_y - 1 - c.iy); ++dy) {
+    const int64_t row = static_cast<int64_t>(c.iy + dy) * g.size_x;
+    for (int dx = std::max(-reach, -c.ix); dx <= std::min(reach, g.size_x - 1 - c.ix); ++dx) {
+      if (static_cast<int64_t>(dx) * dx + static_cast<int64_t>(dy) * dy > reach2) continue;
+      in_range += map_.InWorkArea(row + c.ix + dx);
+    }
+  }
+  if (in_range == 0) return gains;
+
+  const double sin_pan = std::sin(params_.pan_step_rad);
+  const double sin_tilt = std::sin(params_.tilt_step_rad);
+  int64_t unexplored = 0;
+  double quality_sum = 0.0;
+  for (int64_t i : visible_) {
+    if (!map_.InWorkArea(i)) continue;
+    const int64_t ddx = i % g.size_x - c.ix, ddy = i / g.size_x - c.iy;
+    if (ddx * ddx + ddy * ddy > reach2) continue;
+    if (!map_.Explored(i)) {
+      ++unexplored;
+      continue;
+    }
+    // The quality a scan from here would give this cell: the area per point at its distance
+    // (r^2 sin(res_p) sin(res_t), what the mesh measures at normal incidence) against A_max,
+    // and the incidence on the cell's mean normal.
+    const Eigen::Vector3f to = map_.Centroid(i) - scanner;
+    const double r = to.norm();
+    if (!(r > 1e-6)) continue;
+    const double area = r * r * sin_pan * sin_tilt;
+    const double area_score = area <= params_.a_max_m2 ? 1.0 : params_.a_max_m2 / area;
+    const Eigen::Vector3f n = map_.MeanNormal(i);
+    const double incidence = n.squaredNorm() > 0.f ? std::abs(to.dot(n)) / r : 1.0;
+    const double expected =
+        CombineQuality(area_score, incidence, params_.w_a_quality, params_.w_n_quality);
+    quality_sum += std::max(0.0, expected - map_.Quality(i));
+  }
+  gains.info_gain = std::min(1.0, static_cast<double>(unexplored) / in_range);
+  gains.quality_gain = std::min(1.0, quality_sum / in_range);
+
+  double zone_total = 0.0, zone_sum = 0.0;
+  for (size_t z = 0; z < zones.size(); ++z) {
+    const InterestZone& zone = zones[z];
+    const double area = zone.normal.norm();
+    zone_total += area;
+    const Eigen::Vector3f to = zone.center_m - scanner;
+    const double d2 = to.head<2>().squaredNorm();
+    if (d2 > range * range || !(to.norm() > 1e-6)) continue;
+    const auto zone_cell = g.IndexOf({zone.center_m.x(), zone.center_m.y()});
+    if (!zone_cell || stamp_[map_.Linear(*zone_cell)] != epoch_) continue;
+    zone_sum += std::abs(to.normalized().dot(zone.normal));
+    gains.zones_seen.push_back(z);
+  }
+  gains.zone_gain = zone_total > 0.0 ? std::min(1.0, zone_sum / zone_total) : 0.0;
+  return gains;
+}
+
+NbvPlanner::NbvPlanner(const NbvParams& params) : params_(params), rng_(params.seed) {
+  params_.Validate();
+}
+
+const char* OutcomeName(NbvDecision::Outcome outcome) {
+  switch (outcome) {
+    case NbvDecision::Outcome::kGoTo:
+      return "go";
+    case NbvDecision::Outcome::kStopUtility:
+      return "stop";
+    case NbvDecision::Outcome::kNoCandidate:
+      return "no candidate";
+  }
+  return "?";
+}
+
+NbvDecision NbvPlanner::Decide(const InfoMap& map, const std::vector<InterestZone>& zones,
+                               const common::Vector2& robot_m) {
+  const auto robot_cell = map.geometry().IndexOf(robot_m);
+  if (!robot_cell) throw std::invalid_argument("nbv: the robot is off the information map");
+  NbvDecision decision;
+  decision.stop_threshold = StopThreshold(params_.weights.w_c, params_.d_max_m);
+  decision.global_quality = map.MeanQuality();
+  decision.coverage = map.Coverage();
+  const NavigationTree tree = BuildNavigationTree(map, map.Linear(*robot_cell), params_.safe_cnc);
+  const std::vector<int64_t> cells = SampleCandidates(map, params_, robot_m, &rng_);
+  ViewEvaluator evaluator(map, params_);
+  const bool greedy = params_.strategy == NbvStrategy::kGreedy;
+  int reachable = 0;
+  for (int64_t cell : cells) {
+    Candidate cand;
+    cand.cell = cell;
+    cand.position_m = map.geometry().CenterOf(map.Cell(cell));
+    cand.reachable = tree.Reachable(cell);
+    if (cand.reachable) {
+      ++reachable;
+      cand.path_cost = tree.cost[cell];
+      const ViewGains gains = evaluator.Evaluate(cell, zones);
+      cand.info_gain = gains.info_gain;
+      cand.quality_gain = gains.quality_gain;
+      cand.zone_gain = gains.zone_gain;
+      cand.utility = greedy ? cand.info_gain
+                            : Utility(params_.weights, cand.info_gain, cand.quality_gain,
+                                      cand.zone_gain, cand.path_cost);
+      const bool better =
+          !decision.best || cand.utility > decision.best->utility ||
+          (cand.utility == decision.best->utility && cand.path_cost < decision.best->path_cost);
+      if (better) decision.best = cand;
+    }
+    decision.candidates.push_back(cand);
+  }
+  char line[256];
+  if (!decision.best) {
+    decision.outcome = NbvDecision::Outcome::kNoCandidate;
+    std::snprintf(line, sizeof(line), "no reachable candidate (%zu sampled, %d reachable)",
+                  cells.size(), reachable);
+    decision.reason = line;
+    return decision;
+  }
+  const Candidate& best = *decision.best;
+  if (greedy) {
+    if (best.info_gain < params_.greedy_min_gain) {
+      decision.outcome = NbvDecision::Outcome::kStopUtility;
+      std::snprintf(line, sizeof(line), "greedy: the most new information is %.3f < %.3f",
+                    best.info_gain, params_.greedy_min_gain);
+    } else {
+      decision.outcome = NbvDecision::Outcome::kGoTo;
+      std::snprintf(line, sizeof(line), "greedy: most new information A %.3f at %.1f m",
+                    best.info_gain, best.path_cost);
+    }
+  } else if (best.utility < decision.stop_threshold &&
+             decision.global_quality >= params_.min_global_quality) {
+    decision.outcome = NbvDecision::Outcome::kStopUtility;
+    std::snprintf(line, sizeof(line), "best utility %.4f < C_p %.4f with quality %.3f >= %.3f",
+                  best.utility, decision.stop_threshold, decision.global_quality,
+                  params_.min_global_quality);
+  } else {
+    decision.outcome = NbvDecision::Outcome::kGoTo;
+    std::snprintf(line, sizeof(line), "u %.4f (A %.3f Q %.3f O %.3f C %.1f) of %d reachable",
+                  best.utility, best.info_gain, best.quality_gain, best.zone_gain, best.path_cost,
+                  reachable);
+  }
+  decision.reason = line;
+  return decision;
+}
+
+}  // namespace cairn::explore

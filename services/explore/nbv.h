@@ -1,0 +1,150 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "services/explore/info_map.h"
+#include "services/explore/interest_zone.h"
+
+/// @file
+/// Next-best-view (seed 002 §4.2–4.3): random candidates on safe cells, the navigation tree from
+/// the robot's cell, and for each reachable candidate c
+///
+///   u(c) = (w_A A(c) + w_Q Q(c) + w_O O(c)) / (w_C C(c))
+///
+/// with A the unexplored area it would see (2-D ray casting, occluded by cells whose C_nc is
+/// below occlusion_cnc), Q the quality it would add, O the occluded planes it would face and C
+/// the path cost. Exploration stops when the best u falls below C_p = 0.5 / (w_C d_max) once the
+/// mean quality has reached its minimum, or when no candidate is reachable. The greedy baseline
+/// (Koenig, Tovey and Halliburton) goes wherever A is largest.
+
+namespace cairn::explore {
+
+struct NbvWeights {
+  double w_a{0.43};  ///< information gain
+  double w_q{0.35};  ///< quality gain
+  double w_o{0.22};  ///< interest zones
+  double w_c{0.09};  ///< path cost, 1/m
+};
+
+enum class NbvStrategy { kUtility, kGreedy };
+
+struct NbvParams {
+  NbvStrategy strategy{NbvStrategy::kUtility};
+  NbvWeights weights;
+  double d_max_m{50.0};                ///< stop rule: C_p = 0.5 / (w_C d_max)
+  double min_global_quality{0.0};      ///< do not stop below this mean Q_a
+  double safe_cnc{0.7};                ///< candidates and path cells need C_nc above it
+  double candidate_spacing_m{3.0};     ///< candidates lie further apart (and from the robot)
+  int candidate_fraction{50};          ///< at most 1 / candidate_fraction of the safe cells
+  double candidate_clearance_m{0.45};  ///< every cell this near a candidate must be safe too
+  double occlusion_cnc{0.4};           ///< cells below it block the view
+  double gain_range_m{20.0};           ///< useful scanner radius for A, Q and O
+  double scanner_height_m{1.0};        ///< above the ground, for Q's distances
+  double pan_step_rad{0.5 * 3.14159265358979323846 / 180.0};
+  double tilt_step_rad{0.5 * 3.14159265358979323846 / 180.0};
+  double a_max_m2{0.0025};
+  double w_a_quality{0.93};      ///< the quality combination's area weight
+  double w_n_quality{0.07};      ///< and incidence weight
+  double greedy_min_gain{0.02};  ///< the greedy baseline stops below this A
+  uint64_t seed{1};
+
+  /// @throws std::invalid_argument naming the bad field.
+  void Validate() const;
+};
+
+/// A named preset of seed 002's tables 6-2, 6-4, 6-6, 6-8 and 6-9 (for example
+/// "simple-balanced", or "greedy" for the baseline), applied over `base`.
+/// @throws std::invalid_argument listing the known names for an unknown one.
+NbvParams NbvPreset(const std::string& name, NbvParams base = {});
+std::vector<std::string> NbvPresetNames();
+
+/// u(c) (eq. 2.3). A zero cost is floored at 1e-9.
+double Utility(const NbvWeights& w, double info_gain, double quality_gain, double zone_gain,
+               double path_cost);
+/// C_p (eq. 4.12).
+double StopThreshold(double w_c, double d_max_m);
+/// D(p)'s combination of an area and an incidence score (eq. 3.27).
+double CombineQuality(double area_score, double incidence_score, double w_a, double w_n);
+
+/// Least-cost tree over the info map from one cell: 4-neighbour steps cost
+/// cell_size / C_nc(child) and may only enter cells with C_nc > safe_cnc (the root may be
+/// anything). Dijkstra; the same costs as the thesis's wavefront with re-parenting.
+struct NavigationTree {
+  int64_t root{-1};
+  std::vector<float> cost;      ///< +inf where unreachable
+  std::vector<int64_t> parent;  ///< -1 at the root and where unreachable
+  bool Reachable(int64_t cell) const { return std::isfinite(cost[cell]); }
+  /// Cells from the root to `cell` (empty when unreachable).
+  std::vector<int64_t> PathTo(int64_t cell) const;
+};
+NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe_cnc);
+
+struct Candidate {
+  int64_t cell{-1};
+  common::Vector2 position_m{0.0, 0.0};
+  double info_gain{0.0};     ///< A in [0, 1]
+  double quality_gain{0.0};  ///< Q in [0, 1]
+  double zone_gain{0.0};     ///< O in [0, 1]
+  double path_cost{0.0};     ///< C, metres over C_nc
+  double utility{0.0};       ///< u (greedy: A)
+  bool reachable{false};
+};
+
+/// Safe cells at random (seeded by `rng`), pairwise further apart than the spacing, at most
+/// 1/candidate_fraction of the safe cells, inside the work area, with a safe clearance, and not
+/// within the spacing of the robot.
+std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& params,
+                                      const common::Vector2& robot_m, std::mt19937_64* rng);
+
+/// The gains of a view from `cell` (scanner at scanner_height_m above the cell's ground).
+struct ViewGains {
+  double info_gain{0.0};
+  double quality_gain{0.0};
+  double zone_gain{0.0};
+  std::vector<size_t> zones_seen;  ///< indices into the zone list
+};
+class ViewEvaluator {
+ public:
+  ViewEvaluator(const InfoMap& map, const NbvParams& params);
+  ViewGains Evaluate(int64_t cell, const std::vector<InterestZone>& zones);
+
+ private:
+  const InfoMap& map_;
+  NbvParams params_;
+  std::vector<uint32_t> stamp_;
+  uint32_t epoch_{0};
+  std::vector<int64_t> visible_;
+};
+
+struct NbvDecision {
+  enum class Outcome { kGoTo, kStopUtility, kNoCandidate };
+  Outcome outcome{Outcome::kNoCandidate};
+  std::optional<Candidate> best;
+  std::vector<Candidate> candidates;  ///< every sampled candidate, scored
+  double stop_threshold{0.0};         ///< C_p
+  double global_quality{0.0};
+  double coverage{0.0};
+  std::string reason;  ///< one line: why this outcome
+};
+
+class NbvPlanner {
+ public:
+  explicit NbvPlanner(const NbvParams& params);
+  /// One decision from the robot's position (which must lie on the map).
+  /// @throws std::invalid_argument when the robot is off the map.
+  NbvDecision Decide(const InfoMap& map, const std::vector<InterestZone>& zones,
+                     const common::Vector2& robot_m);
+  const NbvParams& params() const { return params_; }
+
+ private:
+  NbvParams params_;
+  std::mt19937_64 rng_;
+};
+
+const char* OutcomeName(NbvDecision::Outcome outcome);
+
+}  // namespace cairn::explore

@@ -1,0 +1,310 @@
+#include "services/explore/nbv.h"
+
+#include <cmath>
+#include <queue>
+#include <set>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "tests/unit/services/explore/explore_test_support.h"
+
+namespace cairn::explore {
+namespace {
+
+using testing::FillMap;
+using testing::SetCell;
+
+InfoMap OpenMap(double size_m, double cnc) {
+  InfoMapParams params;
+  params.margin_m = 0.0;
+  InfoMap map(RectangleWorkArea({0.0, 0.0}, {size_m, size_m}), params);
+  if (cnc > 0.0) FillMap(&map, cnc);
+  return map;
+}
+
+// Seed 002 test 15.
+TEST(NbvTest, UtilityAndStopRuleArithmetic) {
+  const NbvWeights w{0.43, 0.35, 0.22, 0.09};
+  EXPECT_NEAR(Utility(w, 0.6, 0.3, 0.1, 20.0), 0.385 / 1.8, 1e-12);
+  EXPECT_NEAR(Utility(w, 0.6, 0.3, 0.1, 20.0), 0.2139, 5e-5);
+  EXPECT_NEAR(StopThreshold(0.09, 50.0), 0.1111, 5e-5);
+  EXPECT_NEAR(StopThreshold(0.2, 25.0), 0.1, 1e-12);
+  // Ranking: with w_C = 0.2 a numerator of 0.5 at 5 m beats 0.9 at 20 m.
+  const NbvWeights near_w{1.0, 0.0, 0.0, 0.2};
+  EXPECT_NEAR(Utility(near_w, 0.5, 0, 0, 5.0), 0.5, 1e-12);
+  EXPECT_NEAR(Utility(near_w, 0.9, 0, 0, 20.0), 0.225, 1e-12);
+}
+
+TEST(NbvTest, QualityCombinationMatchesTheThesisNumbers) {
+  EXPECT_NEAR(CombineQuality(1, 1, 0.93, 0.07), 1.0, 1e-4);
+  EXPECT_NEAR(CombineQuality(1, 0, 0.93, 0.07), 0.9972, 1e-4);
+  EXPECT_NEAR(CombineQuality(0, 1, 0.93, 0.07), 0.0751, 1e-4);
+  EXPECT_NEAR(CombineQuality(0.5, 0.5, 0.93, 0.07), 0.5, 1e-4);
+  EXPECT_NEAR(CombineQuality(0.5, 1, 0.93, 0.07), 0.5042, 1e-4);
+}
+
+TEST(NbvTest, PresetsCarryTheThesisWeightsAndAnUnknownNameIsRefused) {
+  const NbvParams balanced = NbvPreset("simple-balanced");
+  EXPECT_DOUBLE_EQ(balanced.weights.w_a, 0.43);
+  EXPECT_DOUBLE_EQ(balanced.weights.w_c, 0.09);
+  EXPECT_EQ(NbvPreset("greedy").strategy, NbvStrategy::kGreedy);
+  EXPECT_DOUBLE_EQ(NbvPreset("unstructured-balanced").weights.w_c, 0.125);
+  EXPECT_DOUBLE_EQ(NbvPreset("structured-information").weights.w_c, 0.08);
+  EXPECT_GE(NbvPresetNames().size(), 8u);
+  try {
+    NbvPreset("fast");
+    FAIL() << "an unknown preset was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("simple-quality"), std::string::npos);
+  }
+  NbvParams bad;
+  bad.weights.w_c = 0.0;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+}
+
+// Seed 002 test 12.
+TEST(NbvTest, CandidatesAreSafeSpacedFewAndDeterministic) {
+  InfoMap map = OpenMap(30.0, 0.9);
+  // A band of unsafe cells.
+  for (int iy = 0; iy < map.size_y(); ++iy) SetCell(&map, map.Linear({50, iy}), 0.0);
+  NbvParams params;
+  std::mt19937_64 rng_a(7), rng_b(7), rng_c(8);
+  const common::Vector2 robot{1.0, 1.0};
+  const auto a = SampleCandidates(map, params, robot, &rng_a);
+  const auto b = SampleCandidates(map, params, robot, &rng_b);
+  const auto c = SampleCandidates(map, params, robot, &rng_c);
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
+  ASSERT_FALSE(a.empty());
+  int64_t safe = 0;
+  for (int64_t i = 0; i < map.num_cells(); ++i) safe += map.Navigability(i) > 0.7f;
+  EXPECT_LE(static_cast<int64_t>(a.size()), safe / 50);
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_GT(map.Navigability(a[i]), 0.7f);
+    const auto pi = map.geometry().CenterOf(map.Cell(a[i]));
+    EXPECT_GT((pi - robot).norm(), 3.0);
+    for (size_t j = i + 1; j < a.size(); ++j) {
+      EXPECT_GT((pi - map.geometry().CenterOf(map.Cell(a[j]))).norm(), 3.0);
+    }
+  }
+}
+
+// Seed 002 test 13.
+TEST(NbvTest, PathCostIsManhattanOverNavigability) {
+  const InfoMap open = OpenMap(6.0, 1.0);
+  const NavigationTree tree = BuildNavigationTree(open, open.Linear({2, 3}), 0.7);
+  EXPECT_NEAR(tree.cost[open.Linear({7, 10})], (5 + 7) * 0.3, 1e-4);
+  const auto path = tree.PathTo(open.Linear({7, 10}));
+  ASSERT_EQ(path.size(), 13u);
+  EXPECT_EQ(path.front(), open.Linear({2, 3}));
+  EXPECT_EQ(path.back(), open.Linear({7, 10}));
+
+  const InfoMap slow = OpenMap(6.0, 0.8);
+  const NavigationTree slow_tree = BuildNavigationTree(slow, slow.Linear({2, 3}), 0.7);
+  EXPECT_NEAR(slow_tree.cost[slow.Linear({7, 10})], 1.25 * (5 + 7) * 0.3, 1e-4);
+}
+
+TEST(NbvTest, AWallWithOneGapForcesThePathThroughTheGap) {
+  InfoMap map = OpenMap(6.0, 0.0);
+  for (int64_t i = 0; i < map.num_cells(); ++i) {
+    const auto c = map.Cell(i);
+    SetCell(&map, i, c.ix == 10 && c.iy != 15 ? 0.7 : 1.0);  // 0.7 is not > 0.7
+  }
+  const NavigationTree tree = BuildNavigationTree(map, map.Linear({2, 2}), 0.7);
+  const auto path = tree.PathTo(map.Linear({18, 2}));
+  ASSERT_FALSE(path.empty());
+  bool through_gap = false;
+  for (int64_t c : path) {
+    if (map.Cell(c).ix == 10) through_gap = map.Cell(c).iy == 15;
+  }
+  EXPECT_TRUE(through_gap);
+  EXPECT_NEAR(tree.cost[map.Linear({18, 2})], (16 + 2 * 13) * 0.3, 1e-3);
+}
+
+TEST(NbvTest, AnEnclosedRegionIsUnreachableAndItsCandidatesDropped) {
+  InfoMap map = OpenMap(15.0, 1.0);
+  // A ring of obstacle cells around (35..45)^2.
+  for (int k = 34; k <= 46; ++k) {
+    for (const common::CellIndex c : {common::CellIndex{k, 34}, common::CellIndex{k, 46},
+                                      common::CellIndex{34, k}, common::CellIndex{46, k}}) {
+      SetCell(&map, map.Linear(c), 0.0);
+    }
+  }
+  const NavigationTree tree = BuildNavigationTree(map, map.Linear({2, 2}), 0.7);
+  EXPECT_FALSE(tree.Reachable(map.Linear({40, 40})));
+  EXPECT_TRUE(tree.PathTo(map.Linear({40, 40})).empty());
+  EXPECT_TRUE(tree.Reachable(map.Linear({20, 20})));
+  NbvParams params;
+  params.candidate_fraction = 1;
+  params.candidate_spacing_m = 1.0;
+  NbvPlanner planner(params);
+  const NbvDecision d = planner.Decide(map, {}, {0.75, 0.75});
+  int inside = 0;
+  for (const Candidate& c : d.candidates) {
+    const auto cell = map.Cell(c.cell);
+    const bool enclosed = cell.ix > 34 && cell.ix < 46 && cell.iy > 34 && cell.iy < 46;
+    if (enclosed) {
+      ++inside;
+      EXPECT_FALSE(c.reachable);
+    }
+  }
+  EXPECT_GT(inside, 0);
+  ASSERT_TRUE(d.best);
+  EXPECT_TRUE(d.best->reachable);
+}
+
+TEST(NbvTest, TheTreeMatchesABellmanFordOnARandomMap) {
+  InfoMap map = OpenMap(6.0, 0.0);
+  std::mt19937_64 rng(3);
+  std::uniform_int_distribution<int> tenth(0, 10);
+  for (int64_t i = 0; i < map.num_cells(); ++i) SetCell(&map, i, tenth(rng) / 10.0);
+  const int64_t root = map.Linear({10, 10});
+  const NavigationTree tree = BuildNavigationTree(map, root, 0.7);
+  std::vector<double> cost(map.num_cells(), INFINITY);
+  cost[root] = 0.0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    for (int64_t i = 0; i < map.num_cells(); ++i) {
+      if (!std::isfinite(cost[i])) continue;
+      const auto c = map.Cell(i);
+      for (const common::CellIndex n :
+           {common::CellIndex{c.ix + 1, c.iy}, common::CellIndex{c.ix - 1, c.iy},
+            common::CellIndex{c.ix, c.iy + 1}, common::CellIndex{c.ix, c.iy - 1}}) {
+        if (!map.geometry().Contains(n)) continue;
+        const int64_t j = map.Linear(n);
+        if (!(map.Navigability(j) > 0.7f)) continue;
+        const double next = cost[i] + 0.3 / map.Navigability(j);
+        if (next < cost[j] - 1e-9) {
+          cost[j] = next;
+          changed = true;
+        }
+      }
+    }
+  }
+  for (int64_t i = 0; i < map.num_cells(); ++i) {
+    if (std::isfinite(cost[i])) {
+      EXPECT_NEAR(tree.cost[i], cost[i], 1e-4) << i;
+    } else {
+      EXPECT_FALSE(tree.Reachable(i)) << i;
+    }
+  }
+}
+
+// Seed 002 test 14.
+TEST(NbvTest, InformationGainCountsVisibleUnexploredCellsInTheWorkArea) {
+  InfoMapParams info;
+  info.margin_m = 0.0;
+  NbvParams params;
+  params.gain_range_m = 6.0;
+  {
+    InfoMap map(RectangleWorkArea({0, 0}, {30, 30}), info);
+    const int64_t c = map.Linear({50, 50});
+    SetCell(&map, c, 1.0);
+    ViewEvaluator eval(map, params);
+    EXPECT_NEAR(eval.Evaluate(c, {}).info_gain, 1.0, 0.01);
+    // A wall of obstacle cells through the candidate's neighbourhood (x = 15.15 m, the column
+    // beside it) hides the far half.
+    for (int iy = 0; iy < map.size_y(); ++iy) SetCell(&map, map.Linear({51, iy}), 0.0);
+    ViewEvaluator eval2(map, params);
+    EXPECT_NEAR(eval2.Evaluate(c, {}).info_gain, 0.5, 0.04);
+  }
+  {
+    InfoMap map(RectangleWorkArea({0, 0}, {30, 30}), info);
+    FillMap(&map, 1.0);
+    ViewEvaluator eval(map, params);
+    EXPECT_EQ(eval.Evaluate(map.Linear({50, 50}), {}).info_gain, 0.0);
+  }
+  {
+    // The work area is only the west half: the east half neither counts nor normalises.
+    InfoMapParams wide = info;
+    wide.margin_m = 15.0;
+    InfoMap map(RectangleWorkArea({0, 0}, {15.15, 30}), wide);
+    const auto c = *map.geometry().IndexOf({15.0, 15.0});
+    SetCell(&map, map.Linear(c), 1.0);
+    ViewEvaluator eval(map, params);
+    EXPECT_NEAR(eval.Evaluate(map.Linear(c), {}).info_gain, 1.0, 0.02);
+  }
+}
+
+TEST(NbvTest, QualityGainIsHigherNearPoorlyScannedCells) {
+  InfoMap map = OpenMap(30.0, 0.0);
+  FillMap(&map, 1.0, 0.2f);
+  NbvParams params;
+  ViewEvaluator eval(map, params);
+  const double poor = eval.Evaluate(map.Linear({50, 50}), {}).quality_gain;
+  EXPECT_GT(poor, 0.1);
+  InfoMap good = OpenMap(30.0, 0.0);
+  FillMap(&good, 1.0, 1.0f);
+  ViewEvaluator eval_good(good, params);
+  EXPECT_EQ(eval_good.Evaluate(good.Linear({50, 50}), {}).quality_gain, 0.0);
+}
+
+TEST(NbvTest, ZoneGainCountsVisibleZonesFacingTheView) {
+  InfoMap map = OpenMap(30.0, 0.0);
+  for (int64_t i = 0; i < map.num_cells(); ++i) SetCell(&map, i, map.Cell(i).ix == 60 ? 0.0 : 1.0);
+  NbvParams params;
+  InterestZone facing;
+  facing.center_m = {17.f, 15.f, 1.f};
+  facing.normal = {-2.f, 0.f, 0.f};  // faces west, towards the candidate at x = 15
+  facing.area_m2 = 2.f;
+  InterestZone edge_on = facing;
+  edge_on.normal = {0.f, 2.f, 0.f};
+  const auto c = *map.geometry().IndexOf({15.0, 15.0});
+  ViewEvaluator eval(map, params);
+  EXPECT_GT(eval.Evaluate(map.Linear(c), {facing}).zone_gain, 0.9);
+  EXPECT_LT(eval.Evaluate(map.Linear(c), {edge_on}).zone_gain, 0.1);
+  // Hidden behind the wall of obstacle cells at x = 18 m: not counted.
+  InterestZone behind = facing;
+  behind.center_m.x() = 22.f;
+  ViewEvaluator eval2(map, params);
+  const ViewGains hidden = eval2.Evaluate(map.Linear(c), {behind});
+  EXPECT_EQ(hidden.zone_gain, 0.0);
+  EXPECT_TRUE(hidden.zones_seen.empty());
+}
+
+TEST(NbvTest, TheDecisionStopsWhenNothingIsWorthTheTrip) {
+  // Fully explored at top quality: the best utility is 0 < C_p.
+  InfoMap done = OpenMap(30.0, 0.0);
+  FillMap(&done, 1.0, 1.0f);
+  NbvPlanner planner(NbvPreset("simple-balanced"));
+  const NbvDecision d = planner.Decide(done, {}, {15.0, 15.0});
+  EXPECT_EQ(d.outcome, NbvDecision::Outcome::kStopUtility) << d.reason;
+  // Below the minimum global quality it keeps going.
+  NbvParams strict = NbvPreset("simple-balanced");
+  strict.min_global_quality = 0.9;
+  InfoMap poor = OpenMap(30.0, 0.0);
+  FillMap(&poor, 1.0, 0.5f);
+  NbvPlanner strict_planner(strict);
+  EXPECT_EQ(strict_planner.Decide(poor, {}, {15.0, 15.0}).outcome, NbvDecision::Outcome::kGoTo);
+  // No safe cell at all: no candidate.
+  InfoMap blocked = OpenMap(30.0, 0.0);
+  NbvPlanner p2(NbvParams{});
+  EXPECT_EQ(p2.Decide(blocked, {}, {15.0, 15.0}).outcome, NbvDecision::Outcome::kNoCandidate);
+  EXPECT_THROW(p2.Decide(blocked, {}, {-50.0, 15.0}), std::invalid_argument);
+}
+
+TEST(NbvTest, GreedyPicksTheMostNewInformationAndUtilityWeighsTheTrip) {
+  // Explored safe ground everywhere except an unexplored block in the far corner; the robot at
+  // the other corner. Greedy goes next to the block whatever the distance.
+  InfoMapParams info;
+  info.margin_m = 0.0;
+  InfoMap map(RectangleWorkArea({0, 0}, {30, 30}), info);
+  for (int64_t i = 0; i < map.num_cells(); ++i) {
+    const auto c = map.Cell(i);
+    if (c.ix >= 75 && c.iy >= 75) continue;
+    SetCell(&map, i, 1.0, 1.0f);
+  }
+  NbvParams greedy = NbvPreset("greedy");
+  greedy.candidate_fraction = 5;
+  NbvPlanner planner(greedy);
+  const NbvDecision d = planner.Decide(map, {}, {2.0, 2.0});
+  ASSERT_EQ(d.outcome, NbvDecision::Outcome::kGoTo) << d.reason;
+  double max_info = 0.0;
+  for (const Candidate& c : d.candidates) max_info = std::max(max_info, c.info_gain);
+  EXPECT_DOUBLE_EQ(d.best->info_gain, max_info);
+  EXPECT_GT(d.best->position_m.x() + d.best->position_m.y(), 30.0);
+}
+
+}  // namespace
+}  // namespace cairn::explore
