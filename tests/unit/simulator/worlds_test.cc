@@ -40,10 +40,12 @@ TEST_F(WorldsTest, EveryShippedWorldHostsEveryRobot) {
   for (const std::string& world : paths.ShippedWorlds()) {
     Scenario s = WorldOnly(world);
     SpawnPose at;
-    // Free floor in each world (the apartment's living room, the arena's hall).
+    // Free floor in each world (the apartment's living room, the arena's hall, the room's
+    // middle; the outdoor start area).
     const bool lanes = world == "tunnel" || world == "terraces";
-    at.x_m = lanes ? 4.0 : world == "apartment" ? 1.5 : world == "arena" ? 5.0 : 0.0;
-    at.y_m = lanes ? 6.0 : world == "apartment" ? 2.5 : world == "arena" ? 4.0 : 0.0;
+    const bool room = world == "room";
+    at.x_m = lanes ? 4.0 : world == "apartment" ? 1.5 : world == "arena" ? 5.0 : room ? 1.0 : 0.0;
+    at.y_m = lanes ? 6.0 : world == "apartment" ? 2.5 : world == "arena" ? 4.0 : room ? 2.0 : 0.0;
     int k = 0;
     for (const std::string& model : paths.ShippedRobots()) {
       SpawnPose p = at;
@@ -219,7 +221,7 @@ TEST_F(WorldsTest, ArenaHasRoomsAndClutter) {
   EXPECT_NEAR(SurfaceZ(sim, 6.0, 6.07), 1.0, 1e-9);  // the wall between hall and rooms
   EXPECT_NEAR(SurfaceZ(sim, 3.0, 6.07), 0.0, 1e-9);  // its doorway
   EXPECT_NEAR(SurfaceZ(sim, 9.5, 8.5), 0.76, 1e-9);  // the table
-  EXPECT_NEAR(SurfaceZ(sim, 1.5, 2.5), 0.4, 1e-9);  // a ball (r 0.2 m)
+  EXPECT_NEAR(SurfaceZ(sim, 1.5, 2.5), 0.4, 1e-9);   // a ball (r 0.2 m)
   EXPECT_NEAR(SurfaceZ(sim, 3.7, 0.7), 0.45, 1e-9);  // the armchair seat
 }
 
