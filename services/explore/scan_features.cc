@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "services/explore/field_checks.h"
 #include <Eigen/Geometry>
 
 namespace cairn::explore {
@@ -22,18 +23,8 @@ constexpr double kMinHorizontalDistanceM = 1e-3;
 // Largest local-ground grid side (cells): 60 m at 0.5 m is 240.
 constexpr double kMaxGroundGridSide = 8192;
 
-template <typename T>
-[[noreturn]] void Fail(const char* field, const char* rule, const T& got) {
-  std::ostringstream msg;
-  msg << field << " " << rule << ", got " << got;
-  throw std::invalid_argument(msg.str());
-}
-
-// Throws std::invalid_argument "<field> <rule>, got <got>" unless ok.
-template <typename T>
-void Require(bool ok, const char* field, const char* rule, const T& got) {
-  if (!ok) Fail(field, rule, got);
-}
+using internal::Fail;
+using internal::Require;
 
 bool FiniteNonNegative(double v) { return std::isfinite(v) && v >= 0.0; }
 bool FinitePositive(double v) { return std::isfinite(v) && v > 0.0; }

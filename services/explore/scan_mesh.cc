@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "services/explore/field_checks.h"
 #include <Eigen/Geometry>
 
 namespace cairn::explore {
@@ -16,18 +17,8 @@ namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
-template <typename T>
-[[noreturn]] void Fail(const char* field, const char* rule, const T& got) {
-  std::ostringstream msg;
-  msg << field << " " << rule << ", got " << got;
-  throw std::invalid_argument(msg.str());
-}
-
-// Throws std::invalid_argument "<field> <rule>, got <got>" unless ok.
-template <typename T>
-void Require(bool ok, const char* field, const char* rule, const T& got) {
-  if (!ok) Fail(field, rule, got);
-}
+using internal::Fail;
+using internal::Require;
 
 bool FinitePositive(double v) { return std::isfinite(v) && v > 0.0; }
 
