@@ -268,11 +268,14 @@ void ExplorerService::Tick() {
            " s) is over");
     return;
   }
-  common::GridMap map(snapshot->geometry());
-  map.AddLayer(kCostLayer, common::Layer(snapshot->cost()));
+  if (snapshot != grid_source_) {  // a new snapshot: its cost layer as the frontiers' grid
+    grid_source_ = snapshot;
+    grid_ = common::GridMap(snapshot->geometry());
+    grid_.AddLayer(kCostLayer, common::Layer(snapshot->cost()));
+  }
   FrontierAction action;
   try {
-    action = frontier_.Tick(&map, kCostLayer, robot_xy_, now_s);
+    action = frontier_.Tick(&grid_, kCostLayer, robot_xy_, now_s);
   } catch (const std::invalid_argument& e) {
     // The robot off the known grid (the map has not reached it yet): wait.
     node_.Warn("frontier", std::string("no frontier choice: ") + e.what());

@@ -10,6 +10,7 @@
 #include "cairn/lcmt_nav_status.hpp"
 #include "cairn/lcmt_pose.hpp"
 
+#include "common/grid_map.h"
 #include "common/robot_profile.h"
 #include "planner/lcm/lcm_map_client.h"
 #include "services/explore/explorer_config.h"
@@ -69,6 +70,8 @@ class ExplorerService {
   StatelessExplorer stateless_;
   FrontierExplorer frontier_;
   std::unique_ptr<planner::LcmMapClient> map_client_;
+  std::shared_ptr<const planner::CostMap> grid_source_;  ///< the snapshot grid_ was made from
+  common::GridMap grid_;
   cairn::lcmt_explore_status status_{};
   std::optional<double> start_s_;
   std::optional<double> last_scan_node_s_;
