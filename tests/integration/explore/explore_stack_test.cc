@@ -398,14 +398,15 @@ TEST(ExploreStackTest, TenMinutesOfReactiveStatelessAndFrontierExplorationInTheA
   EXPECT_GE(reactive_eval.coverage, 0.8);
 
   // Test 38: the stateful explorer covers about what the stateless baseline covers, and gets
-  // stuck less. The laser's 5.6 m reach sees most of the 12 x 10 m arena from anywhere: in four
+  // stuck no more. The laser's 5.6 m reach sees most of the 12 x 10 m arena from anywhere: in six
   // runs both mapped 84 to 98 % of the reachable floor, and which of the two came out ahead by a
   // point or two was chance (the simulator and the processes are not in lockstep), so coverage
-  // is compared within 5 points. Being stuck is where they differ every time: the baseline
-  // swings between sides in front of an obstacle and stays put (8 to 18 of the twenty 30 s
-  // windows within 1 m of where they began), which direction memory and reverse prevent (0).
+  // is compared within 5 points. Being stuck is where they differ: in five of those runs the
+  // baseline swung between sides in front of an obstacle and stayed put (8 to 18 of the twenty
+  // 30 s windows within 1 m of where they began), in one it wandered free (0); the stateful
+  // explorer, with direction memory and reverse, was stuck in none.
   EXPECT_GE(reactive_eval.coverage, stateless_eval.coverage - 0.05);
-  EXPECT_LT(reactive.trapped_windows, stateless.trapped_windows);
+  EXPECT_LE(reactive.trapped_windows, stateless.trapped_windows);
   EXPECT_LE(reactive.trapped_windows, 2);
 
   // The frontier mode covers more than the reactive mode in the same time (it stops earlier,
