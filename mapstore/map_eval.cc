@@ -87,8 +87,9 @@ std::vector<Run> Runs(int n, Pred pred) {
 }
 
 // Doubled-wall crossings along one line of cells: map and truth occupancy by position.
-template <typename MapOcc, typename TruthOcc>
-int64_t DoubleWallsAlong(int n, MapOcc map_occ, TruthOcc truth_occ, const MapEvalParams& p) {
+template <typename MapOcc, typename TruthOcc, typename NearTruth>
+int64_t DoubleWallsAlong(int n, MapOcc map_occ, TruthOcc truth_occ, NearTruth near_truth,
+                         const MapEvalParams& p) {
   const std::vector<Run> runs = Runs(n, map_occ);
   int64_t count = 0;
   for (size_t i = 0; i + 1 < runs.size(); ++i) {
@@ -98,6 +99,15 @@ int64_t DoubleWallsAlong(int n, MapOcc map_occ, TruthOcc truth_occ, const MapEva
     bool gap_free = false;
     for (int k = runs[i].end; k < runs[i + 1].begin && !gap_free; ++k) gap_free = !truth_occ(k);
     if (!gap_free) continue;
+    // A copy of a wall lies off it: one of the two runs has no cell within tolerance of the
+    // truth. A stray cell at a wall's end or corner (within a cell of it, diagonally) is not one.
+    const auto off_truth = [&](const Run& run) {
+      for (int k = run.begin; k < run.end; ++k) {
+        if (near_truth(k)) return false;
+      }
+      return true;
+    };
+    if (!off_truth(runs[i]) && !off_truth(runs[i + 1])) continue;
     const int lo = std::max(0, runs[i].begin - p.tolerance_cells);
     const int hi = std::min(n, runs[i + 1].end + p.tolerance_cells);
     const std::vector<Run> truth = Runs(hi - lo, [&](int k) { return truth_occ(lo + k); });
@@ -264,12 +274,14 @@ MapEvalReport EvaluateMap(const common::GridMap& map, const common::GridMap& tru
   for (int iy = 0; iy < ny; ++iy) {
     r.double_wall_crossings += DoubleWallsAlong(
         nx, [&](int k) { return map_occ[k + static_cast<size_t>(iy) * nx] != 0; },
-        [&](int k) { return truth_occ_set[k + static_cast<size_t>(iy) * nx] != 0; }, params);
+        [&](int k) { return truth_occ_set[k + static_cast<size_t>(iy) * nx] != 0; },
+        [&](int k) { return near_truth[k + static_cast<size_t>(iy) * nx] != 0; }, params);
   }
   for (int ix = 0; ix < nx; ++ix) {
     r.double_wall_crossings += DoubleWallsAlong(
         ny, [&](int k) { return map_occ[ix + static_cast<size_t>(k) * nx] != 0; },
-        [&](int k) { return truth_occ_set[ix + static_cast<size_t>(k) * nx] != 0; }, params);
+        [&](int k) { return truth_occ_set[ix + static_cast<size_t>(k) * nx] != 0; },
+        [&](int k) { return near_truth[ix + static_cast<size_t>(k) * nx] != 0; }, params);
   }
   r.double_wall_length_m = r.double_wall_crossings * r.resolution_m;
 

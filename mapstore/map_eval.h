@@ -36,8 +36,10 @@
 /// - double walls: along every row and column, two consecutive map-occupied runs separated by
 ///   double_wall_min_gap_cells..double_wall_max_gap_cells non-occupied cells, where the truth
 ///   over the stretch from the first run's start to the second run's end (widened by
-///   tolerance_cells) holds exactly one occupied run and some cell of the gap is truth-free:
-///   one wall mapped twice (the two faces of a thin wall whose inside was never seen are not).
+///   tolerance_cells) holds exactly one occupied run, some cell of the gap is truth-free and one
+///   of the two runs lies wholly off the truth (no cell within tolerance_cells of it): one wall
+///   mapped twice. The two faces of a thin wall whose inside was never seen are not, and neither
+///   is a stray cell within a cell of a wall's end or corner.
 ///   Counted per crossing (a doubled wall n cells long crossed by n rows or columns counts n);
 /// - elevation (when the map has `elevation` and the truth `truth/ground`): map − truth on the
 ///   truth-free cells both know (the ground is what a mapper measures there).

@@ -156,6 +156,24 @@ TEST(MapEvalTest, DoubledWall) {
   EXPECT_EQ(EvaluateMap(FieldMap({10, 13}), FieldTruth({10, 11, 12, 13}), At(0.05, 0.05))
                 .double_wall_crossings,
             0);
+  // A second wall (column 14) ending at row 10, and a stray cell diagonally past its end,
+  // (13, 11): row 11 crosses column 10 and the stray cell 2 cells apart over free truth, but
+  // both lie on the truth within a cell. Moved a cell further off, (13, 12), it is a copy.
+  {
+    common::GridMap truth = FieldTruth({10});
+    common::GridMap map = FieldMap({10});
+    for (int iy = 2; iy <= 10; ++iy) {
+      truth.at(kTruthOccupied)(14, iy) = 1.f;
+      map.at(layers::kOccupancy)(14, iy) = 100.f;
+    }
+    map.at(layers::kOccupancy)(13, 11) = 100.f;
+    const MapEvalReport stray = EvaluateMap(map, truth, At(0.05, 0.05));
+    EXPECT_DOUBLE_EQ(stray.occupied_precision, 1.0);
+    EXPECT_EQ(stray.double_wall_crossings, 0);
+    map.at(layers::kOccupancy)(13, 11) = 0.f;
+    map.at(layers::kOccupancy)(13, 12) = 100.f;
+    EXPECT_EQ(EvaluateMap(map, truth, At(0.05, 0.05)).double_wall_crossings, 1);
+  }
   // Gap limits are params.
   MapEvalParams wide = At(0.05, 0.05);
   wide.double_wall_max_gap_cells = 7;
