@@ -333,6 +333,19 @@ const SimSensor* MujocoSim::sensor(const std::string& robot, const std::string& 
   return nullptr;
 }
 
+Status MujocoSim::TriggerSensor(const std::string& robot, const std::string& sensor) {
+  if (!HasRobot(robot)) return common::NotFoundError("no robot '" + robot + "'");
+  Robot& r = FindRobot(robot);
+  for (size_t i = 0; i < r.sensors.size(); ++i) {
+    if (r.sensor_names[i] != sensor) continue;
+    const Status status = r.sensors[i]->Trigger(data_->time);
+    if (status.ok()) return status;
+    return Status(status.code(),
+                  "robot '" + robot + "', sensor '" + sensor + "': " + status.message());
+  }
+  return common::NotFoundError("robot '" + robot + "' has no sensor '" + sensor + "'");
+}
+
 Pose3 MujocoSim::RobotPose(const std::string& id) const {
   const Robot& r = FindRobot(id);
   const double* q = data_->qpos + r.qpos_adr;

@@ -90,6 +90,11 @@ class MujocoSim {
   const S* FindSensor(const std::string& robot) const {
     return dynamic_cast<const S*>(sensor(robot, S::kName));
   }
+  /// Asks the robot's sensor of kind `sensor` for readings now (SimSensor::Trigger at the
+  /// current sim time; the turret with `on_request` then makes one full sweep). kNotFound for
+  /// an unknown robot or a robot without that sensor, else the sensor's answer (kInvalidArgument
+  /// for a kind without an on-request mode), its message led by "robot 'r', sensor 'k': ".
+  common::Status TriggerSensor(const std::string& robot, const std::string& sensor);
 
   // --- objects and doors -----------------------------------------------------------------------
   /// Places a new object (from the spawn pool). kAlreadyExists for a used name,

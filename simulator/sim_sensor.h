@@ -7,6 +7,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include "common/status.h"
 #include "common/types.h"
 #include "simulator/noise.h"
 #include "simulator/scene_rays.h"
@@ -23,6 +24,9 @@
 ///   - `using Reading = ...`: what it appends to SimOutputs under kName;
 ///   - a constructor `(const Params&, const SensorContext&)` that finds what it needs in the
 ///     model (sites, MuJoCo sensors) and throws std::invalid_argument when it is missing.
+/// Optionally, a sensor that can take readings on request overrides `Trigger(now_s)` (the
+/// default refuses with kInvalidArgument); MujocoSim::TriggerSensor and SIM.CONTROL's
+/// OP_TRIGGER_SENSOR reach it by robot and kind name.
 /// It is registered by name in sensor_registry.cc (BuiltinSensors) and, for cairn-sim to
 /// publish it, in simulator/lcm/sensor_publishers.cc.
 
@@ -96,6 +100,13 @@ class SimSensor {
   virtual void OnStep(const StepMotion& /*motion*/) {}
   /// The robot was put at (x, y, yaw) with its base at height z_m (spawn or reset).
   virtual void OnPlaced(const common::Pose2& /*pose*/, double /*z_m*/) {}
+  /// Asks for readings now (sim time now_s, between physics steps): a sensor with an
+  /// on-request mode arms it and says Due from the next reading time after now_s on. The
+  /// default refuses: kInvalidArgument "no on-request mode" (MujocoSim::TriggerSensor names the
+  /// robot and the kind in front of the message).
+  virtual common::Status Trigger(double /*now_s*/) {
+    return common::InvalidArgumentError("no on-request mode");
+  }
 };
 
 /// Periodic timing: reading n falls due at n / rate_hz (n = 1, 2, ...), computed from integers
@@ -108,6 +119,16 @@ struct SensorSchedule {
   /// Counts every reading due by now_s (a slow step never makes a burst of readings).
   void Advance(double now_s) {
     while (Due(now_s)) ++count;
+  }
+  /// The same without a loop over the readings passed (after a long idle time): afterwards
+  /// the next reading falls due at the first reading time after now_s. Never moves back.
+  void SkipTo(double now_s) {
+    const double due_by = now_s + 1e-9;
+    int64_t n = static_cast<int64_t>(std::floor(due_by * rate_hz));
+    // Settle rounding with the very comparison Due() makes.
+    while (n > 0 && static_cast<double>(n) / rate_hz > due_by) --n;
+    while (static_cast<double>(n + 1) / rate_hz <= due_by) ++n;
+    if (n > count) count = n;
   }
 };
 

@@ -56,6 +56,8 @@ const char* OpName(int8_t op) {
       return "set speed";
     case Request::OP_LIST:
       return "list";
+    case Request::OP_TRIGGER_SENSOR:
+      return "trigger sensor";
     default:
       return "unknown";
   }
@@ -233,6 +235,15 @@ std::pair<common::Status, std::string> SimService::Apply(const Request& msg) {
       Reanchor();
       return {common::Status::Ok(), msg.speed == 0.0 ? std::string("speed set to max")
                                                      : "speed set to " + std::to_string(msg.speed)};
+    case Request::OP_TRIGGER_SENSOR: {
+      // "<robot>/<sensor>", split at the first '/'.
+      const size_t slash = name.find('/');
+      if (slash == std::string::npos || slash == 0 || slash + 1 == name.size()) {
+        return {common::InvalidArgumentError("trigger sensor: name must be <robot>/<sensor>"), ""};
+      }
+      return {sim_.TriggerSensor(name.substr(0, slash), name.substr(slash + 1)),
+              "triggered " + name};
+    }
     default:
       return {common::InvalidArgumentError("unknown op " + std::to_string(msg.op)), ""};
   }

@@ -36,6 +36,7 @@ TurretParams LoadTurretParams(common::YamlMap& map, const TurretParams& defaults
   map.Get("pan_range_deg", &p.pan_range_deg);
   map.Get("range_noise_sigma_m", &p.range_noise_sigma_m);
   map.Get("mount_site", &p.mount_site);
+  map.Get("on_request", &p.on_request);
   FinishSensorParams(map, p);
   return p;
 }
@@ -62,11 +63,28 @@ TurretSensor::TurretSensor(const TurretParams& params, const SensorContext& cont
   schedule_.rate_hz = params.line_rate_hz;
 }
 
+common::Status TurretSensor::Trigger(double now_s) {
+  if (!params_.on_request) return common::Status::Ok();
+  // The first line comes at the first line time after now_s, however long it was idle.
+  schedule_.SkipTo(now_s);
+  sweep_step_ = 0;
+  return common::Status::Ok();
+}
+
 void TurretSensor::Produce(const SensorFrame& frame, SimOutputs* out) {
   schedule_.Advance(frame.now_s);
   const TurretParams& p = params_;
-  const int64_t line = schedule_.count - 1;
-  const int step = static_cast<int>(line % pan_steps_);
+  int64_t line = 0;
+  int step = 0;
+  if (p.on_request) {
+    if (sweep_step_ < 0) return;  // idle (not due)
+    line = lines_++;
+    step = sweep_step_++;
+    if (sweep_step_ >= pan_steps_) sweep_step_ = -1;
+  } else {
+    line = schedule_.count - 1;
+    step = static_cast<int>(line % pan_steps_);
+  }
   const double pan = step * p.pan_step_deg * M_PI / 180.0;
   const common::Pose3 mount = SitePose(frame.data, site_);
   common::Pose3 sensor;

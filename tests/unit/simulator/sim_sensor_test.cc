@@ -122,6 +122,11 @@ TEST_F(SimSensorSeamTest, ASensorSetInCodeNeedsNoRegistry) {
   while (sim.time_s() < 0.5 - 1e-9) sim.Step(&out);
   EXPECT_EQ(out.Readings<RangefinderSensor>().size(), 5u);
   EXPECT_EQ(sim.FindSensor<PlanarLaserSensor>("r"), nullptr);
+  // A sensor that does not override Trigger has no on-request mode: the default refuses, and
+  // the simulator names the robot and the kind.
+  const common::Status trigger = sim.TriggerSensor("r", "rangefinder");
+  EXPECT_EQ(trigger.code(), common::StatusCode::kInvalidArgument);
+  EXPECT_EQ(trigger.message(), "robot 'r', sensor 'rangefinder': no on-request mode");
 }
 
 TEST_F(SimSensorSeamTest, ItsMistakesAreReportedLikeAnyOther) {
@@ -165,6 +170,39 @@ TEST(SensorScheduleTest, ReadingsFallDueAtMultiplesOfThePeriodWithoutBursts) {
   schedule.count = 1000000;
   EXPECT_TRUE(schedule.Due(20000.02));
   EXPECT_FALSE(schedule.Due(20000.0199));
+}
+
+TEST(SensorScheduleTest, SkipToPassesEveryReadingDueWithoutProducingThem) {
+  SensorSchedule schedule;
+  schedule.rate_hz = 50.0;
+  schedule.SkipTo(0.0);
+  EXPECT_EQ(schedule.count, 0);
+  schedule.SkipTo(0.05);  // readings 1 and 2 (0.02, 0.04) passed; the next at 0.06
+  EXPECT_EQ(schedule.count, 2);
+  EXPECT_FALSE(schedule.Due(0.0599));
+  EXPECT_TRUE(schedule.Due(0.06));
+  // On a reading time that reading counts as passed: the next is one period later.
+  schedule.SkipTo(0.1);
+  EXPECT_EQ(schedule.count, 5);
+  EXPECT_FALSE(schedule.Due(0.1));
+  // The same count as Advance after a long idle time, however large; never backwards.
+  SensorSchedule advanced = schedule;
+  advanced.Advance(3600.02);
+  schedule.SkipTo(3600.02);
+  EXPECT_EQ(schedule.count, advanced.count);
+  EXPECT_EQ(schedule.count, 180001);
+  schedule.SkipTo(1.0);
+  EXPECT_EQ(schedule.count, 180001);
+  // Rates whose periods are not exact in binary agree with Due too.
+  for (double rate : {3.0, 7.0, 1250.0, 0.3}) {
+    for (double t : {0.1, 1.0 / 3.0, 2.0 / 7.0, 10.0 / 3.0, 12.345}) {
+      SensorSchedule a, b;
+      a.rate_hz = b.rate_hz = rate;
+      a.Advance(t);
+      b.SkipTo(t);
+      EXPECT_EQ(a.count, b.count) << rate << " " << t;
+    }
+  }
 }
 
 }  // namespace

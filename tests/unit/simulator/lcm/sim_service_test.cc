@@ -32,7 +32,7 @@ class SimServiceTest : public testing::SimTest {
   void SetUp() override {
     SimTest::SetUp();
     Scenario s = InlineScenario(FlatWorld(), "r", "pioneer3at");
-    s.robots[0].sensors.Set<TurretSensor>(TurretParams{});
+    s.robots[0].sensors.Set<TurretSensor>(Turret());
     sim_ = std::make_unique<MujocoSim>(s);
     runtime::NodeOptions options;
     options.process_name = "cairn-sim";
@@ -49,6 +49,9 @@ class SimServiceTest : public testing::SimTest {
     node_->Subscribe<Reply>(channels::kSimControlReply,
                             [this](const Reply& reply) { replies_.push_back(reply); });
   }
+
+  /// The robot's turret (continuous by default).
+  virtual TurretParams Turret() const { return TurretParams{}; }
 
   Reply Send(Request request) {
     request.requester = "test";
@@ -218,6 +221,56 @@ TEST_F(SimServiceTest, PausedSimulationStandsStill) {
   Send(speed);
   dut_->RunOnce(1);
   EXPECT_GT(sim_->physics_steps(), steps);
+}
+
+TEST_F(SimServiceTest, TriggerSensorParsesRobotSlashSensor) {
+  // A continuous turret accepts the trigger (and sweeps on as before).
+  Reply reply = Send(Make(Request::OP_TRIGGER_SENSOR, "r/turret", 1));
+  EXPECT_EQ(reply.status, +Reply::STATUS_OK) << reply.message;
+  EXPECT_EQ(reply.message, "triggered r/turret");
+  int64_t id = 2;
+  for (const char* bad : {"r", "", "/turret", "r/", "/"}) {
+    reply = Send(Make(Request::OP_TRIGGER_SENSOR, bad, id++));
+    EXPECT_EQ(reply.status, +Reply::STATUS_INVALID) << "'" << bad << "': " << reply.message;
+  }
+  EXPECT_EQ(node_->counter("bad_control_requests"), 5);
+  for (const char* missing : {"nobody/turret", "r/sonar", "r/turret/x"}) {
+    reply = Send(Make(Request::OP_TRIGGER_SENSOR, missing, id++));
+    EXPECT_EQ(reply.status, +Reply::STATUS_NOT_FOUND) << missing << ": " << reply.message;
+  }
+  // A sensor kind without an on-request mode.
+  reply = Send(Make(Request::OP_TRIGGER_SENSOR, "r/planar_laser", id++));
+  EXPECT_EQ(reply.status, +Reply::STATUS_INVALID) << reply.message;
+  EXPECT_NE(reply.message.find("no on-request mode"), std::string::npos) << reply.message;
+}
+
+class SimServiceOnRequestTest : public SimServiceTest {
+ protected:
+  TurretParams Turret() const override {
+    TurretParams turret;
+    turret.pan_range_deg = 10.0;  // 20 lines a sweep
+    turret.pan_step_deg = 0.5;
+    turret.on_request = true;
+    return turret;
+  }
+};
+
+TEST_F(SimServiceOnRequestTest, TriggeredTurretPublishesOneSweep) {
+  std::vector<cairn::lcmt_laser_scan> lines;
+  node_->Subscribe<cairn::lcmt_laser_scan>(
+      "r.TURRET_SCAN", [&](const cairn::lcmt_laser_scan& m) { lines.push_back(m); });
+  dut_->StepAndPublish(250);  // 0.5 s: idle
+  dut_->HandlePending();
+  EXPECT_TRUE(lines.empty());
+  const Reply reply = Send(Make(Request::OP_TRIGGER_SENSOR, "r/turret", 1));
+  ASSERT_EQ(reply.status, +Reply::STATUS_OK) << reply.message;
+  dut_->StepAndPublish(500);  // 1 s: one 0.4 s sweep
+  dut_->HandlePending();
+  ASSERT_EQ(lines.size(), 20u);
+  for (size_t k = 0; k < lines.size(); ++k) {
+    EXPECT_NEAR(lines[k].turret_angle_rad, k * 0.5 * M_PI / 180.0, 1e-6) << k;
+  }
+  EXPECT_GT(lines.front().utime, 500000);
 }
 
 TEST(ParseSpeedTest, AcceptsMaxAndNonNegativeNumbers) {
