@@ -108,6 +108,16 @@ void DrawOverlay(const common::GridMap& map, const PngOverlay& overlay, int scal
     const auto b = to_pixel(overlay.path_m[i]);
     canvas->Line(a.first, a.second, b.first, b.second, kPath, 3);
   }
+  for (const auto& m : overlay.markers) {
+    const auto c = to_pixel(m.position_m);
+    canvas->Fill(c.first - 4, c.second - 4, 9, 9, kBlack);
+    canvas->Fill(c.first - 2, c.second - 2, 5, 5, {255, 255, 255});
+    if (!m.label.empty()) {
+      canvas->Fill(c.first + 6, c.second - 4, static_cast<int>(m.label.size()) * 6 + 2, 9,
+                   {255, 255, 255});
+      canvas->Text(c.first + 7, c.second - 3, m.label, kBlack);
+    }
+  }
   if (!overlay.path_m.empty()) {
     const auto s = to_pixel(overlay.path_m.front());
     const auto e = to_pixel(overlay.path_m.back());
@@ -162,9 +172,10 @@ void DrawLegend(const common::GridMap& map, const std::string& layer, const Rend
   }
   row.Swatch(kUnknownColour, "UNKNOWN");
   int y2 = y1 + 20;
-  if (!overlay.path_m.empty() || !overlay.obstacles.empty()) {
+  if (!overlay.path_m.empty() || !overlay.obstacles.empty() || !overlay.markers.empty()) {
     LegendRow keys(canvas, 4, y2);
     if (!overlay.path_m.empty()) keys.Swatch(kPath, "DRIVEN PATH");
+    if (!overlay.markers.empty()) keys.Swatch(kBlack, "VIEW POINTS");
     if (!overlay.obstacles.empty()) {
       keys.Swatch(kCrossable, "CROSSABLE" + (overlay.verdict_profile.empty()
                                                  ? std::string()
@@ -211,7 +222,8 @@ Result<std::string> WritePng(const std::string& folder, const std::string& stem,
   if (!rendered.ok()) return rendered.status();
   const int w = map.size_x(), h = map.size_y();
   rendered->scale = std::clamp(overlay.min_pixels / std::max(1, std::max(w, h)), 1, 8);
-  const bool has_overlay = !overlay.path_m.empty() || !overlay.obstacles.empty();
+  const bool has_overlay =
+      !overlay.path_m.empty() || !overlay.obstacles.empty() || !overlay.markers.empty();
   const int legend_h = has_overlay || !overlay.caption.empty() ? 92 : 52;
   const int canvas_w = std::max(w * rendered->scale, has_overlay ? 560 : 300);
   Canvas canvas(canvas_w, h * rendered->scale + legend_h);

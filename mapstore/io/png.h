@@ -20,9 +20,16 @@ class FormatRegistry;
 common::Result<std::string> WritePng(const std::string& folder, const std::string& stem,
                                      const common::GridMap& map, const std::string& layer);
 
+/// A labelled point drawn over a rendered layer (a view point, a waypoint).
+struct PngMarker {
+  common::Vector2 position_m{0.0, 0.0};
+  std::string label;  ///< "1", "2", ...: drawn beside the point
+};
+
 /// What can be drawn over a rendered layer (world frame).
 struct PngOverlay {
   std::vector<common::Vector2> path_m;      ///< a driven or planned path (blue)
+  std::vector<PngMarker> markers;           ///< labelled points (black squares)
   std::vector<common::Obstacle> obstacles;  ///< outlined and labelled "<id> <KIND>"
   /// Colours each obstacle by this profile's verdict: green crossable, red not (grey: no
   /// verdict or empty).

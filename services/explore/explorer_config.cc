@@ -52,14 +52,79 @@ void LoadFrontier(YamlMap map, FrontierModeParams* p) {
   map.Finish();
 }
 
+void LoadNbv(YamlMap map, NbvModeParams* p) {
+  map.Get("preset", &p->preset);
+  map.Get("work_area", &p->work_area);
+  map.Get("turret_sensor", &p->turret_sensor);
+  map.Get("pan_step_deg", &p->pan_step_deg);
+  map.Get("pan_range_deg", &p->pan_range_deg);
+  map.Get("tilt_step_deg", &p->tilt_step_deg);
+  map.Get("scanner_height_m", &p->scanner_height_m);
+  map.Get("scan_timeout_s", &p->scan_timeout_s);
+  map.Get("max_scans", &p->max_scans);
+  map.Get("goal_tolerance_m", &p->goal_tolerance_m);
+  map.Get("goal_timeout_s", &p->goal_timeout_s);
+  map.Get("settle_s", &p->settle_s);
+  map.Get("safe_cnc", &p->safe_cnc);
+  map.Get("candidate_spacing_m", &p->candidate_spacing_m);
+  map.Get("d_max_m", &p->d_max_m);
+  map.Get("min_global_quality", &p->min_global_quality);
+  map.Get("gain_range_m", &p->gain_range_m);
+  map.Get("max_slope_deg", &p->max_slope_deg);
+  map.Get("obstacle_band_m", &p->obstacle_band_m);
+  map.Finish();
+}
+
 }  // namespace
+
+NbvMissionParams NbvModeParams::ToMissionParams() const {
+  if (work_area.empty()) {
+    throw std::invalid_argument(
+        "explorer: nbv.work_area is required (\"x0,y0 x1,y1 x2,y2 ...\", or --work-area)");
+  }
+  RequirePositive(goal_tolerance_m, "nbv.goal_tolerance_m");
+  if (!(settle_s >= 0.0) || !std::isfinite(settle_s)) {
+    throw std::invalid_argument("explorer: nbv.settle_s must be >= 0");
+  }
+  if (turret_sensor.empty()) throw std::invalid_argument("explorer: nbv.turret_sensor is empty");
+  constexpr double kDeg = M_PI / 180.0;
+  NbvMissionParams m;
+  m.nbv = NbvPreset(preset);
+  m.nbv.safe_cnc = safe_cnc;
+  m.nbv.candidate_spacing_m = candidate_spacing_m;
+  m.nbv.d_max_m = d_max_m;
+  m.nbv.min_global_quality = min_global_quality;
+  m.nbv.gain_range_m = gain_range_m;
+  m.nbv.scanner_height_m = scanner_height_m;
+  m.nbv.pan_step_rad = pan_step_deg * kDeg;
+  m.nbv.tilt_step_rad = tilt_step_deg * kDeg;
+  m.turret.pan_step_rad = pan_step_deg * kDeg;
+  m.turret.pan_range_rad = pan_range_deg * kDeg;
+  m.turret.tilt_step_rad = tilt_step_deg * kDeg;
+  m.turret.scanner_height_m = scanner_height_m;
+  m.turret.timeout_s = scan_timeout_s;
+  m.analysis.max_slope_rad = max_slope_deg * kDeg;
+  m.analysis.obstacle_band_m = obstacle_band_m;
+  m.work_area = ParseWorkArea(work_area);
+  m.max_scans = max_scans;
+  m.goal_timeout_s = goal_timeout_s;
+  try {
+    m.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("explorer: nbv: ") + e.what());
+  }
+  return m;
+}
+
+void NbvModeParams::Validate() const { ToMissionParams(); }
 
 ExploreMode ExploreModeFromName(const std::string& name) {
   if (name == "reactive") return ExploreMode::kReactive;
   if (name == "stateless") return ExploreMode::kStateless;
   if (name == "frontier") return ExploreMode::kFrontier;
+  if (name == "nbv") return ExploreMode::kNbv;
   throw std::invalid_argument("unknown exploration mode '" + name +
-                              "' (known: reactive, stateless, frontier)");
+                              "' (known: reactive, stateless, frontier, nbv)");
 }
 
 const char* ExploreModeName(ExploreMode mode) {
@@ -70,6 +135,8 @@ const char* ExploreModeName(ExploreMode mode) {
       return "stateless";
     case ExploreMode::kFrontier:
       return "frontier";
+    case ExploreMode::kNbv:
+      return "nbv";
   }
   return "?";
 }
@@ -105,6 +172,7 @@ void ExplorerConfig::Validate() const {
   RequirePositive(scan_timeout_s, "scan_timeout_s");
   reactive.Validate();
   frontier.Validate();
+  if (mode == ExploreMode::kNbv) nbv.Validate();
 }
 
 ExplorerConfig LoadExplorerConfig(YamlMap& root) {
@@ -122,8 +190,10 @@ ExplorerConfig LoadExplorerConfig(YamlMap& root) {
   root.Get("duration_s", &c.duration_s);
   root.Get("status_rate_hz", &c.status_rate_hz);
   root.Get("scan_timeout_s", &c.scan_timeout_s);
+  root.Get("out_dir", &c.out_dir);
   LoadReactive(root.Child("reactive"), &c.reactive);
   LoadFrontier(root.Child("frontier"), &c.frontier);
+  LoadNbv(root.Child("nbv"), &c.nbv);
   root.Finish();
   try {
     c.Validate();

@@ -4,6 +4,7 @@
 
 #include "common/yaml_reader.h"
 #include "services/explore/frontier.h"
+#include "services/explore/nbv_mission.h"
 #include "services/explore/reactive_explorer.h"
 
 /// @file
@@ -17,9 +18,11 @@ enum class ExploreMode {
   kReactive,   ///< seed 003's five-sector explorer on the planar laser
   kStateless,  ///< its stateless baseline (no memory, no reverse)
   kFrontier,   ///< frontier goals on the 2-D occupancy, driven by cairn-navigator
+  kNbv,        ///< seed 002's stop-and-scan next-best-view on the turret's 3-D scans
 };
 
-/// "reactive", "stateless", "frontier". @throws std::invalid_argument listing the known names.
+/// "reactive", "stateless", "frontier", "nbv". @throws std::invalid_argument listing the known
+/// names.
 ExploreMode ExploreModeFromName(const std::string& name);
 const char* ExploreModeName(ExploreMode mode);
 
@@ -49,6 +52,42 @@ struct FrontierModeParams {
   void Validate() const;
 };
 
+/// Seed 002's mission: scans asked of the simulator's turret (SIM.CONTROL OP_TRIGGER_SENSOR),
+/// its lines on <robot>.TURRET_SCAN, view points sent to cairn-navigator.
+struct NbvModeParams {
+  /// A preset of seed 002's tables (NbvPresetNames: simple-balanced, greedy, ...).
+  std::string preset{"simple-balanced"};
+  /// The work area, "x0,y0 x1,y1 x2,y2 ..." (world metres); required in this mode.
+  std::string work_area;
+  std::string turret_sensor{"turret"};  ///< the sensor kind the request names
+  /// The turret's sweep as the simulator's scenario sets it (pan lines over pan_range_deg;
+  /// beams tilt_step_deg apart).
+  double pan_step_deg{0.5};
+  double pan_range_deg{180.0};
+  double tilt_step_deg{0.5};
+  /// Height of the scanner above the ground under the robot.
+  double scanner_height_m{1.0};
+  double scan_timeout_s{60.0};  ///< from the request to the last line (sim s)
+  int max_scans{40};
+  double goal_tolerance_m{1.0};
+  double goal_timeout_s{240.0};
+  /// The robot must stand still this long (sim s) after a goal before a scan is asked for.
+  double settle_s{1.0};
+  /// The NBV parameters over the preset (seed 002 Appendix A).
+  double safe_cnc{0.7};
+  double candidate_spacing_m{3.0};
+  double d_max_m{50.0};
+  double min_global_quality{0.0};
+  double gain_range_m{20.0};
+  double max_slope_deg{20.0};
+  double obstacle_band_m{1.0};
+
+  /// @throws std::invalid_argument naming the first bad field (a missing work area included).
+  void Validate() const;
+  /// The mission's parameters. @throws std::invalid_argument as Validate.
+  NbvMissionParams ToMissionParams() const;
+};
+
 struct ExplorerConfig {
   ExploreMode mode{ExploreMode::kReactive};
   /// Sim seconds of exploring after the first input; 0: until done (or stopped).
@@ -56,8 +95,11 @@ struct ExplorerConfig {
   double status_rate_hz{2.0};
   /// Reactive modes: with no scan for this long (node clock) the robot is told to stop.
   double scan_timeout_s{0.5};
+  /// Next-best-view: where the summary table and the renders go at the end ("" none).
+  std::string out_dir;
   ReactiveParams reactive;
   FrontierModeParams frontier;
+  NbvModeParams nbv;
 
   /// @throws std::invalid_argument naming the first bad field.
   void Validate() const;

@@ -22,6 +22,10 @@ struct Options {
   std::string config_path;
   std::string config_dir = CAIRN_CONFIG_DIR;
   std::string mode;
+  std::string work_area;
+  std::string preset;
+  int max_scans = 0;
+  std::string out_dir;
   double duration_s = -1.0;
   std::string lcm_url;
 };
@@ -43,12 +47,19 @@ int Run(const Options& o) {
   explore::ExplorerConfig config = explore::LoadExplorerConfigFile(config_path);
   if (!o.mode.empty()) config.mode = explore::ExploreModeFromName(o.mode);
   if (o.duration_s >= 0.0) config.duration_s = o.duration_s;
+  if (!o.work_area.empty()) config.nbv.work_area = o.work_area;
+  if (!o.preset.empty()) config.nbv.preset = o.preset;
+  if (o.max_scans > 0) config.nbv.max_scans = o.max_scans;
+  if (!o.out_dir.empty()) config.out_dir = o.out_dir;
   config.Validate();
 
   runtime::NodeOptions options;
   options.process_name = "cairn-explorer";
   options.robot = o.robot;
-  options.lcm_url = o.lcm_url;
+  // The next-best-view mode takes the turret's lines (about 2 KB each, 50 a second) beside
+  // the lidar's traffic on the same multicast group: a large receive buffer keeps bursts.
+  options.lcm_url = runtime::WithReceiveBuffer(runtime::ResolveLcmUrl(o.lcm_url),
+                                               runtime::kLargeReceiveBufferBytes);
   runtime::Node node(options);
   CAIRN_LOG_INFO("profile %s, config %s, mode %s, bus %s", profile.name.c_str(),
                  config_path.c_str(), explore::ExploreModeName(config.mode), node.url().c_str());
@@ -59,7 +70,7 @@ int Run(const Options& o) {
   // The last status (and the stop command) reach the bus before the socket closes.
   service.PublishStatus();
   for (int i = 0; i < 4; ++i) node.SpinOnce(5);
-  return 0;
+  return service.failed() ? 1 : 0;
 }
 
 }  // namespace
@@ -72,23 +83,36 @@ int main(int argc, char** argv) {
       "laser (cruise, corridor centring, turn in place toward the freer side with direction\n"
       "memory, reverse when cornered or blocked over 2 s); 'stateless', its baseline without\n"
       "memory or reverse; 'frontier', goals on the frontiers of the mapper's 2-D occupancy,\n"
-      "driven by cairn-navigator. Exits when the exploration is done (the time given by\n"
-      "--duration, or no frontier left), or on SIGINT/SIGTERM, stopping the robot first.");
+      "driven by cairn-navigator; 'nbv', seed 002's stop-and-scan next-best-view: a full 3-D\n"
+      "scan asked of the simulator's turret at each view point, the information map over the\n"
+      "work area, the next view point chosen by utility and driven to by cairn-navigator.\n"
+      "Exits when the exploration is done (the time given by --duration, no frontier left, or\n"
+      "the next-best-view stop rule), or on SIGINT/SIGTERM, stopping the robot first; exit 1\n"
+      "when a next-best-view mission failed (scans or goals kept failing).");
   flags.AddString("robot", &o.robot, "robot name, the prefix of its channels (required)");
   flags.AddString("profile", &o.profile,
                   "robot profile: a name under <config-dir>/profiles or a file");
   flags.AddString("config", &o.config_path,
                   "explorer YAML (default <config-dir>/explore/explorer.yaml)");
   flags.AddString("config-dir", &o.config_dir, "directory holding profiles/ and explore/");
-  flags.AddString("mode", &o.mode, "reactive, stateless or frontier (overrides the config)");
+  flags.AddString("mode", &o.mode, "reactive, stateless, frontier or nbv (overrides the config)");
+  flags.AddString("work-area", &o.work_area,
+                  "nbv: the work area polygon \"x0,y0 x1,y1 x2,y2 ...\" in world metres");
+  flags.AddString("preset", &o.preset,
+                  "nbv: a preset of seed 002's tables (simple-balanced, greedy, ...)");
+  flags.AddString("out", &o.out_dir,
+                  "nbv: write the summary table and the information map's renders (PNG) here");
+  flags.AddInt("max-scans", &o.max_scans, "nbv: end after this many scans (overrides the config)");
   flags.AddDouble("duration", &o.duration_s,
                   "simulated seconds of exploring, 0 = until done (overrides the config)");
   flags.AddString("lcm-url", &o.lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm with ttl=0)");
   flags.AddHelpSection(
       "Channels",
       "reads <robot>.SCAN, <robot>.POSE; frontier mode also <robot>.MAP.OCCUPANCY,\n"
-      "<robot>.MAP.MANIFEST, <robot>.NAV_STATUS. Writes <robot>.CMD_VEL (reactive\n"
-      "modes), <robot>.GOAL (frontier mode), <robot>.EXPLORE_STATUS.");
+      "<robot>.MAP.MANIFEST, <robot>.NAV_STATUS; nbv mode <robot>.TURRET_SCAN,\n"
+      "<robot>.NAV_STATUS, SIM.CONTROL_REPLY. Writes <robot>.CMD_VEL (reactive modes),\n"
+      "<robot>.GOAL (frontier and nbv modes), SIM.CONTROL (nbv: OP_TRIGGER_SENSOR),\n"
+      "<robot>.EXPLORE_STATUS.");
   const int rc = flags.Parse(argc, argv);
   if (rc >= 0) return rc;
   if (o.robot.empty() || o.profile.empty()) {

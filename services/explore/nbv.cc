@@ -63,6 +63,9 @@ void NbvParams::Validate() const {
   if (!(candidate_clearance_m >= 0.0) || !std::isfinite(candidate_clearance_m)) {
     throw std::invalid_argument("nbv: candidate_clearance_m must be >= 0");
   }
+  if (!(robot_free_radius_m >= 0.0) || !std::isfinite(robot_free_radius_m)) {
+    throw std::invalid_argument("nbv: robot_free_radius_m must be >= 0");
+  }
   RequireUnit(occlusion_cnc, "occlusion_cnc");
   RequirePositive(gain_range_m, "gain_range_m");
   if (!(scanner_height_m >= 0.0) || !std::isfinite(scanner_height_m)) {
@@ -119,7 +122,8 @@ std::vector<int64_t> NavigationTree::PathTo(int64_t cell) const {
   return path;
 }
 
-NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe_cnc) {
+NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe_cnc,
+                                   double free_radius_m) {
   if (root < 0 || root >= map.num_cells()) {
     throw std::invalid_argument("navigation tree: the root cell is off the map");
   }
@@ -134,6 +138,15 @@ NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe
   const int sx = map.size_x(), sy = map.size_y();
   const float res = static_cast<float>(map.geometry().resolution_m);
   const float safe = static_cast<float>(safe_cnc);
+  const int root_x = static_cast<int>(root % sx), root_y = static_cast<int>(root / sx);
+  const double free_radius_cells =
+      std::isfinite(free_radius_m) && free_radius_m > 0.0 ? free_radius_m / res : 0.0;
+  // Unexplored cells this near the root: the robot stands there (its scanner cannot see them).
+  const auto under_robot = [&](int64_t j) {
+    const double dx = static_cast<double>(j % sx - root_x);
+    const double dy = static_cast<double>(j / sx - root_y);
+    return !map.Explored(j) && dx * dx + dy * dy <= free_radius_cells * free_radius_cells;
+  };
   while (!open.empty()) {
     const auto [c, i] = open.top();
     open.pop();
@@ -143,8 +156,8 @@ NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe
                                    iy > 0 ? i - sx : -1, iy + 1 < sy ? i + sx : -1};
     for (int64_t j : neighbours) {
       if (j < 0) continue;
-      const float cnc = map.Navigability(j);
-      if (!map.Explored(j) || !(cnc > safe)) continue;
+      const float cnc = under_robot(j) ? 1.f : map.Navigability(j);
+      if (!(map.Explored(j) || under_robot(j)) || !(cnc > safe)) continue;
       const float next = c + res / cnc;
       if (next < tree.cost[j]) {
         tree.cost[j] = next;
@@ -335,7 +348,8 @@ NbvDecision NbvPlanner::Decide(const InfoMap& map, const std::vector<InterestZon
   decision.stop_threshold = StopThreshold(params_.weights.w_c, params_.d_max_m);
   decision.global_quality = map.MeanQuality();
   decision.coverage = map.Coverage();
-  const NavigationTree tree = BuildNavigationTree(map, map.Linear(*robot_cell), params_.safe_cnc);
+  const NavigationTree tree = BuildNavigationTree(map, map.Linear(*robot_cell), params_.safe_cnc,
+                                                  params_.robot_free_radius_m);
   const std::vector<int64_t> cells = SampleCandidates(map, params_, robot_m, &rng_);
   ViewEvaluator evaluator(map, params_);
   const bool greedy = params_.strategy == NbvStrategy::kGreedy;

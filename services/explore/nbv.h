@@ -41,9 +41,12 @@ struct NbvParams {
   double candidate_spacing_m{3.0};     ///< candidates lie further apart (and from the robot)
   int candidate_fraction{50};          ///< at most 1 / candidate_fraction of the safe cells
   double candidate_clearance_m{0.45};  ///< every cell this near a candidate must be safe too
-  double occlusion_cnc{0.4};           ///< cells below it block the view
-  double gain_range_m{20.0};           ///< useful scanner radius for A, Q and O
-  double scanner_height_m{1.0};        ///< above the ground, for Q's distances
+  /// Unexplored cells this near the robot count as safe for the navigation tree: the scanner's
+  /// blind cone below it (a 270 deg fan 1 m up leaves about 1 m unseen around the robot).
+  double robot_free_radius_m{1.5};
+  double occlusion_cnc{0.4};     ///< cells below it block the view
+  double gain_range_m{20.0};     ///< useful scanner radius for A, Q and O
+  double scanner_height_m{1.0};  ///< above the ground, for Q's distances
   double pan_step_rad{0.5 * 3.14159265358979323846 / 180.0};
   double tilt_step_rad{0.5 * 3.14159265358979323846 / 180.0};
   double a_max_m2{0.0025};
@@ -81,7 +84,10 @@ struct NavigationTree {
   /// Cells from the root to `cell` (empty when unreachable).
   std::vector<int64_t> PathTo(int64_t cell) const;
 };
-NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe_cnc);
+/// Unexplored cells within free_radius_m of the root count as safe (C_nc 1): the robot stands
+/// there, and a scanner on it does not see the ground in its blind cone below.
+NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe_cnc,
+                                   double free_radius_m = 0.0);
 
 struct Candidate {
   int64_t cell{-1};

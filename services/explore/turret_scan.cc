@@ -31,6 +31,9 @@ void TurretScanParams::Validate() const {
   RequirePositive(max_motion_m, "max_motion_m");
   RequirePositive(max_rotation_rad, "max_rotation_rad");
   RequirePositive(timeout_s, "timeout_s");
+  if (max_missing_lines < 0) {
+    throw std::invalid_argument("turret scan: max_missing_lines must be >= 0");
+  }
   if (!(scanner_height_m >= 0.0) || !std::isfinite(scanner_height_m)) {
     throw std::invalid_argument("turret scan: scanner_height_m must be >= 0");
   }
@@ -103,10 +106,19 @@ std::optional<OrderedScan> TurretScanAssembler::Add(const common::LaserScan& lin
     scan_.pan_step_rad = params_.pan_step_rad;
     scan_.tilt_step_rad = params_.tilt_step_rad;
     next_step_ = 0;
+    missing_lines_ = 0;
   } else if (step != next_step_) {
-    StartOver("line " + std::to_string(next_step_) + " missing (got " + std::to_string(step) + ")",
-              event);
-    return std::nullopt;
+    // A few lines lost on the bus leave no-return lines (a hole in the mesh); more, or lines
+    // out of order, start the scan over.
+    const long gap = step - next_step_;
+    if (gap < 1 || gap > params_.max_missing_lines || step >= steps_) {
+      StartOver(
+          "line " + std::to_string(next_step_) + " missing (got " + std::to_string(step) + ")",
+          event);
+      return std::nullopt;
+    }
+    missing_lines_ += static_cast<int>(gap);
+    next_step_ = static_cast<int>(step);
   }
   if (n != beams_ || line.angle_min_rad != angle_min_rad_ ||
       line.angle_increment_rad != angle_increment_rad_) {

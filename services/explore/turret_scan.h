@@ -11,8 +11,9 @@
 /// Stop-and-scan (seed 002 §2.1): the rotating planar laser's lines, one vertical fan per pan
 /// step, assembled into the ordered grid the mesh is built on. The assembler starts on request,
 /// takes the first line at pan 0 and every following step until the pan range is covered, and
-/// hands over an OrderedScan whose row k is the line at pan k · pan_step. It starts over when a
-/// line is missing or out of order, when the scanner moved during the sweep (the robot must
+/// hands over an OrderedScan whose row k is the line at pan k · pan_step. A few lines lost on the
+/// bus (max_missing_lines in a row) are left without returns; it starts over when more are
+/// missing or a line comes out of order, when the scanner moved during the sweep (the robot must
 /// stand still), or when a line does not fit the first one's beam layout; it gives up after
 /// timeout_s. Every size read from a line is checked against a bound before it allocates
 /// (beams, lines), so a faulty peer cannot make it grow.
@@ -28,6 +29,9 @@ struct TurretScanParams {
   double max_motion_m{0.03};  ///< the scanner may drift this much during a sweep
   double max_rotation_rad{0.02};
   double timeout_s{60.0};  ///< from the request to the last line
+  /// Up to this many consecutive lines lost (on the bus) leave lines with no return; a longer
+  /// gap starts the scan over.
+  int max_missing_lines{3};
   /// Height of the scanner above the ground under the robot (OrderedScan::robot_base_z_m is
   /// the first line's scanner height minus this).
   double scanner_height_m{1.0};
@@ -60,6 +64,8 @@ class TurretScanAssembler {
   int lines_collected() const { return next_step_; }
   int lines_needed() const { return steps_; }
   int restarts() const { return restarts_; }
+  /// Lines missing from the scan being collected (or the last one completed).
+  int missing_lines() const { return missing_lines_; }
 
  private:
   void StartOver(const std::string& why, std::string* event);
@@ -75,6 +81,7 @@ class TurretScanAssembler {
   common::Pose3 first_pose_;
   OrderedScan scan_;
   int restarts_{0};
+  int missing_lines_{0};
 };
 
 }  // namespace cairn::explore

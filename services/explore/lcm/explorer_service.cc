@@ -4,10 +4,13 @@
 #include <cstring>
 
 #include "cairn/lcmt_goal.hpp"
+#include "cairn/lcmt_sim_control_reply.hpp"
+#include "cairn/lcmt_sim_control_request.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
 
 #include "common/channels.h"
 #include "common/check.h"
+#include "services/explore/nbv_report.h"
 #include "services/runtime/conversions.h"
 
 namespace cairn::explore {
@@ -27,6 +30,8 @@ int8_t ModeCode(ExploreMode mode) {
       return cairn::lcmt_explore_status::MODE_STATELESS;
     case ExploreMode::kFrontier:
       return cairn::lcmt_explore_status::MODE_FRONTIER;
+    case ExploreMode::kNbv:
+      return cairn::lcmt_explore_status::MODE_NBV;
   }
   return 0;
 }
@@ -71,6 +76,19 @@ ExplorerService::ExplorerService(runtime::Node& node, ExplorerConfig config,
   if (Reactive(config_.mode)) {
     node_.Subscribe<cairn::lcmt_laser_scan>(ch::ForRobot(robot_, ch::kScan),
                                             [this](const cairn::lcmt_laser_scan& m) { OnScan(m); });
+  } else if (config_.mode == ExploreMode::kNbv) {
+    nbv_ = std::make_unique<NbvMission>(config_.nbv.ToMissionParams());
+    node_.Subscribe<cairn::lcmt_laser_scan>(
+        ch::ForRobot(robot_, ch::kTurretScan),
+        [this](const cairn::lcmt_laser_scan& m) { OnTurretLine(m); });
+    node_.Subscribe<cairn::lcmt_nav_status>(
+        ch::ForRobot(robot_, ch::kNavStatus),
+        [this](const cairn::lcmt_nav_status& m) { OnNavStatus(m); });
+    node_.Subscribe<cairn::lcmt_sim_control_reply>(
+        ch::kSimControlReply, [this](const cairn::lcmt_sim_control_reply& m) {
+          if (m.request_id <= 0 || m.request_id >= next_request_id_ || m.status == 0) return;
+          node_.Warn("scan_request", "the simulator refused the scan request: " + m.message);
+        });
   } else {
     map_client_ = std::make_unique<planner::LcmMapClient>(node_, MapClientParams(robot_, config_),
                                                           profile_.footprint_m);
@@ -89,6 +107,13 @@ ExplorerService::ExplorerService(runtime::Node& node, ExplorerConfig config,
                 config_.duration_s > 0.0
                     ? ("for " + std::to_string(static_cast<int>(config_.duration_s)) + " s").c_str()
                     : "until stopped");
+  } else if (nbv_) {
+    node_.Event(
+        "exploring %s (%s) by next-best-view (%s) over a %.0f m2 work area, scans from "
+        "%s/%s, goals to %s",
+        robot_.c_str(), profile_.name.c_str(), config_.nbv.preset.c_str(),
+        nbv_->info_map().work_area().AreaM2(), robot_.c_str(), config_.nbv.turret_sensor.c_str(),
+        ch::ForRobot(robot_, ch::kGoal).c_str());
   } else {
     node_.Event("exploring %s (%s) by frontiers on layer %s, goals to %s", robot_.c_str(),
                 profile_.name.c_str(), config_.frontier.layer.c_str(),
@@ -202,9 +227,28 @@ void ExplorerService::OnPose(const cairn::lcmt_pose& msg) {
 
 void ExplorerService::OnNavStatus(const cairn::lcmt_nav_status& msg) {
   if (!msg.robot.empty() && msg.robot != robot_) return;
+  using S = cairn::lcmt_nav_status;
+  if (nbv_) {
+    if (done_ || !nbv_goal_id_ || msg.goal_id != *nbv_goal_id_) return;
+    const bool reached = msg.state == S::STATE_REACHED;
+    // The navigator stops for a stale map or pose and resumes by itself when they are fresh:
+    // the goal is still on.
+    const bool paused = msg.state == S::STATE_STOPPED &&
+                        (msg.reason == S::REASON_STALE_MAP || msg.reason == S::REASON_STALE_ODOM ||
+                         msg.reason == S::REASON_NO_MAP);
+    if (paused || (!reached && msg.state != S::STATE_FAILED && msg.state != S::STATE_CANCELLED &&
+                   msg.state != S::STATE_STOPPED)) {
+      return;
+    }
+    nbv_goal_id_.reset();
+    const double now_s = NowS();
+    node_.Event("view point %lld %s%s", static_cast<long long>(msg.goal_id),
+                reached ? "reached" : "failed: ", reached ? "" : msg.message.c_str());
+    CarryOut(nbv_->OnGoalResult(reached, msg.message, now_s), now_s);
+    return;
+  }
   const auto active = frontier_.active_goal();
   if (!active || msg.goal_id != *active) return;
-  using S = cairn::lcmt_nav_status;
   if (msg.state == S::STATE_REACHED) {
     frontier_.OnGoalResult(msg.goal_id, true, NowS());
     node_.Event("goal %lld reached", static_cast<long long>(msg.goal_id));
@@ -220,6 +264,115 @@ void ExplorerService::OnNavStatus(const cairn::lcmt_nav_status& msg) {
                 passing ? "not the goal's fault, it may be chosen again" : "blacklisted");
     SetBehaviour("CHOOSING", "goal failed: " + msg.message);
   }
+}
+
+void ExplorerService::OnTurretLine(const cairn::lcmt_laser_scan& msg) {
+  if (done_ || !nbv_) return;
+  if (!msg.robot.empty() && msg.robot != robot_) {
+    node_.CountDropped("lines_for_other_robots");
+    return;
+  }
+  const auto line = runtime::FromLcm(msg);
+  if (!line.ok() || !std::isfinite(msg.turret_angle_rad)) {
+    node_.CountDropped("bad_turret_lines");
+    node_.Warn("bad_turret_line",
+               "turret line refused: " + (line.ok() ? std::string("the turret angle is not finite")
+                                                    : line.status().message()));
+    return;
+  }
+  const double now_s = static_cast<double>(msg.utime) * 1e-6;
+  const int before = nbv_->scans();
+  const NbvAction action = nbv_->OnTurretLine(line.value(), msg.turret_angle_rad, now_s);
+  if (nbv_->scans() != before) UpdateNbvStatus();
+  CarryOut(action, now_s);
+}
+
+void ExplorerService::CarryOut(const NbvAction& action, double now_s) {
+  if (!action.event.empty()) {
+    node_.Event("%s", action.event.c_str());
+    status_.message = action.event;
+  }
+  if (action.request_scan) {
+    // After a drive the robot stands still a moment first; the first scan goes at once.
+    trigger_at_s_ = now_s + (nbv_->goals_sent() > 0 ? config_.nbv.settle_s : 0.0);
+    SetBehaviour("SCANNING");
+  }
+  if (action.goal) SendNbvGoal(*action.goal);
+  if (action.done) Finish(nbv_->end_reason());
+}
+
+void ExplorerService::SendScanRequest() {
+  cairn::lcmt_sim_control_request req{};
+  req.utime = node_.NowUtime();
+  req.request_id = next_request_id_++;
+  req.requester = kProcess;
+  req.op = cairn::lcmt_sim_control_request::OP_TRIGGER_SENSOR;
+  req.name = robot_ + "/" + config_.nbv.turret_sensor;
+  node_.Publish(ch::kSimControl, req);
+}
+
+void ExplorerService::SendNbvGoal(const Candidate& goal) {
+  nbv_goal_id_ = next_goal_id_++;
+  cairn::lcmt_goal msg{};
+  msg.utime = node_.NowUtime();
+  msg.robot = robot_;
+  msg.goal_id = *nbv_goal_id_;
+  msg.kind = cairn::lcmt_goal::KIND_POSE;
+  msg.x_m = goal.position_m.x();
+  msg.y_m = goal.position_m.y();
+  msg.use_yaw = false;
+  msg.xy_tolerance_m = config_.nbv.goal_tolerance_m;
+  node_.Publish(ch::ForRobot(robot_, ch::kGoal), msg);
+  SetBehaviour("DRIVING");
+  UpdateNbvStatus();
+}
+
+void ExplorerService::UpdateNbvStatus() {
+  status_.scans = nbv_->scans();
+  status_.goals_sent = nbv_->goals_sent();
+  status_.goals_reached = nbv_->goals_reached();
+  status_.goals_failed = nbv_->goals_failed();
+  if (!nbv_->view_points().empty()) {
+    status_.coverage = nbv_->view_points().back().coverage;
+    status_.quality = nbv_->view_points().back().mean_quality;
+  }
+}
+
+void ExplorerService::TickNbv(double now_s) {
+  if (!have_pose_) {
+    SetBehaviour("WAITING", "waiting for a pose");
+    status_.state = cairn::lcmt_explore_status::STATE_WAITING;
+    return;
+  }
+  if (!start_s_) {
+    start_s_ = now_s;
+    status_.state = cairn::lcmt_explore_status::STATE_EXPLORING;
+    node_.SetState(runtime::HealthState::kReady, "exploring");
+    CarryOut(nbv_->Start(now_s), now_s);
+  }
+  status_.elapsed_s = now_s - *start_s_;
+  if (config_.duration_s > 0.0 && status_.elapsed_s >= config_.duration_s) {
+    nbv_->Stop("the exploration time is over");
+    Finish("the exploration time (" + std::to_string(static_cast<int>(config_.duration_s)) +
+           " s) is over");
+    return;
+  }
+  nbv_->OnPosition(robot_xy_);
+  if (trigger_at_s_ && now_s >= *trigger_at_s_) {
+    trigger_at_s_.reset();
+    SendScanRequest();
+  }
+  const int failed_before = nbv_->goals_failed();
+  const NbvAction action = nbv_->Tick(now_s);
+  if (nbv_->goals_failed() != failed_before && nbv_goal_id_) {
+    // The mission gave the goal up: the navigator stops driving to it.
+    FrontierAction cancel;
+    cancel.kind = FrontierAction::Kind::kCancelGoal;
+    cancel.goal_id = *nbv_goal_id_;
+    SendGoal(cancel);
+    nbv_goal_id_.reset();
+  }
+  CarryOut(action, now_s);
 }
 
 void ExplorerService::SendGoal(const FrontierAction& action) {
@@ -238,6 +391,10 @@ void ExplorerService::SendGoal(const FrontierAction& action) {
 
 void ExplorerService::Tick() {
   if (done_) return;
+  if (nbv_) {
+    TickNbv(NowS());
+    return;
+  }
   if (Reactive(config_.mode)) {
     if (last_scan_node_s_ && !stopped_for_silence_ &&
         NowS() - *last_scan_node_s_ > config_.scan_timeout_s) {
@@ -307,6 +464,14 @@ void ExplorerService::Tick() {
 void ExplorerService::Halt(const std::string& why) {
   if (Reactive(config_.mode)) {
     PublishCommand(0.0, 0.0);
+  } else if (nbv_) {
+    if (nbv_goal_id_) {
+      FrontierAction cancel;
+      cancel.kind = FrontierAction::Kind::kCancelGoal;
+      cancel.goal_id = *nbv_goal_id_;
+      SendGoal(cancel);
+      nbv_goal_id_.reset();
+    }
   } else if (const auto active = frontier_.active_goal()) {
     FrontierAction cancel;
     cancel.kind = FrontierAction::Kind::kCancelGoal;
@@ -319,9 +484,30 @@ void ExplorerService::Halt(const std::string& why) {
 void ExplorerService::Finish(const std::string& why) {
   Halt(why);
   done_ = true;
-  status_.state = cairn::lcmt_explore_status::STATE_DONE;
+  status_.state =
+      failed() ? cairn::lcmt_explore_status::STATE_FAILED : cairn::lcmt_explore_status::STATE_DONE;
   SetBehaviour("DONE", why);
   PublishStatus();
+  if (nbv_) {
+    UpdateNbvStatus();
+    // Seed 002's summary, a line per view point, and the renders.
+    std::string table = NbvSummaryTable(*nbv_, config_.nbv.preset);
+    size_t begin = 0;
+    for (size_t end = table.find('\n'); end != std::string::npos;
+         begin = end + 1, end = table.find('\n', begin)) {
+      node_.Event("%s", table.substr(begin, end - begin).c_str());
+    }
+    if (!config_.out_dir.empty()) {
+      const auto written = WriteNbvReport(*nbv_, config_.nbv.preset, config_.out_dir);
+      if (written.ok()) {
+        node_.Event("summary and renders written to %s (%zu files)", config_.out_dir.c_str(),
+                    written->size());
+      } else {
+        node_.Warn("report",
+                   "the summary and renders could not be written: " + written.status().ToString());
+      }
+    }
+  }
   node_.Event("done: %s (%.1f m driven in %.0f s, %d reverses, %d goals: %d reached, %d failed)",
               why.c_str(), status_.distance_m, status_.elapsed_s, status_.reverses,
               status_.goals_sent, status_.goals_reached, status_.goals_failed);

@@ -15,6 +15,7 @@
 #include "planner/lcm/lcm_map_client.h"
 #include "services/explore/explorer_config.h"
 #include "services/explore/frontier_explorer.h"
+#include "services/explore/nbv_mission.h"
 #include "services/explore/reactive_explorer.h"
 #include "services/runtime/node.h"
 
@@ -29,7 +30,12 @@
 ///   reads  <robot>.MAP.OCCUPANCY / <robot>.MAP.MANIFEST (the 2-D occupancy layer),
 ///          <robot>.POSE, <robot>.NAV_STATUS (the navigator's result for each goal);
 ///   writes <robot>.GOAL (lcmt_goal: a frontier's goal, or a cancel), <robot>.MAP.TILE_RESEND.
-/// Both write <robot>.EXPLORE_STATUS (lcmt_explore_status) at status_rate_hz and on every
+/// Next-best-view mode (seed 002, stop and scan):
+///   reads  <robot>.TURRET_SCAN (the turret's lines), <robot>.POSE, <robot>.NAV_STATUS,
+///          SIM.CONTROL_REPLY (refused scan requests are logged);
+///   writes SIM.CONTROL (OP_TRIGGER_SENSOR "<robot>/<turret>": one full sweep, asked when the
+///          robot has stood still nbv.settle_s), <robot>.GOAL (each view point, or a cancel).
+/// All write <robot>.EXPLORE_STATUS (lcmt_explore_status) at status_rate_hz and on every
 /// change of state. Times are simulation time (the scans' stamps, SIM.CLOCK).
 
 namespace cairn::explore {
@@ -47,13 +53,18 @@ class ExplorerService {
   void OnScan(const cairn::lcmt_laser_scan& msg);
   void OnPose(const cairn::lcmt_pose& msg);
   void OnNavStatus(const cairn::lcmt_nav_status& msg);
+  void OnTurretLine(const cairn::lcmt_laser_scan& msg);
   void Tick();
   void PublishStatus();
   /// Stops the robot (reactive: a zero command; frontier: cancels the goal).
   void Halt(const std::string& why);
 
   bool done() const { return done_; }
+  /// Done, but the mission failed (next-best-view: scans or goals kept failing).
+  bool failed() const { return nbv_ && nbv_->failed(); }
   const cairn::lcmt_explore_status& status() const { return status_; }
+  /// The next-best-view mission (nullptr in the other modes).
+  const NbvMission* nbv() const { return nbv_.get(); }
 
  private:
   double NowS() const;
@@ -61,6 +72,11 @@ class ExplorerService {
   void Finish(const std::string& why);
   void SendGoal(const FrontierAction& action);
   void SetBehaviour(const std::string& behaviour, const std::string& message = "");
+  void TickNbv(double now_s);
+  void CarryOut(const NbvAction& action, double now_s);
+  void SendScanRequest();
+  void SendNbvGoal(const Candidate& goal);
+  void UpdateNbvStatus();
 
   runtime::Node& node_;
   ExplorerConfig config_;
@@ -80,6 +96,12 @@ class ExplorerService {
   common::Vector2 robot_xy_{0.0, 0.0};
   bool have_pose_{false};
   bool done_{false};
+  // Next-best-view mode.
+  std::unique_ptr<NbvMission> nbv_;
+  std::optional<double> trigger_at_s_;  ///< ask the turret for a scan at this time
+  std::optional<int64_t> nbv_goal_id_;
+  int64_t next_goal_id_{1};
+  int64_t next_request_id_{1};
 };
 
 }  // namespace cairn::explore

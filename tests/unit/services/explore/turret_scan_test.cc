@@ -72,15 +72,39 @@ TEST(TurretScanTest, AFullSweepFromPanZeroBecomesAnOrderedScan) {
   EXPECT_TRUE(side.isApprox(Eigen::Vector3f(2, 5, 1), 1e-5)) << side.transpose();
 }
 
-TEST(TurretScanTest, AMissingLineStartsTheSweepOverAndSaysSo) {
+TEST(TurretScanTest, MoreMissingLinesThanAllowedStartTheSweepOverAndSaySo) {
+  TurretScanAssembler a(Params());  // at most 3 missing lines in a row
+  a.Request(0.0);
+  EXPECT_FALSE(Sweep(&a, 0, 5, 0.0));
+  std::string event;
+  EXPECT_FALSE(a.Add(Line(9 * 10 * kDeg), 9 * 10 * kDeg, 0.2, &event));
+  EXPECT_NE(event.find("line 5 missing"), std::string::npos) << event;
+  EXPECT_EQ(a.restarts(), 1);
+  EXPECT_TRUE(Sweep(&a, 0, 18, 1.0));
+  // A line going back starts over too.
+  a.Request(2.0);
+  EXPECT_FALSE(Sweep(&a, 0, 5, 2.0));
+  event.clear();
+  EXPECT_FALSE(a.Add(Line(3 * 10 * kDeg), 3 * 10 * kDeg, 2.2, &event));
+  EXPECT_NE(event.find("line 5 missing (got 3)"), std::string::npos) << event;
+}
+
+TEST(TurretScanTest, AFewLinesLostOnTheBusLeaveLinesWithNoReturn) {
   TurretScanAssembler a(Params());
   a.Request(0.0);
   EXPECT_FALSE(Sweep(&a, 0, 5, 0.0));
   std::string event;
-  EXPECT_FALSE(a.Add(Line(7 * 10 * kDeg), 7 * 10 * kDeg, 0.2, &event));
-  EXPECT_NE(event.find("line 5 missing"), std::string::npos) << event;
-  EXPECT_EQ(a.restarts(), 1);
-  EXPECT_TRUE(Sweep(&a, 0, 18, 1.0));
+  EXPECT_FALSE(a.Add(Line(7 * 10 * kDeg), 7 * 10 * kDeg, 0.2, &event));  // 5 and 6 lost
+  EXPECT_TRUE(event.empty()) << event;
+  EXPECT_EQ(a.missing_lines(), 2);
+  const std::optional<OrderedScan> scan = Sweep(&a, 8, 18, 0.3);
+  ASSERT_TRUE(scan.has_value());
+  EXPECT_EQ(a.restarts(), 0);
+  EXPECT_EQ(scan->num_lines, 18);
+  for (int line : {5, 6}) {
+    for (int b = 0; b < 7; ++b) EXPECT_FALSE(scan->points_m[line * 7 + b].allFinite());
+  }
+  EXPECT_TRUE(scan->points_m[7 * 7 + 3].allFinite());
 }
 
 TEST(TurretScanTest, TheRobotMustStandStill) {

@@ -1,0 +1,239 @@
+#include "services/explore/nbv_mission.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "common/check.h"
+
+namespace cairn::explore {
+
+void NbvMissionParams::Validate() const {
+  nbv.Validate();
+  mesh.Validate();
+  analysis.Validate();
+  info.Validate();
+  turret.Validate();
+  work_area.Validate();
+  CAIRN_THROW_UNLESS(max_scans >= 1, "max_scans must be >= 1 (got " << max_scans << ")");
+  CAIRN_THROW_UNLESS(std::isfinite(goal_timeout_s) && goal_timeout_s > 0.0,
+                     "goal_timeout_s must be > 0");
+  CAIRN_THROW_UNLESS(max_scan_retries >= 0, "max_scan_retries must be >= 0");
+  CAIRN_THROW_UNLESS(max_goal_failures >= 1, "max_goal_failures must be >= 1");
+  CAIRN_THROW_UNLESS(max_zones >= 0 && max_zones <= 100000, "max_zones must be in [0, 100000]");
+}
+
+namespace {
+
+const NbvMissionParams& Validated(const NbvMissionParams& p) {
+  p.Validate();
+  return p;
+}
+
+std::string Fixed(double v, int digits) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(digits);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+NbvMission::NbvMission(const NbvMissionParams& params)
+    : params_(Validated(params)),
+      info_(params.work_area, params.info),
+      planner_(params.nbv),
+      assembler_(params.turret) {}
+
+const char* NbvMission::state_name() const {
+  switch (state_) {
+    case State::kIdle:
+      return "idle";
+    case State::kScanning:
+      return "scanning";
+    case State::kDriving:
+      return "driving";
+    case State::kDone:
+      return "done";
+  }
+  return "?";
+}
+
+NbvAction NbvMission::Start(double now_s) {
+  if (state_ != State::kIdle) return {};
+  scan_retries_ = 0;
+  return RequestScan(now_s, "first scan requested");
+}
+
+NbvAction NbvMission::RequestScan(double now_s, const std::string& event) {
+  state_ = State::kScanning;
+  assembler_.Request(now_s);
+  NbvAction a;
+  a.request_scan = true;
+  a.event = event;
+  return a;
+}
+
+void NbvMission::OnPosition(const common::Vector2& xy_m) {
+  if (!std::isfinite(xy_m.x()) || !std::isfinite(xy_m.y())) return;
+  if (!path_m_.empty()) {
+    const double step = (xy_m - path_m_.back()).norm();
+    if (step < 0.05) return;  // keep the path light: a point every 5 cm
+    distance_m_ += step;
+  }
+  path_m_.push_back(xy_m);
+}
+
+NbvAction NbvMission::OnTurretLine(const common::LaserScan& line, double pan_rad, double now_s) {
+  if (state_ != State::kScanning) return {};
+  std::string event;
+  const int restarts = assembler_.restarts();
+  std::optional<OrderedScan> scan = assembler_.Add(line, pan_rad, now_s, &event);
+  if (!scan) {
+    if (assembler_.restarts() != restarts) {
+      // The sweep broke (lines lost, the robot moved): a turret that sweeps on request will
+      // not come back to pan 0 by itself, so ask again now.
+      if (++scan_retries_ > params_.max_scan_retries) {
+        return Finish(
+            "no whole scan after " + std::to_string(scan_retries_) + " requests (" + event + ")",
+            true);
+      }
+      return RequestScan(now_s, event + "; asking again");
+    }
+    NbvAction a;
+    a.event = event;
+    return a;
+  }
+  NbvAction a = OnScan(*scan, now_s);
+  if (!event.empty()) a.event = event + "; " + a.event;
+  return a;
+}
+
+NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
+  scan_retries_ = 0;
+  BuildScanMesh(scan, params_.mesh, &mesh_);
+  const ScanFeatures features = AnalyseScan(scan, mesh_, params_.analysis);
+  std::vector<ScoredPoint> points;
+  points.reserve(scan.points_m.size());
+  for (size_t i = 0; i < scan.points_m.size(); ++i) {
+    if (!std::isfinite(features.navigability[i])) continue;
+    ScoredPoint p;
+    p.position_m = scan.points_m[i];
+    p.normal = mesh_.normals[i].allFinite() ? mesh_.normals[i] : Eigen::Vector3f::Zero();
+    p.navigability = features.navigability[i];
+    p.obstacle = std::isfinite(features.obstacle[i]) ? features.obstacle[i] : 0.f;
+    p.quality = std::isfinite(features.quality[i]) ? features.quality[i] : 0.f;
+    points.push_back(p);
+  }
+  ViewPoint view;
+  view.position_m = common::Vector2(scan.sensor_origin_m.x(), scan.sensor_origin_m.y());
+  view.time_s = now_s;
+  view.points_used = info_.AddPoints(points);
+
+  // Zones this view has seen into leave the list; the scan's own zones join it.
+  if (const auto cell = info_.geometry().IndexOf(view.position_m)) {
+    ViewEvaluator evaluator(info_, params_.nbv);
+    std::vector<size_t> seen = evaluator.Evaluate(info_.Linear(*cell), zones_).zones_seen;
+    std::sort(seen.rbegin(), seen.rend());
+    for (size_t z : seen) {
+      if (z < zones_.size()) zones_.erase(zones_.begin() + static_cast<std::ptrdiff_t>(z));
+    }
+  }
+  zones_.insert(zones_.end(), features.zones.begin(), features.zones.end());
+  std::stable_sort(zones_.begin(), zones_.end(), [](const InterestZone& a, const InterestZone& b) {
+    return a.area_m2 > b.area_m2;
+  });
+  if (zones_.size() > static_cast<size_t>(params_.max_zones)) zones_.resize(params_.max_zones);
+
+  view.coverage = info_.Coverage();
+  view.mean_quality = info_.MeanQuality();
+  view.zones = static_cast<int>(zones_.size());
+  view_points_.push_back(view);
+  const std::string scanned = "scan " + std::to_string(view_points_.size()) + " at (" +
+                              Fixed(view.position_m.x(), 1) + ", " + Fixed(view.position_m.y(), 1) +
+                              "): " + std::to_string(view.points_used) + " points, coverage " +
+                              Fixed(100.0 * view.coverage, 1) + " %, quality " +
+                              Fixed(view.mean_quality, 2) + ", " + std::to_string(view.zones) +
+                              " zones, " + Fixed(distance_m_, 1) + " m driven";
+  if (scans() >= params_.max_scans) {
+    NbvAction a = Finish("the scan limit (" + std::to_string(params_.max_scans) + ") is reached");
+    a.event = scanned + "; " + a.event;
+    return a;
+  }
+  try {
+    last_decision_ = planner_.Decide(info_, zones_, view.position_m);
+  } catch (const std::invalid_argument& e) {
+    NbvAction a = Finish(std::string("no decision: ") + e.what());
+    a.event = scanned + "; " + a.event;
+    return a;
+  }
+  if (last_decision_->outcome != NbvDecision::Outcome::kGoTo || !last_decision_->best) {
+    NbvAction a =
+        Finish(std::string(OutcomeName(last_decision_->outcome)) + ": " + last_decision_->reason);
+    a.event = scanned + "; " + a.event;
+    return a;
+  }
+  goal_ = last_decision_->best;
+  goal_sent_s_ = now_s;
+  ++goals_sent_;
+  state_ = State::kDriving;
+  NbvAction a;
+  a.goal = goal_;
+  a.event = scanned + "; next view (" + Fixed(goal_->position_m.x(), 1) + ", " +
+            Fixed(goal_->position_m.y(), 1) + "): u " + Fixed(goal_->utility, 3) + ", A " +
+            Fixed(goal_->info_gain, 2) + ", Q " + Fixed(goal_->quality_gain, 2) + ", O " +
+            Fixed(goal_->zone_gain, 2) + ", path " + Fixed(goal_->path_cost, 1);
+  return a;
+}
+
+NbvAction NbvMission::OnGoalResult(bool reached, const std::string& reason, double now_s) {
+  if (state_ != State::kDriving) return {};
+  if (reached) {
+    ++goals_reached_;
+    failures_in_a_row_ = 0;
+    scan_retries_ = 0;
+    return RequestScan(now_s, "view point reached; scanning");
+  }
+  ++goals_failed_;
+  if (++failures_in_a_row_ >= params_.max_goal_failures) {
+    return Finish(
+        std::to_string(failures_in_a_row_) + " goals in a row failed (last: " + reason + ")", true);
+  }
+  // Scan where the robot stopped: it has moved, and the new view decides again.
+  scan_retries_ = 0;
+  return RequestScan(now_s, "goal failed (" + reason + "); scanning where the robot stands");
+}
+
+NbvAction NbvMission::Tick(double now_s) {
+  if (state_ == State::kScanning) {
+    std::string event;
+    if (assembler_.CheckTimeout(now_s, &event)) {
+      if (++scan_retries_ > params_.max_scan_retries) {
+        return Finish(
+            "no scan after " + std::to_string(scan_retries_) + " requests (" + event + ")", true);
+      }
+      return RequestScan(now_s, event + "; asking again");
+    }
+  } else if (state_ == State::kDriving && now_s - goal_sent_s_ > params_.goal_timeout_s) {
+    return OnGoalResult(false, "no result in " + Fixed(params_.goal_timeout_s, 0) + " s", now_s);
+  }
+  return {};
+}
+
+void NbvMission::Stop(const std::string& why) {
+  if (state_ != State::kDone) Finish(why);
+}
+
+NbvAction NbvMission::Finish(const std::string& why, bool failed) {
+  state_ = State::kDone;
+  failed_ = failed;
+  end_reason_ = why;
+  NbvAction a;
+  a.done = true;
+  a.event = "exploration done: " + why;
+  return a;
+}
+
+}  // namespace cairn::explore

@@ -1,0 +1,68 @@
+#include "services/explore/nbv_report.h"
+
+#include <cstdio>
+
+#include "mapstore/io/files.h"
+#include "mapstore/io/png.h"
+
+namespace cairn::explore {
+
+std::string NbvSummaryTable(const NbvMission& mission, const std::string& preset) {
+  std::string out;
+  char line[256];
+  const auto& views = mission.view_points();
+  const double coverage = views.empty() ? 0.0 : views.back().coverage;
+  const double quality = views.empty() ? 0.0 : views.back().mean_quality;
+  std::snprintf(line, sizeof(line),
+                "next-best-view (%s): %d scans, %.1f m driven, coverage %.1f %%, mean quality "
+                "%.3f, %d goals (%d reached, %d failed)\n",
+                preset.c_str(), mission.scans(), mission.distance_m(), 100.0 * coverage, quality,
+                mission.goals_sent(), mission.goals_reached(), mission.goals_failed());
+  out += line;
+  if (!mission.end_reason().empty()) out += "ended: " + mission.end_reason() + "\n";
+  out += "scan      x m      y m   time s   points  coverage %  quality  zones\n";
+  for (size_t i = 0; i < views.size(); ++i) {
+    const ViewPoint& v = views[i];
+    std::snprintf(line, sizeof(line), "%4zu %8.2f %8.2f %8.1f %8lld %11.1f %8.3f %6d\n", i + 1,
+                  v.position_m.x(), v.position_m.y(), v.time_s,
+                  static_cast<long long>(v.points_used), 100.0 * v.coverage, v.mean_quality,
+                  v.zones);
+    out += line;
+  }
+  return out;
+}
+
+common::Result<std::vector<std::string>> WriteNbvReport(const NbvMission& mission,
+                                                        const std::string& preset,
+                                                        const std::string& dir) {
+  std::vector<std::string> written;
+  auto summary_path = mapstore::io::OutputPath(dir, "nbv_summary", ".txt");
+  if (!summary_path.ok()) return summary_path.status();
+  const common::Status wrote =
+      mapstore::io::WriteFileAtomically(*summary_path, NbvSummaryTable(mission, preset));
+  if (!wrote.ok()) return wrote;
+  written.push_back(*summary_path);
+
+  const common::GridMap map = mission.info_map().ToGridMap();
+  mapstore::io::PngOverlay overlay;
+  overlay.path_m = mission.path_m();
+  for (size_t i = 0; i < mission.view_points().size(); ++i) {
+    overlay.markers.push_back({mission.view_points()[i].position_m, std::to_string(i + 1)});
+  }
+  char caption[160];
+  const auto& views = mission.view_points();
+  std::snprintf(caption, sizeof(caption), "%s: %d scans, %.1f m, coverage %.1f %%", preset.c_str(),
+                mission.scans(), mission.distance_m(),
+                views.empty() ? 0.0 : 100.0 * views.back().coverage);
+  overlay.caption = caption;
+  for (const auto& [stem, layer] :
+       {std::pair<std::string, std::string>{"nbv_navigability", info_layers::kNavigability},
+        {"nbv_quality", info_layers::kQuality}}) {
+    auto png = mapstore::io::WritePng(dir, stem, map, layer, overlay);
+    if (!png.ok()) return png.status();
+    written.push_back(*png);
+  }
+  return written;
+}
+
+}  // namespace cairn::explore

@@ -1,0 +1,138 @@
+// Seed 002's stop-and-scan next-best-view mission closed loop in the outdoor world: cairn-sim
+// (the rover with its turret sweeping on request and its HDL-32E), cairn-mapper (the rover's
+// cost layer from the lidar), cairn-navigator (drives to each view point) and cairn-explorer
+// --mode nbv, as real processes on a private bus. The explorer asks the simulator for each scan
+// over SIM.CONTROL, assembles the turret's lines, builds its information map and sends the next
+// best view to the navigator.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "cairn/lcmt_explore_status.hpp"
+#include "cairn/lcmt_pose.hpp"
+
+#include "common/channels.h"
+#include "tests/support/harness.h"
+
+namespace cairn::explore {
+namespace {
+
+namespace ch = channels;
+using testing::Bus;
+using testing::ProcessSet;
+using testing::WaitFor;
+
+constexpr char kRobot[] = "rover";
+constexpr int kScans = 4;
+constexpr int kLinesPerScan = 360;  // 180 deg of pan in 0.5 deg steps
+
+int Occurrences(const std::string& text, const std::string& what) {
+  int n = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+  return n;
+}
+
+TEST(NbvStackTest, StopsScansAndDrivesToTheNextBestViewUntilTheScanLimit) {
+  ProcessSet procs(testing::PrivateLcmUrl());
+  const std::string out = testing::TestTempDir() + "/report";
+  Bus bus(procs.url());
+  const std::string status_channel = ch::ForRobot(kRobot, ch::kExploreStatus);
+  bus.Keep(status_channel);
+  auto& sim = procs.Start(
+      "cairn-sim",
+      {"--scenario", testing::SourcePath("config/sim/outdoor_nbv.yaml"), "--speed", "2"});
+  procs.Start("cairn-mapper", {"--robot", kRobot, "--profiles", "rover", "--config",
+                               testing::SourcePath("config/mapping/mapper.yaml")});
+  procs.Start("cairn-navigator", {"--robot", kRobot, "--profile", "rover", "--config",
+                                  testing::SourcePath("config/navigator/navigator.yaml")});
+  auto& explorer = procs.Start(
+      "cairn-explorer", {"--robot", kRobot, "--profile", "rover", "--config",
+                         testing::SourcePath("config/explore/outdoor_nbv.yaml"), "--max-scans",
+                         std::to_string(kScans), "--duration", "600", "--out", out});
+
+  // Four scans of 7.2 simulated seconds and three drives of a few metres: about 40 s of wall
+  // time at 2x; the bound allows for a slow machine.
+  const bool done = WaitFor([&] { return !explorer.Running(); }, 400.0, [&] { bus.Pump(20); });
+  for (int i = 0; i < 20; ++i) bus.Pump(10);
+  ASSERT_TRUE(done) << "the explorer did not finish\n" << explorer.Log();
+  const auto rc = explorer.WaitExit(5.0);
+  ASSERT_TRUE(rc.has_value());
+  EXPECT_EQ(*rc, 0) << explorer.Log();
+  const std::string log = explorer.Log();
+
+  // Its progress on the bus: scans and coverage never go back, and the last status says done
+  // after the four scans, with the view points reached.
+  std::vector<cairn::lcmt_explore_status> statuses;
+  for (const auto& bytes : bus.Kept(status_channel)) {
+    cairn::lcmt_explore_status s{};
+    ASSERT_GE(s.decode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+    statuses.push_back(s);
+  }
+  ASSERT_FALSE(statuses.empty());
+  int scans = 0;
+  double coverage = 0.0;
+  for (const auto& s : statuses) {
+    EXPECT_EQ(s.mode, +cairn::lcmt_explore_status::MODE_NBV);
+    EXPECT_GE(s.scans, scans);
+    scans = s.scans;
+    if (std::isfinite(s.coverage)) {
+      EXPECT_GE(s.coverage, coverage - 1e-9);
+      coverage = s.coverage;
+    }
+  }
+  const auto& last = statuses.back();
+  EXPECT_EQ(last.state, +cairn::lcmt_explore_status::STATE_DONE) << log;
+  EXPECT_EQ(last.scans, kScans) << log;
+  EXPECT_EQ(last.goals_sent, kScans - 1) << log;
+  EXPECT_GE(last.goals_reached, kScans - 2) << log;
+  // The first scan from the start area sees most of the 16 x 14 m work area (the turret
+  // reaches 30 m); the next ones add to it.
+  EXPECT_GE(last.coverage, 0.6) << log;
+  EXPECT_GT(last.quality, 0.0) << log;
+  EXPECT_GT(last.distance_m, 3.0) << log;
+  EXPECT_NE(log.find("scan limit (4) is reached"), std::string::npos) << log;
+
+  // The summary table (a row per scan) and the renders of the information map.
+  std::ifstream summary_file(out + "/nbv_summary.txt");
+  ASSERT_TRUE(summary_file.good()) << log;
+  std::stringstream summary;
+  summary << summary_file.rdbuf();
+  EXPECT_NE(summary.str().find("4 scans"), std::string::npos) << summary.str();
+  int rows = 0;
+  for (std::string line; std::getline(summary, line);) {
+    int scan = 0;
+    double x = 0, y = 0;
+    if (std::sscanf(line.c_str(), "%d %lf %lf", &scan, &x, &y) == 3) ++rows;
+  }
+  EXPECT_EQ(rows, kScans) << summary.str();
+  for (const char* png : {"/nbv_navigability.png", "/nbv_quality.png"}) {
+    EXPECT_GT(std::filesystem::file_size(out + png), 1000u) << png;
+  }
+
+  // Each scan was asked of the simulator, and the turret swept only when asked: at most one
+  // sweep of lines per request, and at least one whole sweep per scan.
+  const std::string sim_log = sim.Log();
+  const int triggers = Occurrences(sim_log, "triggered rover/turret");
+  EXPECT_GE(triggers, kScans) << sim_log;
+  const int64_t lines = bus.Count(ch::ForRobot(kRobot, ch::kTurretScan));
+  EXPECT_GE(lines, int64_t{kScans} * kLinesPerScan);
+  EXPECT_LE(lines, int64_t{triggers} * kLinesPerScan);
+
+  // The robot stood on its wheels all along (the ground truth's roll and pitch stay small).
+  const auto pose = bus.Last<cairn::lcmt_pose>(ch::ForRobot(kRobot, ch::kPose));
+  ASSERT_TRUE(pose.has_value());
+  const double x = pose->orientation_wxyz[1], y = pose->orientation_wxyz[2];
+  const double up_z = 1.0 - 2.0 * (x * x + y * y);  // world z of the body's z axis
+  EXPECT_GT(up_z, std::cos(20.0 * M_PI / 180.0));
+}
+
+}  // namespace
+}  // namespace cairn::explore
