@@ -165,6 +165,14 @@ void FrontierModeParams::Validate() const {
 }
 
 void ExplorerConfig::Validate() const {
+  if (!save_to.empty()) {
+    const auto slash = save_to.find('/');
+    if (slash == std::string::npos || slash == 0 || slash + 1 == save_to.size() ||
+        save_to.find('/', slash + 1) != std::string::npos) {
+      throw std::invalid_argument("explorer: save_to must be \"site/map\" (got \"" + save_to +
+                                  "\")");
+    }
+  }
   if (!(duration_s >= 0.0) || !std::isfinite(duration_s)) {
     throw std::invalid_argument("explorer: duration_s must be >= 0");
   }
@@ -191,6 +199,7 @@ ExplorerConfig LoadExplorerConfig(YamlMap& root) {
   root.Get("status_rate_hz", &c.status_rate_hz);
   root.Get("scan_timeout_s", &c.scan_timeout_s);
   root.Get("out_dir", &c.out_dir);
+  root.Get("save_to", &c.save_to);
   LoadReactive(root.Child("reactive"), &c.reactive);
   LoadFrontier(root.Child("frontier"), &c.frontier);
   LoadNbv(root.Child("nbv"), &c.nbv);

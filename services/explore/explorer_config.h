@@ -97,6 +97,9 @@ struct ExplorerConfig {
   double scan_timeout_s{0.5};
   /// Next-best-view: where the summary table and the renders go at the end ("" none).
   std::string out_dir;
+  /// Next-best-view: "site/map" to push-save the information map's layers (explore/*) to
+  /// cairn-mapstore at the end ("" none).
+  std::string save_to;
   ReactiveParams reactive;
   FrontierModeParams frontier;
   NbvModeParams nbv;

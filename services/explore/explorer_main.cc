@@ -26,6 +26,7 @@ struct Options {
   std::string preset;
   int max_scans = 0;
   std::string out_dir;
+  std::string save_to;
   double duration_s = -1.0;
   std::string lcm_url;
 };
@@ -51,6 +52,7 @@ int Run(const Options& o) {
   if (!o.preset.empty()) config.nbv.preset = o.preset;
   if (o.max_scans > 0) config.nbv.max_scans = o.max_scans;
   if (!o.out_dir.empty()) config.out_dir = o.out_dir;
+  if (!o.save_to.empty()) config.save_to = o.save_to;
   config.Validate();
 
   runtime::NodeOptions options;
@@ -67,6 +69,7 @@ int Run(const Options& o) {
   while (node.SpinOnce(50) && !service.done()) {
   }
   if (!service.done()) service.Halt("stopped by a signal");
+  service.WrapUp();
   // The last status (and the stop command) reach the bus before the socket closes.
   service.PublishStatus();
   for (int i = 0; i < 4; ++i) node.SpinOnce(5);
@@ -102,6 +105,8 @@ int main(int argc, char** argv) {
                   "nbv: a preset of seed 002's tables (simple-balanced, greedy, ...)");
   flags.AddString("out", &o.out_dir,
                   "nbv: write the summary table and the information map's renders (PNG) here");
+  flags.AddString("save", &o.save_to,
+                  "nbv: \"site/map\": save the information map to cairn-mapstore at the end");
   flags.AddInt("max-scans", &o.max_scans, "nbv: end after this many scans (overrides the config)");
   flags.AddDouble("duration", &o.duration_s,
                   "simulated seconds of exploring, 0 = until done (overrides the config)");

@@ -9,8 +9,10 @@ Outputs (all in this folder):
   arena.xml                        rooms and clutter for 2-D occupancy mapping (seed 003)
   outdoor.xml, outdoor_terrain.bin heightfield terrain with slopes, rocks and structures
   terraces.xml, terraces_lanes.yaml  one-way drops and ditches in walled lanes (directed terrain)
+  simple.xml, simple_terrain.bin   seed 002's simple environment: a house and a tree on a hill
+  structured.xml                   seed 002's urban block: buildings, kerbs, parked cars, a passage
 
-Everything is deterministic (the outdoor terrain uses a fixed seed), so running it again
+Everything is deterministic (the outdoor and simple terrains use fixed seeds), so running it again
 reproduces the committed files byte for byte.
 """
 
@@ -761,6 +763,243 @@ def terraces():
     write("terraces_lanes.yaml", "\n".join(y) + "\n")
 
 
+# --------------------------------------------------------------------------------------------
+# simple
+
+SIMPLE_WORK_AREA = (-12.0, 14.0, -10.0, 12.0)   # x0, x1, y0, y1: seed 002's red rectangle
+SIMPLE_HOUSE = (2.0, 10.0, 2.0, 8.0)            # x0, x1, y0, y1
+SIMPLE_TREE = (-6.0, -4.0)
+
+
+def smoothstep(t):
+    t = min(1.0, max(0.0, t))
+    return t * t * (3.0 - 2.0 * t)
+
+
+def max_slope_deg(heights, n, half, skip):
+    """The steepest triangle of the height field (either diagonal of each cell), in degrees,
+    leaving out cells that touch the rectangle `skip` (x0, x1, y0, y1)."""
+    step = 2 * half / (n - 1)
+    worst = 0.0
+    for r in range(n - 1):
+        y = -half + step * r
+        for c in range(n - 1):
+            x = -half + step * c
+            if x + step >= skip[0] and x <= skip[1] and y + step >= skip[2] and y <= skip[3]:
+                continue
+            z00, z10 = heights[r][c], heights[r][c + 1]
+            z01, z11 = heights[r + 1][c], heights[r + 1][c + 1]
+            for gx, gy in ((z10 - z00, z01 - z00), (z11 - z01, z11 - z10),
+                           (z10 - z00, z11 - z10), (z11 - z01, z01 - z00)):
+                worst = max(worst, math.degrees(math.atan(math.hypot(gx, gy) / step)))
+    return worst
+
+
+def gable_roof(name, x0, x1, y0, y1, z, pitch_deg, rgba):
+    """A solid gable roof on the flat top (height z) of the box x0..x1, y0..y1, its ridge along x
+    over the middle: two slabs thick enough to fill the attic down to z (no ray gets in under
+    them) whose undersides stay inside the box."""
+    a = math.radians(pitch_deg)
+    w = (y1 - y0) / 2
+    t = w * math.sin(a) + 0.05
+    ym = (y0 + y1) / 2
+    geoms = []
+    for side, sign in (("south", 1.0), ("north", -1.0)):
+        # Midpoint of the top surface, then down along the surface normal by half the thickness.
+        my, mz = ym - sign * w / 2, z + w * math.tan(a) / 2
+        ny, nz = -sign * math.sin(a), math.cos(a)
+        geoms.append(box(f"{name}_{side}", (x0 + x1) / 2, my - ny * t / 2, mz - nz * t / 2,
+                         (x1 - x0) / 2, w / math.cos(a) / 2, t / 2, rgba,
+                         euler=(sign * pitch_deg, 0, 0)))
+    return geoms, w * math.tan(a)
+
+
+def simple():
+    """Seed 002's simple environment (section 6.2.1): a house and a tree on a gently irregular
+    hill, explored inside a rectangle."""
+    n = 81            # samples per side
+    half = 20.0       # half size in metres: 0.5 m between samples
+    rng = random.Random(2024)
+    # The hill: a ridge whose crest (1.3 m) runs from (-3, -2) past the start to the house, so that
+    # both stand on its flat top; random bumps make it irregular, faded out near the start.
+    p0, p1, amp, sigma = (-3.0, -2.0), (8.0, 6.0), 1.3, 7.0
+    bumps = [(rng.uniform(-19, 19), rng.uniform(-19, 19), rng.uniform(-0.25, 0.25),
+              rng.uniform(3.0, 5.0)) for _ in range(10)]
+    ex, ey = p1[0] - p0[0], p1[1] - p0[1]
+    heights = []
+    for r in range(n):
+        y = -half + 2 * half * r / (n - 1)
+        row = []
+        for c in range(n):
+            x = -half + 2 * half * c / (n - 1)
+            t = max(0.0, min(1.0, ((x - p0[0]) * ex + (y - p0[1]) * ey) / (ex * ex + ey * ey)))
+            d2 = (x - p0[0] - t * ex) ** 2 + (y - p0[1] - t * ey) ** 2
+            z = amp * math.exp(-d2 / (2 * sigma ** 2))
+            u = sum(a * math.exp(-((x - bx) ** 2 + (y - by) ** 2) / (2 * s ** 2))
+                    for bx, by, a, s in bumps)
+            z += smoothstep((math.hypot(x, y) - 2.0) / 3.0) * u
+            row.append(z)
+        heights.append(row)
+    lo = min(min(row) for row in heights)
+    hi = max(max(row) for row in heights)
+    hx0, hx1, hy0, hy1 = SIMPLE_HOUSE
+    slope = max_slope_deg(heights, n, half, SIMPLE_HOUSE)
+    assert slope <= 8.0, f"simple: the terrain is {slope:.2f} deg steep somewhere"
+    with open(os.path.join(HERE, "simple_terrain.bin"), "wb") as out:
+        out.write(struct.pack("<ii", n, n))
+        for row in heights:
+            out.write(struct.pack(f"<{n}f", *row))
+
+    def ground_min(xs, ys):
+        return min(terrain_at(heights, n, half, x, y, lo) for x in xs for y in ys)
+
+    g = ['    <geom name="terrain" type="hfield" hfield="terrain" pos="0 0 0" '
+         'rgba="0.45 0.5 0.35 1"/>']
+    # The house: one solid box, sunk 0.2 m below its lowest corner, 3 m walls above it, and a
+    # 25 deg gable roof.
+    steps = [k * 0.5 for k in range(int(round((hx1 - hx0) / 0.5)) + 1)]
+    house_z0 = ground_min([hx0 + s for s in steps], [hy0 + s for s in steps if s <= hy1 - hy0])
+    wall_top = house_z0 + 3.0
+    g.append(aabb("house", hx0, hx1, hy0, hy1, house_z0 - 0.2, wall_top))
+    roof, ridge = gable_roof("house_roof", hx0, hx1, hy0, hy1, wall_top, 25.0, "0.6 0.3 0.25 1")
+    g += roof
+    # The tree: a trunk 2.5 m above the ground (sunk 0.2 m) under a crown 1.5 m in radius.
+    tx, ty = SIMPLE_TREE
+    tree_z0 = ground_min((tx - 0.25, tx + 0.25), (ty - 0.25, ty + 0.25))
+    g.append(f'    <geom name="tree_trunk" type="cylinder" size="0.25 1.35" '
+             f'pos="{f(tx)} {f(ty)} {f(tree_z0 + 1.15)}" rgba="0.4 0.3 0.2 1"/>')
+    g.append(f'    <geom name="tree_crown" type="sphere" size="1.5" '
+             f'pos="{f(tx)} {f(ty)} {f(tree_z0 + 3.7)}" rgba="0.25 0.45 0.2 1"/>')
+    wx0, wx1, wy0, wy1 = SIMPLE_WORK_AREA
+    lines = header("simple", "simple: seed 002's simple environment, a house and a tree on a gently "
+                   "irregular 40 x 40 m height-field hill (work area x -12..14, y -10..12)")
+    lines += [
+        "<!--",
+        f"  Generated by generate_worlds.py. Terrain: simple_terrain.bin, {n} x {n} samples",
+        f"  0.5 m apart over x, y in -20..20, heights {f(lo)}..{f(hi)} m (shifted so the lowest",
+        "  point is z = 0): a ridge whose crest runs from (-3, -2) to (8, 6), with random bumps",
+        f"  (seed 2024) that fade out within 2..5 m of the origin; at most {slope:.1f} deg steep",
+        "  outside the house. Start: the origin (z = "
+        f"{terrain_at(heights, n, half, 0.0, 0.0, lo):.2f}), on the crest, flat-ish within 2 m.",
+        f"  House: a solid box x {f(hx0)}..{f(hx1)}, y {f(hy0)}..{f(hy1)}, walls 3 m above its lowest",
+        f"  corner (top z = {wall_top:.2f}), a 25 deg gable roof with its ridge along x, "
+        f"{ridge:.2f} m high.",
+        f"  Tree at ({f(tx)}, {f(ty)}): trunk r 0.25 m, 2.5 m high, crown r 1.5 m on top.",
+        f"  Work area (seed 002's red rectangle): x {f(wx0)}..{f(wx1)}, y {f(wy0)}..{f(wy1)}.",
+        "-->",
+        "  <asset>",
+        f'    <hfield name="terrain" file="simple_terrain.bin" size="{f(half)} {f(half)} '
+        f'{f(hi - lo)} 0.5"/>',
+        "  </asset>",
+        "  <worldbody>",
+        '    <light name="sun" directional="true" pos="0 0 40" dir="0.2 0.1 -1"/>',
+    ]
+    lines += g + ["  </worldbody>", "</mujoco>", ""]
+    write("simple.xml", "\n".join(lines))
+
+
+# --------------------------------------------------------------------------------------------
+# structured
+
+KERB_H = 0.12
+KERB_W = 0.3
+KERB_RGBA = "0.75 0.75 0.72 1"
+BUILDING_RGBA = ["0.62 0.6 0.56 1", "0.7 0.62 0.52 1", "0.55 0.58 0.62 1"]
+CAR_RGBA = ["0.7 0.15 0.12 1", "0.15 0.3 0.6 1", "0.85 0.85 0.82 1", "0.2 0.2 0.22 1",
+            "0.2 0.5 0.3 1", "0.8 0.65 0.15 1"]
+
+
+def kerb(name, x0, x1, y0, y1, gaps):
+    """A kerb along x (when x1 - x0 > y1 - y0) or y, cut by `gaps` (from, to) along it."""
+    along_x = x1 - x0 > y1 - y0
+    a0, a1 = (x0, x1) if along_x else (y0, y1)
+    cuts = [a0] + [v for gap in gaps for v in gap] + [a1]
+    out = []
+    for i in range(0, len(cuts), 2):
+        s0, s1 = cuts[i], cuts[i + 1]
+        if along_x:
+            out.append(aabb(f"{name}_{i // 2}", s0, s1, y0, y1, 0.0, KERB_H, KERB_RGBA))
+        else:
+            out.append(aabb(f"{name}_{i // 2}", x0, x1, s0, s1, 0.0, KERB_H, KERB_RGBA))
+    return out
+
+
+def car(name, cx, cy, along_x, rgba):
+    """A parked car: a 4.2 x 1.8 x 0.9 m body and a 2.2 x 1.6 m cabin on it (1.4 m high), the
+    cabin a little behind the middle."""
+    lx, ly = (2.1, 0.9) if along_x else (0.9, 2.1)
+    cx2, cy2 = (cx - 0.2, cy) if along_x else (cx, cy - 0.2)
+    clx, cly = (1.1, 0.8) if along_x else (0.8, 1.1)
+    return [aabb(f"{name}_body", cx - lx, cx + lx, cy - ly, cy + ly, 0.0, 0.9, rgba),
+            aabb(f"{name}_cabin", cx2 - clx, cx2 + clx, cy2 - cly, cy2 + cly, 0.9, 1.4,
+                 "0.3 0.35 0.4 1")]
+
+
+# name, x0, x1, y0, y1, height
+STRUCTURED_BUILDINGS = [
+    ("building_nw", -19.0, -12.5, 5.0, 13.0, 6.0),
+    ("building_n", -2.5, 5.5, 5.0, 14.0, 8.0),
+    ("building_ne", 8.0, 17.0, 5.0, 12.0, 5.0),
+    ("building_sw", -19.0, -12.5, -14.0, -5.0, 4.5),
+    ("building_s", -2.5, 4.5, -13.0, -5.0, 7.0),
+    ("building_se", 13.5, 19.5, -13.0, -5.0, 6.0),
+]
+# name, centre x, y, along x
+STRUCTURED_CARS = [
+    ("car_0", -14.0, 2.4, True),
+    ("car_1", 12.0, 2.4, True),
+    ("car_2", 17.5, -2.4, True),
+    ("car_3", -5.1, 10.0, False),
+    ("car_4", -9.9, -13.0, False),
+    ("car_5", 7.1, -16.0, False),
+]
+
+
+def structured():
+    """Seed 002's structured (urban) environment (section 6.2.2): buildings, streets with kerbs
+    and parked cars on flat ground, and a narrow passage between two buildings."""
+    g = ['    <geom name="ground" type="plane" size="30 30 0.1" pos="0 0 0" '
+         f'rgba="{FLOOR_RGBA}"/>']
+    for i, (name, x0, x1, y0, y1, h) in enumerate(STRUCTURED_BUILDINGS):
+        g.append(aabb(name, x0, x1, y0, y1, 0.0, h, BUILDING_RGBA[i % len(BUILDING_RGBA)]))
+    # Streets: main (along x) y -3.5..3.5; west (along y) x -11..-4; south-east (along y, south
+    # of the main street only) x 6..12. Kerbs stand just outside their edges, cut at the crossings
+    # and by gaps where the pavements, the passage and the yards behind the buildings are reached.
+    w = KERB_W
+    g += kerb("kerb_main_n_w", -20.0, -11.0, 3.5, 3.5 + w, [(-18.5, -16.5)])
+    g += kerb("kerb_main_n_e", -4.0, 20.0, 3.5, 3.5 + w, [(0.5, 2.5), (5.0, 8.5), (15.5, 17.5)])
+    g += kerb("kerb_main_s_w", -20.0, -11.0, -3.5 - w, -3.5, [(-16.5, -14.5)])
+    g += kerb("kerb_main_s_e0", -4.0, 6.0, -3.5 - w, -3.5, [(0.5, 2.5)])
+    g += kerb("kerb_main_s_e1", 12.0, 20.0, -3.5 - w, -3.5, [(12.8, 14.8)])
+    g += kerb("kerb_west_w_n", -11.0 - w, -11.0, 3.5, 20.0, [(8.0, 10.0)])
+    g += kerb("kerb_west_w_s", -11.0 - w, -11.0, -20.0, -3.5, [(-10.0, -8.0)])
+    g += kerb("kerb_west_e_n", -4.0, -4.0 + w, 3.5, 20.0, [(15.0, 17.0)])
+    g += kerb("kerb_west_e_s", -4.0, -4.0 + w, -20.0, -3.5, [(-17.0, -15.0)])
+    g += kerb("kerb_se_w", 6.0 - w, 6.0, -20.0, -3.5, [(-11.0, -9.0)])
+    g += kerb("kerb_se_e", 12.0, 12.0 + w, -20.0, -3.5, [(-10.0, -8.0)])
+    for i, (name, cx, cy, along_x) in enumerate(STRUCTURED_CARS):
+        g += car(name, cx, cy, along_x, CAR_RGBA[i % len(CAR_RGBA)])
+    lines = header("structured", "structured: seed 002's structured (urban) environment, a "
+                   "40 x 40 m block on flat ground with six buildings, streets with kerbs and "
+                   "parked cars, and a 2.5 m passage between two buildings")
+    lines += [
+        "<!--",
+        "  Generated by generate_worlds.py. Ground plane z = 0. Streets: main x -20..20, y -3.5..3.5;",
+        "  west x -11..-4, y -20..20; south-east x 6..12, y -20..-3.5. Kerbs 0.12 m high, 0.3 m wide",
+        "  just outside the street edges, cut at the crossings and by 2 m gaps (3.5 m at the",
+        "  passage). Buildings (x, y, height): nw -19..-12.5, 5..13, 6 m; n -2.5..5.5, 5..14, 8 m;",
+        "  ne 8..17, 5..12, 5 m; sw -19..-12.5, -14..-5, 4.5 m; s -2.5..4.5, -13..-5, 7 m;",
+        "  se 13.5..19.5, -13..-5, 6 m. Passage between n and ne: x 5.5..8 (2.5 m), y 5..12.",
+        "  Six parked cars (4.2 x 1.8 x 1.4 m) along the kerbs. Start: (0, 0) in the main street,",
+        "  facing +x. Work area: the block, x -20..20, y -20..20.",
+        "-->",
+        "  <worldbody>",
+        '    <light name="sun" directional="true" pos="0 0 40" dir="0.2 0.1 -1"/>',
+    ]
+    lines += g + ["  </worldbody>", "</mujoco>", ""]
+    write("structured.xml", "\n".join(lines))
+
+
 def terrain_at(heights, n, half, x, y, lo):
     """Terrain height (relative to the lowest point) at (x, y), bilinear."""
     cx = (x + half) / (2 * half) * (n - 1)
@@ -785,3 +1024,5 @@ if __name__ == "__main__":
     room()
     outdoor()
     terraces()
+    simple()
+    structured()

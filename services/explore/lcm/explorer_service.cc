@@ -10,6 +10,7 @@
 
 #include "common/channels.h"
 #include "common/check.h"
+#include "mapstore/lcm/mapstore_client.h"
 #include "services/explore/nbv_report.h"
 #include "services/runtime/conversions.h"
 
@@ -311,6 +312,31 @@ void ExplorerService::SendScanRequest() {
   node_.Publish(ch::kSimControl, req);
 }
 
+void ExplorerService::SaveInfoMap() {
+  const auto slash = config_.save_to.find('/');
+  mapstore::MapSnapshot snapshot;
+  snapshot.site = config_.save_to.substr(0, slash);
+  snapshot.name = config_.save_to.substr(slash + 1);
+  snapshot.base = nbv_->info_map().ToGridMap();
+  snapshot.provenance.source_robot = robot_;
+  snapshot.provenance.source_profile = profile_.name;
+  snapshot.provenance.source_profile_hash = profile_.ContentHash();
+  snapshot.provenance.code_version = "cairn-explorer nbv";
+  snapshot.provenance.parameters = "preset: " + config_.nbv.preset + "\nwork_area: \"" +
+                                   config_.nbv.work_area + "\"\n";
+  mapstore::MapstoreClient client(node_.lcm(), kProcess);
+  const auto reply = client.Save(snapshot);
+  if (!reply.ok()) {
+    node_.Warn("save", "the information map was not saved to " + config_.save_to + ": " +
+                           reply.status().ToString());
+  } else if (reply->status != cairn::lcmt_mapstore_reply::STATUS_OK) {
+    node_.Warn("save", "the map store refused the information map: " + reply->message);
+  } else {
+    node_.Event("information map saved as %s version %lld (%zu layers)", config_.save_to.c_str(),
+                static_cast<long long>(reply->version), snapshot.base.layer_names().size());
+  }
+}
+
 void ExplorerService::SendNbvGoal(const Candidate& goal) {
   nbv_goal_id_ = next_goal_id_++;
   cairn::lcmt_goal msg{};
@@ -488,30 +514,34 @@ void ExplorerService::Finish(const std::string& why) {
       failed() ? cairn::lcmt_explore_status::STATE_FAILED : cairn::lcmt_explore_status::STATE_DONE;
   SetBehaviour("DONE", why);
   PublishStatus();
-  if (nbv_) {
-    UpdateNbvStatus();
-    // Seed 002's summary, a line per view point, and the renders.
-    std::string table = NbvSummaryTable(*nbv_, config_.nbv.preset);
-    size_t begin = 0;
-    for (size_t end = table.find('\n'); end != std::string::npos;
-         begin = end + 1, end = table.find('\n', begin)) {
-      node_.Event("%s", table.substr(begin, end - begin).c_str());
-    }
-    if (!config_.out_dir.empty()) {
-      const auto written = WriteNbvReport(*nbv_, config_.nbv.preset, config_.out_dir);
-      if (written.ok()) {
-        node_.Event("summary and renders written to %s (%zu files)", config_.out_dir.c_str(),
-                    written->size());
-      } else {
-        node_.Warn("report",
-                   "the summary and renders could not be written: " + written.status().ToString());
-      }
-    }
-  }
+  if (nbv_) UpdateNbvStatus();
   node_.Event("done: %s (%.1f m driven in %.0f s, %d reverses, %d goals: %d reached, %d failed)",
               why.c_str(), status_.distance_m, status_.elapsed_s, status_.reverses,
               status_.goals_sent, status_.goals_reached, status_.goals_failed);
   node_.SetState(runtime::HealthState::kReady, "done: " + why);
+}
+
+void ExplorerService::WrapUp() {
+  if (!nbv_ || wrapped_up_) return;
+  wrapped_up_ = true;
+  // Seed 002's summary, a line per view point, and the renders.
+  const std::string table = NbvSummaryTable(*nbv_, config_.nbv.preset);
+  size_t begin = 0;
+  for (size_t end = table.find('\n'); end != std::string::npos;
+       begin = end + 1, end = table.find('\n', begin)) {
+    node_.Event("%s", table.substr(begin, end - begin).c_str());
+  }
+  if (!config_.save_to.empty()) SaveInfoMap();
+  if (!config_.out_dir.empty()) {
+    const auto written = WriteNbvReport(*nbv_, config_.nbv.preset, config_.out_dir);
+    if (written.ok()) {
+      node_.Event("summary and renders written to %s (%zu files)", config_.out_dir.c_str(),
+                  written->size());
+    } else {
+      node_.Warn("report", "the summary and renders could not be written: " +
+                               written.status().ToString());
+    }
+  }
 }
 
 void ExplorerService::PublishStatus() {

@@ -58,6 +58,9 @@ class ExplorerService {
   void PublishStatus();
   /// Stops the robot (reactive: a zero command; frontier: cancels the goal).
   void Halt(const std::string& why);
+  /// After the loop, outside every LCM handler (it talks to the map store): the next-best-view
+  /// summary table, the save to the map store (save_to) and the renders (out_dir). Once.
+  void WrapUp();
 
   bool done() const { return done_; }
   /// Done, but the mission failed (next-best-view: scans or goals kept failing).
@@ -77,6 +80,7 @@ class ExplorerService {
   void SendScanRequest();
   void SendNbvGoal(const Candidate& goal);
   void UpdateNbvStatus();
+  void SaveInfoMap();
 
   runtime::Node& node_;
   ExplorerConfig config_;
@@ -102,6 +106,7 @@ class ExplorerService {
   std::optional<int64_t> nbv_goal_id_;
   int64_t next_goal_id_{1};
   int64_t next_request_id_{1};
+  bool wrapped_up_{false};
 };
 
 }  // namespace cairn::explore

@@ -20,6 +20,8 @@
 #include "cairn/lcmt_pose.hpp"
 
 #include "common/channels.h"
+#include "common/grid_map.h"
+#include "mapstore/sqlite_map_store.h"
 #include "tests/support/harness.h"
 
 namespace cairn::explore {
@@ -43,6 +45,8 @@ int Occurrences(const std::string& text, const std::string& what) {
 TEST(NbvStackTest, StopsScansAndDrivesToTheNextBestViewUntilTheScanLimit) {
   ProcessSet procs(testing::PrivateLcmUrl());
   const std::string out = testing::TestTempDir() + "/report";
+  const std::string db = testing::TestTempDir() + "/cairn.db";
+  procs.Start("cairn-mapstore", {"--db", db});
   Bus bus(procs.url());
   const std::string status_channel = ch::ForRobot(kRobot, ch::kExploreStatus);
   bus.Keep(status_channel);
@@ -56,7 +60,8 @@ TEST(NbvStackTest, StopsScansAndDrivesToTheNextBestViewUntilTheScanLimit) {
   auto& explorer = procs.Start(
       "cairn-explorer", {"--robot", kRobot, "--profile", "rover", "--config",
                          testing::SourcePath("config/explore/outdoor_nbv.yaml"), "--max-scans",
-                         std::to_string(kScans), "--duration", "600", "--out", out});
+                         std::to_string(kScans), "--duration", "600", "--out", out,
+       "--save", "nbv_test/outdoor"});
 
   // Four scans of 7.2 simulated seconds and three drives of a few metres: about 40 s of wall
   // time at 2x; the bound allows for a slow machine.
@@ -115,6 +120,36 @@ TEST(NbvStackTest, StopsScansAndDrivesToTheNextBestViewUntilTheScanLimit) {
   EXPECT_EQ(rows, kScans) << summary.str();
   for (const char* png : {"/nbv_navigability.png", "/nbv_quality.png"}) {
     EXPECT_GT(std::filesystem::file_size(out + png), 1000u) << png;
+  }
+
+  // The information map went to the map store: its layers come back from the SQLite file,
+  // and the coverage they give is the one the explorer reported.
+  EXPECT_NE(log.find("information map saved as nbv_test/outdoor version 1"), std::string::npos)
+      << log;
+  mapstore::SqliteOptions read_only;
+  read_only.read_only = true;
+  auto store = mapstore::SqliteMapStore::Open(db, read_only);
+  ASSERT_TRUE(store.ok()) << store.status().ToString();
+  mapstore::MapRef ref;
+  ref.site = "nbv_test";
+  ref.name = "outdoor";
+  auto stored = (*store)->LoadLayers(ref, {});
+  ASSERT_TRUE(stored.ok()) << stored.status().ToString();
+  for (const char* layer : {"explore/navigability", "explore/quality", "explore/explored",
+                            "explore/work_area", "explore/points"}) {
+    EXPECT_TRUE(stored->HasLayer(layer)) << layer;
+  }
+  if (stored->HasLayer("explore/explored") && stored->HasLayer("explore/work_area")) {
+    const common::Layer& explored = stored->at("explore/explored");
+    const common::Layer& area = stored->at("explore/work_area");
+    int64_t in_area = 0, seen = 0;
+    for (int i = 0; i < area.size(); ++i) {
+      if (area.data()[i] != 1.f) continue;
+      ++in_area;
+      seen += explored.data()[i] == 1.f;
+    }
+    ASSERT_GT(in_area, 0);
+    EXPECT_NEAR(static_cast<double>(seen) / static_cast<double>(in_area), last.coverage, 1e-9);
   }
 
   // Each scan was asked of the simulator, and the turret swept only when asked: at most one

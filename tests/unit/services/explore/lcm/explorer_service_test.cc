@@ -6,6 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include "cairn/lcmt_pose.hpp"
+#include "cairn/lcmt_sim_clock.hpp"
+#include "cairn/lcmt_sim_control_reply.hpp"
+#include "cairn/lcmt_sim_control_request.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
 
 #include "common/channels.h"
@@ -114,6 +118,88 @@ TEST(ExplorerServiceTest, FrontierModeWaitsForTheOccupancyLayer) {
   EXPECT_EQ(rig.service.status().state, +cairn::lcmt_explore_status::STATE_WAITING);
   EXPECT_NE(rig.service.status().message.find("occupancy"), std::string::npos);
   EXPECT_EQ(rig.service.status().goals_sent, 0);
+}
+
+// Next-best-view mode: the scan request, a refused request, a malformed turret line and a scan
+// that never comes, over memq:// with the simulator's clock driven by the test.
+struct NbvRig {
+  static ExplorerConfig Config() {
+    ExplorerConfig c;
+    c.mode = ExploreMode::kNbv;
+    c.nbv.work_area = "-5,-5 5,-5 5,5 -5,5";
+    c.nbv.scan_timeout_s = 10.0;
+    c.nbv.pan_step_deg = 10.0;
+    c.nbv.tilt_step_deg = 45.0;
+    return c;
+  }
+  NbvRig() : node(cairn::testing::MemqNodeOptions("cairn-explorer", kRobot, true)) {
+    node.Subscribe<cairn::lcmt_sim_control_request>(
+        channels::kSimControl,
+        [this](const cairn::lcmt_sim_control_request& r) { requests.push_back(r); });
+    service.emplace(node, Config(), Profile());
+  }
+  void Clock(double t_s) {
+    cairn::lcmt_sim_clock c{};
+    c.utime = static_cast<int64_t>(t_s * 1e6);
+    node.Publish(channels::kSimClock, c);
+    cairn::lcmt_pose p{};
+    p.utime = c.utime;
+    p.robot = kRobot;
+    p.orientation_wxyz[0] = 1.0;
+    node.Publish(channels::ForRobot(kRobot, channels::kPose), p);
+    for (int i = 0; i < 4; ++i) node.SpinOnce(0);
+    service->Tick();
+    for (int i = 0; i < 4; ++i) node.SpinOnce(0);
+  }
+  runtime::Node node;
+  std::optional<ExplorerService> service;
+  std::vector<cairn::lcmt_sim_control_request> requests;
+};
+
+TEST(ExplorerServiceTest, NbvModeAsksTheTurretForAScanAndAsksAgainWhenNoneComes) {
+  NbvRig rig;
+  rig.Clock(1.0);
+  ASSERT_EQ(rig.requests.size(), 1u);
+  EXPECT_EQ(rig.requests[0].op, +cairn::lcmt_sim_control_request::OP_TRIGGER_SENSOR);
+  EXPECT_EQ(rig.requests[0].name, "p3dx/turret");
+  EXPECT_EQ(rig.service->status().mode, +cairn::lcmt_explore_status::MODE_NBV);
+  EXPECT_EQ(rig.service->status().behaviour, "SCANNING");
+
+  // The simulator refuses it: said, and the explorer keeps waiting for the scan.
+  cairn::lcmt_sim_control_reply refused{};
+  refused.request_id = rig.requests[0].request_id;
+  refused.status = cairn::lcmt_sim_control_reply::STATUS_NOT_FOUND;
+  refused.message = "robot 'p3dx' has no sensor 'turret'";
+  rig.node.Publish(channels::kSimControlReply, refused);
+  rig.Clock(2.0);
+  EXPECT_FALSE(rig.service->done());
+
+  // A malformed line (a NaN turret angle) is counted and dropped.
+  cairn::lcmt_laser_scan line = Scan(2'000'000, 3.0f, 3.0f);
+  line.turret_angle_rad = NAN;
+  rig.service->OnTurretLine(line);
+  EXPECT_EQ(rig.node.counter("bad_turret_lines"), 1);
+
+  // No line in scan_timeout_s (10 s): asked again, and said why.
+  rig.Clock(12.0);
+  rig.Clock(13.5);  // settle: the new request goes out a second later
+  ASSERT_EQ(rig.requests.size(), 2u);
+  EXPECT_NE(rig.service->status().message.find("asking again"), std::string::npos)
+      << rig.service->status().message;
+  EXPECT_FALSE(rig.service->done());
+}
+
+TEST(ExplorerServiceTest, NbvModeRefusesAMissingOrSelfIntersectingWorkArea) {
+  ExplorerConfig c = NbvRig::Config();
+  c.nbv.work_area = "";
+  EXPECT_THROW(c.Validate(), std::invalid_argument);
+  c.nbv.work_area = "0,0 4,4 4,0 0,4";  // a bow tie
+  try {
+    c.Validate();
+    ADD_FAILURE() << "a self-intersecting work area was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cross"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
