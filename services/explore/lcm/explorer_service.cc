@@ -322,8 +322,8 @@ void ExplorerService::SaveInfoMap() {
   snapshot.provenance.source_profile = profile_.name;
   snapshot.provenance.source_profile_hash = profile_.ContentHash();
   snapshot.provenance.code_version = "cairn-explorer nbv";
-  snapshot.provenance.parameters = "preset: " + config_.nbv.preset + "\nwork_area: \"" +
-                                   config_.nbv.work_area + "\"\n";
+  snapshot.provenance.parameters =
+      "preset: " + config_.nbv.preset + "\nwork_area: \"" + config_.nbv.work_area + "\"\n";
   mapstore::MapstoreClient client(node_.lcm(), kProcess);
   const auto reply = client.Save(snapshot);
   if (!reply.ok()) {
@@ -538,8 +538,8 @@ void ExplorerService::WrapUp() {
       node_.Event("summary and renders written to %s (%zu files)", config_.out_dir.c_str(),
                   written->size());
     } else {
-      node_.Warn("report", "the summary and renders could not be written: " +
-                               written.status().ToString());
+      node_.Warn("report",
+                 "the summary and renders could not be written: " + written.status().ToString());
     }
   }
 }

@@ -57,11 +57,11 @@ TEST(NbvStackTest, StopsScansAndDrivesToTheNextBestViewUntilTheScanLimit) {
                                testing::SourcePath("config/mapping/mapper.yaml")});
   procs.Start("cairn-navigator", {"--robot", kRobot, "--profile", "rover", "--config",
                                   testing::SourcePath("config/navigator/navigator.yaml")});
-  auto& explorer = procs.Start(
-      "cairn-explorer", {"--robot", kRobot, "--profile", "rover", "--config",
-                         testing::SourcePath("config/explore/outdoor_nbv.yaml"), "--max-scans",
-                         std::to_string(kScans), "--duration", "600", "--out", out,
-       "--save", "nbv_test/outdoor"});
+  auto& explorer =
+      procs.Start("cairn-explorer", {"--robot", kRobot, "--profile", "rover", "--config",
+                                     testing::SourcePath("config/explore/outdoor_nbv.yaml"),
+                                     "--max-scans", std::to_string(kScans), "--duration", "600",
+                                     "--out", out, "--save", "nbv_test/outdoor"});
 
   // Four scans of 7.2 simulated seconds and three drives of a few metres: about 40 s of wall
   // time at 2x; the bound allows for a slow machine.

@@ -1,10 +1,14 @@
 #include "services/explore/nbv_mission.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "mapstore/sqlite_map_store.h"
 #include "scan_test_scenes.h"
 #include <Eigen/Geometry>
 
@@ -179,6 +183,81 @@ TEST(NbvMissionTest, CountsTheDistanceDrivenAndKeepsThePath) {
   m.OnPosition({NAN, 2.0});
   EXPECT_NEAR(m.distance_m(), 3.0, 1e-9);
   EXPECT_EQ(m.path_m().size(), 3u);
+}
+
+// Seed 002 test 28: the information map of an exploration goes to the map store (a real SQLite
+// file) and comes back bit for bit; the same scans analysed for a robot that climbs 15 deg
+// instead of 30 deg never make more cells navigable (C_nc > 0.7), and here make fewer: a 20 deg
+// ramp is safe for one and not for the other. (The store keeps the information map, not the
+// scans: the stricter analysis runs on the scans the test kept.)
+TEST(NbvMissionTest, AStoredExplorationRederivedForAStricterRobotNeverGainsNavigableArea) {
+  Scene scene;
+  scene.patches.push_back(Floor(0.0, -1e3, 2.0, -1e3, 1e3));
+  scene.patches.push_back(scan_testing::Ramp(20.0 * kDeg, 2.0, 6.0, -3.0, 3.0));
+  scene.patches.push_back(Floor(0.0, 2.0, 1e3, 3.0, 1e3));
+  scene.patches.push_back(Floor(0.0, 2.0, 1e3, -1e3, -3.0));
+  auto explore = [&](double max_slope_deg) {
+    NbvMissionParams p = Params();
+    p.analysis.max_slope_rad = max_slope_deg * kDeg;
+    p.max_scans = 2;
+    auto m = std::make_unique<NbvMission>(p);
+    m->Start(0.0);
+    const NbvAction first = Sweep(m.get(), scene, {0.0, 0.0}, 1.0);
+    EXPECT_TRUE(first.goal.has_value()) << first.event;
+    m->OnGoalResult(true, "", 20.0);
+    Sweep(m.get(), scene, {-2.0, 1.0}, 21.0);  // the same second view point for both robots
+    EXPECT_EQ(m->scans(), 2);
+    return m;
+  };
+  const auto climber = explore(30.0);
+  const auto careful = explore(15.0);
+
+  // The climber's map through a SQLite file and back: every layer bit for bit.
+  const std::string path = ::testing::TempDir() + "/nbv_mission_test_store.db";
+  std::remove(path.c_str());
+  {
+    auto store = mapstore::SqliteMapStore::Open(path);
+    ASSERT_TRUE(store.ok()) << store.status().ToString();
+    mapstore::MapSnapshot snapshot;
+    snapshot.site = "test";
+    snapshot.name = "nbv";
+    snapshot.base = climber->info_map().ToGridMap();
+    snapshot.provenance.source_profile = "climber";
+    ASSERT_TRUE((*store)->SaveMap(snapshot, {"nbv_mission_test"}).ok());
+  }
+  auto store = mapstore::SqliteMapStore::Open(path);
+  ASSERT_TRUE(store.ok());
+  mapstore::MapRef ref;
+  ref.site = "test";
+  ref.name = "nbv";
+  const auto loaded = (*store)->LoadLayers(ref, {});
+  ASSERT_TRUE(loaded.ok()) << loaded.status().ToString();
+  const common::GridMap saved = climber->info_map().ToGridMap();
+  EXPECT_EQ(loaded->geometry(), saved.geometry());
+  for (const std::string& name : saved.layer_names()) {
+    ASSERT_TRUE(loaded->HasLayer(name)) << name;
+    const common::Layer& a = saved.at(name);
+    const common::Layer& b = loaded->at(name);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof(float) * a.size()), 0) << name;
+  }
+  std::remove(path.c_str());
+
+  // Navigable cells: the careful robot's are a subset of the climber's, and fewer.
+  const InfoMap& a = climber->info_map();
+  const InfoMap& b = careful->info_map();
+  ASSERT_EQ(a.num_cells(), b.num_cells());
+  int64_t navigable_a = 0, navigable_b = 0, gained = 0;
+  for (int64_t i = 0; i < a.num_cells(); ++i) {
+    const bool na = a.Explored(i) && a.Navigability(i) > 0.7f;
+    const bool nb = b.Explored(i) && b.Navigability(i) > 0.7f;
+    navigable_a += na;
+    navigable_b += nb;
+    gained += nb && !na;
+  }
+  EXPECT_EQ(gained, 0);
+  EXPECT_LT(navigable_b, navigable_a);
+  EXPECT_GT(navigable_b, 0);
 }
 
 TEST(NbvMissionTest, RejectsBadParams) {
