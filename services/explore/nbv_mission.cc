@@ -1,6 +1,7 @@
 #include "services/explore/nbv_mission.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -29,6 +30,10 @@ namespace {
 const NbvMissionParams& Validated(const NbvMissionParams& p) {
   p.Validate();
   return p;
+}
+
+double MsSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 std::string Fixed(double v, int digits) {
@@ -113,8 +118,14 @@ NbvAction NbvMission::OnTurretLine(const common::LaserScan& line, double pan_rad
 
 NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   scan_retries_ = 0;
+  ViewPoint view;
+  auto t0 = std::chrono::steady_clock::now();
   BuildScanMesh(scan, params_.mesh, &mesh_);
+  view.mesh_ms = MsSince(t0);
+  t0 = std::chrono::steady_clock::now();
   const ScanFeatures features = AnalyseScan(scan, mesh_, params_.analysis);
+  view.analysis_ms = MsSince(t0);
+  t0 = std::chrono::steady_clock::now();
   std::vector<ScoredPoint> points;
   points.reserve(scan.points_m.size());
   for (size_t i = 0; i < scan.points_m.size(); ++i) {
@@ -127,7 +138,6 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
     p.quality = std::isfinite(features.quality[i]) ? features.quality[i] : 0.f;
     points.push_back(p);
   }
-  ViewPoint view;
   view.position_m = common::Vector2(scan.sensor_origin_m.x(), scan.sensor_origin_m.y());
   view.time_s = now_s;
   view.points_used = info_.AddPoints(points);
@@ -147,6 +157,7 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   });
   if (zones_.size() > static_cast<size_t>(params_.max_zones)) zones_.resize(params_.max_zones);
 
+  view.map_ms = MsSince(t0);
   view.coverage = info_.Coverage();
   view.mean_quality = info_.MeanQuality();
   view.zones = static_cast<int>(zones_.size());
@@ -163,7 +174,9 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
     return a;
   }
   try {
+    t0 = std::chrono::steady_clock::now();
     last_decision_ = planner_.Decide(info_, zones_, view.position_m);
+    view_points_.back().decision_ms = MsSince(t0);
   } catch (const std::invalid_argument& e) {
     NbvAction a = Finish(std::string("no decision: ") + e.what());
     a.event = scanned + "; " + a.event;
@@ -181,7 +194,11 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   state_ = State::kDriving;
   NbvAction a;
   a.goal = goal_;
-  a.event = scanned + "; next view (" + Fixed(goal_->position_m.x(), 1) + ", " +
+  const ViewPoint& v = view_points_.back();
+  a.event = scanned + " (mesh " + Fixed(v.mesh_ms, 0) + " ms, analysis " + Fixed(v.analysis_ms, 0) +
+            " ms, map " + Fixed(v.map_ms, 0) + " ms, decision " + Fixed(v.decision_ms, 0) +
+            " ms over " + std::to_string(last_decision_->candidates.size()) +
+            " candidates); next view (" + Fixed(goal_->position_m.x(), 1) + ", " +
             Fixed(goal_->position_m.y(), 1) + "): u " + Fixed(goal_->utility, 3) + ", A " +
             Fixed(goal_->info_gain, 2) + ", Q " + Fixed(goal_->quality_gain, 2) + ", O " +
             Fixed(goal_->zone_gain, 2) + ", path " + Fixed(goal_->path_cost, 1);

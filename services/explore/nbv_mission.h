@@ -66,6 +66,11 @@ struct ViewPoint {
   double coverage{0.0};      ///< of the work area, after the scan
   double mean_quality{0.0};  ///< over the explored work area, after the scan
   int zones{0};              ///< in the list after the scan
+  // Wall-clock time of each stage (seed 002 Table 6-10), milliseconds.
+  double mesh_ms{0.0};      ///< triangulation
+  double analysis_ms{0.0};  ///< per-point features and zones
+  double map_ms{0.0};       ///< information map update and zone list
+  double decision_ms{0.0};  ///< candidates, navigation tree, gains, choice
 };
 
 class NbvMission {

@@ -20,13 +20,15 @@ std::string NbvSummaryTable(const NbvMission& mission, const std::string& preset
                 mission.goals_sent(), mission.goals_reached(), mission.goals_failed());
   out += line;
   if (!mission.end_reason().empty()) out += "ended: " + mission.end_reason() + "\n";
-  out += "scan      x m      y m   time s   points  coverage %  quality  zones\n";
+  out +=
+      "scan      x m      y m   time s   points  coverage %  quality  zones   mesh ms  "
+      "analysis ms  decision ms\n";
   for (size_t i = 0; i < views.size(); ++i) {
     const ViewPoint& v = views[i];
-    std::snprintf(line, sizeof(line), "%4zu %8.2f %8.2f %8.1f %8lld %11.1f %8.3f %6d\n", i + 1,
-                  v.position_m.x(), v.position_m.y(), v.time_s,
-                  static_cast<long long>(v.points_used), 100.0 * v.coverage, v.mean_quality,
-                  v.zones);
+    std::snprintf(
+        line, sizeof(line), "%4zu %8.2f %8.2f %8.1f %8lld %11.1f %8.3f %6d %9.1f %12.1f %12.1f\n",
+        i + 1, v.position_m.x(), v.position_m.y(), v.time_s, static_cast<long long>(v.points_used),
+        100.0 * v.coverage, v.mean_quality, v.zones, v.mesh_ms, v.analysis_ms, v.decision_ms);
     out += line;
   }
   return out;

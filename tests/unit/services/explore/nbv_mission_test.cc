@@ -90,7 +90,7 @@ TEST(NbvMissionTest, ScansDecidesDrivesAndScansAgain) {
   EXPECT_FALSE(first.done);
   EXPECT_EQ(m.state(), NbvMission::State::kDriving);
   EXPECT_EQ(m.goals_sent(), 1);
-  const ViewPoint& v1 = m.view_points()[0];
+  const ViewPoint v1 = m.view_points()[0];  // a copy: the list grows
   EXPECT_GT(v1.points_used, 1000);
   EXPECT_GT(v1.coverage, 0.0);
   EXPECT_LT(v1.coverage, 1.0);
