@@ -66,6 +66,8 @@ void PrintReport(const MapEvalReport& r, const MapEvalParams& p) {
          "the same for obstacle cells touching the reachable area"});
   t.Add({"free precision", Percent(r.free_precision),
          "map-free cells that are free (" + std::to_string(r.map_free_cells) + " map-free)"});
+  t.Add({"free precision, edges", Percent(r.free_precision_tolerant),
+         "map-free cells with a free cell " + tol + " (an obstacle's edge shares the cell)"});
   t.Add({"coverage", Percent(r.coverage),
          "reachable cells known: " + Cells(r.reachable_known_cells, r.reachable_cells)});
   t.Add({"occupied IoU", Percent(r.occupied_iou), "map-occupied vs true obstacle cells"});
@@ -86,6 +88,13 @@ void PrintReport(const MapEvalReport& r, const MapEvalParams& p) {
   } else {
     t.Add({"elevation error", "-",
            r.elevation ? "no free cell known to both" : "the map has no elevation layer"});
+  }
+  if (r.elevation_interior && r.elevation_interior->cells > 0) {
+    t.Add({"elevation, interior", Fmt("%.3f m", r.elevation_interior->mean_abs_m),
+           "the same on " + std::to_string(r.elevation_interior->cells) +
+               " free cells with no obstacle " + tol + "; RMS " +
+               Fmt("%.3f m", r.elevation_interior->rms_m) + ", max " +
+               Fmt("%.3f m", r.elevation_interior->max_abs_m)});
   }
   t.Print();
 }

@@ -237,6 +237,14 @@ MapEvalReport EvaluateMap(const common::GridMap& map, const common::GridMap& tru
   const std::vector<uint8_t> near_truth = Dilate(truth_occ_set, nx, ny, params.tolerance_cells);
   const std::vector<uint8_t> near_map = Dilate(map_occ, nx, ny, params.tolerance_cells);
   const std::vector<uint8_t> near_reachable = Dilate(reachable, nx, ny, 1);
+  {
+    std::vector<uint8_t> truth_free(n, 0);
+    for (size_t i = 0; i < n; ++i) truth_free[i] = t.v[i] == kFree;
+    const std::vector<uint8_t> near_free = Dilate(truth_free, nx, ny, params.tolerance_cells);
+    int64_t free_near = 0;
+    for (size_t i = 0; i < n; ++i) free_near += m.v[i] == kFree && near_free[i];
+    r.free_precision_tolerant = Ratio(free_near, r.map_free_cells);
+  }
   int64_t precise = 0, recalled = 0, visible = 0, visible_recalled = 0;
   for (size_t i = 0; i < n; ++i) {
     if (map_occ[i]) precise += near_truth[i];
@@ -289,25 +297,29 @@ MapEvalReport EvaluateMap(const common::GridMap& map, const common::GridMap& tru
   if (map.HasLayer(params.elevation_layer) && truth.HasLayer(kTruthGround)) {
     const common::Layer& z = map.at(params.elevation_layer);
     const common::Layer& g = truth.at(kTruthGround);
-    ElevationError e;
-    double sum_abs = 0.0, sum_sq = 0.0;
-    for (size_t i = 0; i < n; ++i) {
-      if (t.v[i] != kFree) continue;
-      const float a = z.data()[i], b = g.data()[i];
-      if (std::isnan(a) || std::isnan(b)) continue;
-      const double err = static_cast<double>(a) - static_cast<double>(b);
-      ++e.cells;
-      sum_abs += std::abs(err);
-      sum_sq += err * err;
-      e.max_abs_m = std::max(e.max_abs_m, std::abs(err));
-    }
-    if (e.cells > 0) {
-      e.mean_abs_m = sum_abs / e.cells;
-      e.rms_m = std::sqrt(sum_sq / e.cells);
-    } else {
-      e.mean_abs_m = e.rms_m = e.max_abs_m = kNaN;
-    }
-    r.elevation = e;
+    const auto error_over = [&](bool interior_only) {
+      ElevationError e;
+      double sum_abs = 0.0, sum_sq = 0.0;
+      for (size_t i = 0; i < n; ++i) {
+        if (t.v[i] != kFree || (interior_only && near_truth[i])) continue;
+        const float a = z.data()[i], b = g.data()[i];
+        if (std::isnan(a) || std::isnan(b)) continue;
+        const double err = static_cast<double>(a) - static_cast<double>(b);
+        ++e.cells;
+        sum_abs += std::abs(err);
+        sum_sq += err * err;
+        e.max_abs_m = std::max(e.max_abs_m, std::abs(err));
+      }
+      if (e.cells > 0) {
+        e.mean_abs_m = sum_abs / e.cells;
+        e.rms_m = std::sqrt(sum_sq / e.cells);
+      } else {
+        e.mean_abs_m = e.rms_m = e.max_abs_m = kNaN;
+      }
+      return e;
+    };
+    r.elevation = error_over(false);
+    r.elevation_interior = error_over(true);
   }
   return r;
 }
@@ -338,6 +350,7 @@ std::string MapEvalReportToJson(const MapEvalReport& r) {
   field("occupied_recall", Number(r.occupied_recall));
   field("occupied_recall_visible", Number(r.occupied_recall_visible));
   field("free_precision", Number(r.free_precision));
+  field("free_precision_tolerant", Number(r.free_precision_tolerant));
   field("occupied_iou", Number(r.occupied_iou));
   field("reachable_cells", count(r.reachable_cells));
   field("reachable_known_cells", count(r.reachable_known_cells));
@@ -347,14 +360,17 @@ std::string MapEvalReportToJson(const MapEvalReport& r) {
   field("mean_wall_thickness_m", Number(r.mean_wall_thickness_m));
   field("double_wall_crossings", count(r.double_wall_crossings));
   field("double_wall_length_m", Number(r.double_wall_length_m));
-  if (r.elevation) {
-    field("elevation", "{\"cells\": " + count(r.elevation->cells) +
-                           ", \"mean_abs_m\": " + Number(r.elevation->mean_abs_m) +
-                           ", \"rms_m\": " + Number(r.elevation->rms_m) +
-                           ", \"max_abs_m\": " + Number(r.elevation->max_abs_m) + "}");
-  } else {
-    field("elevation", "null");
-  }
+  const auto elevation = [&](const char* name, const std::optional<ElevationError>& e) {
+    if (!e) {
+      field(name, "null");
+      return;
+    }
+    field(name, "{\"cells\": " + count(e->cells) + ", \"mean_abs_m\": " + Number(e->mean_abs_m) +
+                    ", \"rms_m\": " + Number(e->rms_m) +
+                    ", \"max_abs_m\": " + Number(e->max_abs_m) + "}");
+  };
+  elevation("elevation", r.elevation);
+  elevation("elevation_interior", r.elevation_interior);
   return s + "}";
 }
 

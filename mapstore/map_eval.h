@@ -41,8 +41,11 @@
 ///   mapped twice. The two faces of a thin wall whose inside was never seen are not, and neither
 ///   is a stray cell within a cell of a wall's end or corner.
 ///   Counted per crossing (a doubled wall n cells long crossed by n rows or columns counts n);
+/// - free precision, strict and within tolerance_cells (a map-free cell with a truth-free cell
+///   within tolerance is right);
 /// - elevation (when the map has `elevation` and the truth `truth/ground`): map − truth on the
-///   truth-free cells both know (the ground is what a mapper measures there).
+///   truth-free cells both know (the ground is what a mapper measures there), and on those of
+///   them with no truth obstacle within tolerance_cells (elevation_interior).
 ///
 /// A figure whose denominator is zero is NaN.
 
@@ -92,6 +95,10 @@ struct MapEvalReport {
   double occupied_recall{0.0};
   double occupied_recall_visible{0.0};
   double free_precision{0.0};
+  /// Map-free cells with a truth-free cell within tolerance_cells (the twin of occupied
+  /// precision's tolerance): a free cell at an obstacle's edge, whose truth cell holds a sliver
+  /// of the obstacle, is not counted wrong.
+  double free_precision_tolerant{0.0};
   double occupied_iou{0.0};
 
   int64_t reachable_cells{0};
@@ -106,6 +113,9 @@ struct MapEvalReport {
   double double_wall_length_m{0.0};  ///< crossings × resolution
 
   std::optional<ElevationError> elevation;  ///< when both sides have heights
+  /// The same over the truth-free cells with no truth obstacle within tolerance_cells (a cell at
+  /// a wall's foot mixes floor and wall returns at the map's resolution).
+  std::optional<ElevationError> elevation_interior;
 };
 
 /// Judges `map`'s layer against `truth` (the same grid geometry: rasterise the truth on the

@@ -204,6 +204,24 @@ TEST(MapEvalTest, ElevationErrorOnFreeCells) {
   EXPECT_NEAR(r.elevation->mean_abs_m, 0.4 / n, 1e-7);
   EXPECT_NEAR(r.elevation->rms_m, std::sqrt((0.09 + 0.01) / n), 1e-7);
   EXPECT_NEAR(r.elevation->max_abs_m, 0.3, 1e-7);
+  // Away from the wall (columns 9..11 and rows 1..18 are within a cell of it): 400 cells less
+  // those 54 and the unknown one; the two errors are there.
+  ASSERT_TRUE(r.elevation_interior.has_value());
+  EXPECT_EQ(r.elevation_interior->cells, 345);
+  EXPECT_NEAR(r.elevation_interior->mean_abs_m, 0.4 / 345.0, 1e-7);
+  EXPECT_NEAR(r.elevation_interior->max_abs_m, 0.3, 1e-7);
+}
+
+TEST(MapEvalTest, FreePrecisionAtAnObstaclesEdge) {
+  // A true wall three cells thick (columns 9..11, rows 2..17) the map calls free throughout:
+  // strictly 48 wrong cells; within a cell of free truth, only its middle column's inner
+  // cells (column 10, rows 3..16) are wrong.
+  common::GridMap map(Square());
+  map.AddLayer(layers::kOccupancy, 0.f);
+  const MapEvalReport r = EvaluateMap(map, FieldTruth({9, 10, 11}), At(0.05, 0.05));
+  EXPECT_EQ(r.map_free_cells, 400);
+  EXPECT_DOUBLE_EQ(r.free_precision, (400.0 - 48.0) / 400.0);
+  EXPECT_DOUBLE_EQ(r.free_precision_tolerant, (400.0 - 14.0) / 400.0);
 }
 
 TEST(MapEvalTest, CostLayerAndThresholds) {

@@ -116,8 +116,8 @@ TEST(ScenarioTest, ShippedRobotsLoadAndHelpListsWorlds) {
     EXPECT_FALSE(m.default_sensors.Names().empty());
   }
   const auto worlds = paths.ShippedWorlds();
-  EXPECT_EQ(worlds,
-            (std::vector<std::string>{"apartment", "arena", "outdoor", "room", "terraces", "tunnel"}));
+  EXPECT_EQ(worlds, (std::vector<std::string>{"apartment", "arena", "outdoor", "room", "simple",
+                                              "structured", "terraces", "tunnel"}));
   for (const std::string& w : worlds) EXPECT_FALSE(paths.WorldSummary(w).empty()) << w;
 }
 

@@ -2,6 +2,7 @@
 // tunnel_lanes.yaml promise (the contract the mapper, navigator and demo tests rely on).
 
 #include <cmath>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -41,7 +42,7 @@ TEST_F(WorldsTest, EveryShippedWorldHostsEveryRobot) {
     Scenario s = WorldOnly(world);
     SpawnPose at;
     // Free floor in each world (the apartment's living room, the arena's hall, the room's
-    // middle; the outdoor start area).
+    // middle; the start areas of outdoor, simple and structured at the origin).
     const bool lanes = world == "tunnel" || world == "terraces";
     const bool room = world == "room";
     at.x_m = lanes ? 4.0 : world == "apartment" ? 1.5 : world == "arena" ? 5.0 : room ? 1.0 : 0.0;
@@ -211,6 +212,134 @@ TEST_F(WorldsTest, OutdoorTerrainIsTheGeneratedHeightField) {
       const double theirs = mj_rayHfield(sim.model(), sim.data(), terrain, p, v);
       ASSERT_NEAR(ours, theirs, 1e-9) << x << ", " << y;
     }
+  }
+}
+
+// Height of the terrain geom alone below (x, y) (not what stands on it).
+double TerrainZ(const MujocoSim& sim, int terrain, double x, double y) {
+  const double p[3] = {x, y, 20.0}, v[3] = {0, 0, -1};
+  return 20.0 - mj_rayHfield(sim.model(), sim.data(), terrain, p, v);
+}
+
+// Bottom and top of a geom's world-aligned extent (boxes and cylinders standing upright).
+std::pair<double, double> GeomZRange(const MujocoSim& sim, const char* name) {
+  const int g = mj_name2id(sim.model(), mjOBJ_GEOM, name);
+  EXPECT_GE(g, 0) << name;
+  if (g < 0) return {0.0, 0.0};
+  const double z = sim.data()->geom_xpos[3 * g + 2];
+  const double half =
+      sim.model()->geom_size[3 * g + (sim.model()->geom_type[g] == mjGEOM_BOX ? 2 : 1)];
+  return {z - half, z + half};
+}
+
+TEST_F(WorldsTest, SimpleHillHouseAndTree) {
+  MujocoSim sim(WorldOnly("simple"));
+  const int terrain = mj_name2id(sim.model(), mjOBJ_GEOM, "terrain");
+  ASSERT_GE(terrain, 0);
+  // The start on the flat crest of the ridge (generate_worlds.py: 1.299 above the lowest point).
+  EXPECT_NEAR(SurfaceZ(sim, 0.0, 0.0), 1.299, 0.005);
+  for (double a = 0.0; a < 2 * M_PI; a += M_PI / 8) {
+    EXPECT_NEAR(SurfaceZ(sim, 2.0 * std::cos(a), 2.0 * std::sin(a)), 1.299, 0.05) << a;
+  }
+  // The house: a solid box x 2..10, y 2..8 with a 25 deg gable roof, ridge along x at y = 5.
+  const double wall_top = 4.1336, tan25 = std::tan(25.0 * M_PI / 180.0);
+  EXPECT_NEAR(SurfaceZ(sim, 6.0, 5.0), wall_top + 3.0 * tan25, 0.01);
+  EXPECT_NEAR(SurfaceZ(sim, 3.0, 3.0), wall_top + 1.0 * tan25, 0.01);
+  EXPECT_NEAR(SurfaceZ(sim, 9.0, 7.5), wall_top + 0.5 * tan25, 0.01);
+  EXPECT_LT(SurfaceZ(sim, 1.9, 5.0), 1.4);  // ground just west of the west wall
+  EXPECT_LT(SurfaceZ(sim, 6.0, 8.1), 1.4);  // and north of the north wall (no eaves)
+  {  // solid: a level ray at mid-height from the west stops at the wall
+    static const mjtByte kGroups[mjNGROUP] = {1, 1, 1, 0, 0, 0};
+    const double p[3] = {-1.0, 5.0, 2.5}, v[3] = {1, 0, 0};
+    int g = -1;
+    EXPECT_NEAR(mj_ray(sim.model(), sim.data(), p, v, kGroups, 1, -1, &g), 3.0, 1e-6);
+    EXPECT_EQ(g, mj_name2id(sim.model(), mjOBJ_GEOM, "house"));
+  }
+  // The tree at (-6, -4): crown top 1.5 m above a 2.5 m trunk, less the overlap.
+  EXPECT_NEAR(SurfaceZ(sim, -6.0, -4.0), 6.2419, 0.005);
+  // House and trunk stand on the terrain: their bottoms are a little below it at every corner.
+  const auto house = GeomZRange(sim, "house");
+  const auto trunk = GeomZRange(sim, "tree_trunk");
+  for (double x : {2.0, 10.0}) {
+    for (double y : {2.0, 8.0}) {
+      EXPECT_LT(house.first, TerrainZ(sim, terrain, x, y) - 0.1) << x << ", " << y;
+      EXPECT_GT(house.first, TerrainZ(sim, terrain, x, y) - 0.6) << x << ", " << y;
+    }
+  }
+  for (double dx : {-0.25, 0.25}) {
+    for (double dy : {-0.25, 0.25}) {
+      const double ground = TerrainZ(sim, terrain, -6.0 + dx, -4.0 + dy);
+      EXPECT_LT(trunk.first, ground - 0.1);
+      EXPECT_NEAR(trunk.second, ground + 2.5, 0.1);
+    }
+  }
+  // Anywhere the robot may drive in the work area (x -12..14, y -10..12, outside the house and
+  // the tree) the terrain is at most about 8 deg steep.
+  const double max_rise = 0.25 * std::tan(8.5 * M_PI / 180.0);
+  for (double x = -12.0; x < 14.0; x += 0.25) {
+    for (double y = -10.0; y < 12.0; y += 0.25) {
+      const double z = TerrainZ(sim, terrain, x, y);
+      ASSERT_NEAR(TerrainZ(sim, terrain, x + 0.25, y), z, max_rise) << x << ", " << y;
+      ASSERT_NEAR(TerrainZ(sim, terrain, x, y + 0.25), z, max_rise) << x << ", " << y;
+    }
+  }
+}
+
+TEST_F(WorldsTest, StructuredBlockStreetsKerbsCarsAndPassage) {
+  MujocoSim sim(WorldOnly("structured"));
+  // Free street around the start (nothing within 3.5 m of the origin).
+  for (double r : {0.0, 1.0, 2.0, 3.0}) {
+    for (double a = 0.0; a < 2 * M_PI; a += M_PI / 8) {
+      EXPECT_NEAR(SurfaceZ(sim, r * std::cos(a), r * std::sin(a)), 0.0, 1e-9) << r << " " << a;
+    }
+  }
+  // Buildings: their roofs.
+  EXPECT_NEAR(SurfaceZ(sim, -15.75, 9.0), 6.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 1.5, 9.5), 8.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 12.5, 8.5), 5.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, -15.75, -9.5), 4.5, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 1.0, -9.0), 7.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 16.5, -9.0), 6.0, 1e-9);
+  // The passage: 2.5 m of ground between building_n (to x 5.5) and building_ne (from x 8).
+  for (double x = 5.55; x < 8.0; x += 0.1) EXPECT_NEAR(SurfaceZ(sim, x, 8.0), 0.0, 1e-9) << x;
+  EXPECT_NEAR(SurfaceZ(sim, 5.45, 8.0), 8.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 8.05, 8.0), 5.0, 1e-9);
+  // Kerbs 0.12 m high along the street edges, with gaps (in front of the passage: x 5..8.5).
+  EXPECT_NEAR(SurfaceZ(sim, -2.0, 3.65), 0.12, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 1.5, 3.65), 0.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 6.75, 3.65), 0.0, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 3.0, -3.65), 0.12, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, 9.0, -3.65), 0.0, 1e-9);   // the south-east street's mouth
+  EXPECT_NEAR(SurfaceZ(sim, -11.15, 0.0), 0.0, 1e-9);  // the west street crosses
+  EXPECT_NEAR(SurfaceZ(sim, -11.15, 6.0), 0.12, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, -11.15, 9.0), 0.0, 1e-9);
+  // A parked car: 0.9 m body, 1.4 m cabin.
+  EXPECT_NEAR(SurfaceZ(sim, -14.2, 2.4), 1.4, 1e-9);
+  EXPECT_NEAR(SurfaceZ(sim, -15.9, 2.4), 0.9, 1e-9);
+}
+
+// The rover drives from the start of the exploration worlds: forward along +x, a turn, back.
+TEST_F(WorldsTest, RoverDrivesFromTheStartOfSimpleAndStructured) {
+  for (const char* world : {"simple", "structured"}) {
+    SCOPED_TRACE(world);
+    Scenario s = WorldOnly(world);
+    SpawnPose at;
+    s.robots.push_back(MakeRobotSpec("rover", "rover", "", at, testing::TestPaths()));
+    s.robots[0].sensors = SensorSet{};
+    MujocoSim sim(s);
+    SimOutputs out;
+    const double z0 = sim.RobotPose("rover").position_m.z();
+    EXPECT_NEAR(z0, SurfaceZ(sim, 0.0, 0.0) + 0.2, 0.03);  // on its 0.2 m wheels
+    testing::Drive(sim, "rover", 0.5, 0.0, 10.0, &out);
+    const common::Pose3 p = sim.RobotPose("rover");
+    EXPECT_GT(p.position_m.x(), 3.0);
+    EXPECT_NEAR(p.position_m.y(), 0.0, 0.5);
+    EXPECT_NEAR(p.position_m.z(), SurfaceZ(sim, p.position_m.x(), p.position_m.y()) + 0.2, 0.1);
+    EXPECT_GT(p.orientation.toRotationMatrix()(2, 2), 0.98);
+    testing::Drive(sim, "rover", 0.3, 0.5, 8.0, &out);
+    testing::Drive(sim, "rover", 0.5, 0.0, 6.0, &out);
+    EXPECT_GT(sim.RobotPose("rover").orientation.toRotationMatrix()(2, 2), 0.98);
+    EXPECT_GT((sim.RobotPose("rover").position_m - p.position_m).norm(), 2.0);
   }
 }
 
