@@ -56,6 +56,8 @@ void LoadNbv(YamlMap map, NbvModeParams* p) {
   map.Get("preset", &p->preset);
   map.Get("work_area", &p->work_area);
   map.Get("turret_sensor", &p->turret_sensor);
+  map.Get("drive", &p->drive);
+  map.Get("teleport_base_height_m", &p->teleport_base_height_m);
   map.Get("pan_step_deg", &p->pan_step_deg);
   map.Get("pan_range_deg", &p->pan_range_deg);
   map.Get("tilt_step_deg", &p->tilt_step_deg);
@@ -67,6 +69,7 @@ void LoadNbv(YamlMap map, NbvModeParams* p) {
   map.Get("settle_s", &p->settle_s);
   map.Get("safe_cnc", &p->safe_cnc);
   map.Get("candidate_spacing_m", &p->candidate_spacing_m);
+  map.Get("candidate_clearance_m", &p->candidate_clearance_m);
   map.Get("d_max_m", &p->d_max_m);
   map.Get("min_global_quality", &p->min_global_quality);
   map.Get("gain_range_m", &p->gain_range_m);
@@ -83,15 +86,21 @@ NbvMissionParams NbvModeParams::ToMissionParams() const {
         "explorer: nbv.work_area is required (\"x0,y0 x1,y1 x2,y2 ...\", or --work-area)");
   }
   RequirePositive(goal_tolerance_m, "nbv.goal_tolerance_m");
+  RequirePositive(teleport_base_height_m, "nbv.teleport_base_height_m");
   if (!(settle_s >= 0.0) || !std::isfinite(settle_s)) {
     throw std::invalid_argument("explorer: nbv.settle_s must be >= 0");
   }
   if (turret_sensor.empty()) throw std::invalid_argument("explorer: nbv.turret_sensor is empty");
+  if (drive != "navigator" && drive != "teleport") {
+    throw std::invalid_argument("explorer: nbv.drive must be navigator or teleport (got \"" +
+                                drive + "\")");
+  }
   constexpr double kDeg = M_PI / 180.0;
   NbvMissionParams m;
   m.nbv = NbvPreset(preset);
   m.nbv.safe_cnc = safe_cnc;
   m.nbv.candidate_spacing_m = candidate_spacing_m;
+  m.nbv.candidate_clearance_m = candidate_clearance_m;
   m.nbv.d_max_m = d_max_m;
   m.nbv.min_global_quality = min_global_quality;
   m.nbv.gain_range_m = gain_range_m;

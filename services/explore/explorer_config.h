@@ -60,6 +60,13 @@ struct NbvModeParams {
   /// The work area, "x0,y0 x1,y1 x2,y2 ..." (world metres); required in this mode.
   std::string work_area;
   std::string turret_sensor{"turret"};  ///< the sensor kind the request names
+  /// How the robot gets to each view point: "navigator" (a goal to cairn-navigator, which
+  /// drives there) or "teleport" (SIM.CONTROL OP_RESET_ROBOT puts it there, and the distance
+  /// counted is the navigation tree's path: comparing planner presets without the drive).
+  std::string drive{"navigator"};
+  /// Teleport: the robot's base is put this far above the view point's ground (the mean height
+  /// of its cell's points) and drops onto it.
+  double teleport_base_height_m{0.3};
   /// The turret's sweep as the simulator's scenario sets it (pan lines over pan_range_deg;
   /// beams tilt_step_deg apart).
   double pan_step_deg{0.5};
@@ -76,6 +83,8 @@ struct NbvModeParams {
   /// The NBV parameters over the preset (seed 002 Appendix A).
   double safe_cnc{0.7};
   double candidate_spacing_m{3.0};
+  /// Every cell this near a candidate must be safe too: about the robot's circumscribed radius.
+  double candidate_clearance_m{0.45};
   double d_max_m{50.0};
   double min_global_quality{0.0};
   double gain_range_m{20.0};

@@ -27,6 +27,7 @@ struct Options {
   int max_scans = 0;
   std::string out_dir;
   std::string save_to;
+  std::string drive;
   double duration_s = -1.0;
   std::string lcm_url;
 };
@@ -53,6 +54,7 @@ int Run(const Options& o) {
   if (o.max_scans > 0) config.nbv.max_scans = o.max_scans;
   if (!o.out_dir.empty()) config.out_dir = o.out_dir;
   if (!o.save_to.empty()) config.save_to = o.save_to;
+  if (!o.drive.empty()) config.nbv.drive = o.drive;
   config.Validate();
 
   runtime::NodeOptions options;
@@ -107,6 +109,9 @@ int main(int argc, char** argv) {
                   "nbv: write the summary table and the information map's renders (PNG) here");
   flags.AddString("save", &o.save_to,
                   "nbv: \"site/map\": save the information map to cairn-mapstore at the end");
+  flags.AddString("drive", &o.drive,
+                  "nbv: navigator (drive to each view point) or teleport (the simulator puts the "
+                  "robot there; the distance is the navigation tree's path)");
   flags.AddInt("max-scans", &o.max_scans, "nbv: end after this many scans (overrides the config)");
   flags.AddDouble("duration", &o.duration_s,
                   "simulated seconds of exploring, 0 = until done (overrides the config)");

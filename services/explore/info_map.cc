@@ -64,9 +64,9 @@ InfoMap::InfoMap(const WorkArea& area, const InfoMapParams& params) : area_(area
       }
     }
   }
-  for (auto* v :
-       {&points_, &navigable_points_, &obstacle_points_, &sum_navigability_, &sum_obstacle_,
-        &sum_quality_, &sum_x_, &sum_y_, &sum_z_, &sum_nx_, &sum_ny_, &sum_nz_}) {
+  for (auto* v : {&points_, &navigable_points_, &obstacle_points_, &sum_navigability_,
+                  &sum_obstacle_, &sum_quality_, &sum_x_, &sum_y_, &sum_z_, &sum_nx_, &sum_ny_,
+                  &sum_nz_, &sum_navigable_z_}) {
     v->assign(n, 0.f);
   }
   navigability_.assign(n, 0.5f);
@@ -101,6 +101,7 @@ int64_t InfoMap::AddPoints(const std::vector<ScoredPoint>& points) {
     if (p.navigability > tau_f) {
       navigable_points_[i] += 1.f;
       sum_navigability_[i] += p.navigability;
+      sum_navigable_z_[i] += p.position_m.z();
     }
     if (p.obstacle > tau_b) {
       obstacle_points_[i] += 1.f;
@@ -127,6 +128,10 @@ void InfoMap::UpdateCell(int64_t i) {
 Eigen::Vector3f InfoMap::Centroid(int64_t i) const {
   if (!(points_[i] > 0.f)) return Eigen::Vector3f::Constant(kNaN);
   return Eigen::Vector3f(sum_x_[i], sum_y_[i], sum_z_[i]) / points_[i];
+}
+
+float InfoMap::GroundHeight(int64_t i) const {
+  return navigable_points_[i] > 0.f ? sum_navigable_z_[i] / navigable_points_[i] : kNaN;
 }
 
 Eigen::Vector3f InfoMap::MeanNormal(int64_t i) const {
@@ -183,6 +188,7 @@ common::GridMap InfoMap::ToGridMap() const {
   put(info_layers::kSumNormalX, sum_nx_);
   put(info_layers::kSumNormalY, sum_ny_);
   put(info_layers::kSumNormalZ, sum_nz_);
+  put(info_layers::kSumNavigableZ, sum_navigable_z_);
   return grid;
 }
 
@@ -212,6 +218,7 @@ InfoMap InfoMap::FromGridMap(const common::GridMap& grid, const WorkArea& area,
   get(info_layers::kSumNormalX, &map.sum_nx_);
   get(info_layers::kSumNormalY, &map.sum_ny_);
   get(info_layers::kSumNormalZ, &map.sum_nz_);
+  get(info_layers::kSumNavigableZ, &map.sum_navigable_z_);
   for (int64_t i = 0; i < map.num_cells(); ++i) {
     if (!(map.points_[i] >= 0.f) || !std::isfinite(map.points_[i])) {
       throw std::invalid_argument("info map: cell " + std::to_string(i) +

@@ -59,6 +59,7 @@ inline constexpr char kSumZ[] = "explore/sum_z";
 inline constexpr char kSumNormalX[] = "explore/sum_normal_x";  ///< sums of unit normals
 inline constexpr char kSumNormalY[] = "explore/sum_normal_y";
 inline constexpr char kSumNormalZ[] = "explore/sum_normal_z";
+inline constexpr char kSumNavigableZ[] = "explore/sum_navigable_z";  ///< sum z over n_pf
 }  // namespace info_layers
 
 class InfoMap {
@@ -92,6 +93,9 @@ class InfoMap {
   Eigen::Vector3f Centroid(int64_t cell) const;
   /// Unit mean normal of the cell's points (zero when none).
   Eigen::Vector3f MeanNormal(int64_t cell) const;
+  /// Mean height of the cell's navigable points (the ground a robot would stand on; a tree's
+  /// crown above it does not count); NaN when it has none.
+  float GroundHeight(int64_t cell) const;
 
   int64_t work_area_cells() const { return work_area_cells_; }
   int64_t explored_work_area_cells() const { return explored_in_area_; }
@@ -120,6 +124,7 @@ class InfoMap {
   std::vector<float> points_, navigable_points_, obstacle_points_;
   std::vector<float> sum_navigability_, sum_obstacle_, sum_quality_;
   std::vector<float> sum_x_, sum_y_, sum_z_, sum_nx_, sum_ny_, sum_nz_;
+  std::vector<float> sum_navigable_z_;
   // Derived.
   std::vector<float> navigability_, quality_;
 };

@@ -384,6 +384,16 @@ NbvDecision NbvPlanner::Decide(const InfoMap& map, const std::vector<InterestZon
     decision.reason = line;
     return decision;
   }
+  {
+    Candidate& chosen = *decision.best;
+    chosen.ground_z_m = map.GroundHeight(chosen.cell);
+    const std::vector<int64_t> cells_on_path = tree.PathTo(chosen.cell);
+    for (int64_t c : cells_on_path) {
+      const common::Vector2 p = map.geometry().CenterOf(map.Cell(c));
+      if (!chosen.path_m.empty()) chosen.path_length_m += (p - chosen.path_m.back()).norm();
+      chosen.path_m.push_back(p);
+    }
+  }
   const Candidate& best = *decision.best;
   if (greedy) {
     if (best.info_gain < params_.greedy_min_gain) {

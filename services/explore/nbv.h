@@ -98,6 +98,11 @@ struct Candidate {
   double path_cost{0.0};     ///< C, metres over C_nc
   double utility{0.0};       ///< u (greedy: A)
   bool reachable{false};
+  /// The chosen candidate's path through the navigation tree (cell centres from the robot's
+  /// cell) and its length; empty and 0 for the others.
+  std::vector<common::Vector2> path_m;
+  double path_length_m{0.0};
+  double ground_z_m{0.0};  ///< the chosen candidate's ground (InfoMap::GroundHeight)
 };
 
 /// Safe cells at random (seeded by `rng`), pairwise further apart than the spacing, at most

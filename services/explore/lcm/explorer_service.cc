@@ -86,10 +86,8 @@ ExplorerService::ExplorerService(runtime::Node& node, ExplorerConfig config,
         ch::ForRobot(robot_, ch::kNavStatus),
         [this](const cairn::lcmt_nav_status& m) { OnNavStatus(m); });
     node_.Subscribe<cairn::lcmt_sim_control_reply>(
-        ch::kSimControlReply, [this](const cairn::lcmt_sim_control_reply& m) {
-          if (m.request_id <= 0 || m.request_id >= next_request_id_ || m.status == 0) return;
-          node_.Warn("scan_request", "the simulator refused the scan request: " + m.message);
-        });
+        ch::kSimControlReply,
+        [this](const cairn::lcmt_sim_control_reply& m) { OnSimControlReply(m); });
   } else {
     map_client_ = std::make_unique<planner::LcmMapClient>(node_, MapClientParams(robot_, config_),
                                                           profile_.footprint_m);
@@ -222,7 +220,8 @@ void ExplorerService::OnPose(const cairn::lcmt_pose& msg) {
   const common::Pose2 p = pose.value().ToPose2();
   robot_xy_ = {p.x_m, p.y_m};
   have_pose_ = true;
-  if (last_xy_) status_.distance_m += (robot_xy_ - *last_xy_).norm();
+  // The next-best-view mission counts its own distance (the tree's path when teleported).
+  if (last_xy_ && !nbv_) status_.distance_m += (robot_xy_ - *last_xy_).norm();
   last_xy_ = robot_xy_;
 }
 
@@ -302,6 +301,23 @@ void ExplorerService::CarryOut(const NbvAction& action, double now_s) {
   if (action.done) Finish(nbv_->end_reason());
 }
 
+void ExplorerService::OnSimControlReply(const cairn::lcmt_sim_control_reply& msg) {
+  if (done_ || msg.request_id <= 0 || msg.request_id >= next_request_id_) return;  // not ours
+  const bool ok = msg.status == cairn::lcmt_sim_control_reply::STATUS_OK;
+  if (teleport_request_ && msg.request_id == *teleport_request_) {
+    teleport_request_.reset();
+    const double now_s = NowS();
+    if (ok) {
+      for (const auto& p : teleport_path_m_) nbv_->OnPosition(p);
+    }
+    node_.Event("view point %s",
+                ok ? "reached (teleported)" : ("not reached: " + msg.message).c_str());
+    CarryOut(nbv_->OnGoalResult(ok, ok ? "" : msg.message, now_s), now_s);
+    return;
+  }
+  if (!ok) node_.Warn("scan_request", "the simulator refused the scan request: " + msg.message);
+}
+
 void ExplorerService::SendScanRequest() {
   cairn::lcmt_sim_control_request req{};
   req.utime = node_.NowUtime();
@@ -338,6 +354,28 @@ void ExplorerService::SaveInfoMap() {
 }
 
 void ExplorerService::SendNbvGoal(const Candidate& goal) {
+  if (config_.nbv.drive == "teleport") {
+    cairn::lcmt_sim_control_request req{};
+    req.utime = node_.NowUtime();
+    req.request_id = next_request_id_++;
+    req.requester = kProcess;
+    req.op = cairn::lcmt_sim_control_request::OP_RESET_ROBOT;
+    req.name = robot_;
+    req.position_m[0] = goal.position_m.x();
+    req.position_m[1] = goal.position_m.y();
+    // Above the view point's ground, not "on the surface below": from high up that surface
+    // may be a tree's crown.
+    req.position_m[2] = std::isfinite(goal.ground_z_m)
+                            ? goal.ground_z_m + config_.nbv.teleport_base_height_m
+                            : 0.0;  // no ground known there: the surface below
+    req.yaw_rad = 0.0;
+    teleport_request_ = req.request_id;
+    teleport_path_m_ = goal.path_m;
+    node_.Publish(ch::kSimControl, req);
+    SetBehaviour("TELEPORTING");
+    UpdateNbvStatus();
+    return;
+  }
   nbv_goal_id_ = next_goal_id_++;
   cairn::lcmt_goal msg{};
   msg.utime = node_.NowUtime();
@@ -355,6 +393,7 @@ void ExplorerService::SendNbvGoal(const Candidate& goal) {
 
 void ExplorerService::UpdateNbvStatus() {
   status_.scans = nbv_->scans();
+  status_.distance_m = nbv_->distance_m();
   status_.goals_sent = nbv_->goals_sent();
   status_.goals_reached = nbv_->goals_reached();
   status_.goals_failed = nbv_->goals_failed();
@@ -383,7 +422,7 @@ void ExplorerService::TickNbv(double now_s) {
            " s) is over");
     return;
   }
-  nbv_->OnPosition(robot_xy_);
+  if (config_.nbv.drive != "teleport") nbv_->OnPosition(robot_xy_);
   if (trigger_at_s_ && now_s >= *trigger_at_s_) {
     trigger_at_s_.reset();
     SendScanRequest();

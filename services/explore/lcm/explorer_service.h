@@ -9,6 +9,7 @@
 #include "cairn/lcmt_laser_scan.hpp"
 #include "cairn/lcmt_nav_status.hpp"
 #include "cairn/lcmt_pose.hpp"
+#include "cairn/lcmt_sim_control_reply.hpp"
 
 #include "common/grid_map.h"
 #include "common/robot_profile.h"
@@ -81,6 +82,7 @@ class ExplorerService {
   void SendNbvGoal(const Candidate& goal);
   void UpdateNbvStatus();
   void SaveInfoMap();
+  void OnSimControlReply(const cairn::lcmt_sim_control_reply& msg);
 
   runtime::Node& node_;
   ExplorerConfig config_;
@@ -104,6 +106,9 @@ class ExplorerService {
   std::unique_ptr<NbvMission> nbv_;
   std::optional<double> trigger_at_s_;  ///< ask the turret for a scan at this time
   std::optional<int64_t> nbv_goal_id_;
+  /// Teleport drive: the OP_RESET_ROBOT request that carries the robot to the view point.
+  std::optional<int64_t> teleport_request_;
+  std::vector<common::Vector2> teleport_path_m_;
   int64_t next_goal_id_{1};
   int64_t next_request_id_{1};
   bool wrapped_up_{false};
