@@ -636,14 +636,8 @@ def outdoor():
         "  point is z = 0). Flat start area around the origin; hills at (-14, 12), (12, 15),",
         "  (15, -12), (-12, -15); an even 6 deg slope rising east from x = 18 to 28.",
         "-->",
-        "  <asset>",
-        f'    <hfield name="terrain" file="outdoor_terrain.bin" size="{f(half)} {f(half)} '
-        f'{f(hi - lo)} 0.5"/>',
-        "  </asset>",
-        "  <worldbody>",
-        '    <light name="sun" directional="true" pos="0 0 40" dir="0.2 0.1 -1"/>',
     ]
-    lines += g + ["  </worldbody>", "</mujoco>", ""]
+    lines += heightfield_body("outdoor_terrain.bin", half, hi - lo, g)
     write("outdoor.xml", "\n".join(lines))
 
 
@@ -890,14 +884,8 @@ def simple():
         "  2.5 m high, crown r 1.5 m on top. Everything stands on the terrain.",
         f"  Work area (seed 002's red rectangle): x {f(wx0)}..{f(wx1)}, y {f(wy0)}..{f(wy1)}.",
         "-->",
-        "  <asset>",
-        f'    <hfield name="terrain" file="simple_terrain.bin" size="{f(half)} {f(half)} '
-        f'{f(hi - lo)} 0.5"/>',
-        "  </asset>",
-        "  <worldbody>",
-        '    <light name="sun" directional="true" pos="0 0 40" dir="0.2 0.1 -1"/>',
     ]
-    lines += g + ["  </worldbody>", "</mujoco>", ""]
+    lines += heightfield_body("simple_terrain.bin", half, hi - lo, g)
     write("simple.xml", "\n".join(lines))
 
 
@@ -1014,6 +1002,19 @@ def terrain_at(heights, n, half, x, y, lo):
     z = ((1 - tx) * (1 - ty) * heights[r0][c0] + tx * (1 - ty) * heights[r0][c0 + 1] +
          (1 - tx) * ty * heights[r0 + 1][c0] + tx * ty * heights[r0 + 1][c0 + 1])
     return z - lo
+
+
+def heightfield_body(terrain_file, half, height, geoms):
+    """The asset, sun and geoms of a world on a height field (terrain_file, +-half metres,
+    height metres high, 0.5 m base), up to the end of the file."""
+    return [
+        "  <asset>",
+        f'    <hfield name="terrain" file="{terrain_file}" size="{f(half)} {f(half)} '
+        f'{f(height)} 0.5"/>',
+        "  </asset>",
+        "  <worldbody>",
+        '    <light name="sun" directional="true" pos="0 0 40" dir="0.2 0.1 -1"/>',
+    ] + geoms + ["  </worldbody>", "</mujoco>", ""]
 
 
 def write(name, text):

@@ -35,12 +35,9 @@ NbvMissionParams Params() {
   return p;
 }
 
-// One turret line over `scene` from a scanner at `position` (the simulator's convention: the
-// line's x axis is the turret's up axis, its y axis the horizontal pan direction).
+// One turret line over `scene` from a scanner at `position`.
 common::LaserScan Line(const Scene& scene, double pan_rad, const Eigen::Vector3d& position) {
-  const double c = std::cos(pan_rad), s = std::sin(pan_rad);
-  Eigen::Matrix3d r;
-  r << 0.0, c, -s, 0.0, s, c, 1.0, 0.0, 0.0;
+  const Eigen::Matrix3d r = scan_testing::TurretLineFrame(pan_rad);
   common::LaserScan line;
   line.sensor_pose.position_m = position;
   line.sensor_pose.orientation = common::Quaternion(r);

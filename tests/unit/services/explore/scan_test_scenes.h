@@ -97,6 +97,15 @@ inline std::pair<double, int> Hit(const Scene& scene, const Eigen::Vector3d& o,
   return {best, id};
 }
 
+// Rotation from a turret line's scanning frame to the world at `pan_rad` (the simulator's
+// convention: the line's x axis is the turret's up axis, its y axis the horizontal pan direction).
+inline Eigen::Matrix3d TurretLineFrame(double pan_rad) {
+  const double c = std::cos(pan_rad), s = std::sin(pan_rad);
+  Eigen::Matrix3d r;
+  r << 0.0, c, -s, 0.0, s, c, 1.0, 0.0, 0.0;
+  return r;
+}
+
 // A rotating vertical fan: line = pan angle, beam = elevation, 0.5 deg steps by default.
 struct Fan {
   double pan_min_deg{-10}, pan_max_deg{10};

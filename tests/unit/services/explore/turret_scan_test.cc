@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "scan_test_scenes.h"
 #include <Eigen/Geometry>
 
 namespace cairn::explore {
@@ -26,9 +27,7 @@ TurretScanParams Params() {
 // the turret's up axis, its y axis the horizontal pan direction) at `position`.
 common::LaserScan Line(double pan_rad, const Eigen::Vector3d& position = {2.0, 3.0, 1.0},
                        float range_m = 2.0f, int beams = 7) {
-  const double c = std::cos(pan_rad), s = std::sin(pan_rad);
-  Eigen::Matrix3d r;
-  r << 0.0, c, -s, 0.0, s, c, 1.0, 0.0, 0.0;
+  const Eigen::Matrix3d r = scan_testing::TurretLineFrame(pan_rad);
   common::LaserScan line;
   line.sensor_pose.position_m = position;
   line.sensor_pose.orientation = common::Quaternion(r);
