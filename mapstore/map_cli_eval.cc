@@ -120,9 +120,13 @@ int CmdEval(int argc, char** argv) {
   flags.AddString("profile", &profile,
                   "derive this profile's layers (default layer cost/<profile>)");
   flags.AddString("world", &world, "a shipped world name (arena, tunnel, ...) or an MJCF file");
-  flags.AddString("layer", &params.layer,
-                  "map layer judged: occupancy-like 0..100, or cost/<profile> (default occupancy, "
-                  "or cost/<profile> with --profile)");
+  flags.AddString(
+      "layer", &params.layer,
+      "map layer judged: occupancy-like 0..100, cost/<profile>, or explore/navigability "
+      "(C_nc: free above 0.7, occupied below 0.4) (default occupancy, or "
+      "cost/<profile> with --profile)");
+  flags.AddString("region", &params.region_layer,
+                  "count only the cells where this map layer is 1 (e.g. explore/work_area)");
   flags.AddString("start", &start_text,
                   "x,y (m): a free position; the reachable area grows from it");
   flags.AddDouble("band-low", &truth_params.band_low_m,

@@ -15,7 +15,8 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-enum Class : int8_t { kOutside = -2, kUnknown = -1, kFree = 0, kOccupied = 1 };
+// kKnown: explored but neither free nor occupied (a C_nc between the two bounds).
+enum Class : int8_t { kOutside = -2, kUnknown = -1, kFree = 0, kOccupied = 1, kKnown = 2 };
 
 double Ratio(int64_t num, int64_t den) {
   return den > 0 ? static_cast<double>(num) / static_cast<double>(den) : kNaN;
@@ -131,6 +132,11 @@ void MapEvalParams::Validate() const {
       std::isfinite(occupied_above) && std::isfinite(free_below) && free_below <= occupied_above,
       "free_below (" << free_below << ") must not exceed occupied_above (" << occupied_above
                      << ")");
+  CAIRN_THROW_UNLESS(std::isfinite(cnc_free_above) && std::isfinite(cnc_occupied_below) &&
+                         cnc_occupied_below <= cnc_free_above,
+                     "cnc_occupied_below (" << cnc_occupied_below
+                                            << ") must not exceed cnc_free_above ("
+                                            << cnc_free_above << ")");
   CAIRN_THROW_UNLESS(start_m.has_value(), "start_m is required (a free position in the world)");
   CAIRN_THROW_UNLESS(std::isfinite(start_m->x()) && std::isfinite(start_m->y()),
                      "start_m must be finite");
@@ -160,6 +166,13 @@ MapEvalReport EvaluateMap(const common::GridMap& map, const common::GridMap& tru
   const common::Layer& layer = map.at(params.layer);
   const common::Layer& truth_occ = truth.at(kTruthOccupied);
   const bool cost = layers::IsCostLayer(params.layer);
+  const bool cnc = params.layer == kInfoNavigability;
+  const common::Layer* region = nullptr;
+  if (!params.region_layer.empty()) {
+    CAIRN_THROW_UNLESS(map.HasLayer(params.region_layer),
+                       "the map has no region layer '" << params.region_layer << "'");
+    region = &map.at(params.region_layer);
+  }
 
   MapEvalReport r;
   r.layer = params.layer;
@@ -171,12 +184,17 @@ MapEvalReport EvaluateMap(const common::GridMap& map, const common::GridMap& tru
   for (size_t i = 0; i < n; ++i) {
     const float tv = truth_occ.data()[i];
     if (std::isnan(tv)) continue;
+    if (region && region->data()[i] != 1.f) continue;
     t.v[i] = tv >= 0.5f ? kOccupied : kFree;
     const float mv = layer.data()[i];
     if (std::isnan(mv)) {
       m.v[i] = kUnknown;
     } else if (cost) {
       m.v[i] = mv >= layers::kCostLethal ? kOccupied : kFree;
+    } else if (cnc) {
+      m.v[i] = mv > params.cnc_free_above       ? kFree
+               : mv < params.cnc_occupied_below ? kOccupied
+                                                : kKnown;
     } else {
       m.v[i] = mv > params.occupied_above ? kOccupied : mv < params.free_below ? kFree : kUnknown;
     }
@@ -229,7 +247,7 @@ MapEvalReport EvaluateMap(const common::GridMap& map, const common::GridMap& tru
   for (size_t i = 0; i < n; ++i) {
     if (!reachable[i]) continue;
     ++r.reachable_cells;
-    r.reachable_known_cells += m.v[i] == kFree || m.v[i] == kOccupied;
+    r.reachable_known_cells += m.v[i] == kFree || m.v[i] == kOccupied || m.v[i] == kKnown;
   }
   r.coverage = Ratio(r.reachable_known_cells, r.reachable_cells);
 

@@ -15,7 +15,13 @@
 /// Classes of a map cell, from one layer:
 /// - `occupancy` and other 0..100 layers (100·p, NaN unknown): occupied above
 ///   occupied_above, free below free_below, otherwise (and NaN) unknown;
-/// - `cost/<profile>` (common/layers.h): occupied at 100 (lethal), free from 0 to 99, NaN unknown.
+/// - `cost/<profile>` (common/layers.h): occupied at 100 (lethal), free from 0 to 99, NaN unknown;
+/// - `explore/navigability` (the next-best-view information map's C_nc, 0..1, NaN unexplored):
+///   free above cnc_free_above (the explorer's safe cells), occupied below cnc_occupied_below
+///   (the cells that block its view), known but neither in between (counted in coverage only).
+/// With region_layer, only the cells where that map layer is 1 count (for instance
+/// `explore/work_area`: the explorer's work area); the others are left out like cells outside
+/// the world.
 /// The truth: `truth/occupied` 1 occupied, 0 free, NaN outside the world (such cells are left
 /// out of every figure); `truth/ground` (optional) the ground height.
 ///
@@ -54,12 +60,18 @@ namespace cairn::mapstore {
 /// Layer names of the truth (the same strings as simulator/ground_truth.h's).
 inline constexpr char kTruthOccupied[] = "truth/occupied";
 inline constexpr char kTruthGround[] = "truth/ground";
+/// The information map's C_nc layer (services/explore/info_map.h).
+inline constexpr char kInfoNavigability[] = "explore/navigability";
 
 struct MapEvalParams {
   /// The map layer judged: 0..100 occupancy-like, or cost/<profile>.
   std::string layer{"occupancy"};
-  double occupied_above{65.0};  ///< 0..100 layers: occupied when > this
-  double free_below{25.0};      ///< 0..100 layers: free when < this
+  double occupied_above{65.0};     ///< 0..100 layers: occupied when > this
+  double free_below{25.0};         ///< 0..100 layers: free when < this
+  double cnc_free_above{0.7};      ///< explore/navigability: free above this C_nc
+  double cnc_occupied_below{0.4};  ///< explore/navigability: occupied below this C_nc
+  /// Optional map layer (1 inside): the figures count only the cells inside.
+  std::string region_layer;
   /// World position the reachable area grows from (required; must be truth-free).
   std::optional<common::Vector2> start_m;
   int tolerance_cells{1};

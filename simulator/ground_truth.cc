@@ -100,6 +100,8 @@ void TruthRasterParams::Validate() const {
                      "samples_per_side must be in [1, 16] (got " << samples_per_side << ")");
   CAIRN_THROW_UNLESS(std::isfinite(terrain_min_extent_m) && terrain_min_extent_m > 0.0,
                      "terrain_min_extent_m must be > 0 (got " << terrain_min_extent_m << ")");
+  CAIRN_THROW_UNLESS(std::isfinite(terrain_max_height_m) && terrain_max_height_m > 0.0,
+                     "terrain_max_height_m must be > 0 (got " << terrain_max_height_m << ")");
   CAIRN_THROW_UNLESS(
       std::isfinite(stack_tolerance_m) && stack_tolerance_m >= 0.0 &&
           stack_tolerance_m < band_low_m,
@@ -139,7 +141,8 @@ GroundTruthWorld::GroundTruthWorld(MjModelPtr model, const TruthRasterParams& pa
     const double* p = d->geom_xpos + 3 * g;
     footprint_[g] = {p[0] - half[0], p[0] + half[0], p[1] - half[1], p[1] + half[1]};
     terrain_[g] = type == mjGEOM_HFIELD || (2.0 * half[0] >= params_.terrain_min_extent_m &&
-                                            2.0 * half[1] >= params_.terrain_min_extent_m);
+                                            2.0 * half[1] >= params_.terrain_min_extent_m &&
+                                            2.0 * half[2] <= params_.terrain_max_height_m);
   }
   start_z_m_ = (std::isfinite(highest) ? highest : 0.0) + 1.0;
 }

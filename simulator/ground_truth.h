@@ -30,8 +30,9 @@
 /// lowest to its highest surface on the line).
 ///
 /// Ground and objects. Planes, height fields, and geoms whose world footprint is at least
-/// terrain_min_extent_m along both x and y (the tunnel's decks, ramps and platforms) are
-/// terrain; every other colliding geom is an object (walls, furniture, rocks). The ground of a
+/// terrain_min_extent_m along both x and y and at most terrain_max_height_m tall (the tunnel's
+/// decks, ramps and platforms) are terrain; every other colliding geom is an object (walls,
+/// furniture, rocks, and a solid building, whose roof is no ground). The ground of a
 /// sample is the top of the lowest stack of terrain spans, each starting at most
 /// stack_tolerance_m above the top of the one below (a deck on the ground plane, a ramp sunk
 /// into a deck); terrain above a gap (a large slab overhead) is not ground. Geoms that do not
@@ -60,6 +61,8 @@ struct TruthRasterParams {
   int samples_per_side{3};
   /// Non-plane, non-height-field geoms at least this wide along both world x and y are terrain.
   double terrain_min_extent_m{3.0};
+  /// ... and at most this tall (world z extent): a taller one is a building, an object.
+  double terrain_max_height_m{2.0};
   /// A terrain span starting at most this far above the ground below it extends that ground.
   double stack_tolerance_m{0.01};
   /// Doors (hinge `door_<name>` with a position actuator) open, as cairn-sim starts them.

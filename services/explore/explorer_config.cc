@@ -66,10 +66,15 @@ void LoadNbv(YamlMap map, NbvModeParams* p) {
   map.Get("max_scans", &p->max_scans);
   map.Get("goal_tolerance_m", &p->goal_tolerance_m);
   map.Get("goal_timeout_s", &p->goal_timeout_s);
+  map.Get("max_scan_retries", &p->max_scan_retries);
   map.Get("settle_s", &p->settle_s);
   map.Get("safe_cnc", &p->safe_cnc);
   map.Get("candidate_spacing_m", &p->candidate_spacing_m);
   map.Get("candidate_clearance_m", &p->candidate_clearance_m);
+  map.Get("missed_view_step_m", &p->missed_view_step_m);
+  map.Get("fill_surface", &p->fill_surface);
+  map.Get("seed", &p->seed);
+  map.Get("revisit_radius_m", &p->revisit_radius_m);
   map.Get("d_max_m", &p->d_max_m);
   map.Get("min_global_quality", &p->min_global_quality);
   map.Get("gain_range_m", &p->gain_range_m);
@@ -101,6 +106,11 @@ NbvMissionParams NbvModeParams::ToMissionParams() const {
   m.nbv.safe_cnc = safe_cnc;
   m.nbv.candidate_spacing_m = candidate_spacing_m;
   m.nbv.candidate_clearance_m = candidate_clearance_m;
+  m.nbv.missed_view_step_m = missed_view_step_m;
+  m.nbv.revisit_radius_m = revisit_radius_m;
+  m.fill_surface = fill_surface;
+  if (seed < 0) throw std::invalid_argument("explorer: nbv.seed must be >= 0");
+  m.nbv.seed = static_cast<uint64_t>(seed);
   m.nbv.d_max_m = d_max_m;
   m.nbv.min_global_quality = min_global_quality;
   m.nbv.gain_range_m = gain_range_m;
@@ -117,6 +127,7 @@ NbvMissionParams NbvModeParams::ToMissionParams() const {
   m.work_area = ParseWorkArea(work_area);
   m.max_scans = max_scans;
   m.goal_timeout_s = goal_timeout_s;
+  m.max_scan_retries = max_scan_retries;
   try {
     m.Validate();
   } catch (const std::invalid_argument& e) {

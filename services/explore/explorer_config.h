@@ -78,6 +78,9 @@ struct NbvModeParams {
   int max_scans{40};
   double goal_tolerance_m{1.0};
   double goal_timeout_s{240.0};
+  /// A sweep that breaks (lines lost on the bus) is asked for again at most this many times in
+  /// a row before the mission fails.
+  int max_scan_retries{6};
   /// The robot must stand still this long (sim s) after a goal before a scan is asked for.
   double settle_s{1.0};
   /// The NBV parameters over the preset (seed 002 Appendix A).
@@ -85,6 +88,10 @@ struct NbvModeParams {
   double candidate_spacing_m{3.0};
   /// Every cell this near a candidate must be safe too: about the robot's circumscribed radius.
   double candidate_clearance_m{0.45};
+  double missed_view_step_m{3.0};  ///< NbvParams::missed_view_step_m
+  bool fill_surface{true};         ///< NbvMissionParams::fill_surface
+  int seed{1};                     ///< candidate sampling (NbvParams::seed)
+  double revisit_radius_m{1.5};    ///< NbvParams::revisit_radius_m
   double d_max_m{50.0};
   double min_global_quality{0.0};
   double gain_range_m{20.0};

@@ -25,6 +25,7 @@ struct Options {
   std::string work_area;
   std::string preset;
   int max_scans = 0;
+  int seed = -1;
   std::string out_dir;
   std::string save_to;
   std::string drive;
@@ -52,6 +53,7 @@ int Run(const Options& o) {
   if (!o.work_area.empty()) config.nbv.work_area = o.work_area;
   if (!o.preset.empty()) config.nbv.preset = o.preset;
   if (o.max_scans > 0) config.nbv.max_scans = o.max_scans;
+  if (o.seed >= 0) config.nbv.seed = o.seed;
   if (!o.out_dir.empty()) config.out_dir = o.out_dir;
   if (!o.save_to.empty()) config.save_to = o.save_to;
   if (!o.drive.empty()) config.nbv.drive = o.drive;
@@ -113,6 +115,7 @@ int main(int argc, char** argv) {
                   "nbv: navigator (drive to each view point) or teleport (the simulator puts the "
                   "robot there; the distance is the navigation tree's path)");
   flags.AddInt("max-scans", &o.max_scans, "nbv: end after this many scans (overrides the config)");
+  flags.AddInt("seed", &o.seed, "nbv: the candidate sampling's seed (overrides the config)");
   flags.AddDouble("duration", &o.duration_s,
                   "simulated seconds of exploring, 0 = until done (overrides the config)");
   flags.AddString("lcm-url", &o.lcm_url, "LCM URL (default: LCM_DEFAULT_URL or udpm with ttl=0)");

@@ -1,5 +1,6 @@
 #include "services/explore/info_map.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -227,6 +228,80 @@ InfoMap InfoMap::FromGridMap(const common::GridMap& grid, const WorkArea& area,
     map.UpdateCell(i);
   }
   return map;
+}
+
+std::vector<ScoredPoint> FillSurfaceCells(const InfoMap& map,
+                                          const std::vector<ScoredPoint>& points,
+                                          const std::vector<uint8_t>& valid,
+                                          const std::vector<Eigen::Vector3i>& triangles) {
+  const common::GridGeometry& geometry = map.geometry();
+  if (valid.size() != points.size()) {
+    throw std::invalid_argument("info map: valid flags and points differ in size");
+  }
+  std::vector<ScoredPoint> filled;
+  if (geometry.num_cells() == 0) return filled;
+  // 0 untouched, 1 explored or a point fell in it, 2 filled by this call.
+  std::vector<uint8_t> state(static_cast<size_t>(geometry.num_cells()), 0);
+  for (int64_t i = 0; i < geometry.num_cells(); ++i) {
+    if (map.Explored(i)) state[static_cast<size_t>(i)] = 1;
+  }
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (!valid[i]) continue;
+    const auto cell = geometry.IndexOf({points[i].position_m.x(), points[i].position_m.y()});
+    if (cell) state[static_cast<size_t>(geometry.LinearIndex(*cell))] = 1;
+  }
+  const double res = geometry.resolution_m;
+  const int64_t n = static_cast<int64_t>(points.size());
+  for (const Eigen::Vector3i& t : triangles) {
+    if (t.minCoeff() < 0 || t.maxCoeff() >= n || !valid[t[0]] || !valid[t[1]] || !valid[t[2]]) {
+      continue;
+    }
+    const ScoredPoint& a = points[t[0]];
+    const ScoredPoint& b = points[t[1]];
+    const ScoredPoint& c = points[t[2]];
+    const double ax = a.position_m.x(), ay = a.position_m.y();
+    const double bx = b.position_m.x() - ax, by = b.position_m.y() - ay;
+    const double cx = c.position_m.x() - ax, cy = c.position_m.y() - ay;
+    const double det = bx * cy - by * cx;  // twice the signed projected area
+    if (!(std::abs(det) > 2e-6)) continue;
+    const double min_x = std::min({ax, ax + bx, ax + cx}), max_x = std::max({ax, ax + bx, ax + cx});
+    const double min_y = std::min({ay, ay + by, ay + cy}), max_y = std::max({ay, ay + by, ay + cy});
+    const int ix0 =
+        std::max(0, static_cast<int>(std::ceil((min_x - geometry.origin.x_m) / res - 0.5)));
+    const int ix1 =
+        std::min(geometry.size_x - 1,
+                 static_cast<int>(std::floor((max_x - geometry.origin.x_m) / res - 0.5)));
+    const int iy0 =
+        std::max(0, static_cast<int>(std::ceil((min_y - geometry.origin.y_m) / res - 0.5)));
+    const int iy1 =
+        std::min(geometry.size_y - 1,
+                 static_cast<int>(std::floor((max_y - geometry.origin.y_m) / res - 0.5)));
+    for (int iy = iy0; iy <= iy1; ++iy) {
+      for (int ix = ix0; ix <= ix1; ++ix) {
+        const size_t k = static_cast<size_t>(ix + static_cast<int64_t>(iy) * geometry.size_x);
+        if (state[k] != 0) continue;
+        const double px = geometry.origin.x_m + (ix + 0.5) * res - ax;
+        const double py = geometry.origin.y_m + (iy + 0.5) * res - ay;
+        // Barycentric weights of the cell centre (u on b, v on c).
+        const double u = (px * cy - py * cx) / det;
+        const double v = (bx * py - by * px) / det;
+        if (u < 0.0 || v < 0.0 || u + v > 1.0) continue;
+        const float wa = static_cast<float>(1.0 - u - v), wb = static_cast<float>(u),
+                    wc = static_cast<float>(v);
+        ScoredPoint p;
+        p.position_m = wa * a.position_m + wb * b.position_m + wc * c.position_m;
+        const Eigen::Vector3f normal = wa * a.normal + wb * b.normal + wc * c.normal;
+        p.normal =
+            normal.norm() > 1e-6f ? Eigen::Vector3f(normal.normalized()) : Eigen::Vector3f::Zero();
+        p.navigability = wa * a.navigability + wb * b.navigability + wc * c.navigability;
+        p.obstacle = wa * a.obstacle + wb * b.obstacle + wc * c.obstacle;
+        p.quality = wa * a.quality + wb * b.quality + wc * c.quality;
+        state[k] = 2;
+        filled.push_back(p);
+      }
+    }
+  }
+  return filled;
 }
 
 }  // namespace cairn::explore

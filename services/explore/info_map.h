@@ -88,6 +88,8 @@ class InfoMap {
   /// Q_a, NaN where unexplored.
   float Quality(int64_t cell) const { return quality_[cell]; }
   bool Explored(int64_t cell) const { return points_[cell] > 0.f; }
+  /// n_p: the points that fell on the cell.
+  float PointCount(int64_t cell) const { return points_[cell]; }
   bool InWorkArea(int64_t cell) const { return in_area_[cell] != 0; }
   /// Mean position of the cell's points (NaN when unexplored).
   Eigen::Vector3f Centroid(int64_t cell) const;
@@ -132,5 +134,18 @@ class InfoMap {
 /// C_nc from a cell's statistics (eq. 4.4): 0.5 when neither count is positive.
 double CellNavigability(double navigable_points, double sum_navigability, double obstacle_points,
                         double sum_obstacle);
+
+/// The surface between a scan's points: for every accepted triangle (vertex indices into
+/// `points`; a triangle with a vertex not in `valid` is skipped), each cell of `map` whose
+/// centre lies inside the triangle's ground projection, that no valid point falls in and that
+/// the map has not explored yet gets one point, interpolated from the corners at the cell's
+/// centre (position, normal, F, B, D); an explored cell keeps its measured points alone. A
+/// scanner 1 m up meets flat ground in rings about d^2 res_t / h apart (0.3 m at 6 m, 2 m at
+/// 15 m): the mesh spans the rings and says what lies between, so the cells there are explored
+/// too. Near-vertical triangles (ground projection under 1e-6 m^2) fill nothing.
+std::vector<ScoredPoint> FillSurfaceCells(const InfoMap& map,
+                                          const std::vector<ScoredPoint>& points,
+                                          const std::vector<uint8_t>& valid,
+                                          const std::vector<Eigen::Vector3i>& triangles);
 
 }  // namespace cairn::explore

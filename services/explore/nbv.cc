@@ -66,6 +66,9 @@ void NbvParams::Validate() const {
   if (!(robot_free_radius_m >= 0.0) || !std::isfinite(robot_free_radius_m)) {
     throw std::invalid_argument("nbv: robot_free_radius_m must be >= 0");
   }
+  if (!(revisit_radius_m >= 0.0) || !std::isfinite(revisit_radius_m)) {
+    throw std::invalid_argument("nbv: revisit_radius_m must be >= 0");
+  }
   RequireUnit(occlusion_cnc, "occlusion_cnc");
   RequirePositive(gain_range_m, "gain_range_m");
   if (!(scanner_height_m >= 0.0) || !std::isfinite(scanner_height_m)) {
@@ -80,6 +83,9 @@ void NbvParams::Validate() const {
     throw std::invalid_argument("nbv: w_a_quality and w_n_quality cannot both be 0");
   }
   RequireUnit(greedy_min_gain, "greedy_min_gain");
+  if (!(missed_view_step_m >= 0.0) || !std::isfinite(missed_view_step_m)) {
+    throw std::invalid_argument("nbv: missed_view_step_m must be >= 0");
+  }
 }
 
 NbvParams NbvPreset(const std::string& name, NbvParams base) {
@@ -169,8 +175,17 @@ NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe
   return tree;
 }
 
+uint64_t CandidateRank(int64_t cell, uint64_t seed) {
+  uint64_t z = seed * 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(cell) + 0x632BE59BD9B4E019ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
 std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& params,
-                                      const common::Vector2& robot_m, std::mt19937_64* rng) {
+                                      const common::Vector2& robot_m, uint64_t seed,
+                                      const std::vector<common::Vector2>& visited) {
+  const double revisit2 = params.revisit_radius_m * params.revisit_radius_m;
   const float safe = static_cast<float>(params.safe_cnc);
   auto is_safe = [&](int64_t i) { return map.Explored(i) && map.Navigability(i) > safe; };
   const double res = map.geometry().resolution_m;
@@ -180,7 +195,11 @@ std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& param
     if (is_safe(i)) safe_cells.push_back(i);
   }
   const size_t limit = safe_cells.size() / static_cast<size_t>(params.candidate_fraction);
-  std::shuffle(safe_cells.begin(), safe_cells.end(), *rng);
+  std::vector<std::pair<uint64_t, int64_t>> ranked;
+  ranked.reserve(safe_cells.size());
+  for (int64_t i : safe_cells) ranked.emplace_back(CandidateRank(i, seed), i);
+  std::sort(ranked.begin(), ranked.end());
+  for (size_t k = 0; k < ranked.size(); ++k) safe_cells[k] = ranked[k].second;
   std::vector<int64_t> chosen;
   std::vector<common::Vector2> chosen_xy;
   const double spacing2 = params.candidate_spacing_m * params.candidate_spacing_m;
@@ -190,6 +209,14 @@ std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& param
     const common::CellIndex cell = map.Cell(i);
     const common::Vector2 xy = map.geometry().CenterOf(cell);
     if ((xy - robot_m).squaredNorm() <= spacing2) continue;
+    bool revisit = false;
+    for (const auto& v : visited) {
+      if ((xy - v).squaredNorm() < revisit2) {
+        revisit = true;
+        break;
+      }
+    }
+    if (revisit) continue;
     bool far = true;
     for (const auto& other : chosen_xy) {
       if ((xy - other).squaredNorm() <= spacing2) {
@@ -219,12 +246,16 @@ std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& param
   return chosen;
 }
 
-ViewEvaluator::ViewEvaluator(const InfoMap& map, const NbvParams& params)
-    : map_(map), params_(params), stamp_(static_cast<size_t>(map.num_cells()), 0) {
+ViewEvaluator::ViewEvaluator(const InfoMap& map, const NbvParams& params, const MissedViews* missed)
+    : map_(map), params_(params), missed_(missed), stamp_(static_cast<size_t>(map.num_cells()), 0) {
   params_.Validate();
+  if (missed_ && missed_->count.size() != static_cast<size_t>(map.num_cells())) {
+    throw std::invalid_argument("nbv: the missed-view counts do not match the map");
+  }
 }
 
-ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>& zones) {
+ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>& zones,
+                                  bool list_unexplored) {
   ViewGains gains;
   if (++epoch_ == 0) {
     std::fill(stamp_.begin(), stamp_.end(), 0);
@@ -280,31 +311,42 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
 
   const double sin_pan = std::sin(params_.pan_step_rad);
   const double sin_tilt = std::sin(params_.tilt_step_rad);
-  int64_t unexplored = 0;
+  // The quality a scan from here would give a cell at range r met at `incidence` (the cosine
+  // between the ray and the surface normal): eq. 4.8's area part, A_max over the area per point
+  // across the ray (r^2 sin(res_p) sin(res_t)), with eq. 4.9's incidence (eq. 4.10).
+  auto expected_quality = [&](double r, double incidence) {
+    const double area = r * r * sin_pan * sin_tilt;
+    const double area_score = area <= params_.a_max_m2 ? 1.0 : params_.a_max_m2 / area;
+    return CombineQuality(area_score, incidence, params_.w_a_quality, params_.w_n_quality);
+  };
+  double unexplored = 0.0;
   double quality_sum = 0.0;
   for (int64_t i : visible_) {
     if (!map_.InWorkArea(i)) continue;
     const int64_t ddx = i % g.size_x - c.ix, ddy = i / g.size_x - c.iy;
     if (ddx * ddx + ddy * ddy > reach2) continue;
     if (!map_.Explored(i)) {
-      ++unexplored;
+      if (list_unexplored) gains.unexplored.push_back(i);
+      const double d_m = std::sqrt(static_cast<double>(ddx * ddx + ddy * ddy)) * res;
+      const double weight = missed_ ? missed_->Weight(i, d_m, params_.missed_view_step_m) : 1.0;
+      unexplored += weight;
+      // Q counts it too (its Q_a is 0, eq. 4.10 sums over every cell in range): the quality a
+      // scan from here would give flat ground there, met at the scanner's height.
+      const double h = params_.scanner_height_m;
+      const double r = std::sqrt(d_m * d_m + h * h);
+      if (r > 1e-6) quality_sum += weight * expected_quality(r, h / r);
       continue;
     }
-    // The quality a scan from here would give this cell: the area per point at its distance
-    // (r^2 sin(res_p) sin(res_t), what the mesh measures at normal incidence) against A_max,
-    // and the incidence on the cell's mean normal.
+    // The quality a scan from here would give this cell, from its distance and the incidence on
+    // its mean normal, above its Q_a.
     const Eigen::Vector3f to = map_.Centroid(i) - scanner;
     const double r = to.norm();
     if (!(r > 1e-6)) continue;
-    const double area = r * r * sin_pan * sin_tilt;
-    const double area_score = area <= params_.a_max_m2 ? 1.0 : params_.a_max_m2 / area;
     const Eigen::Vector3f n = map_.MeanNormal(i);
     const double incidence = n.squaredNorm() > 0.f ? std::abs(to.dot(n)) / r : 1.0;
-    const double expected =
-        CombineQuality(area_score, incidence, params_.w_a_quality, params_.w_n_quality);
-    quality_sum += std::max(0.0, expected - map_.Quality(i));
+    quality_sum += std::max(0.0, expected_quality(r, incidence) - map_.Quality(i));
   }
-  gains.info_gain = std::min(1.0, static_cast<double>(unexplored) / in_range);
+  gains.info_gain = std::min(1.0, unexplored / static_cast<double>(in_range));
   gains.quality_gain = std::min(1.0, quality_sum / in_range);
 
   double zone_total = 0.0, zone_sum = 0.0;
@@ -324,9 +366,36 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
   return gains;
 }
 
-NbvPlanner::NbvPlanner(const NbvParams& params) : params_(params), rng_(params.seed) {
-  params_.Validate();
+MissedViews::MissedViews(int64_t num_cells)
+    : nearest_m(static_cast<size_t>(num_cells), std::numeric_limits<float>::infinity()),
+      count(static_cast<size_t>(num_cells), 0) {}
+
+double MissedViews::Weight(int64_t cell, double d_m, double step_m) const {
+  const int k = count[static_cast<size_t>(cell)];
+  if (k == 0 || d_m < nearest_m[static_cast<size_t>(cell)] - step_m) return 1.0;
+  return std::ldexp(1.0, -k);
 }
+
+int64_t RecordMissedView(const InfoMap& map, int64_t cell, const std::vector<int64_t>& unexplored,
+                         MissedViews* missed) {
+  if (missed->count.size() != static_cast<size_t>(map.num_cells())) {
+    throw std::invalid_argument("nbv: the missed views do not match the map");
+  }
+  const common::CellIndex c = map.Cell(cell);
+  const double res = map.geometry().resolution_m;
+  int64_t first = 0;
+  for (int64_t i : unexplored) {
+    const common::CellIndex u = map.Cell(i);
+    const float d_m = static_cast<float>(std::hypot(u.ix - c.ix, u.iy - c.iy) * res);
+    const size_t k = static_cast<size_t>(i);
+    if (missed->count[k] == 0) ++first;
+    if (missed->count[k] < 255) ++missed->count[k];
+    missed->nearest_m[k] = std::min(missed->nearest_m[k], d_m);
+  }
+  return first;
+}
+
+NbvPlanner::NbvPlanner(const NbvParams& params) : params_(params) { params_.Validate(); }
 
 const char* OutcomeName(NbvDecision::Outcome outcome) {
   switch (outcome) {
@@ -341,7 +410,8 @@ const char* OutcomeName(NbvDecision::Outcome outcome) {
 }
 
 NbvDecision NbvPlanner::Decide(const InfoMap& map, const std::vector<InterestZone>& zones,
-                               const common::Vector2& robot_m) {
+                               const common::Vector2& robot_m, const MissedViews* missed,
+                               const std::vector<common::Vector2>& visited) {
   const auto robot_cell = map.geometry().IndexOf(robot_m);
   if (!robot_cell) throw std::invalid_argument("nbv: the robot is off the information map");
   NbvDecision decision;
@@ -350,8 +420,8 @@ NbvDecision NbvPlanner::Decide(const InfoMap& map, const std::vector<InterestZon
   decision.coverage = map.Coverage();
   const NavigationTree tree = BuildNavigationTree(map, map.Linear(*robot_cell), params_.safe_cnc,
                                                   params_.robot_free_radius_m);
-  const std::vector<int64_t> cells = SampleCandidates(map, params_, robot_m, &rng_);
-  ViewEvaluator evaluator(map, params_);
+  const std::vector<int64_t> cells = SampleCandidates(map, params_, robot_m, params_.seed, visited);
+  ViewEvaluator evaluator(map, params_, missed);
   const bool greedy = params_.strategy == NbvStrategy::kGreedy;
   int reachable = 0;
   for (int64_t cell : cells) {

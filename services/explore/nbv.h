@@ -2,7 +2,6 @@
 
 #include <cstdint>
 #include <optional>
-#include <random>
 #include <string>
 #include <vector>
 
@@ -41,6 +40,9 @@ struct NbvParams {
   double candidate_spacing_m{3.0};     ///< candidates lie further apart (and from the robot)
   int candidate_fraction{50};          ///< at most 1 / candidate_fraction of the safe cells
   double candidate_clearance_m{0.45};  ///< every cell this near a candidate must be safe too
+  /// No candidate this near a view point already scanned: the same view gives the same points,
+  /// nothing new, whatever the gains' model expects of it (0: no such rule).
+  double revisit_radius_m{1.5};
   /// Unexplored cells this near the robot count as safe for the navigation tree: the scanner's
   /// blind cone below it (a 270 deg fan 1 m up leaves about 1 m unseen around the robot).
   double robot_free_radius_m{1.5};
@@ -53,6 +55,12 @@ struct NbvParams {
   double w_a_quality{0.93};      ///< the quality combination's area weight
   double w_n_quality{0.07};      ///< and incidence weight
   double greedy_min_gain{0.02};  ///< the greedy baseline stops below this A
+  /// An unexplored cell that k scans should have seen (by the 2-D model A uses) and did not,
+  /// the nearest from d metres, weighs 2^-k in A, or 1 again for a view nearer than
+  /// d - missed_view_step_m: the inside of a building, ground behind a crest or between the far
+  /// rings of a scan. A nearer view sees the ground steeper and over more crests; a view from
+  /// about as far would likely miss it again.
+  double missed_view_step_m{3.0};
   uint64_t seed{1};
 
   /// @throws std::invalid_argument naming the bad field.
@@ -105,11 +113,18 @@ struct Candidate {
   double ground_z_m{0.0};  ///< the chosen candidate's ground (InfoMap::GroundHeight)
 };
 
-/// Safe cells at random (seeded by `rng`), pairwise further apart than the spacing, at most
-/// 1/candidate_fraction of the safe cells, inside the work area, with a safe clearance, and not
-/// within the spacing of the robot.
+/// Safe cells at random, pairwise further apart than the spacing, at most 1/candidate_fraction
+/// of the safe cells, inside the work area, with a safe clearance, and not within the spacing
+/// of the robot or within revisit_radius_m of a view point in `visited`. The draw is stable: every
+/// cell has a fixed random rank (a hash of its index and `seed`) and the candidates are taken in
+/// rank order, so a cell that stays safe keeps its chances from one decision to the next and a
+/// small change of the map (another scan's noise) changes the sample only where it changed the safe
+/// cells, not everywhere.
 std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& params,
-                                      const common::Vector2& robot_m, std::mt19937_64* rng);
+                                      const common::Vector2& robot_m, uint64_t seed,
+                                      const std::vector<common::Vector2>& visited = {});
+/// The rank of `cell` under `seed` (SplitMix64 of both).
+uint64_t CandidateRank(int64_t cell, uint64_t seed);
 
 /// The gains of a view from `cell` (scanner at scanner_height_m above the cell's ground).
 struct ViewGains {
@@ -117,15 +132,34 @@ struct ViewGains {
   double quality_gain{0.0};
   double zone_gain{0.0};
   std::vector<size_t> zones_seen;  ///< indices into the zone list
+  /// The unexplored work-area cells the view should see (only when asked for).
+  std::vector<int64_t> unexplored;
 };
+
+/// Per cell, the scans that should have seen it and did not: how many, and the distance (m) of
+/// the nearest (+inf when none). NbvParams::missed_view_step_m.
+struct MissedViews {
+  explicit MissedViews(int64_t num_cells);
+  std::vector<float> nearest_m;
+  std::vector<uint8_t> count;
+  /// The cell's weight in A for a view d_m away.
+  double Weight(int64_t cell, double d_m, double step_m) const;
+};
+/// Records a scan from `cell` that did not see the cells of `unexplored`.
+/// @returns how many cells were missed for the first time.
+int64_t RecordMissedView(const InfoMap& map, int64_t cell, const std::vector<int64_t>& unexplored,
+                         MissedViews* missed);
 class ViewEvaluator {
  public:
-  ViewEvaluator(const InfoMap& map, const NbvParams& params);
-  ViewGains Evaluate(int64_t cell, const std::vector<InterestZone>& zones);
+  /// `missed` (one entry per map cell, or null) removes the cells given up on from A.
+  ViewEvaluator(const InfoMap& map, const NbvParams& params, const MissedViews* missed = nullptr);
+  ViewGains Evaluate(int64_t cell, const std::vector<InterestZone>& zones,
+                     bool list_unexplored = false);
 
  private:
   const InfoMap& map_;
   NbvParams params_;
+  const MissedViews* missed_;
   std::vector<uint32_t> stamp_;
   uint32_t epoch_{0};
   std::vector<int64_t> visible_;
@@ -147,13 +181,14 @@ class NbvPlanner {
   explicit NbvPlanner(const NbvParams& params);
   /// One decision from the robot's position (which must lie on the map).
   /// @throws std::invalid_argument when the robot is off the map.
+  /// `missed` (or null) as ViewEvaluator's; `visited`: the view points scanned so far.
   NbvDecision Decide(const InfoMap& map, const std::vector<InterestZone>& zones,
-                     const common::Vector2& robot_m);
+                     const common::Vector2& robot_m, const MissedViews* missed = nullptr,
+                     const std::vector<common::Vector2>& visited = {});
   const NbvParams& params() const { return params_; }
 
  private:
   NbvParams params_;
-  std::mt19937_64 rng_;
 };
 
 const char* OutcomeName(NbvDecision::Outcome outcome);

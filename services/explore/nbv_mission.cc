@@ -50,7 +50,8 @@ NbvMission::NbvMission(const NbvMissionParams& params)
     : params_(Validated(params)),
       info_(params.work_area, params.info),
       planner_(params.nbv),
-      assembler_(params.turret) {}
+      assembler_(params.turret),
+      missed_(info_.num_cells()) {}
 
 const char* NbvMission::state_name() const {
   switch (state_) {
@@ -126,17 +127,25 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   const ScanFeatures features = AnalyseScan(scan, mesh_, params_.analysis);
   view.analysis_ms = MsSince(t0);
   t0 = std::chrono::steady_clock::now();
+  std::vector<ScoredPoint> scored(scan.points_m.size());
+  std::vector<uint8_t> valid(scan.points_m.size(), 0);
   std::vector<ScoredPoint> points;
   points.reserve(scan.points_m.size());
   for (size_t i = 0; i < scan.points_m.size(); ++i) {
     if (!std::isfinite(features.navigability[i])) continue;
-    ScoredPoint p;
+    ScoredPoint& p = scored[i];
     p.position_m = scan.points_m[i];
     p.normal = mesh_.normals[i].allFinite() ? mesh_.normals[i] : Eigen::Vector3f::Zero();
     p.navigability = features.navigability[i];
     p.obstacle = std::isfinite(features.obstacle[i]) ? features.obstacle[i] : 0.f;
     p.quality = std::isfinite(features.quality[i]) ? features.quality[i] : 0.f;
+    valid[i] = p.position_m.allFinite();
     points.push_back(p);
+  }
+  if (params_.fill_surface) {
+    const std::vector<ScoredPoint> filled = FillSurfaceCells(info_, scored, valid, mesh_.triangles);
+    view.filled_cells = static_cast<int64_t>(filled.size());
+    points.insert(points.end(), filled.begin(), filled.end());
   }
   view.position_m = common::Vector2(scan.sensor_origin_m.x(), scan.sensor_origin_m.y());
   view.time_s = now_s;
@@ -145,7 +154,10 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   // Zones this view has seen into leave the list; the scan's own zones join it.
   if (const auto cell = info_.geometry().IndexOf(view.position_m)) {
     ViewEvaluator evaluator(info_, params_.nbv);
-    std::vector<size_t> seen = evaluator.Evaluate(info_.Linear(*cell), zones_).zones_seen;
+    ViewGains gains = evaluator.Evaluate(info_.Linear(*cell), zones_, true);
+    // Cells this scan should have seen and did not count in A only for nearer views.
+    missed_cells_ += RecordMissedView(info_, info_.Linear(*cell), gains.unexplored, &missed_);
+    std::vector<size_t>& seen = gains.zones_seen;
     std::sort(seen.rbegin(), seen.rend());
     for (size_t z : seen) {
       if (z < zones_.size()) zones_.erase(zones_.begin() + static_cast<std::ptrdiff_t>(z));
@@ -175,7 +187,10 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   }
   try {
     t0 = std::chrono::steady_clock::now();
-    last_decision_ = planner_.Decide(info_, zones_, view.position_m);
+    std::vector<common::Vector2> visited;
+    visited.reserve(view_points_.size());
+    for (const ViewPoint& v : view_points_) visited.push_back(v.position_m);
+    last_decision_ = planner_.Decide(info_, zones_, view.position_m, &missed_, visited);
     view_points_.back().decision_ms = MsSince(t0);
   } catch (const std::invalid_argument& e) {
     NbvAction a = Finish(std::string("no decision: ") + e.what());

@@ -1,14 +1,23 @@
 // Seed 002 test 23 over real processes: the simple world (a house and a tree on a gentle hill,
-// seed 002's work area), the four presets of table 6-2 run one after the other. Each run is
-// cairn-sim (the rover with only its turret, sweeping on request, at full speed) and
-// cairn-explorer --mode nbv --drive teleport: every view point is reached by SIM.CONTROL
-// OP_RESET_ROBOT and the distance counted is the navigation tree's path, so the presets are
-// compared on what they choose, not on how a navigator drives (the closed loop with
-// cairn-navigator is nbv_stack_test's). A run takes seconds of wall time.
+// seed 002's work area), the four presets of table 6-2, each run with three candidate seeds,
+// one run after the other. Each run is cairn-sim (the rover with only its turret, sweeping on
+// request, at full speed), cairn-mapstore, and cairn-explorer --mode nbv --drive teleport
+// --save: every view point is reached by SIM.CONTROL OP_RESET_ROBOT and the distance counted is
+// the navigation tree's path, so the presets are compared on what they choose, not on how a
+// navigator drives (the closed loop with cairn-navigator is nbv_stack_test's). The stored
+// information map is then judged with `cairn-map eval` against the world's geometry: the
+// coverage of the reachable cells of the work area (the thesis's coverage) and the precision
+// of the cells the explorer calls safe. A run takes seconds of wall time.
+//
+// Which view comes next hangs on small differences (the robot settles a little differently
+// after each teleport, the scan differs by a few points, the candidates move), so one run of a
+// preset can differ a lot from the next (the balanced one took 10 to 19 scans in five runs).
+// The thesis's relations are asserted on the median of three runs of each preset.
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -25,18 +34,32 @@ using testing::ProcessSet;
 using testing::WaitFor;
 
 constexpr char kRobot[] = "rover";
+constexpr int kSeeds = 3;
 
 struct PresetRun {
   std::string preset;
+  int seed{0};
   int scans{0};
   double distance_m{0.0};
-  double coverage{0.0};  ///< 0..1
+  double coverage{0.0};  ///< of the work area, as the explorer counts it, 0..1
   double quality{0.0};
-  std::string summary;  ///< nbv_summary.txt
+  double reachable_coverage{NAN};  ///< cairn-map eval: reachable cells known, 0..1
+  double free_precision{NAN};      ///< cairn-map eval: safe cells (C_nc > 0.7) truly free
   std::string log;
+  std::string eval;
   bool done{false};
   int exit_code{-1};
 };
+
+// The number after "key": in one JSON object (NaN when absent or null).
+double JsonNumber(const std::string& json, const std::string& key) {
+  const size_t at = json.find("\"" + key + "\":");
+  if (at == std::string::npos) return NAN;
+  const char* start = json.c_str() + at + key.size() + 3;
+  char* end = nullptr;
+  const double v = std::strtod(start, &end);
+  return end == start ? NAN : v;
+}
 
 // The shipped simple-world scenario without the lidar (no mapper or navigator here).
 std::string TurretOnlyScenario(const std::string& dir) {
@@ -49,18 +72,28 @@ std::string TurretOnlyScenario(const std::string& dir) {
   return path;
 }
 
-PresetRun RunPreset(const std::string& preset, const std::string& scenario,
+PresetRun RunPreset(const std::string& preset, int seed, const std::string& scenario,
                     const std::string& dir) {
   PresetRun run;
   run.preset = preset;
-  ProcessSet procs(testing::PrivateLcmUrl(), dir + "/" + preset);
-  const std::string out = dir + "/" + preset + "/report";
+  run.seed = seed;
+  const std::string run_dir = dir + "/" + preset + "-" + std::to_string(seed);
+  ProcessSet procs(testing::PrivateLcmUrl(), run_dir);
+  const std::string out = run_dir + "/report";
+  const std::string db = run_dir + "/maps.db";
+  procs.Start("cairn-mapstore", {"--db", db});
   procs.Start("cairn-sim", {"--scenario", scenario, "--speed", "0"});
-  auto& explorer =
-      procs.Start("cairn-explorer",
-                  {"--robot", kRobot, "--profile", "rover", "--config",
-                   testing::SourcePath("config/explore/simple_nbv.yaml"), "--preset", preset,
-                   "--drive", "teleport", "--max-scans", "60", "--duration", "3000", "--out", out});
+  auto& explorer = procs.Start(
+      "cairn-explorer", {"--robot",     kRobot,
+                         "--profile",   "rover",
+                         "--config",    testing::SourcePath("config/explore/simple_nbv.yaml"),
+                         "--preset",    preset,
+                         "--seed",      std::to_string(seed),
+                         "--drive",     "teleport",
+                         "--max-scans", "60",
+                         "--duration",  "3000",
+                         "--out",       out,
+                         "--save",      "test23/" + preset});
   // The figures come from the explorer's summary file: at full speed the simulator's messages
   // come by the ten thousand a second, more than a test's bus reads.
   run.done = WaitFor([&] { return !explorer.Running(); }, 240.0);
@@ -69,57 +102,117 @@ PresetRun RunPreset(const std::string& preset, const std::string& scenario,
   std::ifstream in(out + "/nbv_summary.txt");
   std::stringstream text;
   text << in.rdbuf();
-  run.summary = text.str();
+  const std::string summary = text.str();
   double coverage_percent = 0.0;
-  const size_t colon = run.summary.find("): ");
+  const size_t colon = summary.find("): ");
   if (colon != std::string::npos &&
-      std::sscanf(run.summary.c_str() + colon + 3,
+      std::sscanf(summary.c_str() + colon + 3,
                   "%d scans, %lf m driven, coverage %lf %%, mean quality %lf", &run.scans,
                   &run.distance_m, &coverage_percent, &run.quality) == 4) {
     run.coverage = coverage_percent / 100.0;
   }
+  // The stored map against the world: the explorer's C_nc, within its work area, from the
+  // start (the origin).
+  auto& eval = procs.StartRaw(
+      "cairn-map eval", {testing::BinPath("cairn-map"), "eval", "--db", db, "--site", "test23",
+                         "--map", preset, "--world", "simple", "--start", "0,0", "--layer",
+                         "explore/navigability", "--region", "explore/work_area", "--json"});
+  if (eval.WaitExit(60.0)) {
+    run.eval = eval.Log();
+    run.reachable_coverage = JsonNumber(run.eval, "coverage");
+    run.free_precision = JsonNumber(run.eval, "free_precision");
+  }
   return run;
+}
+
+double Median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+struct Medians {
+  double scans, distance_m, quality, coverage, reachable_coverage;
+};
+
+Medians MediansOf(const std::vector<PresetRun>& runs, const std::string& preset) {
+  std::vector<double> scans, distance, quality, coverage, reachable;
+  for (const PresetRun& r : runs) {
+    if (r.preset != preset) continue;
+    scans.push_back(r.scans);
+    distance.push_back(r.distance_m);
+    quality.push_back(r.quality);
+    coverage.push_back(r.coverage);
+    reachable.push_back(r.reachable_coverage);
+  }
+  return {Median(scans), Median(distance), Median(quality), Median(coverage), Median(reachable)};
 }
 
 TEST(NbvPresetsTest, Seed002Test23TheSimpleWorldUnderTheFourPresetsOfTable62) {
   const std::string dir = testing::TestTempDir();
   const std::string scenario = TurretOnlyScenario(dir);
+  const std::vector<std::string> presets = {"simple-balanced", "simple-information",
+                                            "simple-quality", "greedy"};
   std::vector<PresetRun> runs;
-  for (const char* preset : {"simple-balanced", "simple-information", "simple-quality", "greedy"}) {
-    runs.push_back(RunPreset(preset, scenario, dir));
-    const PresetRun& r = runs.back();
-    ASSERT_TRUE(r.done) << r.preset << " did not finish\n" << r.log;
-    ASSERT_EQ(r.exit_code, 0) << r.preset << "\n" << r.log;
-    ASSERT_GT(r.scans, 0) << r.preset << ": no summary\n" << r.summary << r.log;
+  for (const std::string& preset : presets) {
+    for (int seed = 1; seed <= kSeeds; ++seed) {
+      runs.push_back(RunPreset(preset, seed, scenario, dir));
+      const PresetRun& r = runs.back();
+      ASSERT_TRUE(r.done) << r.preset << " seed " << seed << " did not finish\n" << r.log;
+      ASSERT_EQ(r.exit_code, 0) << r.preset << " seed " << seed << "\n" << r.log;
+      ASSERT_GT(r.scans, 0) << r.preset << " seed " << seed << ": no summary\n" << r.log;
+      ASSERT_TRUE(std::isfinite(r.reachable_coverage))
+          << r.preset << " seed " << seed << ": no evaluation\n"
+          << r.eval;
+    }
   }
-  // The table beside the thesis's (table 6-3).
+  // Every run, then the medians beside the thesis's table 6-3.
+  std::printf("preset              seed  scans  distance  quality  coverage  reachable  safe ok\n");
+  for (const PresetRun& r : runs) {
+    std::printf("%-20s %3d  %5d  %6.1f m  %7.3f  %6.1f %%  %7.1f %%  %6.1f %%\n", r.preset.c_str(),
+                r.seed, r.scans, r.distance_m, r.quality, 100.0 * r.coverage,
+                100.0 * r.reachable_coverage, 100.0 * r.free_precision);
+  }
   const char* thesis[] = {"106 m, 0.6846, 92.5 %, 12", "107 m, 0.6904, 94.1 %, 10",
                           "128 m, 0.7503, 93.6 %, 13", "116 m, 0.5013, 91.4 %, 8"};
-  std::printf("preset               distance  quality  coverage  scans   | thesis\n");
-  for (size_t i = 0; i < runs.size(); ++i) {
-    const PresetRun& s = runs[i];
-    std::printf("%-20s %7.1f m  %7.4f  %7.1f %%  %5d   | %s\n", s.preset.c_str(), s.distance_m,
-                s.quality, 100.0 * s.coverage, s.scans, thesis[i]);
+  std::printf("\nmedians of %d runs   distance  quality  reachable  scans   | thesis\n", kSeeds);
+  std::vector<Medians> m;
+  for (size_t i = 0; i < presets.size(); ++i) {
+    m.push_back(MediansOf(runs, presets[i]));
+    std::printf("%-20s %7.1f m  %7.3f  %7.1f %%  %5.0f   | %s\n", presets[i].c_str(),
+                m[i].distance_m, m[i].quality, 100.0 * m[i].reachable_coverage, m[i].scans,
+                thesis[i]);
   }
-  const PresetRun& balanced = runs[0];
-  const PresetRun& information = runs[1];
-  const PresetRun& quality = runs[2];
-  const PresetRun& greedy = runs[3];
-  // What held in every run made while writing this test (about a dozen): every utility preset
-  // covers at least 80 % of the work area (the house's footprint, about 8 % of it, can never be
-  // seen). The balanced one reached 86.8..96.2 %: the 90 % failed once, so it is
-  // printed, not asserted. The greedy baseline chases information wherever it is: a lower
-  // quality than the balanced preset (the thesis: 0.50 against 0.68; here 0.04..0.23 lower) and
-  // longer legs than any utility preset (1.6 to 9 times). Which utility preset came out best in
-  // quality, whether the information-dominant one needed fewer scans than the balanced one, and
-  // how many scans each took (balanced 17..49) changed from run to run (the candidates are
-  // sampled at random), so those relations of the thesis are not asserted.
-  for (const PresetRun* s : {&balanced, &information, &quality}) {
-    EXPECT_GE(s->coverage, 0.80) << s->preset;
+  const Medians& balanced = m[0];
+  const Medians& information = m[1];
+  const Medians& quality = m[2];
+  const Medians& greedy = m[3];
+
+  // The figure: the balanced preset covers 90 % of the reachable cells (the thesis's
+  // coverage; the house's inside and roof are not reachable). 89.3..100 % in the runs made
+  // while writing this test.
+  EXPECT_GE(balanced.reachable_coverage, 0.90);
+  // Table 6-3's relations.
+  EXPECT_LE(information.scans, balanced.scans) << "the information-dominant preset";
+  for (const Medians* other : {&balanced, &information, &greedy}) {
+    EXPECT_GT(quality.quality, other->quality) << "the quality-dominant preset";
+  }
+  EXPECT_GT(quality.distance_m, std::max(balanced.distance_m, information.distance_m));
+  for (const Medians* other : {&balanced, &information, &quality}) {
+    EXPECT_LE(greedy.scans, other->scans) << "greedy";
   }
   EXPECT_LT(greedy.quality, balanced.quality);
-  EXPECT_GT(greedy.distance_m,
-            std::max({balanced.distance_m, information.distance_m, quality.distance_m}));
+  // Not asserted: greedy's quality against the information-dominant preset's. Both chase new
+  // cells and stop when none is left, and here both end near 0.33 (the thesis: 0.50 against
+  // 0.69). Greedy's legs are the longest per scan, as in the thesis.
+  EXPECT_GT(greedy.distance_m / greedy.scans, balanced.distance_m / balanced.scans);
+
+  // `cairn-map eval` on every run: the cells the explorer would drive on (C_nc above 0.7) are
+  // free in the world. A wrong one is a collision risk; 99.2..100 % in the runs made while
+  // writing this test, the misses at the house's foot and the tree's trunk, where a 0.3 m cell
+  // holds both ground and wall.
+  for (const PresetRun& r : runs) {
+    EXPECT_GE(r.free_precision, 0.98) << r.preset << " seed " << r.seed << "\n" << r.eval;
+  }
 }
 
 }  // namespace

@@ -248,6 +248,47 @@ TEST(MapEvalTest, CostLayerAndThresholds) {
   EXPECT_EQ(o.map_occupied_cells, 17);
 }
 
+TEST(MapEvalTest, InformationMapNavigabilityAndARegion) {
+  // The room judged from a C_nc layer: walls at 0.1 (occupied, below 0.4), the west half of the
+  // floor at 0.9 (free, above 0.7), the east half at 0.5 (explored, neither) but one column
+  // unexplored (NaN).
+  const common::GridMap truth = RoomTruth();
+  common::GridMap map(Square());
+  common::Layer& cnc = map.AddLayer(kInfoNavigability, 0.f);
+  common::Layer& region = map.AddLayer("explore/work_area", 1.f);
+  for (int iy = 0; iy < 20; ++iy) {
+    for (int ix = 0; ix < 20; ++ix) {
+      const bool wall = truth.at(kTruthOccupied)(ix, iy) == 1.f;
+      cnc(ix, iy) = wall ? 0.1f : ix < 10 ? 0.9f : ix == 15 ? NAN : 0.5f;
+    }
+  }
+  MapEvalParams p = At(0.55, 0.55);
+  p.layer = kInfoNavigability;
+  const MapEvalReport r = EvaluateMap(map, truth, p);
+  EXPECT_EQ(r.map_occupied_cells, 76);
+  EXPECT_EQ(r.map_free_cells, 18 * 9);
+  EXPECT_EQ(r.map_unknown_cells, 18);  // the NaN column inside the walls
+  EXPECT_DOUBLE_EQ(r.occupied_precision, 1.0);
+  EXPECT_DOUBLE_EQ(r.free_precision, 1.0);
+  // Coverage counts the 0.5 cells as known: all but the NaN column.
+  EXPECT_EQ(r.reachable_cells, 324);
+  EXPECT_EQ(r.reachable_known_cells, 324 - 18);
+  // A region of the west half only: the east half is left out of every figure.
+  for (int iy = 0; iy < 20; ++iy) {
+    for (int ix = 10; ix < 20; ++ix) region(ix, iy) = 0.f;
+  }
+  p.region_layer = "explore/work_area";
+  const MapEvalReport west = EvaluateMap(map, truth, p);
+  EXPECT_EQ(west.truth_cells, 200);
+  EXPECT_EQ(west.reachable_cells, 18 * 9);
+  EXPECT_DOUBLE_EQ(west.coverage, 1.0);
+  p.region_layer = "nope";
+  EXPECT_THROW(EvaluateMap(map, truth, p), std::invalid_argument);
+  p.region_layer.clear();
+  p.cnc_free_above = 0.3;
+  EXPECT_THROW(EvaluateMap(map, truth, p), std::invalid_argument);
+}
+
 TEST(MapEvalTest, BadInputThrows) {
   const common::GridMap truth = RoomTruth();
   common::GridMap map(Square());

@@ -128,6 +128,43 @@ TEST(GroundTruthTest, InlineWorldCellsByHand) {
   EXPECT_FLOAT_EQ(lower.at(kTruthOccupiedLayer)(9, 8), 1.f);
 }
 
+TEST(GroundTruthTest, AWideTallBlockIsABuildingAndAWideLowOneIsADeck) {
+  // Two 4 x 4 m blocks on a floor: a 3 m tall one (a solid house) and a 0.3 m one (a deck).
+  // Both are wider than terrain_min_extent_m; only the low one is terrain, so the house's roof
+  // is no ground and its footprint is occupied, while the deck's top is ground.
+  const std::string xml = R"(<mujoco model="blocks">
+  <worldbody>
+    <geom name="floor" type="plane" size="20 20 0.1"/>
+    <geom name="house" type="box" size="2 2 1.5" pos="-3 0 1.5"/>
+    <geom name="deck" type="box" size="2 2 0.15" pos="3 0 0.15"/>
+  </worldbody>
+</mujoco>)";
+  GroundTruthWorld world = GroundTruthWorld::FromText(xml, "/tmp/truth_blocks.xml", {});
+  const ColumnProfile house = world.Column(-3.0, 0.0);
+  EXPECT_NEAR(house.ground_m, 0.0, 1e-9);
+  EXPECT_NEAR(house.top_m, 3.0, 1e-9);
+  const ColumnProfile deck = world.Column(3.0, 0.0);
+  EXPECT_NEAR(deck.ground_m, 0.3, 1e-9);
+  common::GridGeometry g;
+  g.resolution_m = 0.5;
+  g.size_x = 24;
+  g.size_y = 4;
+  g.origin = {-6.0, -1.0, 0.0};
+  const common::GridMap truth = world.Rasterise(g);
+  const common::Layer& occ = truth.at(kTruthOccupiedLayer);
+  EXPECT_FLOAT_EQ(occ(6, 2), 1.f);   // x -2.75: the house
+  EXPECT_FLOAT_EQ(occ(18, 2), 0.f);  // x 3.25: the deck's top
+  EXPECT_FLOAT_EQ(occ(0, 2), 0.f);   // x -5.75: the floor
+  // A bound above the house makes it terrain again (its roof ground), as before.
+  TruthRasterParams tall;
+  tall.terrain_max_height_m = 4.0;
+  EXPECT_NEAR(
+      GroundTruthWorld::FromText(xml, "/tmp/truth_blocks.xml", tall).Column(-3.0, 0.0).ground_m,
+      3.0, 1e-9);
+  tall.terrain_max_height_m = 0.0;
+  EXPECT_THROW(tall.Validate(), std::invalid_argument);
+}
+
 TEST(GroundTruthTest, RotatedGridAndThreadsGiveTheSameCells) {
   TruthRasterParams threaded;
   threaded.threads = 2;

@@ -103,5 +103,47 @@ TEST(InfoMapTest, BadParamsAndHugeAreasAreRefused) {
   EXPECT_THROW(InfoMap(WorkArea{}), std::invalid_argument);
 }
 
+TEST(InfoMapTest, TheSurfaceBetweenFarPointsExploresTheCellsUnderItsTriangles) {
+  // A 3 x 3 m map of 0.3 m cells; four points at the corners of a 2.4 m square (two triangles,
+  // as far ground rings leave them), F rising from west to east.
+  InfoMap map = SmallMap();
+  std::vector<ScoredPoint> points = {
+      Point(0.25, 0.25, 0.6f, 0.f, 0.2f), Point(2.65, 0.25, 1.0f, 0.f, 0.4f),
+      Point(0.25, 2.65, 0.6f, 0.f, 0.2f), Point(2.65, 2.65, 1.0f, 0.f, 0.4f)};
+  std::vector<uint8_t> valid(points.size(), 1);
+  const std::vector<Eigen::Vector3i> triangles = {{0, 1, 3}, {0, 3, 2}};
+  const std::vector<ScoredPoint> filled = FillSurfaceCells(map, points, valid, triangles);
+  // Cell centres inside the square: 0.45 .. 2.55 on both axes, 8 x 8, less the one of them a
+  // point falls in (2.65, 2.65 is in the cell centred at 2.55, 2.55); the other three points'
+  // cells are centred at 0.15, outside the square.
+  EXPECT_EQ(filled.size(), 64u - 1u);
+  for (const ScoredPoint& p : filled) {
+    EXPECT_GT(p.position_m.x(), 0.25f - 1e-4f);
+    EXPECT_LT(p.position_m.x(), 2.65f + 1e-4f);
+    // Interpolated: F from 0.6 in the west to 1.0 in the east.
+    const float expect_f = 0.6f + 0.4f * (p.position_m.x() - 0.25f) / 2.4f;
+    EXPECT_NEAR(p.navigability, expect_f, 1e-4f);
+    EXPECT_NEAR(p.normal.z(), 1.f, 1e-5f);
+  }
+  map.AddPoints(points);
+  map.AddPoints(filled);
+  EXPECT_EQ(map.explored_work_area_cells(), 64 + 3);
+  // Cells the map has explored already are left alone; so is a cell a point falls in.
+  EXPECT_TRUE(FillSurfaceCells(map, points, valid, triangles).empty());
+  // A vertical triangle (a wall) fills nothing; a triangle with an invalid corner is skipped.
+  InfoMap fresh = SmallMap();
+  std::vector<ScoredPoint> wall = {Point(1.0, 1.0, 0.f, 1.f, 0.5f), Point(2.0, 1.0, 0.f, 1.f, 0.5f),
+                                   Point(2.0, 1.0, 0.f, 1.f, 0.5f)};
+  wall[2].position_m.z() = 2.f;
+  EXPECT_TRUE(FillSurfaceCells(fresh, wall, {1, 1, 1}, {{0, 1, 2}}).empty());
+  // Without the south-east corner only the north-west triangle fills: the 36 centres with
+  // x <= y, less the point's cell.
+  valid[1] = 0;
+  EXPECT_EQ(FillSurfaceCells(fresh, points, valid, triangles).size(), 35u);
+  EXPECT_THROW(FillSurfaceCells(fresh, points, {1}, triangles), std::invalid_argument);
+  // Indices out of range are skipped, not read.
+  EXPECT_TRUE(FillSurfaceCells(fresh, points, {1, 1, 1, 1}, {{0, 1, 7}, {-1, 0, 1}}).empty());
+}
+
 }  // namespace
 }  // namespace cairn::explore
