@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -378,9 +379,21 @@ Status MujocoSim::ResetRobot(const std::string& id, double x_m, double y_m, doub
 void MujocoSim::Step(SimOutputs* out) {
   const double dt = model_->opt.timestep;
   const auto t0 = Clock::now();
-  ApplyDrive(data_->time, dt, out);
+  const mjModel* m = model_.get();
+  mjData* d = data_.get();
+  ApplyDrive(d->time, dt, out);
+  const double time_before = d->time;
+  saved_qpos_.assign(d->qpos, d->qpos + m->nq);
+  saved_act_.assign(d->act, d->act + m->na);
+  saved_mocap_pos_.assign(d->mocap_pos, d->mocap_pos + 3 * m->nmocap);
+  saved_mocap_quat_.assign(d->mocap_quat, d->mocap_quat + 4 * m->nmocap);
   mj_step(model_.get(), data_.get());
   ++stats_.physics_steps;
+  // MuJoCo resets mjData after a bad acceleration (its warning counters too, then counts this
+  // one): a count above 0, or a clock that did not advance, is such a step.
+  if (d->warning[mjWARN_BADQACC].number > 0 || !(d->time > time_before)) {
+    UndoBadStep(time_before, dt, out);
+  }
   AfterPhysicsStep(dt);
   const auto t1 = Clock::now();
   stats_.physics_s += Seconds(t0, t1);
@@ -415,6 +428,39 @@ void MujocoSim::ApplyDrive(double now_s, double dt_s, SimOutputs* out) {
     };
     servo(r->left_actuators, r->left_dof, r->left_integral, r->drive->left_wheel_radps());
     servo(r->right_actuators, r->right_dof, r->right_integral, r->drive->right_wheel_radps());
+  }
+}
+
+void MujocoSim::UndoBadStep(double time_before_s, double dt_s, SimOutputs* out) {
+  const mjModel* m = model_.get();
+  mjData* d = data_.get();
+  const int dof = d->warning[mjWARN_BADQACC].lastinfo;
+  std::string who = "the world";
+  for (const auto& r : robots_) {
+    if (dof >= r->qvel_adr && dof < r->qvel_adr + 6) who = "robot '" + r->spec.id + "'";
+  }
+  d->warning[mjWARN_BADQACC].number = 0;
+  ++stats_.unstable_steps;
+  std::copy(saved_qpos_.begin(), saved_qpos_.end(), d->qpos);
+  std::copy(saved_act_.begin(), saved_act_.end(), d->act);
+  std::copy(saved_mocap_pos_.begin(), saved_mocap_pos_.end(), d->mocap_pos);
+  std::copy(saved_mocap_quat_.begin(), saved_mocap_quat_.end(), d->mocap_quat);
+  mju_zero(d->qvel, m->nv);
+  mju_zero(d->qacc_warmstart, m->nv);
+  d->time = time_before_s + dt_s;
+  mj_forward(m, d);
+  // One line a second of sim time at most: a robot left inside geometry fails every step.
+  ++unstable_unlogged_;
+  if (d->time - last_unstable_log_s_ >= 1.0) {
+    char line[256];
+    std::snprintf(line, sizeof(line),
+                  "physics unstable at %.3f s (bad acceleration of dof %d, %s; %lld step%s since "
+                  "the last report): the step is undone and everything stopped",
+                  d->time, dof, who.c_str(), static_cast<long long>(unstable_unlogged_),
+                  unstable_unlogged_ == 1 ? "" : "s");
+    out->events.push_back(line);
+    last_unstable_log_s_ = d->time;
+    unstable_unlogged_ = 0;
   }
 }
 

@@ -44,6 +44,9 @@ struct SimStats {
   double physics_s{0.0};
   double sensors_s{0.0};
   double ray_s{0.0};
+  /// Steps whose accelerations MuJoCo found bad (NaN or beyond 1e10: a robot put inside solid
+  /// geometry, an exploding contact); each was undone (UndoBadStep).
+  int64_t unstable_steps{0};
 };
 
 class MujocoSim {
@@ -141,6 +144,10 @@ class MujocoSim {
   void PlaceRobot(Robot& robot, double x_m, double y_m, double yaw_rad, std::optional<double> z_m);
   void ApplyDrive(double now_s, double dt_s, SimOutputs* out);
   void AfterPhysicsStep(double dt_s);
+  /// After a step MuJoCo found unstable (it then resets all of mjData to the model's initial
+  /// state, time 0 and every robot at the model's origin): back to the state before the step,
+  /// at rest, the clock one step on, and one event line.
+  void UndoBadStep(double time_before_s, double dt_s, SimOutputs* out);
   void ProduceReadings(SimOutputs* out);
   void SetGeomEnabled(int geom, bool enabled);
   Object* FindObject(const std::string& name);
@@ -154,6 +161,13 @@ class MujocoSim {
   std::map<std::string, std::unique_ptr<Object>> objects_;
   std::vector<int> free_slots_;  ///< spawn pool geoms not in use
   SimStats stats_;
+  // The state before the current step (qpos, act, mocap), for UndoBadStep.
+  std::vector<double> saved_qpos_;
+  std::vector<double> saved_act_;
+  std::vector<double> saved_mocap_pos_;
+  std::vector<double> saved_mocap_quat_;
+  double last_unstable_log_s_{-1e300};
+  int64_t unstable_unlogged_{0};  ///< unstable steps since the last event line
 };
 
 }  // namespace cairn::sim

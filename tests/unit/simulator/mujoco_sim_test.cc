@@ -201,6 +201,46 @@ TEST_F(DriveSimTest, ResetPutsTheRobotAtRestAndRestartsOdometry) {
   EXPECT_EQ(sim.ResetRobot("r", std::nan(""), 0, 0).code(), common::StatusCode::kInvalidArgument);
 }
 
+TEST(UnstablePhysicsTest, AnUnstableStepIsUndoneTheClockRunsOnAndItIsSaidOnce) {
+  InstallMujocoLogHooks();
+  const int64_t warnings_before = MujocoWarningCount();
+  // A 1 g wheel on a hinge driven by a constant 1e12 N m (a bias-only actuator): its
+  // acceleration is far beyond MuJoCo's bound (mjWARN_BADQACC), and MuJoCo then resets all of
+  // mjData, time 0 and the robot at the model's origin included. The step is undone instead:
+  // the robot stays where it was, the clock runs on, and one event line a second says so.
+  Scenario s = InlineScenario(FlatWorld(R"(<body name="wheel" pos="3 3 1">
+      <joint name="spin" type="hinge" axis="0 0 1"/>
+      <geom type="cylinder" size="0.1 0.01" mass="0.001" contype="0" conaffinity="0"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <general joint="spin" biastype="affine" biasprm="1e12 0 0"/>
+  </actuator>
+  <worldbody>)"),
+                              "r", "p3dx", 1.0, -2.0);
+  s.robots[0].sensors = SensorSet{};
+  MujocoSim sim(s);
+  SimOutputs out;
+  double last = sim.time_s();
+  bool monotonic = true;
+  for (int i = 0; i < 1000; ++i) {  // 2 s
+    sim.Command("r", 0.0, 0.0);
+    sim.Step(&out);
+    monotonic &= sim.time_s() > last;
+    last = sim.time_s();
+  }
+  EXPECT_TRUE(monotonic);
+  EXPECT_NEAR(sim.time_s(), 2.0, 1e-6);
+  EXPECT_GT(sim.stats().unstable_steps, 0);
+  EXPECT_NEAR(sim.RobotPose("r").position_m.x(), 1.0, 0.01);
+  EXPECT_NEAR(sim.RobotPose("r").position_m.y(), -2.0, 0.01);
+  int lines = 0;
+  for (const auto& e : out.events) lines += e.find("physics unstable") != std::string::npos;
+  EXPECT_GE(lines, 1);
+  EXPECT_LE(lines, 3);                               // one a second of sim time at most
+  EXPECT_GT(MujocoWarningCount(), warnings_before);  // MuJoCo's own warning, rate-limited
+}
+
 class SensorRatesTest : public SimTest {};
 
 TEST_F(SensorRatesTest, EverySensorAtItsRate) {
