@@ -67,6 +67,7 @@ void LoadNbv(YamlMap map, NbvModeParams* p) {
   map.Get("goal_tolerance_m", &p->goal_tolerance_m);
   map.Get("goal_timeout_s", &p->goal_timeout_s);
   map.Get("max_scan_retries", &p->max_scan_retries);
+  map.Get("max_skipped_views", &p->max_skipped_views);
   map.Get("settle_s", &p->settle_s);
   map.Get("safe_cnc", &p->safe_cnc);
   map.Get("candidate_spacing_m", &p->candidate_spacing_m);
@@ -128,6 +129,7 @@ NbvMissionParams NbvModeParams::ToMissionParams() const {
   m.max_scans = max_scans;
   m.goal_timeout_s = goal_timeout_s;
   m.max_scan_retries = max_scan_retries;
+  m.max_skipped_views = max_skipped_views;
   try {
     m.Validate();
   } catch (const std::invalid_argument& e) {

@@ -81,6 +81,7 @@ struct NbvModeParams {
   /// A sweep that breaks (lines lost on the bus) is asked for again at most this many times in
   /// a row before the mission fails.
   int max_scan_retries{6};
+  int max_skipped_views{3};  ///< NbvMissionParams::max_skipped_views
   /// The robot must stand still this long (sim s) after a goal before a scan is asked for.
   double settle_s{1.0};
   /// The NBV parameters over the preset (seed 002 Appendix A).

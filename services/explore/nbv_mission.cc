@@ -21,6 +21,7 @@ void NbvMissionParams::Validate() const {
   CAIRN_THROW_UNLESS(std::isfinite(goal_timeout_s) && goal_timeout_s > 0.0,
                      "goal_timeout_s must be > 0");
   CAIRN_THROW_UNLESS(max_scan_retries >= 0, "max_scan_retries must be >= 0");
+  CAIRN_THROW_UNLESS(max_skipped_views >= 0, "max_skipped_views must be >= 0");
   CAIRN_THROW_UNLESS(max_goal_failures >= 1, "max_goal_failures must be >= 1");
   CAIRN_THROW_UNLESS(max_zones >= 0 && max_zones <= 100000, "max_zones must be in [0, 100000]");
 }
@@ -101,11 +102,7 @@ NbvAction NbvMission::OnTurretLine(const common::LaserScan& line, double pan_rad
     if (assembler_.restarts() != restarts) {
       // The sweep broke (lines lost, the robot moved): a turret that sweeps on request will
       // not come back to pan 0 by itself, so ask again now.
-      if (++scan_retries_ > params_.max_scan_retries) {
-        return Finish(
-            "no whole scan after " + std::to_string(scan_retries_) + " requests (" + event + ")",
-            true);
-      }
+      if (++scan_retries_ > params_.max_scan_retries) return ScanFailed(event, now_s);
       return RequestScan(now_s, event + "; asking again");
     }
     NbvAction a;
@@ -119,6 +116,7 @@ NbvAction NbvMission::OnTurretLine(const common::LaserScan& line, double pan_rad
 
 NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   scan_retries_ = 0;
+  skipped_in_row_ = 0;
   ViewPoint view;
   auto t0 = std::chrono::steady_clock::now();
   BuildScanMesh(scan, params_.mesh, &mesh_);
@@ -185,23 +183,35 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
     a.event = scanned + "; " + a.event;
     return a;
   }
-  try {
-    t0 = std::chrono::steady_clock::now();
-    std::vector<common::Vector2> visited;
-    visited.reserve(view_points_.size());
-    for (const ViewPoint& v : view_points_) visited.push_back(v.position_m);
-    last_decision_ = planner_.Decide(info_, zones_, view.position_m, &missed_, visited);
-    view_points_.back().decision_ms = MsSince(t0);
-  } catch (const std::invalid_argument& e) {
-    NbvAction a = Finish(std::string("no decision: ") + e.what());
+  double decision_ms = 0.0;
+  NbvAction a = DecideNext(view.position_m, now_s, &decision_ms);
+  view_points_.back().decision_ms = decision_ms;
+  if (a.done) {
     a.event = scanned + "; " + a.event;
     return a;
   }
+  const ViewPoint& v = view_points_.back();
+  a.event = scanned + " (mesh " + Fixed(v.mesh_ms, 0) + " ms, analysis " + Fixed(v.analysis_ms, 0) +
+            " ms, map " + Fixed(v.map_ms, 0) + " ms, decision " + Fixed(v.decision_ms, 0) +
+            " ms over " + std::to_string(last_decision_->candidates.size()) + " candidates); " +
+            a.event;
+  return a;
+}
+
+NbvAction NbvMission::DecideNext(const common::Vector2& from_m, double now_s, double* decision_ms) {
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    std::vector<common::Vector2> visited = skipped_;
+    visited.reserve(view_points_.size() + skipped_.size());
+    for (const ViewPoint& v : view_points_) visited.push_back(v.position_m);
+    last_decision_ = planner_.Decide(info_, zones_, from_m, &missed_, visited);
+    *decision_ms = MsSince(t0);
+  } catch (const std::invalid_argument& e) {
+    return Finish(std::string("no decision: ") + e.what());
+  }
   if (last_decision_->outcome != NbvDecision::Outcome::kGoTo || !last_decision_->best) {
-    NbvAction a =
-        Finish(std::string(OutcomeName(last_decision_->outcome)) + ": " + last_decision_->reason);
-    a.event = scanned + "; " + a.event;
-    return a;
+    return Finish(std::string(OutcomeName(last_decision_->outcome)) + ": " +
+                  last_decision_->reason);
   }
   goal_ = last_decision_->best;
   goal_sent_s_ = now_s;
@@ -209,14 +219,33 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   state_ = State::kDriving;
   NbvAction a;
   a.goal = goal_;
-  const ViewPoint& v = view_points_.back();
-  a.event = scanned + " (mesh " + Fixed(v.mesh_ms, 0) + " ms, analysis " + Fixed(v.analysis_ms, 0) +
-            " ms, map " + Fixed(v.map_ms, 0) + " ms, decision " + Fixed(v.decision_ms, 0) +
-            " ms over " + std::to_string(last_decision_->candidates.size()) +
-            " candidates); next view (" + Fixed(goal_->position_m.x(), 1) + ", " +
+  a.event = "next view (" + Fixed(goal_->position_m.x(), 1) + ", " +
             Fixed(goal_->position_m.y(), 1) + "): u " + Fixed(goal_->utility, 3) + ", A " +
             Fixed(goal_->info_gain, 2) + ", Q " + Fixed(goal_->quality_gain, 2) + ", O " +
             Fixed(goal_->zone_gain, 2) + ", path " + Fixed(goal_->path_cost, 1);
+  return a;
+}
+
+NbvAction NbvMission::ScanFailed(const std::string& why, double now_s) {
+  // At a view point (not the first scan) a sweep that never completes (the robot rocks on a
+  // kerb's edge, lines keep getting lost) leaves that view point out: the next view is decided
+  // from the map as it is, and only max_skipped_views of them in a row end the mission.
+  if (view_points_.empty() || !goal_ || skipped_in_row_ >= params_.max_skipped_views) {
+    return Finish("no whole scan after " + std::to_string(scan_retries_) + " requests (" + why +
+                      ")",
+                  true);
+  }
+  ++skipped_in_row_;
+  // Where the robot stands (its last position; the view point when none came).
+  const common::Vector2 here = path_m_.empty() ? goal_->position_m : path_m_.back();
+  skipped_.push_back(here);
+  const std::string skipped = "no whole scan at (" + Fixed(here.x(), 1) + ", " +
+                              Fixed(here.y(), 1) + ") after " + std::to_string(scan_retries_) +
+                              " requests (" + why + "): view point skipped";
+  scan_retries_ = 0;
+  double decision_ms = 0.0;
+  NbvAction a = DecideNext(here, now_s, &decision_ms);
+  a.event = skipped + "; " + a.event;
   return a;
 }
 
@@ -242,10 +271,7 @@ NbvAction NbvMission::Tick(double now_s) {
   if (state_ == State::kScanning) {
     std::string event;
     if (assembler_.CheckTimeout(now_s, &event)) {
-      if (++scan_retries_ > params_.max_scan_retries) {
-        return Finish(
-            "no scan after " + std::to_string(scan_retries_) + " requests (" + event + ")", true);
-      }
+      if (++scan_retries_ > params_.max_scan_retries) return ScanFailed(event, now_s);
       return RequestScan(now_s, event + "; asking again");
     }
   } else if (state_ == State::kDriving && now_s - goal_sent_s_ > params_.goal_timeout_s) {

@@ -44,6 +44,10 @@ struct NbvMissionParams {
   int max_scan_retries{3};
   /// The mission ends after this many goals in a row failed.
   int max_goal_failures{3};
+  /// A view point where no whole sweep comes (max_scan_retries + 1 requests) is skipped: the
+  /// next view is decided without its scan. The mission fails after this many in a row (0: at
+  /// the first).
+  int max_skipped_views{3};
   int max_zones{200};
   /// Cells under the scan's accepted triangles that no point fell in are explored too
   /// (FillSurfaceCells): the far ground rings leave such cells between them.
@@ -122,6 +126,9 @@ class NbvMission {
   NbvAction RequestScan(double now_s, const std::string& event);
   NbvAction OnScan(const OrderedScan& scan, double now_s);
   NbvAction Finish(const std::string& why, bool failed = false);
+  /// The next view from `from_m` (the planner's decision, then a goal or the end).
+  NbvAction DecideNext(const common::Vector2& from_m, double now_s, double* decision_ms);
+  NbvAction ScanFailed(const std::string& why, double now_s);
 
   NbvMissionParams params_;
   InfoMap info_;
@@ -138,6 +145,8 @@ class NbvMission {
   State state_{State::kIdle};
   double goal_sent_s_{0.0};
   int scan_retries_{0};
+  int skipped_in_row_{0};
+  std::vector<common::Vector2> skipped_;  ///< view points skipped (never candidates again)
   int goals_sent_{0};
   int goals_reached_{0};
   int goals_failed_{0};

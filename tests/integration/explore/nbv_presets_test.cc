@@ -61,10 +61,17 @@ double JsonNumber(const std::string& json, const std::string& key) {
   return end == start ? NAN : v;
 }
 
-// The shipped simple-world scenario without the lidar (no mapper or navigator here).
-std::string TurretOnlyScenario(const std::string& dir) {
-  std::ifstream in(testing::SourcePath("config/sim/simple_nbv.yaml"));
-  const std::string path = dir + "/simple_turret_only.yaml";
+// One of seed 002's worlds: its explorer config, its shipped scenario and its name.
+struct World {
+  std::string name;      ///< simulator/worlds/<name>.xml
+  std::string config;    ///< config/explore/<name>_nbv.yaml
+  std::string scenario;  ///< the scenario without the lidar (TurretOnlyScenario)
+};
+
+// The shipped scenario of `world` without the lidar (no mapper or navigator here).
+std::string TurretOnlyScenario(const std::string& world, const std::string& dir) {
+  std::ifstream in(testing::SourcePath("config/sim/" + world + "_nbv.yaml"));
+  const std::string path = dir + "/" + world + "_turret_only.yaml";
   std::ofstream out(path);
   for (std::string line; std::getline(in, line);) {
     if (line.find("hdl32e") == std::string::npos) out << line << "\n";
@@ -72,7 +79,12 @@ std::string TurretOnlyScenario(const std::string& dir) {
   return path;
 }
 
-PresetRun RunPreset(const std::string& preset, int seed, const std::string& scenario,
+World SeedWorld(const std::string& name, const std::string& dir) {
+  return {name, testing::SourcePath("config/explore/" + name + "_nbv.yaml"),
+          TurretOnlyScenario(name, dir)};
+}
+
+PresetRun RunPreset(const std::string& preset, int seed, const World& world,
                     const std::string& dir) {
   PresetRun run;
   run.preset = preset;
@@ -82,21 +94,15 @@ PresetRun RunPreset(const std::string& preset, int seed, const std::string& scen
   const std::string out = run_dir + "/report";
   const std::string db = run_dir + "/maps.db";
   procs.Start("cairn-mapstore", {"--db", db});
-  procs.Start("cairn-sim", {"--scenario", scenario, "--speed", "0"});
+  procs.Start("cairn-sim", {"--scenario", world.scenario, "--speed", "0"});
   auto& explorer = procs.Start(
-      "cairn-explorer", {"--robot",     kRobot,
-                         "--profile",   "rover",
-                         "--config",    testing::SourcePath("config/explore/simple_nbv.yaml"),
-                         "--preset",    preset,
-                         "--seed",      std::to_string(seed),
-                         "--drive",     "teleport",
-                         "--max-scans", "60",
-                         "--duration",  "3000",
-                         "--out",       out,
-                         "--save",      "test23/" + preset});
+      "cairn-explorer", {"--robot",    kRobot,     "--profile",   "rover",  "--config",
+                         world.config, "--preset", preset,        "--seed", std::to_string(seed),
+                         "--drive",    "teleport", "--max-scans", "80",     "--duration",
+                         "6000",       "--out",    out,           "--save", "nbv/" + preset});
   // The figures come from the explorer's summary file: at full speed the simulator's messages
   // come by the ten thousand a second, more than a test's bus reads.
-  run.done = WaitFor([&] { return !explorer.Running(); }, 240.0);
+  run.done = WaitFor([&] { return !explorer.Running(); }, 400.0);
   if (const auto rc = explorer.WaitExit(5.0)) run.exit_code = *rc;
   run.log = explorer.Log();
   std::ifstream in(out + "/nbv_summary.txt");
@@ -113,10 +119,10 @@ PresetRun RunPreset(const std::string& preset, int seed, const std::string& scen
   }
   // The stored map against the world: the explorer's C_nc, within its work area, from the
   // start (the origin).
-  auto& eval = procs.StartRaw(
-      "cairn-map eval", {testing::BinPath("cairn-map"), "eval", "--db", db, "--site", "test23",
-                         "--map", preset, "--world", "simple", "--start", "0,0", "--layer",
-                         "explore/navigability", "--region", "explore/work_area", "--json"});
+  auto& eval = procs.StartRaw("cairn-map eval",
+                              {testing::BinPath("cairn-map"), "eval", "--db", db, "--site", "nbv",
+                               "--map", preset, "--world", world.name, "--start", "0,0", "--layer",
+                               "explore/navigability", "--region", "explore/work_area", "--json"});
   if (eval.WaitExit(60.0)) {
     run.eval = eval.Log();
     run.reachable_coverage = JsonNumber(run.eval, "coverage");
@@ -147,41 +153,54 @@ Medians MediansOf(const std::vector<PresetRun>& runs, const std::string& preset)
   return {Median(scans), Median(distance), Median(quality), Median(coverage), Median(reachable)};
 }
 
-TEST(NbvPresetsTest, Seed002Test23TheSimpleWorldUnderTheFourPresetsOfTable62) {
-  const std::string dir = testing::TestTempDir();
-  const std::string scenario = TurretOnlyScenario(dir);
-  const std::vector<std::string> presets = {"simple-balanced", "simple-information",
-                                            "simple-quality", "greedy"};
-  std::vector<PresetRun> runs;
+// Runs every preset kSeeds times (expecting each to finish, exit 0, with a summary and an
+// evaluation), prints every run and the medians beside the thesis's figures, and returns the
+// medians in the presets' order.
+std::vector<Medians> RunAll(const World& world, const std::vector<std::string>& presets,
+                            const std::vector<std::string>& thesis, const std::string& dir,
+                            std::vector<PresetRun>* runs) {
   for (const std::string& preset : presets) {
     for (int seed = 1; seed <= kSeeds; ++seed) {
-      runs.push_back(RunPreset(preset, seed, scenario, dir));
-      const PresetRun& r = runs.back();
-      ASSERT_TRUE(r.done) << r.preset << " seed " << seed << " did not finish\n" << r.log;
-      ASSERT_EQ(r.exit_code, 0) << r.preset << " seed " << seed << "\n" << r.log;
-      ASSERT_GT(r.scans, 0) << r.preset << " seed " << seed << ": no summary\n" << r.log;
-      ASSERT_TRUE(std::isfinite(r.reachable_coverage))
+      runs->push_back(RunPreset(preset, seed, world, dir));
+      const PresetRun& r = runs->back();
+      EXPECT_TRUE(r.done) << r.preset << " seed " << seed << " did not finish\n" << r.log;
+      EXPECT_EQ(r.exit_code, 0) << r.preset << " seed " << seed << "\n" << r.log;
+      EXPECT_GT(r.scans, 0) << r.preset << " seed " << seed << ": no summary\n" << r.log;
+      EXPECT_TRUE(std::isfinite(r.reachable_coverage))
           << r.preset << " seed " << seed << ": no evaluation\n"
           << r.eval;
     }
   }
-  // Every run, then the medians beside the thesis's table 6-3.
-  std::printf("preset              seed  scans  distance  quality  coverage  reachable  safe ok\n");
-  for (const PresetRun& r : runs) {
-    std::printf("%-20s %3d  %5d  %6.1f m  %7.3f  %6.1f %%  %7.1f %%  %6.1f %%\n", r.preset.c_str(),
+  std::printf("%s world\n", world.name.c_str());
+  std::printf(
+      "preset                    seed  scans  distance  quality  coverage  reachable  safe\n");
+  for (const PresetRun& r : *runs) {
+    std::printf("%-25s %3d  %5d  %6.1f m  %7.3f  %6.1f %%  %7.1f %%  %5.1f %%\n", r.preset.c_str(),
                 r.seed, r.scans, r.distance_m, r.quality, 100.0 * r.coverage,
                 100.0 * r.reachable_coverage, 100.0 * r.free_precision);
   }
-  const char* thesis[] = {"106 m, 0.6846, 92.5 %, 12", "107 m, 0.6904, 94.1 %, 10",
-                          "128 m, 0.7503, 93.6 %, 13", "116 m, 0.5013, 91.4 %, 8"};
-  std::printf("\nmedians of %d runs   distance  quality  reachable  scans   | thesis\n", kSeeds);
+  std::printf("\nmedians of %d runs        distance  quality  reachable  scans   | thesis\n",
+              kSeeds);
   std::vector<Medians> m;
   for (size_t i = 0; i < presets.size(); ++i) {
-    m.push_back(MediansOf(runs, presets[i]));
-    std::printf("%-20s %7.1f m  %7.3f  %7.1f %%  %5.0f   | %s\n", presets[i].c_str(),
+    m.push_back(MediansOf(*runs, presets[i]));
+    std::printf("%-25s %7.1f m  %7.3f  %7.1f %%  %5.0f   | %s\n", presets[i].c_str(),
                 m[i].distance_m, m[i].quality, 100.0 * m[i].reachable_coverage, m[i].scans,
-                thesis[i]);
+                thesis[i].c_str());
   }
+  return m;
+}
+
+TEST(NbvPresetsTest, Seed002Test23TheSimpleWorldUnderTheFourPresetsOfTable62) {
+  const std::string dir = testing::TestTempDir();
+  std::vector<PresetRun> runs;
+  const std::vector<Medians> m =
+      RunAll(SeedWorld("simple", dir),
+             {"simple-balanced", "simple-information", "simple-quality", "greedy"},
+             {"106 m, 0.6846, 92.5 %, 12", "107 m, 0.6904, 94.1 %, 10", "128 m, 0.7503, 93.6 %, 13",
+              "116 m, 0.5013, 91.4 %, 8"},
+             dir, &runs);
+  ASSERT_FALSE(HasFailure());
   const Medians& balanced = m[0];
   const Medians& information = m[1];
   const Medians& quality = m[2];
@@ -212,6 +231,35 @@ TEST(NbvPresetsTest, Seed002Test23TheSimpleWorldUnderTheFourPresetsOfTable62) {
   // holds both ground and wall.
   for (const PresetRun& r : runs) {
     EXPECT_GE(r.free_precision, 0.98) << r.preset << " seed " << r.seed << "\n" << r.eval;
+  }
+}
+
+// Seed 002 test 24: the urban block (six buildings, streets with kerbs and gaps, parked cars, a
+// 2.5 m passage) under the two presets of table 6-4.
+TEST(NbvPresetsTest, Seed002Test24TheStructuredWorldUnderThePresetsOfTable64) {
+  const std::string dir = testing::TestTempDir();
+  std::vector<PresetRun> runs;
+  const std::vector<Medians> m =
+      RunAll(SeedWorld("structured", dir), {"structured-zones-quality", "structured-information"},
+             {"352 m, 43 scans", "397 m, 39 scans"}, dir, &runs);
+  ASSERT_FALSE(HasFailure());
+  const Medians& zones_quality = m[0];
+  const Medians& information = m[1];
+  // The figure: both presets cover 94 % of the reachable cells (99.6..99.9 % and
+  // 98.2..99.5 % in the runs made while writing this test).
+  EXPECT_GE(zones_quality.reachable_coverage, 0.94);
+  EXPECT_GE(information.reachable_coverage, 0.94);
+  // As in the thesis the information-dominant preset needs fewer scans (25..33 against 49..60
+  // here; 39 against 43 there). Unlike the thesis it drives less too (148..166 m against
+  // 223..277 m; 397 against 352 m there): not asserted.
+  EXPECT_LT(information.scans, zones_quality.scans);
+  // `cairn-map eval`: the safe cells are free in the world but for the kerbs. The explorer's
+  // C_nc (seed 002's F and B) reads a 15 cm kerb as navigable ground, and the rover's 8 cm step
+  // makes it an obstacle in the truth: 93.1..93.9 % in the runs made while writing this test,
+  // 98.4 % with the kerbs left out of the truth (--band-low 0.2). A step term for the
+  // information map is not built yet.
+  for (const PresetRun& r : runs) {
+    EXPECT_GE(r.free_precision, 0.90) << r.preset << " seed " << r.seed << "\n" << r.eval;
   }
 }
 

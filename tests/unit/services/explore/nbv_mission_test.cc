@@ -152,6 +152,7 @@ TEST(NbvMissionTest, AGoalWithNoResultIsGivenUpAndAScanThatNeverComesIsAskedForA
   NbvMissionParams p = Params();
   p.goal_timeout_s = 50.0;
   p.max_scan_retries = 1;
+  p.max_skipped_views = 0;
   NbvMission m(p);
   m.Start(0.0);
   ASSERT_TRUE(Sweep(&m, FlatWithABox(), {0.0, 0.0}, 1.0).goal.has_value());
@@ -167,8 +168,37 @@ TEST(NbvMissionTest, AGoalWithNoResultIsGivenUpAndAScanThatNeverComesIsAskedForA
   EXPECT_FALSE(again.done);
   const NbvAction end = m.Tick(110.0);
   EXPECT_TRUE(end.done) << end.event;
-  EXPECT_NE(m.end_reason().find("no scan"), std::string::npos) << m.end_reason();
+  EXPECT_NE(m.end_reason().find("no whole scan"), std::string::npos) << m.end_reason();
   EXPECT_TRUE(m.failed());
+}
+
+TEST(NbvMissionTest, AViewPointWithNoWholeSweepIsSkippedAndOnlyTooManyInARowFail) {
+  NbvMissionParams p = Params();
+  p.max_scan_retries = 0;
+  p.max_skipped_views = 1;
+  NbvMission m(p);
+  m.Start(0.0);
+  const NbvAction first = Sweep(&m, FlatWithABox(), {0.0, 0.0}, 1.0);
+  ASSERT_TRUE(first.goal.has_value()) << first.event;
+  const common::Vector2 view = first.goal->position_m;
+  m.OnPosition(view);
+  ASSERT_TRUE(m.OnGoalResult(true, "", 10.0).request_scan);
+  // No line comes at that view point: after the timeout it is skipped and another one chosen,
+  // at least the revisit radius away from it.
+  const NbvAction skip = m.Tick(40.0);
+  EXPECT_FALSE(skip.done) << skip.event;
+  ASSERT_TRUE(skip.goal.has_value()) << skip.event;
+  EXPECT_NE(skip.event.find("view point skipped"), std::string::npos) << skip.event;
+  EXPECT_GE((skip.goal->position_m - view).norm(), p.nbv.revisit_radius_m);
+  EXPECT_FALSE(m.failed());
+  // The next one fails too: two in a row, over the limit of one.
+  m.OnPosition(skip.goal->position_m);
+  ASSERT_TRUE(m.OnGoalResult(true, "", 45.0).request_scan);
+  const NbvAction end = m.Tick(80.0);
+  EXPECT_TRUE(end.done) << end.event;
+  EXPECT_TRUE(m.failed());
+  EXPECT_NE(m.end_reason().find("no whole scan"), std::string::npos) << m.end_reason();
+  EXPECT_EQ(m.scans(), 1);
 }
 
 TEST(NbvMissionTest, CountsTheDistanceDrivenAndKeepsThePath) {
