@@ -142,7 +142,6 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   }
   if (params_.fill_surface) {
     const std::vector<ScoredPoint> filled = FillSurfaceCells(info_, scored, valid, mesh_.triangles);
-    view.filled_cells = static_cast<int64_t>(filled.size());
     points.insert(points.end(), filled.begin(), filled.end());
   }
   view.position_m = common::Vector2(scan.sensor_origin_m.x(), scan.sensor_origin_m.y());
@@ -154,7 +153,7 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
     ViewEvaluator evaluator(info_, params_.nbv);
     ViewGains gains = evaluator.Evaluate(info_.Linear(*cell), zones_, true);
     // Cells this scan should have seen and did not count in A only for nearer views.
-    missed_cells_ += RecordMissedView(info_, info_.Linear(*cell), gains.unexplored, &missed_);
+    RecordMissedView(info_, info_.Linear(*cell), gains.unexplored, &missed_);
     std::vector<size_t>& seen = gains.zones_seen;
     std::sort(seen.rbegin(), seen.rend());
     for (size_t z : seen) {
@@ -231,9 +230,8 @@ NbvAction NbvMission::ScanFailed(const std::string& why, double now_s) {
   // kerb's edge, lines keep getting lost) leaves that view point out: the next view is decided
   // from the map as it is, and only max_skipped_views of them in a row end the mission.
   if (view_points_.empty() || !goal_ || skipped_in_row_ >= params_.max_skipped_views) {
-    return Finish("no whole scan after " + std::to_string(scan_retries_) + " requests (" + why +
-                      ")",
-                  true);
+    return Finish(
+        "no whole scan after " + std::to_string(scan_retries_) + " requests (" + why + ")", true);
   }
   ++skipped_in_row_;
   // Where the robot stands (its last position; the view point when none came).

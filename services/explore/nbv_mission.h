@@ -70,7 +70,6 @@ struct ViewPoint {
   common::Vector2 position_m{0.0, 0.0};
   double time_s{0.0};
   int64_t points_used{0};    ///< points that fell on the information map
-  int64_t filled_cells{0};   ///< cells explored from the mesh between points (fill_surface)
   double coverage{0.0};      ///< of the work area, after the scan
   double mean_quality{0.0};  ///< over the explored work area, after the scan
   int zones{0};              ///< in the list after the scan
@@ -106,8 +105,6 @@ class NbvMission {
   const char* state_name() const;
   const InfoMap& info_map() const { return info_; }
   const std::vector<InterestZone>& zones() const { return zones_; }
-  /// Cells some scan should have seen and did not (NbvParams::missed_view_step_m).
-  int64_t missed_cells() const { return missed_cells_; }
   const std::vector<ViewPoint>& view_points() const { return view_points_; }
   const std::vector<common::Vector2>& path_m() const { return path_m_; }
   const std::optional<NbvDecision>& last_decision() const { return last_decision_; }
@@ -136,8 +133,7 @@ class NbvMission {
   TurretScanAssembler assembler_;
   ScanMesh mesh_;
   std::vector<InterestZone> zones_;
-  MissedViews missed_;       ///< per cell: the scans that should have seen it and did not
-  int64_t missed_cells_{0};  ///< cells some scan should have seen and did not
+  MissedViews missed_;  ///< per cell: the scans that should have seen it and did not
   std::vector<ViewPoint> view_points_;
   std::vector<common::Vector2> path_m_;
   std::optional<NbvDecision> last_decision_;

@@ -10,15 +10,18 @@
 namespace cairn::sim {
 namespace {
 
-// A 2 x 2 m floor patch at 0.1 m: cell (ix, iy) covers x -1 + 0.1 ix .. , y -1 + 0.1 iy ...
-common::GridGeometry Patch() {
+// size_x x size_y cells of resolution_m from (x0, y0).
+common::GridGeometry Grid(double resolution_m, int size_x, int size_y, double x0, double y0) {
   common::GridGeometry g;
-  g.resolution_m = 0.1;
-  g.size_x = 20;
-  g.size_y = 20;
-  g.origin = {-1.0, -1.0, 0.0};
+  g.resolution_m = resolution_m;
+  g.size_x = size_x;
+  g.size_y = size_y;
+  g.origin = {x0, y0, 0.0};
   return g;
 }
+
+// A 2 x 2 m floor patch at 0.1 m: cell (ix, iy) covers x -1 + 0.1 ix .. , y -1 + 0.1 iy ...
+common::GridGeometry Patch() { return Grid(0.1, 20, 20, -1.0, -1.0); }
 
 // A box on the floor (x -0.2..0.2, y -0.3..0.1, 0.5 m high; its bottom is the floor's plane),
 // listed before the floor so that mj_ray reports the box's bottom where it ties with the floor;
@@ -145,12 +148,7 @@ TEST(GroundTruthTest, AWideTallBlockIsABuildingAndAWideLowOneIsADeck) {
   EXPECT_NEAR(house.top_m, 3.0, 1e-9);
   const ColumnProfile deck = world.Column(3.0, 0.0);
   EXPECT_NEAR(deck.ground_m, 0.3, 1e-9);
-  common::GridGeometry g;
-  g.resolution_m = 0.5;
-  g.size_x = 24;
-  g.size_y = 4;
-  g.origin = {-6.0, -1.0, 0.0};
-  const common::GridMap truth = world.Rasterise(g);
+  const common::GridMap truth = world.Rasterise(Grid(0.5, 24, 4, -6.0, -1.0));
   const common::Layer& occ = truth.at(kTruthOccupiedLayer);
   EXPECT_FLOAT_EQ(occ(6, 2), 1.f);   // x -2.75: the house
   EXPECT_FLOAT_EQ(occ(18, 2), 0.f);  // x 3.25: the deck's top
@@ -313,20 +311,13 @@ TEST(GroundTruthTest, OutdoorHeightField) {
   EXPECT_GT(shed.ground_m, 0.3);
   EXPECT_LT(shed.ground_m, 1.0);
 
-  common::GridGeometry g;
-  g.resolution_m = 0.5;
-  g.size_x = 40;
-  g.size_y = 40;
-  g.origin = {-10.0, -10.0, 0.0};
-  const common::GridMap truth = world.Rasterise(g);
+  const common::GridMap truth = world.Rasterise(Grid(0.5, 40, 40, -10.0, -10.0));
   const auto shed_cell = truth.IndexOf({7.25, 5.25});
   const auto start_cell = truth.IndexOf({0.25, 0.25});
   EXPECT_FLOAT_EQ(truth.at(kTruthOccupiedLayer)(shed_cell->ix, shed_cell->iy), 1.f);
   EXPECT_FLOAT_EQ(truth.at(kTruthOccupiedLayer)(start_cell->ix, start_cell->iy), 0.f);
   // Outside the height field (x > 30) there is no ground.
-  g.origin = {31.0, 0.0, 0.0};
-  g.size_x = g.size_y = 2;
-  const common::GridMap outside = world.Rasterise(g);
+  const common::GridMap outside = world.Rasterise(Grid(0.5, 2, 2, 31.0, 0.0));
   EXPECT_TRUE(std::isnan(outside.at(kTruthGroundLayer)(0, 0)));
   EXPECT_TRUE(std::isnan(outside.at(kTruthOccupiedLayer)(0, 0)));
 }
