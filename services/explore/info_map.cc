@@ -9,6 +9,8 @@ namespace cairn::explore {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+// A point is steep when its normal is more than 45 degrees from the vertical: |n_z| < cos 45.
+constexpr float kSteepNormalZ = 0.70710678f;
 
 }  // namespace
 
@@ -70,6 +72,8 @@ InfoMap::InfoMap(const WorkArea& area, const InfoMapParams& params) : area_(area
                   &sum_nz_, &sum_navigable_z_}) {
     v->assign(n, 0.f);
   }
+  steep_low_z_.assign(n, kNaN);
+  steep_high_z_.assign(n, kNaN);
   navigability_.assign(n, 0.5f);
   quality_.assign(n, kNaN);
 }
@@ -98,6 +102,13 @@ int64_t InfoMap::AddPoints(const std::vector<ScoredPoint>& points) {
       sum_nx_[i] += p.normal.x();
       sum_ny_[i] += p.normal.y();
       sum_nz_[i] += p.normal.z();
+      // Steep: the normal more than 45 degrees from the vertical (a zero normal is none).
+      const float nz = std::abs(p.normal.z());
+      if (nz < kSteepNormalZ * p.normal.norm()) {
+        // fmin/fmax: NaN (none yet) gives way to the point's height.
+        steep_low_z_[i] = std::fmin(steep_low_z_[i], p.position_m.z());
+        steep_high_z_[i] = std::fmax(steep_high_z_[i], p.position_m.z());
+      }
     }
     if (p.navigability > tau_f) {
       navigable_points_[i] += 1.f;
@@ -190,6 +201,8 @@ common::GridMap InfoMap::ToGridMap() const {
   put(info_layers::kSumNormalY, sum_ny_);
   put(info_layers::kSumNormalZ, sum_nz_);
   put(info_layers::kSumNavigableZ, sum_navigable_z_);
+  put(info_layers::kSteepLowZ, steep_low_z_);
+  put(info_layers::kSteepHighZ, steep_high_z_);
   return grid;
 }
 
@@ -220,6 +233,8 @@ InfoMap InfoMap::FromGridMap(const common::GridMap& grid, const WorkArea& area,
   get(info_layers::kSumNormalY, &map.sum_ny_);
   get(info_layers::kSumNormalZ, &map.sum_nz_);
   get(info_layers::kSumNavigableZ, &map.sum_navigable_z_);
+  if (grid.HasLayer(info_layers::kSteepLowZ)) get(info_layers::kSteepLowZ, &map.steep_low_z_);
+  if (grid.HasLayer(info_layers::kSteepHighZ)) get(info_layers::kSteepHighZ, &map.steep_high_z_);
   for (int64_t i = 0; i < map.num_cells(); ++i) {
     if (!(map.points_[i] >= 0.f) || !std::isfinite(map.points_[i])) {
       throw std::invalid_argument("info map: cell " + std::to_string(i) +

@@ -60,6 +60,11 @@ inline constexpr char kSumNormalX[] = "explore/sum_normal_x";  ///< sums of unit
 inline constexpr char kSumNormalY[] = "explore/sum_normal_y";
 inline constexpr char kSumNormalZ[] = "explore/sum_normal_z";
 inline constexpr char kSumNavigableZ[] = "explore/sum_navigable_z";  ///< sum z over n_pf
+/// Lowest and highest z of the cell's steep points (a normal more than 45 degrees from the
+/// vertical), NaN when none. Optional when a map is rebuilt: maps stored before they existed
+/// read as NaN.
+inline constexpr char kSteepLowZ[] = "explore/steep_low_z";
+inline constexpr char kSteepHighZ[] = "explore/steep_high_z";
 }  // namespace info_layers
 
 class InfoMap {
@@ -98,6 +103,12 @@ class InfoMap {
   /// Mean height of the cell's navigable points (the ground a robot would stand on; a tree's
   /// crown above it does not count); NaN when it has none.
   float GroundHeight(int64_t cell) const;
+  /// Lowest and highest z (m) of the cell's steep points (a normal more than 45 degrees from the
+  /// vertical); NaN when it has none. A wall that spans a scanner's height hides the ground
+  /// behind it from that scanner; a tree's crown (all of it above) or a kerb (all below) does
+  /// not.
+  float SteepLow(int64_t cell) const { return steep_low_z_[cell]; }
+  float SteepHigh(int64_t cell) const { return steep_high_z_[cell]; }
 
   int64_t work_area_cells() const { return work_area_cells_; }
   int64_t explored_work_area_cells() const { return explored_in_area_; }
@@ -127,6 +138,7 @@ class InfoMap {
   std::vector<float> sum_navigability_, sum_obstacle_, sum_quality_;
   std::vector<float> sum_x_, sum_y_, sum_z_, sum_nx_, sum_ny_, sum_nz_;
   std::vector<float> sum_navigable_z_;
+  std::vector<float> steep_low_z_, steep_high_z_;
   // Derived.
   std::vector<float> navigability_, quality_;
 };

@@ -9,6 +9,9 @@
 namespace cairn::explore {
 namespace {
 
+// The least height of steep points in a cell that hides what is behind it (Evaluate).
+constexpr float kMinWallHeightM = 0.5f;
+
 constexpr double kPi = 3.14159265358979323846;
 
 void RequireUnit(double v, const char* name) {
@@ -249,7 +252,7 @@ std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& param
 ViewEvaluator::ViewEvaluator(const InfoMap& map, const NbvParams& params, const MissedViews* missed)
     : map_(map), params_(params), missed_(missed), stamp_(static_cast<size_t>(map.num_cells()), 0) {
   params_.Validate();
-  if (missed_ && missed_->count.size() != static_cast<size_t>(map.num_cells())) {
+  if (missed_ && missed_->num_cells() != map.num_cells()) {
     throw std::invalid_argument("nbv: the missed-view counts do not match the map");
   }
 }
@@ -292,7 +295,16 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
         stamp_[i] = epoch_;
         visible_.push_back(i);
       }
-      if (i != cell && map_.Explored(i) && map_.Navigability(i) < occlusion) break;
+      // A cell blocks the view when it is an obstacle (C_nc below occlusion_cnc) or a wall
+      // spans the scanner's height in it: a wall's foot cell also holds ground, so its C_nc
+      // alone says little about what the wall hides. A wall is at least kMinWallHeightM of
+      // steep points: a few steep normals on rough ground at the scanner's height are not one.
+      if (i != cell && map_.Explored(i) &&
+          (map_.Navigability(i) < occlusion ||
+           (map_.SteepLow(i) < scanner.z() && map_.SteepHigh(i) > scanner.z() &&
+            map_.SteepHigh(i) - map_.SteepLow(i) > kMinWallHeightM))) {
+        break;
+      }
     }
   }
 
@@ -328,7 +340,9 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
     if (!map_.Explored(i)) {
       if (list_unexplored) gains.unexplored.push_back(i);
       const double d_m = std::sqrt(static_cast<double>(ddx * ddx + ddy * ddy)) * res;
-      const double weight = missed_ ? missed_->Weight(i, d_m, params_.missed_view_step_m) : 1.0;
+      const double weight = missed_ ? missed_->Weight(i, MissedViews::Sector(-ddx, -ddy), d_m,
+                                                      params_.missed_view_step_m)
+                                    : 1.0;
       unexplored += weight;
       // Q counts it too (its Q_a is 0, eq. 4.10 sums over every cell in range): the quality a
       // scan from here would give flat ground there, met at the scanner's height.
@@ -367,18 +381,31 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
 }
 
 MissedViews::MissedViews(int64_t num_cells)
-    : nearest_m(static_cast<size_t>(num_cells), std::numeric_limits<float>::infinity()),
-      count(static_cast<size_t>(num_cells), 0) {}
+    : nearest_m(static_cast<size_t>(num_cells) * kSectors, std::numeric_limits<float>::infinity()),
+      count(static_cast<size_t>(num_cells) * kSectors, 0) {}
 
-double MissedViews::Weight(int64_t cell, double d_m, double step_m) const {
-  const int k = count[static_cast<size_t>(cell)];
-  if (k == 0 || d_m < nearest_m[static_cast<size_t>(cell)] - step_m) return 1.0;
-  return std::ldexp(1.0, -k);
+int MissedViews::Sector(int64_t dx, int64_t dy) {
+  // Octants by sign and by which axis dominates, without a trigonometric call: 0 for bearings in
+  // [0, 45) degrees, 1 for [45, 90), ..., 7 for [315, 360).
+  const int64_t ax = dx < 0 ? -dx : dx, ay = dy < 0 ? -dy : dy;
+  if (dy >= 0) {
+    if (dx > 0) return ax > ay ? 0 : 1;
+    return ay > ax ? 2 : 3;
+  }
+  if (dx < 0) return ax > ay ? 4 : 5;
+  return ay > ax ? 6 : 7;
+}
+
+double MissedViews::Weight(int64_t cell, int sector, double d_m, double step_m) const {
+  const size_t k = static_cast<size_t>(cell) * kSectors + static_cast<size_t>(sector);
+  const int misses = count[k];
+  if (misses == 0 || d_m < nearest_m[k] - step_m) return 1.0;
+  return std::ldexp(1.0, -misses);
 }
 
 int64_t RecordMissedView(const InfoMap& map, int64_t cell, const std::vector<int64_t>& unexplored,
                          MissedViews* missed) {
-  if (missed->count.size() != static_cast<size_t>(map.num_cells())) {
+  if (missed->num_cells() != map.num_cells()) {
     throw std::invalid_argument("nbv: the missed views do not match the map");
   }
   const common::CellIndex c = map.Cell(cell);
@@ -387,8 +414,11 @@ int64_t RecordMissedView(const InfoMap& map, int64_t cell, const std::vector<int
   for (int64_t i : unexplored) {
     const common::CellIndex u = map.Cell(i);
     const float d_m = static_cast<float>(std::hypot(u.ix - c.ix, u.iy - c.iy) * res);
-    const size_t k = static_cast<size_t>(i);
-    if (missed->count[k] == 0) ++first;
+    const size_t base = static_cast<size_t>(i) * MissedViews::kSectors;
+    bool never = true;
+    for (int s = 0; s < MissedViews::kSectors; ++s) never = never && missed->count[base + s] == 0;
+    first += never;
+    const size_t k = base + static_cast<size_t>(MissedViews::Sector(c.ix - u.ix, c.iy - u.iy));
     if (missed->count[k] < 255) ++missed->count[k];
     missed->nearest_m[k] = std::min(missed->nearest_m[k], d_m);
   }

@@ -15,10 +15,11 @@
 ///   u(c) = (w_A A(c) + w_Q Q(c) + w_O O(c)) / (w_C C(c))
 ///
 /// with A the unexplored area it would see (2-D ray casting, occluded by cells whose C_nc is
-/// below occlusion_cnc), Q the quality it would add, O the occluded planes it would face and C
-/// the path cost. Exploration stops when the best u falls below C_p = 0.5 / (w_C d_max) once the
-/// mean quality has reached its minimum, or when no candidate is reachable. The greedy baseline
-/// (Koenig, Tovey and Halliburton) goes wherever A is largest.
+/// below occlusion_cnc or where a wall spans the scanner's height), Q the quality it would
+/// add, O the occluded planes it would face and C the path cost. Exploration stops when the best u
+/// falls below C_p = 0.5 / (w_C d_max) once the mean quality has reached its minimum, or when no
+/// candidate is reachable. The greedy baseline (Koenig, Tovey and Halliburton) goes wherever A is
+/// largest.
 
 namespace cairn::explore {
 
@@ -46,7 +47,8 @@ struct NbvParams {
   /// Unexplored cells this near the robot count as safe for the navigation tree: the scanner's
   /// blind cone below it (a 270 deg fan 1 m up leaves about 1 m unseen around the robot).
   double robot_free_radius_m{1.5};
-  double occlusion_cnc{0.4};     ///< cells below it block the view
+  /// Cells below it block the view (so do cells where a wall spans the scanner's height).
+  double occlusion_cnc{0.4};
   double gain_range_m{20.0};     ///< useful scanner radius for A, Q and O
   double scanner_height_m{1.0};  ///< above the ground, for Q's distances
   double pan_step_rad{0.5 * 3.14159265358979323846 / 180.0};
@@ -55,11 +57,12 @@ struct NbvParams {
   double w_a_quality{0.93};      ///< the quality combination's area weight
   double w_n_quality{0.07};      ///< and incidence weight
   double greedy_min_gain{0.02};  ///< the greedy baseline stops below this A
-  /// An unexplored cell that k scans should have seen (by the 2-D model A uses) and did not,
-  /// the nearest from d metres, weighs 2^-k in A, or 1 again for a view nearer than
-  /// d - missed_view_step_m: the inside of a building, ground behind a crest or between the far
-  /// rings of a scan. A nearer view sees the ground steeper and over more crests; a view from
-  /// about as far would likely miss it again.
+  /// An unexplored cell that k scans from one direction (an octant) should have seen (by the
+  /// 2-D model A uses) and did not, the nearest from d metres, weighs 2^-k in A for a view from
+  /// that direction, or 1 again for a view nearer than d - missed_view_step_m or from another
+  /// direction: the inside of a building, ground behind a crest or between the far rings of a
+  /// scan. A nearer view sees the ground steeper and over more crests, a view from elsewhere
+  /// round the house; a view from about as far the same way would likely miss it again.
   double missed_view_step_m{3.0};
   uint64_t seed{1};
 
@@ -136,17 +139,24 @@ struct ViewGains {
   std::vector<int64_t> unexplored;
 };
 
-/// Per cell, the scans that should have seen it and did not: how many, and the distance (m) of
-/// the nearest (+inf when none). NbvParams::missed_view_step_m.
+/// Per cell and per direction, the scans that should have seen it and did not: how many, and the
+/// distance (m) of the nearest (+inf when none). NbvParams::missed_view_step_m. The direction is
+/// the octant (45 degrees) of the bearing from the cell to the scan: what hid a cell from the
+/// south-west (a house, a crest) need not hide it from the north.
 struct MissedViews {
+  static constexpr int kSectors = 8;
   explicit MissedViews(int64_t num_cells);
-  std::vector<float> nearest_m;
-  std::vector<uint8_t> count;
-  /// The cell's weight in A for a view d_m away.
-  double Weight(int64_t cell, double d_m, double step_m) const;
+  /// The octant of the bearing (dx, dy), in cells, from a cell to a view: 0 is east, counted
+  /// anticlockwise.
+  static int Sector(int64_t dx, int64_t dy);
+  int64_t num_cells() const { return static_cast<int64_t>(count.size()) / kSectors; }
+  std::vector<float> nearest_m;  ///< [cell * kSectors + sector]
+  std::vector<uint8_t> count;    ///< [cell * kSectors + sector]
+  /// The cell's weight in A for a view d_m away in direction `sector`.
+  double Weight(int64_t cell, int sector, double d_m, double step_m) const;
 };
 /// Records a scan from `cell` that did not see the cells of `unexplored`.
-/// @returns how many cells were missed for the first time.
+/// @returns how many cells were missed for the first time (from any direction).
 int64_t RecordMissedView(const InfoMap& map, int64_t cell, const std::vector<int64_t>& unexplored,
                          MissedViews* missed);
 class ViewEvaluator {

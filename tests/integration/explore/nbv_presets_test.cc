@@ -1,5 +1,5 @@
 // Seed 002 test 23 over real processes: the simple world (a house and a tree on a gentle hill,
-// seed 002's work area), the four presets of table 6-2, each run with three candidate seeds,
+// seed 002's work area), the four presets of table 6-2, each run with five candidate seeds,
 // one run after the other. Each run is cairn-sim (the rover with only its turret, sweeping on
 // request, at full speed), cairn-mapstore, and cairn-explorer --mode nbv --drive teleport
 // --save: every view point is reached by SIM.CONTROL OP_RESET_ROBOT and the distance counted is
@@ -11,8 +11,9 @@
 //
 // Which view comes next hangs on small differences (the robot settles a little differently
 // after each teleport, the scan differs by a few points, the candidates move), so one run of a
-// preset can differ a lot from the next (the balanced one took 10 to 19 scans in five runs).
-// The thesis's relations are asserted on the median of three runs of each preset.
+// preset can differ a lot from the next (the balanced one took 21 to 33 scans in five runs).
+// The thesis's relations are asserted on the median of five runs of each preset (three in the
+// structured world, whose runs are longer).
 
 #include <algorithm>
 #include <cmath>
@@ -34,7 +35,6 @@ using testing::ProcessSet;
 using testing::WaitFor;
 
 constexpr char kRobot[] = "rover";
-constexpr int kSeeds = 3;
 
 struct PresetRun {
   std::string preset;
@@ -153,14 +153,14 @@ Medians MediansOf(const std::vector<PresetRun>& runs, const std::string& preset)
   return {Median(scans), Median(distance), Median(quality), Median(coverage), Median(reachable)};
 }
 
-// Runs every preset kSeeds times (expecting each to finish, exit 0, with a summary and an
+// Runs every preset `seeds` times (expecting each to finish, exit 0, with a summary and an
 // evaluation), prints every run and the medians beside the thesis's figures, and returns the
 // medians in the presets' order.
 std::vector<Medians> RunAll(const World& world, const std::vector<std::string>& presets,
-                            const std::vector<std::string>& thesis, const std::string& dir,
-                            std::vector<PresetRun>* runs) {
+                            const std::vector<std::string>& thesis, int seeds,
+                            const std::string& dir, std::vector<PresetRun>* runs) {
   for (const std::string& preset : presets) {
-    for (int seed = 1; seed <= kSeeds; ++seed) {
+    for (int seed = 1; seed <= seeds; ++seed) {
       runs->push_back(RunPreset(preset, seed, world, dir));
       const PresetRun& r = runs->back();
       EXPECT_TRUE(r.done) << r.preset << " seed " << seed << " did not finish\n" << r.log;
@@ -180,7 +180,7 @@ std::vector<Medians> RunAll(const World& world, const std::vector<std::string>& 
                 100.0 * r.reachable_coverage, 100.0 * r.free_precision);
   }
   std::printf("\nmedians of %d runs        distance  quality  reachable  scans   | thesis\n",
-              kSeeds);
+              seeds);
   std::vector<Medians> m;
   for (size_t i = 0; i < presets.size(); ++i) {
     m.push_back(MediansOf(*runs, presets[i]));
@@ -199,7 +199,7 @@ TEST(NbvPresetsTest, Seed002Test23TheSimpleWorldUnderTheFourPresetsOfTable62) {
              {"simple-balanced", "simple-information", "simple-quality", "greedy"},
              {"106 m, 0.6846, 92.5 %, 12", "107 m, 0.6904, 94.1 %, 10", "128 m, 0.7503, 93.6 %, 13",
               "116 m, 0.5013, 91.4 %, 8"},
-             dir, &runs);
+             5, dir, &runs);
   ASSERT_FALSE(HasFailure());
   const Medians& balanced = m[0];
   const Medians& information = m[1];
@@ -207,10 +207,14 @@ TEST(NbvPresetsTest, Seed002Test23TheSimpleWorldUnderTheFourPresetsOfTable62) {
   const Medians& greedy = m[3];
 
   // The figure: the balanced preset covers 90 % of the reachable cells (the thesis's
-  // coverage; the house's inside and roof are not reachable). 89.3..100 % in the runs made
-  // while writing this test.
+  // coverage; the house's inside and roof are not reachable). 98.9..100 % in the runs made
+  // while writing this test (config/explore/simple_nbv.yaml's d_max of 100 m; with 50 m the
+  // utility presets stopped now and then at 89..93 %, the far side of the house not worth the
+  // drive).
   EXPECT_GE(balanced.reachable_coverage, 0.90);
-  // Table 6-3's relations.
+  // Table 6-3's relations. Medians while writing this test: balanced 24 scans, 116 m, 0.62;
+  // information-dominant 21, 105 m, 0.57; quality-dominant 38, 177 m, 0.69; greedy 8, 215 m,
+  // 0.39.
   EXPECT_LE(information.scans, balanced.scans) << "the information-dominant preset";
   for (const Medians* other : {&balanced, &information, &greedy}) {
     EXPECT_GT(quality.quality, other->quality) << "the quality-dominant preset";
@@ -218,11 +222,9 @@ TEST(NbvPresetsTest, Seed002Test23TheSimpleWorldUnderTheFourPresetsOfTable62) {
   EXPECT_GT(quality.distance_m, std::max(balanced.distance_m, information.distance_m));
   for (const Medians* other : {&balanced, &information, &quality}) {
     EXPECT_LE(greedy.scans, other->scans) << "greedy";
+    EXPECT_LT(greedy.quality, other->quality) << "greedy";
   }
-  EXPECT_LT(greedy.quality, balanced.quality);
-  // Not asserted: greedy's quality against the information-dominant preset's. Both chase new
-  // cells and stop when none is left, and here both end near 0.33 (the thesis: 0.50 against
-  // 0.69). Greedy's legs are the longest per scan, as in the thesis.
+  // Greedy's legs are the longest per scan, as in the thesis.
   EXPECT_GT(greedy.distance_m / greedy.scans, balanced.distance_m / balanced.scans);
 
   // `cairn-map eval` on every run: the cells the explorer would drive on (C_nc above 0.7) are
@@ -241,7 +243,7 @@ TEST(NbvPresetsTest, Seed002Test24TheStructuredWorldUnderThePresetsOfTable64) {
   std::vector<PresetRun> runs;
   const std::vector<Medians> m =
       RunAll(SeedWorld("structured", dir), {"structured-zones-quality", "structured-information"},
-             {"352 m, 43 scans", "397 m, 39 scans"}, dir, &runs);
+             {"352 m, 43 scans", "397 m, 39 scans"}, 3, dir, &runs);
   ASSERT_FALSE(HasFailure());
   const Medians& zones_quality = m[0];
   const Medians& information = m[1];

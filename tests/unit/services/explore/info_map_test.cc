@@ -95,6 +95,37 @@ TEST(InfoMapTest, TheGridMapFormRoundTripsEveryStatistic) {
   EXPECT_THROW(InfoMap::FromGridMap(missing, map.work_area(), map.params()), std::invalid_argument);
 }
 
+TEST(InfoMapTest, SteepPointsSetTheCellsWallExtentAndItRoundTrips) {
+  InfoMap map = SmallMap();
+  auto at = [](double x, double y, double z, Eigen::Vector3f normal) {
+    ScoredPoint p = Point(x, y, 1.f, 0.f, 0.5f);
+    p.position_m.z() = static_cast<float>(z);
+    p.normal = normal;
+    return p;
+  };
+  const Eigen::Vector3f wall(1.f, 0.f, 0.f), ground(0.f, 0.f, 1.f);
+  const Eigen::Vector3f slope45(0.f, 0.6f, 0.8f);  // 37 degrees from the vertical: not steep
+  map.AddPoints({at(0.45, 0.45, 0.0, ground), at(0.45, 0.45, 0.2, wall), at(0.45, 0.45, 2.4, wall),
+                 at(0.45, 0.45, 3.0, slope45), at(1.05, 1.05, 0.5, slope45)});
+  const int64_t wall_cell = map.Linear({1, 1}), other = map.Linear({3, 3});
+  EXPECT_FLOAT_EQ(map.SteepLow(wall_cell), 0.2f);
+  EXPECT_FLOAT_EQ(map.SteepHigh(wall_cell), 2.4f);
+  EXPECT_TRUE(map.Explored(other));
+  EXPECT_TRUE(std::isnan(map.SteepLow(other)));  // a gentle slope is not a wall
+  EXPECT_TRUE(std::isnan(map.SteepHigh(map.Linear({0, 0}))));
+  const common::GridMap grid = map.ToGridMap();
+  const InfoMap back = InfoMap::FromGridMap(grid, map.work_area(), map.params());
+  EXPECT_FLOAT_EQ(back.SteepLow(wall_cell), 0.2f);
+  EXPECT_FLOAT_EQ(back.SteepHigh(wall_cell), 2.4f);
+  // A map stored before the wall extents existed still loads, with none.
+  common::GridMap older = grid;
+  older.RemoveLayer(info_layers::kSteepLowZ);
+  older.RemoveLayer(info_layers::kSteepHighZ);
+  const InfoMap old = InfoMap::FromGridMap(older, map.work_area(), map.params());
+  EXPECT_TRUE(old.Explored(wall_cell));
+  EXPECT_TRUE(std::isnan(old.SteepLow(wall_cell)));
+}
+
 TEST(InfoMapTest, BadParamsAndHugeAreasAreRefused) {
   InfoMapParams params;
   params.cell_size_m = 0.0;

@@ -310,21 +310,55 @@ TEST(NbvTest, AnUnexploredCellAScanMissedWeighsHalfPerMissUntilAViewComesNearer)
   InfoMap map = OpenMap(30.0, 0.0);
   const int64_t cell = map.Linear({50, 50});
   MissedViews missed(map.num_cells());
-  EXPECT_EQ(missed.Weight(cell, 10.0, 3.0), 1.0);  // never missed
-  // Missed by scans from 10 m, then from 8 m: a quarter for views as far, 1 from nearer than
-  // 8 - 3 = 5 m.
-  const int64_t from10 = map.Linear({50 + 33, 50});  // 9.9 m east
-  const int64_t from8 = map.Linear({50, 50 + 27});   // 8.1 m north
+  const int east = MissedViews::Sector(1, 0);
+  EXPECT_EQ(missed.Weight(cell, east, 10.0, 3.0), 1.0);  // never missed
+  // Missed by scans from 10 m east, then from 8.08 m east-north-east: a quarter for views as
+  // far from the east, 1 from nearer than 8.08 - 3 = 5.08 m.
+  const int64_t from10 = map.Linear({50 + 33, 50});     // 9.9 m east
+  const int64_t from8 = map.Linear({50 + 26, 50 + 7});  // 8.08 m, 15 degrees north of east
   EXPECT_EQ(RecordMissedView(map, from10, {cell}, &missed), 1);
-  EXPECT_EQ(missed.Weight(cell, 10.0, 3.0), 0.5);
+  EXPECT_EQ(missed.Weight(cell, east, 10.0, 3.0), 0.5);
   EXPECT_EQ(RecordMissedView(map, from8, {cell}, &missed), 0);  // not a first miss
-  EXPECT_EQ(missed.Weight(cell, 9.0, 3.0), 0.25);
-  EXPECT_EQ(missed.Weight(cell, 5.5, 3.0), 0.25);
-  EXPECT_EQ(missed.Weight(cell, 5.0, 3.0), 1.0);
-  EXPECT_NEAR(missed.nearest_m[cell], 8.1, 1e-5);
+  EXPECT_EQ(missed.Weight(cell, east, 9.0, 3.0), 0.25);
+  EXPECT_EQ(missed.Weight(cell, east, 5.5, 3.0), 0.25);
+  EXPECT_EQ(missed.Weight(cell, east, 5.0, 3.0), 1.0);
+  EXPECT_NEAR(missed.nearest_m[cell * MissedViews::kSectors + east], 0.3 * std::hypot(26, 7), 1e-5);
+  // From any other direction nothing has missed it yet: what hid it from the east (a house, a
+  // crest) need not hide it from the north or the west.
+  for (int s = 0; s < MissedViews::kSectors; ++s) {
+    if (s == east) continue;
+    EXPECT_EQ(missed.Weight(cell, s, 10.0, 3.0), 1.0) << "sector " << s;
+  }
+  // A third miss, from the north, is a first miss from there and leaves the east's count.
+  EXPECT_EQ(RecordMissedView(map, map.Linear({50, 50 + 30}), {cell}, &missed), 0);
+  EXPECT_EQ(missed.Weight(cell, MissedViews::Sector(0, 1), 10.0, 3.0), 0.5);
+  EXPECT_EQ(missed.Weight(cell, east, 9.0, 3.0), 0.25);
   MissedViews wrong(10);
   EXPECT_THROW(RecordMissedView(map, from8, {cell}, &wrong), std::invalid_argument);
   EXPECT_THROW(ViewEvaluator(map, NbvParams{}, &wrong), std::invalid_argument);
+}
+
+TEST(NbvTest, MissedViewSectorsAreTheOctantsOfTheBearing) {
+  // Anticlockwise from east, 45 degrees each; a bearing on a boundary goes to one side only.
+  EXPECT_EQ(MissedViews::Sector(10, 1), 0);
+  EXPECT_EQ(MissedViews::Sector(1, 10), 1);
+  EXPECT_EQ(MissedViews::Sector(-1, 10), 2);
+  EXPECT_EQ(MissedViews::Sector(-10, 1), 3);
+  EXPECT_EQ(MissedViews::Sector(-10, -1), 4);
+  EXPECT_EQ(MissedViews::Sector(-1, -10), 5);
+  EXPECT_EQ(MissedViews::Sector(1, -10), 6);
+  EXPECT_EQ(MissedViews::Sector(10, -1), 7);
+  for (int dx = -5; dx <= 5; ++dx) {
+    for (int dy = -5; dy <= 5; ++dy) {
+      if (dx == 0 && dy == 0) continue;
+      double deg = std::atan2(dy, dx) * 180.0 / M_PI;
+      if (deg < 0.0) deg += 360.0;
+      const int s = MissedViews::Sector(dx, dy);
+      // Within its octant, boundaries included.
+      EXPECT_GE(deg, 45.0 * s - 1e-9) << dx << "," << dy;
+      EXPECT_LE(deg, 45.0 * (s + 1) + 1e-9) << dx << "," << dy;
+    }
+  }
 }
 
 TEST(NbvTest, InformationGainDiscountsCellsEarlierScansMissed) {
@@ -355,6 +389,46 @@ TEST(NbvTest, InformationGainDiscountsCellsEarlierScansMissed) {
   const int64_t near_view = map.Linear({50, 42});
   EXPECT_NEAR(nearer.Evaluate(near_view, {}).info_gain, plain.Evaluate(near_view, {}).info_gain,
               1e-9);
+}
+
+TEST(NbvTest, AWallAcrossTheScannersHeightHidesTheGroundBehindItButACrownDoesNot) {
+  // Explored safe ground but for an unexplored 6 m strip beyond x = 15 m; a line of cells at
+  // x = 12 m between the view (x = 6 m) and the strip holds navigable ground and steep points.
+  auto map_with = [](float low_z, float high_z) {
+    InfoMap map = OpenMap(30.0, 0.0);
+    std::vector<ScoredPoint> points;
+    for (int64_t i = 0; i < map.num_cells(); ++i) {
+      const auto c = map.Cell(i);
+      if (c.ix >= 50 && c.ix < 70) continue;
+      const auto cell = testing::CellPoints(map, i, 1.0);
+      points.insert(points.end(), cell.begin(), cell.end());
+      if (c.ix != 40) continue;
+      for (float z : {low_z, high_z}) {
+        ScoredPoint p = cell.front();
+        p.position_m.z() = z;
+        p.normal = {-1.f, 0.f, 0.f};
+        points.push_back(p);
+      }
+    }
+    map.AddPoints(points);
+    return map;
+  };
+  NbvParams params;
+  params.gain_range_m = 15.0;
+  const int64_t view = OpenMap(30.0, 0.0).Linear({20, 50});
+  // Every cell stays navigable (C_nc 1 with the steep points' F = 1): only the wall test hides.
+  InfoMap open = map_with(NAN, NAN);
+  InfoMap wall = map_with(0.1f, 2.5f);   // from the foot to above the 1 m scanner
+  InfoMap crown = map_with(2.0f, 4.0f);  // all of it above the scanner
+  InfoMap kerb = map_with(0.0f, 0.15f);  // all of it below
+  InfoMap rough = map_with(0.9f, 1.1f);  // rough ground at the scanner's height: no wall
+  ASSERT_GT(wall.Navigability(wall.Linear({40, 50})), params.occlusion_cnc);
+  const double seen = ViewEvaluator(open, params).Evaluate(view, {}).info_gain;
+  ASSERT_GT(seen, 0.01);
+  EXPECT_EQ(ViewEvaluator(wall, params).Evaluate(view, {}).info_gain, 0.0);
+  EXPECT_DOUBLE_EQ(ViewEvaluator(crown, params).Evaluate(view, {}).info_gain, seen);
+  EXPECT_DOUBLE_EQ(ViewEvaluator(kerb, params).Evaluate(view, {}).info_gain, seen);
+  EXPECT_DOUBLE_EQ(ViewEvaluator(rough, params).Evaluate(view, {}).info_gain, seen);
 }
 
 TEST(NbvTest, QualityGainCountsUnexploredCellsAtTheQualityAScanWouldGiveThem) {
