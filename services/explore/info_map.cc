@@ -27,6 +27,9 @@ void InfoMapParams::Validate() const {
   if (!(margin_m >= 0.0) || !std::isfinite(margin_m)) {
     throw std::invalid_argument("info map: margin_m must be >= 0");
   }
+  if (!(max_step_m >= 0.0) || !std::isfinite(max_step_m)) {
+    throw std::invalid_argument("info map: max_step_m must be >= 0 (0: no step term)");
+  }
 }
 
 double CellNavigability(double navigable_points, double sum_navigability, double obstacle_points,
@@ -126,15 +129,55 @@ int64_t InfoMap::AddPoints(const std::vector<ScoredPoint>& points) {
     ++used;
   }
   for (int64_t i : touched) UpdateCell(i);
+  // A step is judged against the 4 neighbours' ground too: theirs may have changed.
+  if (params_.max_step_m > 0.0) {
+    const int sx = geometry_.size_x, sy = geometry_.size_y;
+    for (size_t t = 0, n = touched.size(); t < n; ++t) {
+      const common::CellIndex c = Cell(touched[t]);
+      const int64_t around[4][2] = {
+          {c.ix - 1, c.iy}, {c.ix + 1, c.iy}, {c.ix, c.iy - 1}, {c.ix, c.iy + 1}};
+      for (const auto& a : around) {
+        if (a[0] < 0 || a[1] < 0 || a[0] >= sx || a[1] >= sy) continue;
+        const int64_t j = a[0] + a[1] * static_cast<int64_t>(sx);
+        if (mark[j]) continue;
+        mark[j] = 2;
+        UpdateNavigability(j);
+      }
+    }
+  }
   return used;
 }
 
 void InfoMap::UpdateCell(int64_t i) {
   const bool was_explored = !std::isnan(quality_[i]);
-  navigability_[i] = static_cast<float>(CellNavigability(navigable_points_[i], sum_navigability_[i],
-                                                         obstacle_points_[i], sum_obstacle_[i]));
+  UpdateNavigability(i);
   quality_[i] = points_[i] > 0.f ? sum_quality_[i] / points_[i] : kNaN;
   if (!was_explored && points_[i] > 0.f && in_area_[i]) ++explored_in_area_;
+}
+
+bool InfoMap::HasStep(int64_t i) const {
+  const float step = static_cast<float>(params_.max_step_m);
+  if (!(step > 0.f)) return false;
+  // Steep points spanning more than the step: a kerb's face, a wall's foot (NaN compares
+  // false).
+  if (steep_high_z_[i] - steep_low_z_[i] > step) return true;
+  // Or ground more than the step above or below a 4-neighbour's: a kerb's edge between two
+  // cells. A slope the robot may climb rises less than this over one cell (12 degrees: 6 cm).
+  const float h = GroundHeight(i);
+  if (std::isnan(h)) return false;
+  const common::CellIndex c = Cell(i);
+  const int sx = geometry_.size_x, sy = geometry_.size_y;
+  if (c.ix > 0 && std::abs(GroundHeight(i - 1) - h) > step) return true;
+  if (c.ix + 1 < sx && std::abs(GroundHeight(i + 1) - h) > step) return true;
+  if (c.iy > 0 && std::abs(GroundHeight(i - sx) - h) > step) return true;
+  if (c.iy + 1 < sy && std::abs(GroundHeight(i + sx) - h) > step) return true;
+  return false;
+}
+
+void InfoMap::UpdateNavigability(int64_t i) {
+  navigability_[i] = static_cast<float>(CellNavigability(navigable_points_[i], sum_navigability_[i],
+                                                         obstacle_points_[i], sum_obstacle_[i]));
+  if (HasStep(i)) navigability_[i] = std::min(navigability_[i], kStepCnc);
 }
 
 Eigen::Vector3f InfoMap::Centroid(int64_t i) const {

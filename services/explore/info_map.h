@@ -36,6 +36,11 @@ struct InfoMapParams {
   double tau_f{0.65};    ///< points with F above it count as navigable
   double tau_b{0.83};    ///< points with B above it count as obstacle
   double margin_m{3.0};  ///< grid margin around the work area's bounding box
+  /// The robot's step (m; 0: no step term). A cell whose steep points span more than this (a
+  /// kerb's face, a wall's foot), or whose ground lies more than this above or below a
+  /// 4-neighbour's (a kerb's edge), has C_nc at most kStepCnc: not safe to drive, not an
+  /// obstacle to the view. Seed 002's F and B read a kerb's top and foot as navigable ground.
+  double max_step_m{0.0};
 
   /// @throws std::invalid_argument naming the bad field.
   void Validate() const;
@@ -126,6 +131,10 @@ class InfoMap {
 
  private:
   void UpdateCell(int64_t cell);
+  /// C_nc from the cell's statistics, at most kStepCnc where HasStep.
+  void UpdateNavigability(int64_t cell);
+  /// A step higher than params_.max_step_m in the cell or to a 4-neighbour's ground.
+  bool HasStep(int64_t cell) const;
 
   WorkArea area_;
   InfoMapParams params_;
@@ -142,6 +151,10 @@ class InfoMap {
   // Derived.
   std::vector<float> navigability_, quality_;
 };
+
+/// The C_nc a cell with a step higher than InfoMapParams::max_step_m has at most: neither safe
+/// (0.7) nor blocking the view (0.4).
+inline constexpr float kStepCnc = 0.5f;
 
 /// C_nc from a cell's statistics (eq. 4.4): 0.5 when neither count is positive.
 double CellNavigability(double navigable_points, double sum_navigability, double obstacle_points,

@@ -126,6 +126,72 @@ TEST(InfoMapTest, SteepPointsSetTheCellsWallExtentAndItRoundTrips) {
   EXPECT_TRUE(std::isnan(old.SteepLow(wall_cell)));
 }
 
+TEST(InfoMapTest, ACellWithAStepAboveTheRobotsIsNeitherSafeNorBlocking) {
+  // Street (z 0) and pavement (z 0.15) are navigable everywhere; the kerb's face, steep points
+  // from 0 to 0.15 m, stands in one cell. A robot with an 8 cm step cannot cross it.
+  InfoMapParams params;
+  params.margin_m = 0.0;
+  params.max_step_m = 0.08;
+  InfoMap rover(RectangleWorkArea({0.0, 0.0}, {3.0, 3.0}), params);
+  params.max_step_m = 0.0;
+  InfoMap plain(RectangleWorkArea({0.0, 0.0}, {3.0, 3.0}), params);
+  params.max_step_m = 0.2;
+  InfoMap climber(RectangleWorkArea({0.0, 0.0}, {3.0, 3.0}), params);
+  std::vector<ScoredPoint> points;
+  for (double z : {0.0, 0.05, 0.1, 0.15}) {
+    ScoredPoint face = Point(1.05, 1.05, 1.f, 0.f, 0.5f);
+    face.position_m.z() = static_cast<float>(z);
+    face.normal = {-1.f, 0.f, 0.f};
+    points.push_back(face);
+  }
+  points.push_back(Point(1.05, 1.05, 1.f, 0.f, 0.5f));  // the street at its foot
+  points.push_back(Point(0.45, 0.45, 1.f, 0.f, 0.5f));  // open street
+  for (InfoMap* map : {&rover, &plain, &climber}) map->AddPoints(points);
+  const int64_t kerb = rover.Linear({3, 3}), street = rover.Linear({1, 1});
+  EXPECT_FLOAT_EQ(plain.Navigability(kerb), 1.f);  // F and B alone: navigable
+  EXPECT_FLOAT_EQ(rover.Navigability(kerb), kStepCnc);
+  EXPECT_FLOAT_EQ(climber.Navigability(kerb), 1.f);
+  EXPECT_FLOAT_EQ(rover.Navigability(street), 1.f);
+  // The step never raises C_nc, and it survives a round trip.
+  const InfoMap back = InfoMap::FromGridMap(rover.ToGridMap(), rover.work_area(), rover.params());
+  EXPECT_FLOAT_EQ(back.Navigability(kerb), kStepCnc);
+  params.max_step_m = -0.1;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+}
+
+TEST(InfoMapTest, GroundAStepAboveANeighboursMakesBothCellsUnsafe) {
+  // No steep point at all (the face unseen): street at z 0 in column 2, pavement at 0.15 in
+  // column 3; beside it a 10 degree slope along x in row 7. Cells are 0.3 m.
+  InfoMapParams params;
+  params.margin_m = 0.0;
+  params.max_step_m = 0.08;
+  InfoMap map(RectangleWorkArea({0.0, 0.0}, {3.0, 3.0}), params);
+  auto ground = [](double x, double y, double z) {
+    ScoredPoint p = Point(x, y, 1.f, 0.f, 0.5f);
+    p.position_m.z() = static_cast<float>(z);
+    return p;
+  };
+  map.AddPoints({ground(0.75, 1.05, 0.0), ground(1.05, 1.05, 0.15)});
+  EXPECT_FLOAT_EQ(map.Navigability(map.Linear({2, 3})), kStepCnc);
+  EXPECT_FLOAT_EQ(map.Navigability(map.Linear({3, 3})), kStepCnc);
+  const double rise = 0.3 * std::tan(10.0 * M_PI / 180.0);  // 5.3 cm a cell
+  std::vector<ScoredPoint> slope;
+  for (int ix = 0; ix < 10; ++ix) slope.push_back(ground(0.15 + 0.3 * ix, 2.25, rise * ix));
+  map.AddPoints(slope);
+  for (int ix = 0; ix < 10; ++ix) EXPECT_FLOAT_EQ(map.Navigability(map.Linear({ix, 7})), 1.f);
+  // A neighbour seen later clears nothing and adds its own step: the pavement cell's other
+  // side, at the pavement's height, is safe; the street's other side too.
+  map.AddPoints({ground(1.35, 1.05, 0.15), ground(0.45, 1.05, 0.0)});
+  EXPECT_FLOAT_EQ(map.Navigability(map.Linear({4, 3})), 1.f);
+  EXPECT_FLOAT_EQ(map.Navigability(map.Linear({1, 3})), 1.f);
+  EXPECT_FLOAT_EQ(map.Navigability(map.Linear({3, 3})), kStepCnc);
+  // Rebuilt from its layers, the map judges the same.
+  const InfoMap back = InfoMap::FromGridMap(map.ToGridMap(), map.work_area(), map.params());
+  for (int64_t i = 0; i < map.num_cells(); ++i) {
+    EXPECT_FLOAT_EQ(back.Navigability(i), map.Navigability(i)) << i;
+  }
+}
+
 TEST(InfoMapTest, BadParamsAndHugeAreasAreRefused) {
   InfoMapParams params;
   params.cell_size_m = 0.0;
