@@ -301,7 +301,7 @@ TEST(NbvPresetsTest, Seed002Test24TheStructuredWorldUnderThePresetsOfTable64) {
   // 224..321 m; 397 against 352 m there): not asserted.
   EXPECT_LT(information.scans, zones_quality.scans);
   // `cairn-map eval`: the safe cells are free in the world, kerbs included. Seed 002's F and B
-  // read a 15 cm kerb as navigable ground; the information map's step term (the rover's 8 cm
+  // read a 12 cm kerb as navigable ground; the information map's step term (the rover's 8 cm
   // step, nbv.max_step_m) makes its face and its edge unsafe: 97.7..99.3 % in the runs made
   // while writing this test, 93.1..93.9 % without the step term.
   for (const PresetRun& r : runs) {
