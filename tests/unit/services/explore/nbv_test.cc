@@ -1,6 +1,7 @@
 #include "services/explore/nbv.h"
 
 #include <cmath>
+#include <cstdio>
 #include <queue>
 #include <random>
 #include <set>
@@ -282,6 +283,43 @@ TEST(NbvTest, TheDecisionStopsWhenNothingIsWorthTheTrip) {
   NbvPlanner p2(NbvParams{});
   EXPECT_EQ(p2.Decide(blocked, {}, {15.0, 15.0}).outcome, NbvDecision::Outcome::kNoCandidate);
   EXPECT_THROW(p2.Decide(blocked, {}, {-50.0, 15.0}), std::invalid_argument);
+}
+
+// Seed 002 test 26 (the CARTIF presets of table 6-8): information-heavy weights choose a view
+// near the known/unknown border, a long hop away; quality-heavy weights with a high cost choose
+// one near the robot.
+TEST(NbvTest, Seed002Test26InformationHeavyWeightsHopToTheBorderQualityHeavyOnesStayNear) {
+  // Safe ground scanned at quality 0.3 west of x = 30 m, nothing known east of it; the robot
+  // 25 m from the border, beyond the gains' 20 m range.
+  InfoMap map = OpenMap(40.0, 0.0);
+  std::vector<ScoredPoint> points;
+  for (int64_t i = 0; i < map.num_cells(); ++i) {
+    if (map.Cell(i).ix >= 100) continue;
+    const auto cell = testing::CellPoints(map, i, 1.0, 0.3f);
+    points.insert(points.end(), cell.begin(), cell.end());
+  }
+  map.AddPoints(points);
+  const common::Vector2 robot(5.0, 20.0);
+  auto decide = [&](const char* preset) {
+    const NbvDecision d = NbvPlanner(NbvPreset(preset)).Decide(map, {}, robot);
+    EXPECT_EQ(d.outcome, NbvDecision::Outcome::kGoTo) << preset << ": " << d.reason;
+    return d.best.value_or(Candidate{});
+  };
+  const Candidate fast = decide("cartif-fast");        // w 0.84, 0.10, 0.05, 0.05
+  const Candidate careful = decide("cartif-quality");  // w 0.35, 0.40, 0.15, 0.40
+  std::printf(
+      "cartif-fast: (%.1f, %.1f), %.1f m, A %.2f Q %.2f; cartif-quality: (%.1f, %.1f), "
+      "%.1f m, A %.2f Q %.2f\n",
+      fast.position_m.x(), fast.position_m.y(), fast.path_length_m, fast.info_gain,
+      fast.quality_gain, careful.position_m.x(), careful.position_m.y(), careful.path_length_m,
+      careful.info_gain, careful.quality_gain);
+  // Near the border (within 5 m of it; the first view that sees into the unknown is 10 m
+  // nearer), seeing into the unknown.
+  EXPECT_GT(fast.position_m.x(), 25.0);
+  EXPECT_GT(fast.info_gain, 0.0);
+  // Near the robot: closer than the border is to the robot by far.
+  EXPECT_LT(careful.path_length_m, 8.0);
+  EXPECT_GT(fast.path_length_m, 2.0 * careful.path_length_m);
 }
 
 TEST(NbvTest, GreedyPicksTheMostNewInformationAndUtilityWeighsTheTrip) {
