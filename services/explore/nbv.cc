@@ -386,7 +386,8 @@ MissedViews::MissedViews(int64_t num_cells)
 
 int MissedViews::Sector(int64_t dx, int64_t dy) {
   // Octants by sign and by which axis dominates, without a trigonometric call: 0 for bearings in
-  // [0, 45) degrees, 1 for [45, 90), ..., 7 for [315, 360).
+  // [0, 45) degrees, 1 for [45, 90), ..., 7 for [315, 360), but for due west (180), which falls
+  // in 3.
   const int64_t ax = dx < 0 ? -dx : dx, ay = dy < 0 ? -dy : dy;
   if (dy >= 0) {
     if (dx > 0) return ax > ay ? 0 : 1;
