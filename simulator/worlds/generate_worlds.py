@@ -11,6 +11,7 @@ Outputs (all in this folder):
   terraces.xml, terraces_lanes.yaml  one-way drops and ditches in walled lanes (directed terrain)
   simple.xml, simple_terrain.bin   seed 002's simple environment: a house and a tree on a hill
   structured.xml                   seed 002's urban block: buildings, kerbs, parked cars, a passage
+  unstructured.xml, unstructured_terrain.bin  seed 002's unstructured world: a canyon and a bridge
 
 Everything is deterministic (the outdoor and simple terrains use fixed seeds), so running it again
 reproduces the committed files byte for byte.
@@ -992,6 +993,134 @@ def structured():
     write("structured.xml", "\n".join(lines))
 
 
+# --------------------------------------------------------------------------------------------
+# unstructured
+
+UNSTRUCTURED_WORK_AREA = (-18.0, 18.0, -18.0, 18.0)   # x0, x1, y0, y1
+UNSTRUCTURED_START = (15.0, 15.0)                     # the top-right corner (seed 002 §6.2.3)
+CANYON_X = (-4.0, 0.0)        # the canyon floor across x, for y from its ramp to its north end
+CANYON_RIM_X = (-5.0, 1.0)    # its walls fall from these rims
+CANYON_DEPTH = 3.0
+CANYON_Y = (-20.0, 14.0)      # south: open (its ramp), north: closed
+CANYON_RAMP_Y = (-20.0, -2.0)  # the floor falls from the rim level to the depth along +y
+BRIDGE_Y = (6.0, 9.0)         # the deck across the canyon
+BRIDGE_X = (-6.5, 2.5)
+BRIDGE_THICK = 0.3
+
+
+def unstructured():
+    """Seed 002's unstructured environment (section 6.2.3): few safe passes, large slopes, many
+    obstacles and occlusions, a canyon the robot can drive along and a bridge across it that it
+    can drive over and under, raised structures and a house; the start is the top-right corner."""
+    n = 81
+    half = 20.0
+    rng = random.Random(2063)
+    # Steep mounds (25..35 deg flanks: no pass for a 12 deg robot) that leave two passes between
+    # the start and the canyon, and gentle waves elsewhere.
+    mounds = [(10.0, 3.0, 2.2, 3.0), (13.0, -6.0, 2.0, 2.6), (5.0, 14.0, 1.8, 2.4),
+              (-12.0, 12.0, 2.5, 3.5), (-13.0, -9.0, 2.0, 3.0)]
+    cx0, cx1 = CANYON_X
+    rx0, rx1 = CANYON_RIM_X
+    heights = []
+    for r in range(n):
+        y = -half + 2 * half * r / (n - 1)
+        row = []
+        for c in range(n):
+            x = -half + 2 * half * c / (n - 1)
+            z = 0.15 * math.sin(0.35 * x + 0.2) * math.cos(0.3 * y - 0.4)
+            for mx, my, amp, sigma in mounds:
+                z += amp * math.exp(-((x - mx) ** 2 + (y - my) ** 2) / (2 * sigma ** 2))
+            # Level ground (z = 0) where the bridge lands, fading out over 2 m.
+            dx = max(BRIDGE_X[0] - 2.5 - x, 0.0, x - BRIDGE_X[1] - 2.5)
+            dy = max(BRIDGE_Y[0] - 1.0 - y, 0.0, y - BRIDGE_Y[1] - 1.0)
+            z *= smoothstep(math.hypot(dx, dy) / 2.0)
+            # The canyon: its floor CANYON_DEPTH below the rims (less along its ramp), walls from
+            # floor to rim over 0.5..1 m.
+            if CANYON_Y[0] <= y <= CANYON_Y[1] and rx0 <= x <= rx1:
+                t = (y - CANYON_RAMP_Y[0]) / (CANYON_RAMP_Y[1] - CANYON_RAMP_Y[0])
+                depth = CANYON_DEPTH * min(1.0, max(0.0, t))
+                if cx0 <= x <= cx1:
+                    wall = 1.0
+                else:
+                    wall = 1.0 - min(abs(x - cx0), abs(x - cx1)) / max(cx0 - rx0, rx1 - cx1)
+                z -= depth * max(0.0, min(1.0, wall))
+            row.append(z)
+        heights.append(row)
+    # Flat within 2.5 m of the start.
+    sx, sy = UNSTRUCTURED_START
+    for r in range(n):
+        y = -half + 2 * half * r / (n - 1)
+        for c in range(n):
+            x = -half + 2 * half * c / (n - 1)
+            d = math.hypot(x - sx, y - sy)
+            if d < 4.0:
+                w = smoothstep((d - 2.5) / 1.5)
+                heights[r][c] = (1 - w) * 0.0 + w * heights[r][c]
+    lo = min(min(row) for row in heights)
+    hi = max(max(row) for row in heights)
+    with open(os.path.join(HERE, "unstructured_terrain.bin"), "wb") as out:
+        out.write(struct.pack("<ii", n, n))
+        for row in heights:
+            out.write(struct.pack(f"<{n}f", *row))
+
+    def ground(x, y):
+        return terrain_at(heights, n, half, x, y, lo)
+
+    def on_ground(name, x0, x1, y0, y1, height, rgba=WALL_RGBA):
+        z0 = min(ground(x, y) for x in (x0, x1) for y in (y0, y1)) - 0.2
+        return aabb(name, x0, x1, y0, y1, z0, z0 + 0.2 + height, rgba)
+
+    g = ['    <geom name="terrain" type="hfield" hfield="terrain" pos="0 0 0" '
+         'rgba="0.5 0.45 0.35 1"/>']
+    # The bridge: a deck whose top is level with the higher rim, resting on both rims, 2.7 m
+    # above the canyon floor.
+    by0, by1 = BRIDGE_Y
+    bx0, bx1 = BRIDGE_X
+    deck_top = ground(bx0, (by0 + by1) / 2)  # the level ground where it lands
+    g.append(aabb("bridge_deck", bx0, bx1, by0, by1, deck_top - BRIDGE_THICK, deck_top,
+                  "0.5 0.42 0.32 1"))
+    floor_under = ground((cx0 + cx1) / 2, (by0 + by1) / 2)
+    # A house, a raised platform (1.2 m, too high to climb) and a low wall (occlusions).
+    g.append(on_ground("house", -15.0, -9.0, 1.0, 6.0, 3.0))
+    g.append(on_ground("platform", 4.0, 8.0, -14.0, -10.0, 1.2, FEATURE_RGBA))
+    g.append(on_ground("wall", 4.0, 9.0, 8.0, 8.3, 1.5))
+    # Rocks.
+    rocks = []
+    while len(rocks) < 12:
+        x, y = rng.uniform(-17, 17), rng.uniform(-17, 17)
+        if math.hypot(x - sx, y - sy) < 5 or rx0 - 1 <= x <= rx1 + 1:
+            continue
+        if -16 <= x <= -8 and 0 <= y <= 7:
+            continue
+        rocks.append((x, y))
+    for i, (x, y) in enumerate(rocks):
+        s = rng.uniform(0.4, 1.0)
+        g.append(f'    <geom name="rock_{i}" type="ellipsoid" size="{f(s)} {f(s * 0.8)} '
+                 f'{f(s * 0.7)}" pos="{f(x)} {f(y)} {f(ground(x, y))}" '
+                 f'euler="0 0 {rng.randint(0, 179)}" rgba="0.5 0.48 0.45 1"/>')
+    wx0, wx1, wy0, wy1 = UNSTRUCTURED_WORK_AREA
+    lines = header("unstructured", "unstructured: seed 002's unstructured environment, a 40 x "
+                   "40 m height field with steep mounds, a canyon the robot drives along and a "
+                   "bridge across it that it drives over and under, a house, a platform and rocks")
+    lines += [
+        "<!--",
+        f"  Generated by generate_worlds.py. Terrain: unstructured_terrain.bin, {n} x {n}",
+        f"  samples 0.5 m apart over x, y in -20..20, heights {f(lo)}..{f(hi)} m (shifted so the",
+        "  lowest point is z = 0). Canyon: floor x -4..0, rims x -5 and 1, 3 m deep from y -2 to",
+        "  its closed north end at y 14; from y -2 its floor rises to the rim level at y -20 (a",
+        "  9.5 deg ramp). Bridge: a 0.3 m deck x -6.5..2.5, y 6..9, its top "
+        f"{deck_top:.2f} m, {deck_top - floor_under:.2f} m",
+        "  above the canyon floor. Steep mounds (no pass for a 12 deg robot) at (10, 3),",
+        "  (13, -6), (5, 14), (-12, 12), (-13, -9). House x -15..-9, y 1..6, 3 m; platform",
+        "  x 4..8, y -14..-10, 1.2 m; wall x 4..9, y 8..8.3, 1.5 m; 12 rocks (seed 2063).",
+        f"  Start: ({f(sx)}, {f(sy)}), the top-right corner, flat within 2.5 m. Work area:",
+        f"  x {f(wx0)}..{f(wx1)}, y {f(wy0)}..{f(wy1)}.",
+        "-->",
+    ]
+    lines += heightfield_body("unstructured_terrain.bin", half, hi - lo, g)
+    write("unstructured.xml", "\n".join(lines))
+
+
 def terrain_at(heights, n, half, x, y, lo):
     """Terrain height (relative to the lowest point) at (x, y), bilinear."""
     cx = (x + half) / (2 * half) * (n - 1)
@@ -1031,3 +1160,4 @@ if __name__ == "__main__":
     terraces()
     simple()
     structured()
+    unstructured()
