@@ -74,6 +74,7 @@ void LoadNbv(YamlMap map, NbvModeParams* p) {
   map.Get("candidate_clearance_m", &p->candidate_clearance_m);
   map.Get("missed_view_step_m", &p->missed_view_step_m);
   map.Get("max_step_m", &p->max_step_m);
+  map.Get("level_gap_m", &p->level_gap_m);
   map.Get("fill_surface", &p->fill_surface);
   map.Get("seed", &p->seed);
   map.Get("revisit_radius_m", &p->revisit_radius_m);
@@ -112,6 +113,7 @@ NbvMissionParams NbvModeParams::ToMissionParams() const {
   m.nbv.revisit_radius_m = revisit_radius_m;
   m.fill_surface = fill_surface;
   m.info.max_step_m = max_step_m;
+  m.info.level_gap_m = level_gap_m;
   if (seed < 0) throw std::invalid_argument("explorer: nbv.seed must be >= 0");
   m.nbv.seed = static_cast<uint64_t>(seed);
   m.nbv.d_max_m = d_max_m;

@@ -90,6 +90,7 @@ struct NbvModeParams {
   /// Every cell this near a candidate must be safe too: about the robot's circumscribed radius.
   double candidate_clearance_m{0.45};
   double max_step_m{0.0};          ///< InfoMapParams::max_step_m (the robot's step; 0: none)
+  double level_gap_m{0.0};         ///< InfoMapParams::level_gap_m (0: one level per cell)
   double missed_view_step_m{3.0};  ///< NbvParams::missed_view_step_m
   bool fill_surface{true};         ///< NbvMissionParams::fill_surface
   int seed{1};                     ///< candidate sampling (NbvParams::seed)

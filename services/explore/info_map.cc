@@ -30,6 +30,9 @@ void InfoMapParams::Validate() const {
   if (!(max_step_m >= 0.0) || !std::isfinite(max_step_m)) {
     throw std::invalid_argument("info map: max_step_m must be >= 0 (0: no step term)");
   }
+  if (!(level_gap_m >= 0.0) || !std::isfinite(level_gap_m)) {
+    throw std::invalid_argument("info map: level_gap_m must be >= 0 (0: one level per cell)");
+  }
 }
 
 double CellNavigability(double navigable_points, double sum_navigability, double obstacle_points,
@@ -45,15 +48,17 @@ double CellNavigability(double navigable_points, double sum_navigability, double
 InfoMap::InfoMap(const WorkArea& area, const InfoMapParams& params) : area_(area), params_(params) {
   area_.Validate();
   params_.Validate();
+  num_levels_ = params_.level_gap_m > 0.0 ? 2 : 1;
   const common::Vector2 lo = area_.MinCorner().array() - params_.margin_m;
   const common::Vector2 hi = area_.MaxCorner().array() + params_.margin_m;
   const double res = params_.cell_size_m;
   const double cells_x = std::ceil((hi.x() - lo.x()) / res);
   const double cells_y = std::ceil((hi.y() - lo.y()) / res);
-  if (cells_x * cells_y > 64.0e6) {
+  if (cells_x * cells_y * num_levels_ > 64.0e6) {
     throw std::invalid_argument("info map: the work area needs " +
                                 std::to_string(static_cast<int64_t>(cells_x * cells_y)) +
-                                " cells, more than 64 million");
+                                " cells of " + std::to_string(num_levels_) +
+                                " levels, more than 64 million nodes");
   }
   geometry_.resolution_m = res;
   geometry_.size_x = static_cast<int>(cells_x);
@@ -61,6 +66,7 @@ InfoMap::InfoMap(const WorkArea& area, const InfoMapParams& params) : area_(area
   geometry_.origin = common::Pose2{lo.x(), lo.y(), 0.0};
   const size_t n = static_cast<size_t>(geometry_.num_cells());
   in_area_.assign(n, 0);
+  cell_explored_.assign(n, 0);
   for (int iy = 0; iy < geometry_.size_y; ++iy) {
     for (int ix = 0; ix < geometry_.size_x; ++ix) {
       const common::CellIndex c{ix, iy};
@@ -70,65 +76,128 @@ InfoMap::InfoMap(const WorkArea& area, const InfoMapParams& params) : area_(area
       }
     }
   }
+  steep_low_z_.assign(n, kNaN);
+  steep_high_z_.assign(n, kNaN);
+  if (num_levels_ > 1) floor_z_.assign(n, kNaN);
+  const size_t nodes = n * static_cast<size_t>(num_levels_);
   for (auto* v : {&points_, &navigable_points_, &obstacle_points_, &sum_navigability_,
                   &sum_obstacle_, &sum_quality_, &sum_x_, &sum_y_, &sum_z_, &sum_nx_, &sum_ny_,
                   &sum_nz_, &sum_navigable_z_}) {
-    v->assign(n, 0.f);
+    v->assign(nodes, 0.f);
   }
-  steep_low_z_.assign(n, kNaN);
-  steep_high_z_.assign(n, kNaN);
-  navigability_.assign(n, 0.5f);
-  quality_.assign(n, kNaN);
+  step_low_z_.assign(nodes, kNaN);
+  step_high_z_.assign(nodes, kNaN);
+  navigability_.assign(nodes, 0.5f);
+  quality_.assign(nodes, kNaN);
 }
 
-int64_t InfoMap::AddPoints(const std::vector<ScoredPoint>& points) {
+void InfoMap::AddToNode(int64_t i, const ScoredPoint& p, bool steep, bool counts) {
+  points_[i] += 1.f;
+  sum_quality_[i] += p.quality;
+  sum_x_[i] += p.position_m.x();
+  sum_y_[i] += p.position_m.y();
+  sum_z_[i] += p.position_m.z();
+  if (p.normal.allFinite()) {
+    sum_nx_[i] += p.normal.x();
+    sum_ny_[i] += p.normal.y();
+    sum_nz_[i] += p.normal.z();
+  }
+  if (!counts) return;
+  if (steep) {
+    // fmin/fmax: NaN (none yet) gives way to the point's height.
+    step_low_z_[i] = std::fmin(step_low_z_[i], p.position_m.z());
+    step_high_z_[i] = std::fmax(step_high_z_[i], p.position_m.z());
+  }
+  if (p.navigability > static_cast<float>(params_.tau_f)) {
+    navigable_points_[i] += 1.f;
+    sum_navigability_[i] += p.navigability;
+    sum_navigable_z_[i] += p.position_m.z();
+  }
+  if (p.obstacle > static_cast<float>(params_.tau_b)) {
+    obstacle_points_[i] += 1.f;
+    sum_obstacle_[i] += p.obstacle;
+  }
+}
+
+void InfoMap::LiftLowerLevel(int64_t cell) {
+  const int64_t up = cell + num_cells();
+  for (auto* v : {&points_, &navigable_points_, &obstacle_points_, &sum_navigability_,
+                  &sum_obstacle_, &sum_quality_, &sum_x_, &sum_y_, &sum_z_, &sum_nx_, &sum_ny_,
+                  &sum_nz_, &sum_navigable_z_}) {
+    (*v)[up] = (*v)[cell];
+    (*v)[cell] = 0.f;
+  }
+  step_low_z_[up] = step_low_z_[cell];
+  step_high_z_[up] = step_high_z_[cell];
+  step_low_z_[cell] = step_high_z_[cell] = kNaN;
+}
+
+int64_t InfoMap::AddPoints(const std::vector<ScoredPoint>& points, float scanner_z_m) {
+  const int64_t cells = num_cells();
   std::vector<int64_t> touched;
   touched.reserve(1024);
-  std::vector<uint8_t> mark(static_cast<size_t>(num_cells()), 0);
-  const float tau_f = static_cast<float>(params_.tau_f);
-  const float tau_b = static_cast<float>(params_.tau_b);
+  std::vector<uint8_t> mark(static_cast<size_t>(cells), 0);
+  const bool two = num_levels_ > 1;
+  const float gap = static_cast<float>(params_.level_gap_m);
+  // With two levels the points go in by height, lowest first: a cell's lowest point opens its
+  // lower level before anything above it is placed.
+  std::vector<uint32_t> order;
+  if (two) {
+    order.reserve(points.size());
+    for (size_t k = 0; k < points.size(); ++k) {
+      if (points[k].position_m.allFinite()) order.push_back(static_cast<uint32_t>(k));
+    }
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+      return points[a].position_m.z() < points[b].position_m.z();
+    });
+  }
+  const size_t count = two ? order.size() : points.size();
   int64_t used = 0;
-  for (const ScoredPoint& p : points) {
+  for (size_t k = 0; k < count; ++k) {
+    const ScoredPoint& p = points[two ? order[k] : k];
     if (!p.position_m.allFinite() || !std::isfinite(p.navigability) || !std::isfinite(p.obstacle) ||
         !std::isfinite(p.quality)) {
       continue;
     }
     const auto cell = geometry_.IndexOf({p.position_m.x(), p.position_m.y()});
     if (!cell) continue;
-    const int64_t i = Linear(*cell);
-    points_[i] += 1.f;
-    sum_quality_[i] += p.quality;
-    sum_x_[i] += p.position_m.x();
-    sum_y_[i] += p.position_m.y();
-    sum_z_[i] += p.position_m.z();
-    if (p.normal.allFinite()) {
-      sum_nx_[i] += p.normal.x();
-      sum_ny_[i] += p.normal.y();
-      sum_nz_[i] += p.normal.z();
-      // Steep: the normal more than 45 degrees from the vertical (a zero normal is none).
-      const float nz = std::abs(p.normal.z());
-      if (nz < kSteepNormalZ * p.normal.norm()) {
-        // fmin/fmax: NaN (none yet) gives way to the point's height.
-        steep_low_z_[i] = std::fmin(steep_low_z_[i], p.position_m.z());
-        steep_high_z_[i] = std::fmax(steep_high_z_[i], p.position_m.z());
+    const int64_t c = Linear(*cell);
+    const float z = p.position_m.z();
+    // Steep: the normal more than 45 degrees from the vertical (a zero normal is none).
+    const bool steep =
+        p.normal.allFinite() && std::abs(p.normal.z()) < kSteepNormalZ * p.normal.norm();
+    if (steep) {
+      steep_low_z_[c] = std::fmin(steep_low_z_[c], z);
+      steep_high_z_[c] = std::fmax(steep_high_z_[c], z);
+    }
+    int64_t node = c;
+    bool counts = true;
+    if (two) {
+      if (std::isnan(floor_z_[c])) {
+        floor_z_[c] = z;
+      } else if (z > floor_z_[c] + gap) {
+        // Above the lower level: its navigability counts what was seen from above only.
+        node = c + cells;
+        counts = !(scanner_z_m < z);
+      } else if (z < floor_z_[c] - gap && !(points_[c + cells] > 0.f)) {
+        // A surface below everything seen so far (the road under a deck seen first from the
+        // deck): what was the lower level is now the upper one.
+        LiftLowerLevel(c);
+        floor_z_[c] = z;
+      } else {
+        floor_z_[c] = std::min(floor_z_[c], z);
       }
     }
-    if (p.navigability > tau_f) {
-      navigable_points_[i] += 1.f;
-      sum_navigability_[i] += p.navigability;
-      sum_navigable_z_[i] += p.position_m.z();
-    }
-    if (p.obstacle > tau_b) {
-      obstacle_points_[i] += 1.f;
-      sum_obstacle_[i] += p.obstacle;
-    }
-    if (!mark[i]) {
-      mark[i] = 1;
-      touched.push_back(i);
+    AddToNode(node, p, steep, counts);
+    if (!mark[c]) {
+      mark[c] = 1;
+      touched.push_back(c);
     }
     ++used;
   }
-  for (int64_t i : touched) UpdateCell(i);
+  for (int64_t c : touched) {
+    for (int l = 0; l < num_levels_; ++l) UpdateNode(c + l * cells);
+  }
   // A step is judged against the 4 neighbours' ground too: theirs may have changed.
   if (params_.max_step_m > 0.0) {
     const int sx = geometry_.size_x, sy = geometry_.size_y;
@@ -141,18 +210,40 @@ int64_t InfoMap::AddPoints(const std::vector<ScoredPoint>& points) {
         const int64_t j = a[0] + a[1] * static_cast<int64_t>(sx);
         if (mark[j]) continue;
         mark[j] = 2;
-        UpdateNavigability(j);
+        for (int l = 0; l < num_levels_; ++l) UpdateNavigability(j + l * cells);
       }
     }
   }
   return used;
 }
 
-void InfoMap::UpdateCell(int64_t i) {
-  const bool was_explored = !std::isnan(quality_[i]);
+void InfoMap::UpdateNode(int64_t i) {
   UpdateNavigability(i);
   quality_[i] = points_[i] > 0.f ? sum_quality_[i] / points_[i] : kNaN;
-  if (!was_explored && points_[i] > 0.f && in_area_[i]) ++explored_in_area_;
+  const int64_t c = NodeCell(i);
+  if (!cell_explored_[c] && points_[i] > 0.f) {
+    cell_explored_[c] = 1;
+    if (in_area_[c]) ++explored_in_area_;
+  }
+}
+
+int64_t InfoMap::NearestLevel(int64_t cell, float z_m) const {
+  cell = NodeCell(cell);
+  if (num_levels_ == 1 || std::isnan(z_m)) return cell;
+  int64_t best = cell;
+  float best_d = std::numeric_limits<float>::infinity();
+  for (int l = 0; l < num_levels_; ++l) {
+    const int64_t node = cell + l * num_cells();
+    if (!(points_[node] > 0.f)) continue;
+    float h = GroundHeight(node);
+    if (std::isnan(h)) h = sum_z_[node] / points_[node];
+    const float d = std::abs(h - z_m);
+    if (d < best_d) {
+      best_d = d;
+      best = node;
+    }
+  }
+  return best;
 }
 
 bool InfoMap::HasStep(int64_t i) const {
@@ -160,17 +251,19 @@ bool InfoMap::HasStep(int64_t i) const {
   if (!(step > 0.f)) return false;
   // Steep points spanning more than the step: a kerb's face, a wall's foot (NaN compares
   // false).
-  if (steep_high_z_[i] - steep_low_z_[i] > step) return true;
+  if (step_high_z_[i] - step_low_z_[i] > step) return true;
   // Or ground more than the step above or below a 4-neighbour's: a kerb's edge between two
   // cells. A slope the robot may climb rises less than this over one cell (12 degrees: 6 cm).
   const float h = GroundHeight(i);
   if (std::isnan(h)) return false;
-  const common::CellIndex c = Cell(i);
+  const int64_t cell = NodeCell(i);
+  const common::CellIndex c = Cell(cell);
   const int sx = geometry_.size_x, sy = geometry_.size_y;
-  if (c.ix > 0 && std::abs(GroundHeight(i - 1) - h) > step) return true;
-  if (c.ix + 1 < sx && std::abs(GroundHeight(i + 1) - h) > step) return true;
-  if (c.iy > 0 && std::abs(GroundHeight(i - sx) - h) > step) return true;
-  if (c.iy + 1 < sy && std::abs(GroundHeight(i + sx) - h) > step) return true;
+  auto differs = [&](int64_t j) { return std::abs(GroundHeight(NearestLevel(j, h)) - h) > step; };
+  if (c.ix > 0 && differs(cell - 1)) return true;
+  if (c.ix + 1 < sx && differs(cell + 1)) return true;
+  if (c.iy > 0 && differs(cell - sx)) return true;
+  if (c.iy + 1 < sy && differs(cell + sx)) return true;
   return false;
 }
 
@@ -195,6 +288,35 @@ Eigen::Vector3f InfoMap::MeanNormal(int64_t i) const {
   return norm > 1e-6f ? Eigen::Vector3f(n / norm) : Eigen::Vector3f::Zero();
 }
 
+float InfoMap::CellQuality(int64_t cell) const {
+  cell = NodeCell(cell);
+  if (num_levels_ == 1) return quality_[cell];
+  const int64_t up = cell + num_cells();
+  const float n = points_[cell] + points_[up];
+  return n > 0.f ? (sum_quality_[cell] + sum_quality_[up]) / n : kNaN;
+}
+
+Eigen::Vector3f InfoMap::CellCentroid(int64_t cell) const {
+  cell = NodeCell(cell);
+  if (num_levels_ == 1) return Centroid(cell);
+  const int64_t up = cell + num_cells();
+  const float n = points_[cell] + points_[up];
+  if (!(n > 0.f)) return Eigen::Vector3f::Constant(kNaN);
+  return Eigen::Vector3f(sum_x_[cell] + sum_x_[up], sum_y_[cell] + sum_y_[up],
+                         sum_z_[cell] + sum_z_[up]) /
+         n;
+}
+
+Eigen::Vector3f InfoMap::CellMeanNormal(int64_t cell) const {
+  cell = NodeCell(cell);
+  if (num_levels_ == 1) return MeanNormal(cell);
+  const int64_t up = cell + num_cells();
+  const Eigen::Vector3f n(sum_nx_[cell] + sum_nx_[up], sum_ny_[cell] + sum_ny_[up],
+                          sum_nz_[cell] + sum_nz_[up]);
+  const float norm = n.norm();
+  return norm > 1e-6f ? Eigen::Vector3f(n / norm) : Eigen::Vector3f::Zero();
+}
+
 double InfoMap::Coverage() const {
   return work_area_cells_ > 0
              ? static_cast<double>(explored_in_area_) / static_cast<double>(work_area_cells_)
@@ -205,8 +327,8 @@ double InfoMap::MeanQuality() const {
   double sum = 0.0;
   int64_t n = 0;
   for (int64_t i = 0; i < num_cells(); ++i) {
-    if (in_area_[i] && points_[i] > 0.f) {
-      sum += quality_[i];
+    if (in_area_[i] && cell_explored_[i]) {
+      sum += CellQuality(i);
       ++n;
     }
   }
@@ -215,37 +337,53 @@ double InfoMap::MeanQuality() const {
 
 common::GridMap InfoMap::ToGridMap() const {
   common::GridMap grid(geometry_);
-  auto put = [&](const char* name, const std::vector<float>& v) {
+  const size_t n = static_cast<size_t>(num_cells());
+  auto put = [&](const std::string& name, const std::vector<float>& v, size_t offset) {
     common::Layer& layer = grid.AddLayer(name, 0.f);
-    std::copy(v.begin(), v.end(), layer.data());
+    std::copy(v.begin() + static_cast<std::ptrdiff_t>(offset),
+              v.begin() + static_cast<std::ptrdiff_t>(offset + n), layer.data());
   };
-  std::vector<float> nav(navigability_);
-  std::vector<float> explored(navigability_.size());
-  std::vector<float> area(navigability_.size());
-  for (size_t i = 0; i < nav.size(); ++i) {
-    if (!(points_[i] > 0.f)) nav[i] = kNaN;
-    explored[i] = points_[i] > 0.f ? 1.f : 0.f;
-    area[i] = in_area_[i] ? 1.f : 0.f;
+  std::vector<float> area(n);
+  for (size_t i = 0; i < n; ++i) area[i] = in_area_[i] ? 1.f : 0.f;
+  put(info_layers::kWorkArea, area, 0);
+  put(info_layers::kSteepLowZ, steep_low_z_, 0);
+  put(info_layers::kSteepHighZ, steep_high_z_, 0);
+  if (num_levels_ > 1) put(info_layers::kFloorZ, floor_z_, 0);
+  for (int l = 0; l < num_levels_; ++l) {
+    const size_t offset = n * static_cast<size_t>(l);
+    // The upper level's layers are the lower's names with the upper prefix.
+    auto name = [&](const char* lower) {
+      return l == 0 ? std::string(lower)
+                    : info_layers::kUpperPrefix +
+                          std::string(lower).substr(std::string("explore/").size());
+    };
+    std::vector<float> nav(n), explored(n);
+    for (size_t i = 0; i < n; ++i) {
+      const bool seen = points_[offset + i] > 0.f;
+      nav[i] = seen ? navigability_[offset + i] : kNaN;
+      explored[i] = seen ? 1.f : 0.f;
+    }
+    put(name(info_layers::kNavigability), nav, 0);
+    put(name(info_layers::kQuality), quality_, offset);
+    put(name(info_layers::kExplored), explored, 0);
+    put(name(info_layers::kPoints), points_, offset);
+    put(name(info_layers::kNavigablePoints), navigable_points_, offset);
+    put(name(info_layers::kObstaclePoints), obstacle_points_, offset);
+    put(name(info_layers::kSumNavigability), sum_navigability_, offset);
+    put(name(info_layers::kSumObstacle), sum_obstacle_, offset);
+    put(name(info_layers::kSumQuality), sum_quality_, offset);
+    put(name(info_layers::kSumX), sum_x_, offset);
+    put(name(info_layers::kSumY), sum_y_, offset);
+    put(name(info_layers::kSumZ), sum_z_, offset);
+    put(name(info_layers::kSumNormalX), sum_nx_, offset);
+    put(name(info_layers::kSumNormalY), sum_ny_, offset);
+    put(name(info_layers::kSumNormalZ), sum_nz_, offset);
+    put(name(info_layers::kSumNavigableZ), sum_navigable_z_, offset);
+    if (num_levels_ > 1) {
+      put(name(info_layers::kStepLowZ), step_low_z_, offset);
+      put(name(info_layers::kStepHighZ), step_high_z_, offset);
+    }
   }
-  put(info_layers::kNavigability, nav);
-  put(info_layers::kQuality, quality_);
-  put(info_layers::kExplored, explored);
-  put(info_layers::kWorkArea, area);
-  put(info_layers::kPoints, points_);
-  put(info_layers::kNavigablePoints, navigable_points_);
-  put(info_layers::kObstaclePoints, obstacle_points_);
-  put(info_layers::kSumNavigability, sum_navigability_);
-  put(info_layers::kSumObstacle, sum_obstacle_);
-  put(info_layers::kSumQuality, sum_quality_);
-  put(info_layers::kSumX, sum_x_);
-  put(info_layers::kSumY, sum_y_);
-  put(info_layers::kSumZ, sum_z_);
-  put(info_layers::kSumNormalX, sum_nx_);
-  put(info_layers::kSumNormalY, sum_ny_);
-  put(info_layers::kSumNormalZ, sum_nz_);
-  put(info_layers::kSumNavigableZ, sum_navigable_z_);
-  put(info_layers::kSteepLowZ, steep_low_z_);
-  put(info_layers::kSteepHighZ, steep_high_z_);
   return grid;
 }
 
@@ -256,35 +394,69 @@ InfoMap InfoMap::FromGridMap(const common::GridMap& grid, const WorkArea& area,
     throw std::invalid_argument(
         "info map: the stored grid's geometry differs from the work area's grid");
   }
-  auto get = [&](const char* name, std::vector<float>* v) {
+  const size_t n = static_cast<size_t>(map.num_cells());
+  auto get = [&](const std::string& name, std::vector<float>* v, size_t offset) {
     if (!grid.HasLayer(name)) {
-      throw std::invalid_argument(std::string("info map: layer '") + name + "' is missing");
+      throw std::invalid_argument("info map: layer '" + name + "' is missing");
     }
     const common::Layer& layer = grid.at(name);
-    v->assign(layer.data(), layer.data() + layer.size());
+    std::copy(layer.data(), layer.data() + n, v->begin() + static_cast<std::ptrdiff_t>(offset));
   };
-  get(info_layers::kPoints, &map.points_);
-  get(info_layers::kNavigablePoints, &map.navigable_points_);
-  get(info_layers::kObstaclePoints, &map.obstacle_points_);
-  get(info_layers::kSumNavigability, &map.sum_navigability_);
-  get(info_layers::kSumObstacle, &map.sum_obstacle_);
-  get(info_layers::kSumQuality, &map.sum_quality_);
-  get(info_layers::kSumX, &map.sum_x_);
-  get(info_layers::kSumY, &map.sum_y_);
-  get(info_layers::kSumZ, &map.sum_z_);
-  get(info_layers::kSumNormalX, &map.sum_nx_);
-  get(info_layers::kSumNormalY, &map.sum_ny_);
-  get(info_layers::kSumNormalZ, &map.sum_nz_);
-  get(info_layers::kSumNavigableZ, &map.sum_navigable_z_);
-  if (grid.HasLayer(info_layers::kSteepLowZ)) get(info_layers::kSteepLowZ, &map.steep_low_z_);
-  if (grid.HasLayer(info_layers::kSteepHighZ)) get(info_layers::kSteepHighZ, &map.steep_high_z_);
-  for (int64_t i = 0; i < map.num_cells(); ++i) {
+  // A map stored with one level loads with one level (its upper one empty); a map stored with two
+  // loaded with one keeps its lower level.
+  const bool stored_upper = grid.HasLayer(std::string(info_layers::kUpperPrefix) + "points");
+  for (int l = 0; l < map.num_levels_; ++l) {
+    if (l == 1 && !stored_upper) break;
+    const size_t offset = n * static_cast<size_t>(l);
+    auto name = [&](const char* lower) {
+      return l == 0 ? std::string(lower)
+                    : info_layers::kUpperPrefix +
+                          std::string(lower).substr(std::string("explore/").size());
+    };
+    get(name(info_layers::kPoints), &map.points_, offset);
+    get(name(info_layers::kNavigablePoints), &map.navigable_points_, offset);
+    get(name(info_layers::kObstaclePoints), &map.obstacle_points_, offset);
+    get(name(info_layers::kSumNavigability), &map.sum_navigability_, offset);
+    get(name(info_layers::kSumObstacle), &map.sum_obstacle_, offset);
+    get(name(info_layers::kSumQuality), &map.sum_quality_, offset);
+    get(name(info_layers::kSumX), &map.sum_x_, offset);
+    get(name(info_layers::kSumY), &map.sum_y_, offset);
+    get(name(info_layers::kSumZ), &map.sum_z_, offset);
+    get(name(info_layers::kSumNormalX), &map.sum_nx_, offset);
+    get(name(info_layers::kSumNormalY), &map.sum_ny_, offset);
+    get(name(info_layers::kSumNormalZ), &map.sum_nz_, offset);
+    get(name(info_layers::kSumNavigableZ), &map.sum_navigable_z_, offset);
+    if (grid.HasLayer(name(info_layers::kStepLowZ))) {
+      get(name(info_layers::kStepLowZ), &map.step_low_z_, offset);
+      get(name(info_layers::kStepHighZ), &map.step_high_z_, offset);
+    }
+  }
+  if (grid.HasLayer(info_layers::kSteepLowZ)) {
+    get(info_layers::kSteepLowZ, &map.steep_low_z_, 0);
+    get(info_layers::kSteepHighZ, &map.steep_high_z_, 0);
+  }
+  // Stored without a lower level's own steep range (one level): the cell's is the level's.
+  if (!grid.HasLayer(info_layers::kStepLowZ)) {
+    std::copy(map.steep_low_z_.begin(), map.steep_low_z_.end(), map.step_low_z_.begin());
+    std::copy(map.steep_high_z_.begin(), map.steep_high_z_.end(), map.step_high_z_.begin());
+  }
+  if (map.num_levels_ > 1) {
+    if (grid.HasLayer(info_layers::kFloorZ)) {
+      get(info_layers::kFloorZ, &map.floor_z_, 0);
+    } else {
+      // Stored with one level: its points' mean height stands in for the lowest.
+      for (size_t i = 0; i < n; ++i) {
+        if (map.points_[i] > 0.f) map.floor_z_[i] = map.sum_z_[i] / map.points_[i];
+      }
+    }
+  }
+  for (int64_t i = 0; i < map.num_nodes(); ++i) {
     if (!(map.points_[i] >= 0.f) || !std::isfinite(map.points_[i])) {
-      throw std::invalid_argument("info map: cell " + std::to_string(i) +
+      throw std::invalid_argument("info map: cell " + std::to_string(map.NodeCell(i)) +
                                   " has a negative or non-finite point count");
     }
-    map.UpdateCell(i);
   }
+  for (int64_t i = 0; i < map.num_nodes(); ++i) map.UpdateNode(i);
   return map;
 }
 
@@ -301,7 +473,7 @@ std::vector<ScoredPoint> FillSurfaceCells(const InfoMap& map,
   // 0 untouched, 1 explored or a point fell in it, 2 filled by this call.
   std::vector<uint8_t> state(static_cast<size_t>(geometry.num_cells()), 0);
   for (int64_t i = 0; i < geometry.num_cells(); ++i) {
-    if (map.Explored(i)) state[static_cast<size_t>(i)] = 1;
+    if (map.CellExplored(i)) state[static_cast<size_t>(i)] = 1;
   }
   for (size_t i = 0; i < points.size(); ++i) {
     if (!valid[i]) continue;

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,15 @@
 /// points with B > tau_B (n_po). A cell with no such point is 0.5 (unknown navigability), and
 /// Q_a is the mean D of all its points. Cells outside the work area are kept (the robot may drive
 /// there) but count for neither coverage nor gain.
+///
+/// Two levels per cell (InfoMapParams::level_gap_m > 0), after the multi-level surface maps of
+/// Triebel, Pfaff and Burgard (2006) kept to two: a bridge the robot drives both over and under,
+/// a canopy above the ground. A cell's lower level holds its lowest surface (the points up to
+/// level_gap_m above its lowest point); its upper level the points above that. Each level has its
+/// own statistics, so its own C_nc, Q_a, ground and step. The upper level's navigability counts
+/// only points seen from above (the scanner higher than the point): a deck's underside and the
+/// walls under it, seen from the road below, say nothing of the deck's top. A map node is a cell
+/// and a level: node = cell + level * num_cells(); with one level nodes are cells.
 
 namespace cairn::explore {
 
@@ -41,6 +51,10 @@ struct InfoMapParams {
   /// 4-neighbour's (a kerb's edge), has C_nc at most kStepCnc: not safe to drive, not an
   /// obstacle to the view. Seed 002's F and B read a kerb's top and foot as navigable ground.
   double max_step_m{0.0};
+  /// Two levels per cell (0: one): a point more than this above its cell's lowest point belongs
+  /// to the upper level. The robot's height plus a margin: a deck higher than that above the
+  /// road leaves the road navigable.
+  double level_gap_m{0.0};
 
   /// @throws std::invalid_argument naming the bad field.
   void Validate() const;
@@ -70,6 +84,14 @@ inline constexpr char kSumNavigableZ[] = "explore/sum_navigable_z";  ///< sum z 
 /// read as NaN.
 inline constexpr char kSteepLowZ[] = "explore/steep_low_z";
 inline constexpr char kSteepHighZ[] = "explore/steep_high_z";
+/// With two levels: the lowest z of each cell (NaN unexplored), the steep range of the lower
+/// level's own points (the step term's; the steep layers above span both levels), and every
+/// per-level layer above again for the upper level under kUpperPrefix (for example
+/// "explore/upper/navigability"). Optional on load: a map stored with one level reads as one.
+inline constexpr char kFloorZ[] = "explore/floor_z";
+inline constexpr char kStepLowZ[] = "explore/step_low_z";
+inline constexpr char kStepHighZ[] = "explore/step_high_z";
+inline constexpr char kUpperPrefix[] = "explore/upper/";
 }  // namespace info_layers
 
 class InfoMap {
@@ -78,8 +100,11 @@ class InfoMap {
   InfoMap(const WorkArea& area, const InfoMapParams& params = {});
 
   /// Adds the points that fall on the grid (others and non-finite ones are skipped) and updates
-  /// the cells they touch. Returns how many points were used.
-  int64_t AddPoints(const std::vector<ScoredPoint>& points);
+  /// the cells they touch. Returns how many points were used. `scanner_z_m`, the height of the
+  /// scanner that saw them (NaN: unknown, every point counts as seen from above), decides which
+  /// upper-level points count for its navigability.
+  int64_t AddPoints(const std::vector<ScoredPoint>& points,
+                    float scanner_z_m = std::numeric_limits<float>::quiet_NaN());
 
   const common::GridGeometry& geometry() const { return geometry_; }
   const WorkArea& work_area() const { return area_; }
@@ -87,39 +112,61 @@ class InfoMap {
   int size_x() const { return geometry_.size_x; }
   int size_y() const { return geometry_.size_y; }
   int64_t num_cells() const { return geometry_.num_cells(); }
+  /// 1, or 2 with InfoMapParams::level_gap_m.
+  int num_levels() const { return num_levels_; }
+  /// Cells times levels: node = cell + level * num_cells().
+  int64_t num_nodes() const { return num_cells() * num_levels_; }
   int64_t Linear(const common::CellIndex& c) const { return geometry_.LinearIndex(c); }
-  common::CellIndex Cell(int64_t linear) const {
+  /// The cell of a cell index or of a node.
+  common::CellIndex Cell(int64_t node) const {
+    const int64_t linear = node % num_cells();
     return {static_cast<int>(linear % geometry_.size_x),
             static_cast<int>(linear / geometry_.size_x)};
   }
+  int64_t NodeCell(int64_t node) const { return node % num_cells(); }
+  int NodeLevel(int64_t node) const { return static_cast<int>(node / num_cells()); }
+  /// The node of `cell` a robot standing near height z_m is on: of its explored levels, the one
+  /// whose ground (or, without ground, mean height) is nearest; the lower level when z_m is NaN
+  /// or no level is explored.
+  int64_t NearestLevel(int64_t cell, float z_m) const;
 
-  /// C_nc of a cell: 0.5 where no qualifying point fell.
-  float Navigability(int64_t cell) const { return navigability_[cell]; }
+  // Per node (a cell index is its lower level's node).
+  /// C_nc: 0.5 where no qualifying point fell.
+  float Navigability(int64_t node) const { return navigability_[node]; }
   /// Q_a, NaN where unexplored.
-  float Quality(int64_t cell) const { return quality_[cell]; }
-  bool Explored(int64_t cell) const { return points_[cell] > 0.f; }
-  /// n_p: the points that fell on the cell.
-  float PointCount(int64_t cell) const { return points_[cell]; }
-  bool InWorkArea(int64_t cell) const { return in_area_[cell] != 0; }
-  /// Mean position of the cell's points (NaN when unexplored).
-  Eigen::Vector3f Centroid(int64_t cell) const;
-  /// Unit mean normal of the cell's points (zero when none).
-  Eigen::Vector3f MeanNormal(int64_t cell) const;
-  /// Mean height of the cell's navigable points (the ground a robot would stand on; a tree's
+  float Quality(int64_t node) const { return quality_[node]; }
+  bool Explored(int64_t node) const { return points_[node] > 0.f; }
+  /// n_p: the points that fell on the node.
+  float PointCount(int64_t node) const { return points_[node]; }
+  /// Mean position of the node's points (NaN when unexplored).
+  Eigen::Vector3f Centroid(int64_t node) const;
+  /// Unit mean normal of the node's points (zero when none).
+  Eigen::Vector3f MeanNormal(int64_t node) const;
+  /// Mean height of the node's navigable points (the ground a robot would stand on; a tree's
   /// crown above it does not count); NaN when it has none.
-  float GroundHeight(int64_t cell) const;
+  float GroundHeight(int64_t node) const;
+
+  // Per cell, over its levels.
+  bool InWorkArea(int64_t cell) const { return in_area_[NodeCell(cell)] != 0; }
+  /// Explored on any level.
+  bool CellExplored(int64_t cell) const { return cell_explored_[NodeCell(cell)] != 0; }
+  /// Q_a, mean position and unit mean normal of all the cell's points (NaN, NaN, zero when
+  /// unexplored); with one level, the node's.
+  float CellQuality(int64_t cell) const;
+  Eigen::Vector3f CellCentroid(int64_t cell) const;
+  Eigen::Vector3f CellMeanNormal(int64_t cell) const;
   /// Lowest and highest z (m) of the cell's steep points (a normal more than 45 degrees from the
-  /// vertical); NaN when it has none. A wall that spans a scanner's height hides the ground
-  /// behind it from that scanner; a tree's crown (all of it above) or a kerb (all below) does
-  /// not.
-  float SteepLow(int64_t cell) const { return steep_low_z_[cell]; }
-  float SteepHigh(int64_t cell) const { return steep_high_z_[cell]; }
+  /// vertical), on any level; NaN when it has none. A wall that spans a scanner's height hides
+  /// the ground behind it from that scanner; a tree's crown (all of it above) or a kerb (all
+  /// below) does not.
+  float SteepLow(int64_t cell) const { return steep_low_z_[NodeCell(cell)]; }
+  float SteepHigh(int64_t cell) const { return steep_high_z_[NodeCell(cell)]; }
 
   int64_t work_area_cells() const { return work_area_cells_; }
   int64_t explored_work_area_cells() const { return explored_in_area_; }
-  /// Explored cells of the work area over its cells, in [0, 1].
+  /// Explored cells (on any level) of the work area over its cells, in [0, 1].
   double Coverage() const;
-  /// Mean Q_a over the explored cells of the work area (0 when none).
+  /// Mean CellQuality over the explored cells of the work area (0 when none).
   double MeanQuality() const;
 
   /// The map as GridMap layers (info_layers), for storage, export and rendering.
@@ -130,25 +177,35 @@ class InfoMap {
                              const InfoMapParams& params = {});
 
  private:
-  void UpdateCell(int64_t cell);
-  /// C_nc from the cell's statistics, at most kStepCnc where HasStep.
-  void UpdateNavigability(int64_t cell);
-  /// A step higher than params_.max_step_m in the cell or to a 4-neighbour's ground.
-  bool HasStep(int64_t cell) const;
+  void UpdateNode(int64_t node);
+  /// C_nc from the node's statistics, at most kStepCnc where HasStep.
+  void UpdateNavigability(int64_t node);
+  /// A step higher than params_.max_step_m in the node or to a 4-neighbour's ground (the
+  /// neighbour's level nearest in height).
+  bool HasStep(int64_t node) const;
+  /// Adds one point to a node; `counts` false: to its extent and quality only (an upper-level
+  /// point seen from below).
+  void AddToNode(int64_t node, const ScoredPoint& p, bool steep, bool counts);
+  /// Moves the lower level of `cell` to its (empty) upper level.
+  void LiftLowerLevel(int64_t cell);
 
   WorkArea area_;
   InfoMapParams params_;
   common::GridGeometry geometry_;
-  std::vector<uint8_t> in_area_;
+  int num_levels_{1};
+  // Per cell.
+  std::vector<uint8_t> in_area_, cell_explored_;
   int64_t work_area_cells_{0};
   int64_t explored_in_area_{0};
-  // Statistics (struct of arrays, one entry per cell).
+  std::vector<float> steep_low_z_, steep_high_z_;  // every steep point of the cell
+  std::vector<float> floor_z_;                     // two levels: the lowest z
+  // Statistics per node (struct of arrays).
   std::vector<float> points_, navigable_points_, obstacle_points_;
   std::vector<float> sum_navigability_, sum_obstacle_, sum_quality_;
   std::vector<float> sum_x_, sum_y_, sum_z_, sum_nx_, sum_ny_, sum_nz_;
   std::vector<float> sum_navigable_z_;
-  std::vector<float> steep_low_z_, steep_high_z_;
-  // Derived.
+  std::vector<float> step_low_z_, step_high_z_;  // the steep points that count
+  // Derived, per node.
   std::vector<float> navigability_, quality_;
 };
 

@@ -132,45 +132,56 @@ std::vector<int64_t> NavigationTree::PathTo(int64_t cell) const {
 }
 
 NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe_cnc,
-                                   double free_radius_m) {
-  if (root < 0 || root >= map.num_cells()) {
-    throw std::invalid_argument("navigation tree: the root cell is off the map");
+                                   double free_radius_m, float root_ground_z_m) {
+  if (root < 0 || root >= map.num_nodes()) {
+    throw std::invalid_argument("navigation tree: the root node is off the map");
   }
   NavigationTree tree;
   tree.root = root;
-  tree.cost.assign(static_cast<size_t>(map.num_cells()), std::numeric_limits<float>::infinity());
-  tree.parent.assign(static_cast<size_t>(map.num_cells()), -1);
+  const size_t nodes = static_cast<size_t>(map.num_nodes());
+  tree.cost.assign(nodes, std::numeric_limits<float>::infinity());
+  tree.parent.assign(nodes, -1);
+  // The ground each reached node stands on: its own, or (unexplored under the robot) its
+  // parent's. A move into a cell of two levels takes the level nearest it.
+  std::vector<float> ground(nodes, std::numeric_limits<float>::quiet_NaN());
   using Entry = std::pair<float, int64_t>;
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> open;
   tree.cost[root] = 0.f;
+  ground[root] = std::isnan(map.GroundHeight(root)) ? root_ground_z_m : map.GroundHeight(root);
   open.push({0.f, root});
   const int sx = map.size_x(), sy = map.size_y();
   const float res = static_cast<float>(map.geometry().resolution_m);
   const float safe = static_cast<float>(safe_cnc);
-  const int root_x = static_cast<int>(root % sx), root_y = static_cast<int>(root / sx);
+  const common::CellIndex root_cell = map.Cell(root);
   const double free_radius_cells =
       std::isfinite(free_radius_m) && free_radius_m > 0.0 ? free_radius_m / res : 0.0;
   // Unexplored cells this near the root: the robot stands there (its scanner cannot see them).
   const auto under_robot = [&](int64_t j) {
-    const double dx = static_cast<double>(j % sx - root_x);
-    const double dy = static_cast<double>(j / sx - root_y);
-    return !map.Explored(j) && dx * dx + dy * dy <= free_radius_cells * free_radius_cells;
+    const common::CellIndex c = map.Cell(j);
+    const double dx = static_cast<double>(c.ix - root_cell.ix);
+    const double dy = static_cast<double>(c.iy - root_cell.iy);
+    return !map.CellExplored(j) && dx * dx + dy * dy <= free_radius_cells * free_radius_cells;
   };
   while (!open.empty()) {
     const auto [c, i] = open.top();
     open.pop();
     if (c > tree.cost[i]) continue;
-    const int ix = static_cast<int>(i % sx), iy = static_cast<int>(i / sx);
-    const int64_t neighbours[4] = {ix > 0 ? i - 1 : -1, ix + 1 < sx ? i + 1 : -1,
-                                   iy > 0 ? i - sx : -1, iy + 1 < sy ? i + sx : -1};
-    for (int64_t j : neighbours) {
-      if (j < 0) continue;
-      const float cnc = under_robot(j) ? 1.f : map.Navigability(j);
-      if (!(map.Explored(j) || under_robot(j)) || !(cnc > safe)) continue;
+    const int64_t cell = map.NodeCell(i);
+    const int ix = static_cast<int>(cell % sx), iy = static_cast<int>(cell / sx);
+    const int64_t neighbours[4] = {ix > 0 ? cell - 1 : -1, ix + 1 < sx ? cell + 1 : -1,
+                                   iy > 0 ? cell - sx : -1, iy + 1 < sy ? cell + sx : -1};
+    for (int64_t n : neighbours) {
+      if (n < 0) continue;
+      const bool free_under_robot = under_robot(n);
+      const int64_t j = free_under_robot ? n : map.NearestLevel(n, ground[i]);
+      const float cnc = free_under_robot ? 1.f : map.Navigability(j);
+      if (!(map.Explored(j) || free_under_robot) || !(cnc > safe)) continue;
       const float next = c + res / cnc;
       if (next < tree.cost[j]) {
         tree.cost[j] = next;
         tree.parent[j] = i;
+        const float h = map.GroundHeight(j);
+        ground[j] = std::isnan(h) ? ground[i] : h;
         open.push({next, j});
       }
     }
@@ -194,7 +205,7 @@ std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& param
   const double res = map.geometry().resolution_m;
   const int clearance_cells = static_cast<int>(std::ceil(params.candidate_clearance_m / res));
   std::vector<int64_t> safe_cells;
-  for (int64_t i = 0; i < map.num_cells(); ++i) {
+  for (int64_t i = 0; i < map.num_nodes(); ++i) {
     if (is_safe(i)) safe_cells.push_back(i);
   }
   const size_t limit = safe_cells.size() / static_cast<size_t>(params.candidate_fraction);
@@ -236,7 +247,8 @@ std::vector<int64_t> SampleCandidates(const InfoMap& map, const NbvParams& param
           continue;
         }
         const common::CellIndex n{cell.ix + dx, cell.iy + dy};
-        if (!map.geometry().Contains(n) || !is_safe(map.Linear(n))) {
+        if (!map.geometry().Contains(n) ||
+            !is_safe(map.NearestLevel(map.Linear(n), map.GroundHeight(i)))) {
           clear = false;
           break;
         }
@@ -269,9 +281,12 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
   const double res = g.resolution_m;
   const double range = params_.gain_range_m;
   const common::CellIndex c = map_.Cell(cell);
+  const int64_t own_cell = map_.NodeCell(cell);
   const common::Vector2 origin = g.CenterOf(c);
   const Eigen::Vector3f ground = map_.Centroid(cell);
   const float ground_z = std::isfinite(ground.z()) ? ground.z() : 0.f;
+  const int64_t cells = map_.num_cells();
+  const float level_gap = static_cast<float>(map_.params().level_gap_m);
   const Eigen::Vector3f scanner(static_cast<float>(origin.x()), static_cast<float>(origin.y()),
                                 ground_z + static_cast<float>(params_.scanner_height_m));
   const float occlusion = static_cast<float>(params_.occlusion_cnc);
@@ -299,12 +314,18 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
       // spans the scanner's height in it: a wall's foot cell also holds ground, so its C_nc
       // alone says little about what the wall hides. A wall is at least kMinWallHeightM of
       // steep points: a few steep normals on rough ground at the scanner's height are not one.
-      if (i != cell && map_.Explored(i) &&
-          (map_.Navigability(i) < occlusion ||
-           (map_.SteepLow(i) < scanner.z() && map_.SteepHigh(i) > scanner.z() &&
-            map_.SteepHigh(i) - map_.SteepLow(i) > kMinWallHeightM))) {
-        break;
+      // With two levels, an obstacle blocks only if it reaches within the level gap of the
+      // scanner's height: the walls of a canyon below a scanner on its rim do not hide the
+      // other rim, a deck above a scanner on the road does not hide the road.
+      if (i == own_cell || !map_.CellExplored(i)) continue;
+      bool blocks = map_.SteepLow(i) < scanner.z() && map_.SteepHigh(i) > scanner.z() &&
+                    map_.SteepHigh(i) - map_.SteepLow(i) > kMinWallHeightM;
+      for (int l = 0; l < map_.num_levels() && !blocks; ++l) {
+        const int64_t node = i + l * cells;
+        blocks = map_.Explored(node) && map_.Navigability(node) < occlusion &&
+                 (level_gap <= 0.f || map_.Centroid(node).z() > scanner.z() - level_gap);
       }
+      if (blocks) break;
     }
   }
 
@@ -337,7 +358,7 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
     if (!map_.InWorkArea(i)) continue;
     const int64_t ddx = i % g.size_x - c.ix, ddy = i / g.size_x - c.iy;
     if (ddx * ddx + ddy * ddy > reach2) continue;
-    if (!map_.Explored(i)) {
+    if (!map_.CellExplored(i)) {
       if (list_unexplored) gains.unexplored.push_back(i);
       const double d_m = std::sqrt(static_cast<double>(ddx * ddx + ddy * ddy)) * res;
       const double weight = missed_ ? missed_->Weight(i, MissedViews::Sector(-ddx, -ddy), d_m,
@@ -353,12 +374,12 @@ ViewGains ViewEvaluator::Evaluate(int64_t cell, const std::vector<InterestZone>&
     }
     // The quality a scan from here would give this cell, from its distance and the incidence on
     // its mean normal, above its Q_a.
-    const Eigen::Vector3f to = map_.Centroid(i) - scanner;
+    const Eigen::Vector3f to = map_.CellCentroid(i) - scanner;
     const double r = to.norm();
     if (!(r > 1e-6)) continue;
-    const Eigen::Vector3f n = map_.MeanNormal(i);
+    const Eigen::Vector3f n = map_.CellMeanNormal(i);
     const double incidence = n.squaredNorm() > 0.f ? std::abs(to.dot(n)) / r : 1.0;
-    quality_sum += std::max(0.0, expected_quality(r, incidence) - map_.Quality(i));
+    quality_sum += std::max(0.0, expected_quality(r, incidence) - map_.CellQuality(i));
   }
   gains.info_gain = std::min(1.0, unexplored / static_cast<double>(in_range));
   gains.quality_gain = std::min(1.0, quality_sum / in_range);
@@ -442,15 +463,18 @@ const char* OutcomeName(NbvDecision::Outcome outcome) {
 
 NbvDecision NbvPlanner::Decide(const InfoMap& map, const std::vector<InterestZone>& zones,
                                const common::Vector2& robot_m, const MissedViews* missed,
-                               const std::vector<common::Vector2>& visited) {
+                               const std::vector<common::Vector2>& visited,
+                               float robot_ground_z_m) {
   const auto robot_cell = map.geometry().IndexOf(robot_m);
   if (!robot_cell) throw std::invalid_argument("nbv: the robot is off the information map");
   NbvDecision decision;
   decision.stop_threshold = StopThreshold(params_.weights.w_c, params_.d_max_m);
   decision.global_quality = map.MeanQuality();
   decision.coverage = map.Coverage();
-  const NavigationTree tree = BuildNavigationTree(map, map.Linear(*robot_cell), params_.safe_cnc,
-                                                  params_.robot_free_radius_m);
+  const int64_t root = map.NearestLevel(map.Linear(*robot_cell), robot_ground_z_m);
+  const NavigationTree tree =
+      BuildNavigationTree(map, root, params_.safe_cnc, params_.robot_free_radius_m,
+                          robot_ground_z_m);
   const std::vector<int64_t> cells = SampleCandidates(map, params_, robot_m, params_.seed, visited);
   ViewEvaluator evaluator(map, params_, missed);
   const bool greedy = params_.strategy == NbvStrategy::kGreedy;

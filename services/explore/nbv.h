@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -84,24 +85,28 @@ double StopThreshold(double w_c, double d_max_m);
 /// D(p)'s combination of an area and an incidence score (eq. 3.27).
 double CombineQuality(double area_score, double incidence_score, double w_a, double w_n);
 
-/// Least-cost tree over the info map from one cell: 4-neighbour steps cost
-/// cell_size / C_nc(child) and may only enter cells with C_nc > safe_cnc (the root may be
-/// anything). Dijkstra; the same costs as the thesis's wavefront with re-parenting.
+/// Least-cost tree over the info map's nodes from one node: 4-neighbour steps cost
+/// cell_size / C_nc(child) and may only enter nodes with C_nc > safe_cnc (the root may be
+/// anything). Dijkstra; the same costs as the thesis's wavefront with re-parenting. A step into a
+/// cell of two levels enters the level whose ground is nearest the ground it leaves: over a
+/// bridge's deck from its ramps, under it from the road.
 struct NavigationTree {
   int64_t root{-1};
-  std::vector<float> cost;      ///< +inf where unreachable
+  std::vector<float> cost;      ///< per node; +inf where unreachable
   std::vector<int64_t> parent;  ///< -1 at the root and where unreachable
-  bool Reachable(int64_t cell) const { return std::isfinite(cost[cell]); }
-  /// Cells from the root to `cell` (empty when unreachable).
-  std::vector<int64_t> PathTo(int64_t cell) const;
+  bool Reachable(int64_t node) const { return std::isfinite(cost[node]); }
+  /// Nodes from the root to `node` (empty when unreachable).
+  std::vector<int64_t> PathTo(int64_t node) const;
 };
-/// Unexplored cells within free_radius_m of the root count as safe (C_nc 1): the robot stands
-/// there, and a scanner on it does not see the ground in its blind cone below.
+/// Unexplored cells within free_radius_m of the root count as safe (C_nc 1) on the lower level:
+/// the robot stands there, and a scanner on it does not see the ground in its blind cone below.
+/// `root_ground_z_m`: the robot's ground where the root has none of its own (NaN: unknown).
 NavigationTree BuildNavigationTree(const InfoMap& map, int64_t root, double safe_cnc,
-                                   double free_radius_m = 0.0);
+                                   double free_radius_m = 0.0,
+                                   float root_ground_z_m = std::numeric_limits<float>::quiet_NaN());
 
 struct Candidate {
-  int64_t cell{-1};
+  int64_t cell{-1};  ///< the view's node (InfoMap: cell + level * cells)
   common::Vector2 position_m{0.0, 0.0};
   double info_gain{0.0};     ///< A in [0, 1]
   double quality_gain{0.0};  ///< Q in [0, 1]
@@ -116,7 +121,7 @@ struct Candidate {
   double ground_z_m{0.0};  ///< the chosen candidate's ground (InfoMap::GroundHeight)
 };
 
-/// Safe cells at random, pairwise further apart than the spacing, at most 1/candidate_fraction
+/// Safe nodes at random, pairwise further apart than the spacing, at most 1/candidate_fraction
 /// of the safe cells, inside the work area, with a safe clearance, and not within the spacing
 /// of the robot or within revisit_radius_m of a view point in `visited`. The draw is stable: every
 /// cell has a fixed random rank (a hash of its index and `seed`) and the candidates are taken in
@@ -191,10 +196,12 @@ class NbvPlanner {
   explicit NbvPlanner(const NbvParams& params);
   /// One decision from the robot's position (which must lie on the map).
   /// @throws std::invalid_argument when the robot is off the map.
-  /// `missed` (or null) as ViewEvaluator's; `visited`: the view points scanned so far.
+  /// `missed` (or null) as ViewEvaluator's; `visited`: the view points scanned so far;
+  /// `robot_ground_z_m` picks the level the robot stands on (NaN: the lower one).
   NbvDecision Decide(const InfoMap& map, const std::vector<InterestZone>& zones,
                      const common::Vector2& robot_m, const MissedViews* missed = nullptr,
-                     const std::vector<common::Vector2>& visited = {});
+                     const std::vector<common::Vector2>& visited = {},
+                     float robot_ground_z_m = std::numeric_limits<float>::quiet_NaN());
   const NbvParams& params() const { return params_; }
 
  private:

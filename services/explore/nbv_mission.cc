@@ -146,14 +146,18 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   }
   view.position_m = common::Vector2(scan.sensor_origin_m.x(), scan.sensor_origin_m.y());
   view.time_s = now_s;
-  view.points_used = info_.AddPoints(points);
+  view.points_used = info_.AddPoints(points, scan.sensor_origin_m.z());
+  // The ground under the scanner: it picks the level the robot stands on (a deck or the road
+  // below it) for the next decision.
+  ground_z_m_ = scan.sensor_origin_m.z() - static_cast<float>(params_.nbv.scanner_height_m);
 
   // Zones this view has seen into leave the list; the scan's own zones join it.
   if (const auto cell = info_.geometry().IndexOf(view.position_m)) {
     ViewEvaluator evaluator(info_, params_.nbv);
-    ViewGains gains = evaluator.Evaluate(info_.Linear(*cell), zones_, true);
+    const int64_t node = info_.NearestLevel(info_.Linear(*cell), ground_z_m_);
+    ViewGains gains = evaluator.Evaluate(node, zones_, true);
     // Cells this scan should have seen and did not count in A only for nearer views.
-    RecordMissedView(info_, info_.Linear(*cell), gains.unexplored, &missed_);
+    RecordMissedView(info_, node, gains.unexplored, &missed_);
     std::vector<size_t>& seen = gains.zones_seen;
     std::sort(seen.rbegin(), seen.rend());
     for (size_t z : seen) {
@@ -203,7 +207,7 @@ NbvAction NbvMission::DecideNext(const common::Vector2& from_m, double now_s, do
     std::vector<common::Vector2> visited = skipped_;
     visited.reserve(view_points_.size() + skipped_.size());
     for (const ViewPoint& v : view_points_) visited.push_back(v.position_m);
-    last_decision_ = planner_.Decide(info_, zones_, from_m, &missed_, visited);
+    last_decision_ = planner_.Decide(info_, zones_, from_m, &missed_, visited, ground_z_m_);
     *decision_ms = MsSince(t0);
   } catch (const std::invalid_argument& e) {
     return Finish(std::string("no decision: ") + e.what());

@@ -1,5 +1,6 @@
 #pragma once
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -134,6 +135,8 @@ class NbvMission {
   ScanMesh mesh_;
   std::vector<InterestZone> zones_;
   MissedViews missed_;  ///< per cell: the scans that should have seen it and did not
+  /// The ground under the last scan (NaN before one): the level the robot stands on.
+  float ground_z_m_{std::numeric_limits<float>::quiet_NaN()};
   std::vector<ViewPoint> view_points_;
   std::vector<common::Vector2> path_m_;
   std::optional<NbvDecision> last_decision_;

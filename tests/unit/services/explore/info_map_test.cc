@@ -192,6 +192,89 @@ TEST(InfoMapTest, GroundAStepAboveANeighboursMakesBothCellsUnsafe) {
   }
 }
 
+InfoMapParams BridgeParams(double level_gap_m) {
+  InfoMapParams params;
+  params.margin_m = 0.0;
+  params.max_step_m = 0.08;
+  params.level_gap_m = level_gap_m;
+  return params;
+}
+
+TEST(InfoMapTest, TwoLevelsKeepABridgesDeckAndTheFloorUnderItBothNavigable) {
+  const InfoMap map = testing::BridgeMap(BridgeParams(1.5));
+  ASSERT_EQ(map.num_levels(), 2);
+  EXPECT_EQ(map.num_nodes(), 2 * map.num_cells());
+  const int64_t n = map.num_cells();
+  // Under the deck's middle (3.0, 3.15): the floor below, the deck above, both safe. The deck
+  // was seen first; the floor, 3 m lower, took the lower level from it.
+  const int64_t under = map.Linear({10, 10});
+  EXPECT_NEAR(map.GroundHeight(under), 0.f, 1e-5f);
+  EXPECT_GT(map.Navigability(under), 0.7f);
+  EXPECT_NEAR(map.GroundHeight(under + n), 3.f, 1e-5f);
+  EXPECT_GT(map.Navigability(under + n), 0.7f);
+  EXPECT_EQ(map.NodeCell(under + n), under);
+  EXPECT_EQ(map.NodeLevel(under + n), 1);
+  // The deck's underside (obstacle-like, seen from below) counts for the upper level's points
+  // but not for its navigability.
+  EXPECT_FLOAT_EQ(map.PointCount(under + n), 8.f);
+  EXPECT_TRUE(map.CellExplored(under));
+  // Over the canyon's wall (x 1.95): the wall's foot makes the floor there unsafe, the wall's
+  // top, seen from below, leaves the deck above it safe.
+  const int64_t wall = map.Linear({6, 10});
+  EXPECT_LT(map.Navigability(wall), 0.7f);
+  EXPECT_GT(map.Navigability(wall + n), 0.7f);
+  // The level a robot stands on is the one whose ground is nearest its own.
+  EXPECT_EQ(map.NearestLevel(under, 0.2f), under);
+  EXPECT_EQ(map.NearestLevel(under, 2.9f), under + n);
+  EXPECT_EQ(map.NearestLevel(under + n, std::nanf("")), under);
+  const int64_t rim = map.Linear({1, 1});
+  EXPECT_EQ(map.NearestLevel(rim, 0.f), rim);  // one level: that one
+  EXPECT_FALSE(map.Explored(rim + n));
+  // The deck's edge over the canyon (y 2.55) is a drop to the floor beside it: not safe.
+  EXPECT_LT(map.Navigability(map.Linear({10, 8}) + n), 0.7f);
+  // Coverage counts a cell once.
+  EXPECT_EQ(map.explored_work_area_cells(), map.work_area_cells());
+
+  // One level: the deck, its underside and the floor in one cell make neither safe.
+  const InfoMap flat = testing::BridgeMap(BridgeParams(0.0));
+  EXPECT_EQ(flat.num_levels(), 1);
+  EXPECT_LT(flat.Navigability(under), 0.7f);
+}
+
+TEST(InfoMapTest, BothLevelsRoundTripAndAMapOfOneLevelStillLoads) {
+  const InfoMap map = testing::BridgeMap(BridgeParams(1.5));
+  const common::GridMap grid = map.ToGridMap();
+  EXPECT_TRUE(grid.HasLayer("explore/upper/navigability"));
+  EXPECT_TRUE(grid.HasLayer(info_layers::kFloorZ));
+  const InfoMap back = InfoMap::FromGridMap(grid, map.work_area(), map.params());
+  for (int64_t i = 0; i < map.num_nodes(); ++i) {
+    ASSERT_EQ(back.Explored(i), map.Explored(i)) << i;
+    ASSERT_FLOAT_EQ(back.Navigability(i), map.Navigability(i)) << i;
+  }
+  // A further scan after the round trip places its points as before it: the floor level is
+  // stored.
+  InfoMap grown = back;
+  const int64_t under = map.Linear({10, 10});
+  ScoredPoint deck;
+  deck.position_m = {3.f, 3.15f, 3.f};
+  deck.normal = {0.f, 0.f, 1.f};
+  deck.navigability = 1.f;
+  grown.AddPoints({deck}, 4.f);
+  EXPECT_FLOAT_EQ(grown.PointCount(under + map.num_cells()), 9.f);
+  EXPECT_FLOAT_EQ(grown.PointCount(under), 4.f);
+  // Loaded with one level, a two-level map keeps its lower level.
+  const InfoMap lower = InfoMap::FromGridMap(grid, map.work_area(), BridgeParams(0.0));
+  EXPECT_FLOAT_EQ(lower.Navigability(under), map.Navigability(under));
+  EXPECT_EQ(lower.num_nodes(), map.num_cells());
+  // A map stored with one level loads with two: its upper level empty.
+  const InfoMap flat = testing::BridgeMap(BridgeParams(0.0));
+  const InfoMap two = InfoMap::FromGridMap(flat.ToGridMap(), flat.work_area(), BridgeParams(1.5));
+  EXPECT_FALSE(two.Explored(under + two.num_cells()));
+  EXPECT_FLOAT_EQ(two.Navigability(under), flat.Navigability(under));
+  InfoMapParams bad = BridgeParams(-1.0);
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+}
+
 TEST(InfoMapTest, BadParamsAndHugeAreasAreRefused) {
   InfoMapParams params;
   params.cell_size_m = 0.0;

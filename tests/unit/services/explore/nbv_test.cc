@@ -541,5 +541,73 @@ TEST(NbvTest, TheCandidateDrawIsStableWhereTheMapDidNotChange) {
   EXPECT_NE(CandidateRank(5, 1), CandidateRank(6, 1));
 }
 
+TEST(NbvTest, TheTreeGoesOverABridgesDeckFromTheRimsAndUnderItFromTheFloor) {
+  InfoMapParams info;
+  info.margin_m = 0.0;
+  info.max_step_m = 0.08;
+  info.level_gap_m = 1.5;
+  const InfoMap map = testing::BridgeMap(info);
+  const int64_t n = map.num_cells();
+  // Over: from the west rim along the deck's middle row (y 2.85) to the east rim.
+  const int64_t west = map.Linear({0, 9}), east = map.Linear({19, 9});
+  const NavigationTree over = BuildNavigationTree(map, west, 0.7, 0.0, 3.f);
+  ASSERT_TRUE(over.Reachable(east));
+  bool crossed = false;
+  for (int64_t node : over.PathTo(east)) {
+    EXPECT_GT(map.Navigability(node), 0.7f);
+    const common::Vector2 xy = map.geometry().CenterOf(map.Cell(node));
+    if (xy.x() > 1.8 && xy.x() < 4.2) {
+      EXPECT_EQ(map.NodeLevel(node), 1) << "over the canyon, on the deck";
+      crossed = true;
+    }
+  }
+  EXPECT_TRUE(crossed);
+  // The canyon's floor is not reachable from the rims: no ramp leads down.
+  EXPECT_FALSE(over.Reachable(map.Linear({10, 0})));
+  // Under: along the floor from the south end to the north end.
+  const int64_t south = map.Linear({10, 0}), north = map.Linear({10, 19});
+  const NavigationTree under = BuildNavigationTree(map, south, 0.7, 0.0, 0.f);
+  ASSERT_TRUE(under.Reachable(north));
+  bool passed_under = false;
+  for (int64_t node : under.PathTo(north)) {
+    EXPECT_GT(map.Navigability(node), 0.7f);
+    EXPECT_LT(node, n) << "on the floor";
+    const common::Vector2 xy = map.geometry().CenterOf(map.Cell(node));
+    passed_under = passed_under || (xy.y() > 2.4 && xy.y() < 3.6);
+  }
+  EXPECT_TRUE(passed_under);
+  EXPECT_FALSE(under.Reachable(east));
+  // A decision from the floor picks the floor's level by the robot's ground and keeps its path
+  // and view there; candidates on the deck are not reachable from it.
+  NbvParams params;
+  params.candidate_fraction = 1;
+  params.candidate_spacing_m = 0.5;
+  params.revisit_radius_m = 0.0;
+  params.robot_free_radius_m = 0.0;
+  params.candidate_clearance_m = 0.0;
+  NbvPlanner planner(params);
+  const NbvDecision d = planner.Decide(map, {}, map.geometry().CenterOf(map.Cell(south)), nullptr,
+                                       {}, 0.f);
+  int on_deck = 0, on_floor = 0;
+  for (const Candidate& c : d.candidates) {
+    EXPECT_GT(map.Navigability(c.cell), 0.7f);
+    if (map.NodeLevel(c.cell) == 1 && c.position_m.x() > 1.8 && c.position_m.x() < 4.2) {
+      ++on_deck;
+      EXPECT_FALSE(c.reachable);
+    }
+    if (c.reachable) {
+      ++on_floor;
+      EXPECT_LT(c.cell, n);
+    }
+  }
+  EXPECT_GT(on_deck, 0);
+  EXPECT_GT(on_floor, 0);
+  // One level: the cells under the deck are neither deck nor floor, and neither route exists.
+  info.level_gap_m = 0.0;
+  const InfoMap flat = testing::BridgeMap(info);
+  EXPECT_FALSE(BuildNavigationTree(flat, west, 0.7).Reachable(east));
+  EXPECT_FALSE(BuildNavigationTree(flat, south, 0.7).Reachable(north));
+}
+
 }  // namespace
 }  // namespace cairn::explore
