@@ -82,6 +82,7 @@ void LoadNbv(YamlMap map, NbvModeParams* p) {
   map.Get("min_global_quality", &p->min_global_quality);
   map.Get("gain_range_m", &p->gain_range_m);
   map.Get("max_slope_deg", &p->max_slope_deg);
+  map.Get("max_descent_deg", &p->max_descent_deg);
   map.Get("obstacle_band_m", &p->obstacle_band_m);
   map.Finish();
 }
@@ -128,6 +129,7 @@ NbvMissionParams NbvModeParams::ToMissionParams() const {
   m.turret.scanner_height_m = scanner_height_m;
   m.turret.timeout_s = scan_timeout_s;
   m.analysis.max_slope_rad = max_slope_deg * kDeg;
+  m.analysis.max_descent_rad = max_descent_deg * kDeg;
   m.analysis.obstacle_band_m = obstacle_band_m;
   m.work_area = ParseWorkArea(work_area);
   m.max_scans = max_scans;

@@ -99,6 +99,7 @@ struct NbvModeParams {
   double min_global_quality{0.0};
   double gain_range_m{20.0};
   double max_slope_deg{20.0};
+  double max_descent_deg{0.0};  ///< ScanAnalysisParams::max_descent_rad (0: max_slope_deg)
   double obstacle_band_m{1.0};
 
   /// @throws std::invalid_argument naming the first bad field (a missing work area included).

@@ -11,6 +11,9 @@ namespace {
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // A point is steep when its normal is more than 45 degrees from the vertical: |n_z| < cos 45.
 constexpr float kSteepNormalZ = 0.70710678f;
+// With two levels, a point seen from below more than this under its level's ground lies under
+// that surface: more than a deck's thickness, less than a cliff's last half metre.
+constexpr float kUnderSurfaceM = 0.5f;
 
 }  // namespace
 
@@ -55,10 +58,9 @@ InfoMap::InfoMap(const WorkArea& area, const InfoMapParams& params) : area_(area
   const double cells_x = std::ceil((hi.x() - lo.x()) / res);
   const double cells_y = std::ceil((hi.y() - lo.y()) / res);
   if (cells_x * cells_y * num_levels_ > 64.0e6) {
-    throw std::invalid_argument("info map: the work area needs " +
-                                std::to_string(static_cast<int64_t>(cells_x * cells_y)) +
-                                " cells of " + std::to_string(num_levels_) +
-                                " levels, more than 64 million nodes");
+    throw std::invalid_argument(
+        "info map: the work area needs " + std::to_string(static_cast<int64_t>(cells_x * cells_y)) +
+        " cells of " + std::to_string(num_levels_) + " levels, more than 64 million nodes");
   }
   geometry_.resolution_m = res;
   geometry_.size_x = static_cast<int>(cells_x);
@@ -186,6 +188,9 @@ int64_t InfoMap::AddPoints(const std::vector<ScoredPoint>& points, float scanner
         floor_z_[c] = z;
       } else {
         floor_z_[c] = std::min(floor_z_[c], z);
+        // Seen from below, well under the lower level's ground as seen from above: under that
+        // surface (the wall below a deck's end, seen from the road), nothing to a robot on it.
+        counts = !(scanner_z_m < z && z < GroundHeight(c) - kUnderSurfaceM);
       }
     }
     AddToNode(node, p, steep, counts);

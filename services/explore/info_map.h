@@ -27,7 +27,9 @@
 /// level_gap_m above its lowest point); its upper level the points above that. Each level has its
 /// own statistics, so its own C_nc, Q_a, ground and step. The upper level's navigability counts
 /// only points seen from above (the scanner higher than the point): a deck's underside and the
-/// walls under it, seen from the road below, say nothing of the deck's top. A map node is a cell
+/// walls under it, seen from the road below, say nothing of the deck's top. Nor does the lower
+/// level's count a point seen from below more than 0.5 m under its ground seen from above (the
+/// wall under a deck's end, where the deck is the lowest surface known). A map node is a cell
 /// and a level: node = cell + level * num_cells(); with one level nodes are cells.
 
 namespace cairn::explore {

@@ -472,9 +472,8 @@ NbvDecision NbvPlanner::Decide(const InfoMap& map, const std::vector<InterestZon
   decision.global_quality = map.MeanQuality();
   decision.coverage = map.Coverage();
   const int64_t root = map.NearestLevel(map.Linear(*robot_cell), robot_ground_z_m);
-  const NavigationTree tree =
-      BuildNavigationTree(map, root, params_.safe_cnc, params_.robot_free_radius_m,
-                          robot_ground_z_m);
+  const NavigationTree tree = BuildNavigationTree(map, root, params_.safe_cnc,
+                                                  params_.robot_free_radius_m, robot_ground_z_m);
   const std::vector<int64_t> cells = SampleCandidates(map, params_, robot_m, params_.seed, visited);
   ViewEvaluator evaluator(map, params_, missed);
   const bool greedy = params_.strategy == NbvStrategy::kGreedy;
@@ -512,8 +511,8 @@ NbvDecision NbvPlanner::Decide(const InfoMap& map, const std::vector<InterestZon
   {
     Candidate& chosen = *decision.best;
     chosen.ground_z_m = map.GroundHeight(chosen.cell);
-    const std::vector<int64_t> cells_on_path = tree.PathTo(chosen.cell);
-    for (int64_t c : cells_on_path) {
+    chosen.path_nodes = tree.PathTo(chosen.cell);
+    for (int64_t c : chosen.path_nodes) {
       const common::Vector2 p = map.geometry().CenterOf(map.Cell(c));
       if (!chosen.path_m.empty()) chosen.path_length_m += (p - chosen.path_m.back()).norm();
       chosen.path_m.push_back(p);

@@ -117,6 +117,7 @@ struct Candidate {
   /// The chosen candidate's path through the navigation tree (cell centres from the robot's
   /// cell) and its length; empty and 0 for the others.
   std::vector<common::Vector2> path_m;
+  std::vector<int64_t> path_nodes;  ///< the same path as info-map nodes (cell and level)
   double path_length_m{0.0};
   double ground_z_m{0.0};  ///< the chosen candidate's ground (InfoMap::GroundHeight)
 };

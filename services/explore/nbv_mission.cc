@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "common/check.h"
 
@@ -155,6 +157,8 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   if (const auto cell = info_.geometry().IndexOf(view.position_m)) {
     ViewEvaluator evaluator(info_, params_.nbv);
     const int64_t node = info_.NearestLevel(info_.Linear(*cell), ground_z_m_);
+    view.node = node;
+    view.ground_z_m = ground_z_m_;
     ViewGains gains = evaluator.Evaluate(node, zones_, true);
     // Cells this scan should have seen and did not count in A only for nearer views.
     RecordMissedView(info_, node, gains.unexplored, &missed_);
@@ -217,6 +221,17 @@ NbvAction NbvMission::DecideNext(const common::Vector2& from_m, double now_s, do
                   last_decision_->reason);
   }
   goal_ = last_decision_->best;
+  NbvLeg leg;
+  leg.nodes = goal_->path_nodes;
+  float ground = ground_z_m_;
+  for (int64_t node : leg.nodes) {
+    const bool explored = info_.Explored(node);
+    leg.cnc_when_chosen.push_back(explored ? info_.Navigability(node)
+                                           : std::numeric_limits<float>::quiet_NaN());
+    if (explored && !std::isnan(info_.GroundHeight(node))) ground = info_.GroundHeight(node);
+    leg.ground_z_m.push_back(ground);
+  }
+  legs_.push_back(std::move(leg));
   goal_sent_s_ = now_s;
   ++goals_sent_;
   state_ = State::kDriving;

@@ -69,6 +69,10 @@ struct NbvAction {
 /// One scan of the mission.
 struct ViewPoint {
   common::Vector2 position_m{0.0, 0.0};
+  /// The info-map node the robot stood on (the level by the scanner's height; -1 off the map)
+  /// and its ground under the scanner.
+  int64_t node{-1};
+  float ground_z_m{std::numeric_limits<float>::quiet_NaN()};
   double time_s{0.0};
   int64_t points_used{0};    ///< points that fell on the information map
   double coverage{0.0};      ///< of the work area, after the scan
@@ -79,6 +83,17 @@ struct ViewPoint {
   double analysis_ms{0.0};  ///< per-point features and zones
   double map_ms{0.0};       ///< information map update and zone list
   double decision_ms{0.0};  ///< candidates, navigation tree, gains, choice
+};
+
+/// One leg of the mission as chosen: the navigation tree's path to a view point, as info-map
+/// nodes, each node's C_nc when it was chosen (NaN for unexplored cells in the blind cone under
+/// the robot, which the tree lets it cross) and its ground then.
+struct NbvLeg {
+  std::vector<int64_t> nodes;
+  std::vector<float> cnc_when_chosen;
+  /// Each node's ground when chosen (its parent's across the blind cone): a later scan may find
+  /// a lower surface under it and make the node's level the upper one.
+  std::vector<float> ground_z_m;
 };
 
 class NbvMission {
@@ -108,6 +123,7 @@ class NbvMission {
   const std::vector<InterestZone>& zones() const { return zones_; }
   const std::vector<ViewPoint>& view_points() const { return view_points_; }
   const std::vector<common::Vector2>& path_m() const { return path_m_; }
+  const std::vector<NbvLeg>& legs() const { return legs_; }
   const std::optional<NbvDecision>& last_decision() const { return last_decision_; }
   const std::optional<Candidate>& goal() const { return goal_; }
   int scans() const { return static_cast<int>(view_points_.size()); }
@@ -138,6 +154,7 @@ class NbvMission {
   /// The ground under the last scan (NaN before one): the level the robot stands on.
   float ground_z_m_{std::numeric_limits<float>::quiet_NaN()};
   std::vector<ViewPoint> view_points_;
+  std::vector<NbvLeg> legs_;
   std::vector<common::Vector2> path_m_;
   std::optional<NbvDecision> last_decision_;
   std::optional<Candidate> goal_;

@@ -1,6 +1,7 @@
 #include "services/explore/nbv_report.h"
 
 #include <cstdio>
+#include <limits>
 
 #include "mapstore/io/files.h"
 #include "mapstore/io/png.h"
@@ -34,6 +35,40 @@ std::string NbvSummaryTable(const NbvMission& mission, const std::string& preset
   return out;
 }
 
+std::string NbvPathCsv(const NbvMission& mission) {
+  const InfoMap& map = mission.info_map();
+  std::string out = "kind,index,x_m,y_m,level,ground_z_m,cnc_when_chosen,cnc_final\n";
+  char line[192];
+  auto final_cnc = [&](int64_t node) {
+    return map.Explored(node) ? map.Navigability(node) : std::numeric_limits<float>::quiet_NaN();
+  };
+  const auto& views = mission.view_points();
+  for (size_t i = 0; i < views.size(); ++i) {
+    const ViewPoint& v = views[i];
+    const bool on_map = v.node >= 0 && v.node < map.num_nodes();
+    std::snprintf(line, sizeof(line), "view,%zu,%.3f,%.3f,%d,%.3f,nan,%.4f\n", i + 1,
+                  v.position_m.x(), v.position_m.y(), on_map ? map.NodeLevel(v.node) : -1,
+                  v.ground_z_m,
+                  on_map ? final_cnc(v.node) : std::numeric_limits<float>::quiet_NaN());
+    out += line;
+  }
+  const auto& legs = mission.legs();
+  for (size_t l = 0; l < legs.size(); ++l) {
+    for (size_t k = 0; k < legs[l].nodes.size(); ++k) {
+      const int64_t node = legs[l].nodes[k];
+      if (node < 0 || node >= map.num_nodes()) continue;
+      const common::Vector2 xy = map.geometry().CenterOf(map.Cell(node));
+      // The same surface in the final map: the cell's level nearest the ground it had then.
+      const int64_t now = map.NearestLevel(map.NodeCell(node), legs[l].ground_z_m[k]);
+      std::snprintf(line, sizeof(line), "path,%zu,%.3f,%.3f,%d,%.3f,%.4f,%.4f\n", l + 1, xy.x(),
+                    xy.y(), map.NodeLevel(now), legs[l].ground_z_m[k], legs[l].cnc_when_chosen[k],
+                    final_cnc(now));
+      out += line;
+    }
+  }
+  return out;
+}
+
 common::Result<std::vector<std::string>> WriteNbvReport(const NbvMission& mission,
                                                         const std::string& preset,
                                                         const std::string& dir) {
@@ -44,6 +79,12 @@ common::Result<std::vector<std::string>> WriteNbvReport(const NbvMission& missio
       mapstore::io::WriteFileAtomically(*summary_path, NbvSummaryTable(mission, preset));
   if (!wrote.ok()) return wrote;
   written.push_back(*summary_path);
+  auto path_csv = mapstore::io::OutputPath(dir, "nbv_path", ".csv");
+  if (!path_csv.ok()) return path_csv.status();
+  const common::Status wrote_path =
+      mapstore::io::WriteFileAtomically(*path_csv, NbvPathCsv(mission));
+  if (!wrote_path.ok()) return wrote_path;
+  written.push_back(*path_csv);
 
   const common::GridMap map = mission.info_map().ToGridMap();
   mapstore::io::PngOverlay overlay;

@@ -40,6 +40,7 @@ struct Formulas {
   float inv_one_minus_cos;  // 1 / (1 - cos θ)
   float k;
   float tan_theta;
+  float tan_descent;  // below the base (dz < 0)
   float a_max;
   float w_a, w_n, inv_w_norm;
 
@@ -47,8 +48,8 @@ struct Formulas {
     return 1.f / (1.f + std::exp(-k * (n_z - cos_theta) * inv_one_minus_cos));
   }
   float Height(float dz, float d_xy) const {
-    return std::exp(-std::fabs(dz) /
-                    (std::max(d_xy, static_cast<float>(kMinHorizontalDistanceM)) * tan_theta));
+    return std::exp(-std::fabs(dz) / (std::max(d_xy, static_cast<float>(kMinHorizontalDistanceM)) *
+                                      (dz < 0.f ? tan_descent : tan_theta)));
   }
   float Quality(float par, float d_i) const {
     const float d_a = par <= a_max ? 1.f : a_max / par;
@@ -104,6 +105,8 @@ void CheckMesh(const OrderedScan& scan, const ScanMesh& mesh) {
 void ScanAnalysisParams::Validate() const {
   Require(ValidAngle(max_slope_rad), "ScanAnalysisParams.max_slope_rad", "must be in (0, pi/2)",
           max_slope_rad);
+  Require(max_descent_rad == 0.0 || ValidAngle(max_descent_rad),
+          "ScanAnalysisParams.max_descent_rad", "must be 0 or in (0, pi/2)", max_descent_rad);
   Require(FinitePositive(slope_steepness), "ScanAnalysisParams.slope_steepness", "must be > 0",
           slope_steepness);
   Require(FiniteNonNegative(w_l), "ScanAnalysisParams.w_l", "must be >= 0", w_l);
@@ -182,6 +185,9 @@ ScanFeatures AnalyseScan(const OrderedScan& scan, const ScanMesh& mesh,
   f.inv_one_minus_cos = static_cast<float>(1.0 / (1.0 - c));
   f.k = static_cast<float>(params.slope_steepness);
   f.tan_theta = static_cast<float>(std::tan(params.max_slope_rad));
+  f.tan_descent = params.max_descent_rad > 0.0
+                      ? static_cast<float>(std::tan(params.max_descent_rad))
+                      : f.tan_theta;
   f.a_max = static_cast<float>(params.a_max_m2);
   f.w_a = static_cast<float>(params.w_a);
   f.w_n = static_cast<float>(params.w_n);

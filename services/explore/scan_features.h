@@ -55,6 +55,10 @@ struct ScanAnalysisParams {
   /// θ, the robot's climbing angle, in (0, 90 deg). The thesis does not give the value it used
   /// (Appendix A); 20 deg is the robauco profile's.
   double max_slope_rad{20.0 * M_PI / 180.0};
+  /// The robot's descent angle for H below its base (dz < 0), in (0, 90 deg); 0: θ, the seed's
+  /// symmetric H. A robot that may descend steeper than it climbs (the rover: 20 deg down, 12
+  /// up) sees a 7 deg ramp down ahead as navigable (H 0.71), which with θ it would not (0.56).
+  double max_descent_rad{0.0};
   /// k in S(p), [R]: the seed's form lost this single glyph; 10 is its suggested default.
   double slope_steepness{10.0};
   double w_l{0.66};   ///< weight of the local navigability F_pl (Table 6-1)
@@ -100,7 +104,8 @@ ScanFeatures AnalyseScan(const OrderedScan& scan, const ScanMesh& mesh,
 /// @throws std::invalid_argument unless n_z is in [-1, 1], θ in (0, π/2) and k > 0.
 double SlopeTerm(double n_z, double theta_rad, double k);
 
-/// H(p) = exp(-|dz| / (d_xy tan θ)) (eq. 3.16, [R]): 1 at the robot's height, in (0, 1].
+/// H(p) = exp(-|dz| / (d_xy tan θ)) (eq. 3.16, [R]): 1 at the robot's height, in (0, 1]. Below
+/// the base with ScanAnalysisParams::max_descent_rad set, that angle stands in for θ.
 /// d_xy is clamped to at least 1 mm (a point straight above or below the scanner).
 /// @throws std::invalid_argument unless dz is finite, d_xy >= 0 and θ in (0, π/2).
 double HeightTerm(double dz_m, double d_xy_m, double theta_rad);

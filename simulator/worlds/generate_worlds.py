@@ -999,13 +999,18 @@ def structured():
 UNSTRUCTURED_WORK_AREA = (-18.0, 18.0, -18.0, 18.0)   # x0, x1, y0, y1
 UNSTRUCTURED_START = (15.0, 15.0)                     # the top-right corner (seed 002 §6.2.3)
 CANYON_X = (-4.0, 0.0)        # the canyon floor across x, for y from its ramp to its north end
-CANYON_RIM_X = (-5.0, 1.0)    # its walls fall from these rims
-CANYON_DEPTH = 3.0
+CANYON_WALL_M = 1.0           # its walls rise from the floor's edge to the rims over this
+CANYON_DEPTH = 2.2            # its floor below the rims' level (z 0 before the shift)
 CANYON_Y = (-20.0, 14.0)      # south: open (its ramp), north: closed
-CANYON_RAMP_Y = (-20.0, -2.0)  # the floor falls from the rim level to the depth along +y
+CANYON_RAMP_Y = (-17.0, 0.0)  # the floor falls from the rim level to the depth along +y (7.4 deg)
+BRANCH_X = (-16.0, -4.0)      # north of the bridge the canyon opens west into a basin, out of
+BRANCH_Y = (10.5, 16.0)       # sight from above and from south of the bridge: only a robot that
+                              # passes under the bridge sees it
 BRIDGE_Y = (6.0, 9.0)         # the deck across the canyon
 BRIDGE_X = (-6.5, 2.5)
 BRIDGE_THICK = 0.3
+RIM_WALL_HEIGHT = 1.3         # stone walls line the rims: no look into the canyon from above
+PARAPET_HEIGHT = 1.2          # the deck's parapets: no look down from the bridge
 
 
 def unstructured():
@@ -1018,9 +1023,12 @@ def unstructured():
     # Steep mounds (25..35 deg flanks: no pass for a 12 deg robot) that leave two passes between
     # the start and the canyon, and gentle waves elsewhere.
     mounds = [(10.0, 3.0, 2.2, 3.0), (13.0, -6.0, 2.0, 2.6), (5.0, 14.0, 1.8, 2.4),
-              (-12.0, 12.0, 2.5, 3.5), (-13.0, -9.0, 2.0, 3.0)]
+              (-13.0, -9.0, 2.0, 3.0)]
     cx0, cx1 = CANYON_X
-    rx0, rx1 = CANYON_RIM_X
+
+    def outside(v, lo_v, hi_v):
+        return max(lo_v - v, 0.0, v - hi_v)
+
     heights = []
     for r in range(n):
         y = -half + 2 * half * r / (n - 1)
@@ -1034,16 +1042,17 @@ def unstructured():
             dx = max(BRIDGE_X[0] - 2.5 - x, 0.0, x - BRIDGE_X[1] - 2.5)
             dy = max(BRIDGE_Y[0] - 1.0 - y, 0.0, y - BRIDGE_Y[1] - 1.0)
             z *= smoothstep(math.hypot(dx, dy) / 2.0)
-            # The canyon: its floor CANYON_DEPTH below the rims (less along its ramp), walls from
-            # floor to rim over 0.5..1 m.
-            if CANYON_Y[0] <= y <= CANYON_Y[1] and rx0 <= x <= rx1:
+            # The canyon and its west branch: a level floor CANYON_DEPTH below z 0 (rising along
+            # the ramp), walls rising from the floor's edge over CANYON_WALL_M, cut into
+            # whatever ground is there.
+            floor = -CANYON_DEPTH
+            if y < CANYON_RAMP_Y[1]:
                 t = (y - CANYON_RAMP_Y[0]) / (CANYON_RAMP_Y[1] - CANYON_RAMP_Y[0])
-                depth = CANYON_DEPTH * min(1.0, max(0.0, t))
-                if cx0 <= x <= cx1:
-                    wall = 1.0
-                else:
-                    wall = 1.0 - min(abs(x - cx0), abs(x - cx1)) / max(cx0 - rx0, rx1 - cx1)
-                z -= depth * max(0.0, min(1.0, wall))
+                floor = -CANYON_DEPTH * max(0.0, t)
+            rise = CANYON_DEPTH / CANYON_WALL_M
+            d_main = math.hypot(outside(x, cx0, cx1), max(0.0, y - CANYON_Y[1]))
+            d_branch = math.hypot(outside(x, *BRANCH_X), outside(y, *BRANCH_Y))
+            z = min(z, floor + rise * d_main, -CANYON_DEPTH + rise * d_branch)
             row.append(z)
         heights.append(row)
     # Flat within 2.5 m of the start.
@@ -1072,14 +1081,36 @@ def unstructured():
 
     g = ['    <geom name="terrain" type="hfield" hfield="terrain" pos="0 0 0" '
          'rgba="0.5 0.45 0.35 1"/>']
-    # The bridge: a deck whose top is level with the higher rim, resting on both rims, 2.7 m
-    # above the canyon floor.
+    # The bridge: a deck whose top is level with the ground where it lands, resting on both
+    # rims, with parapets over the canyon.
     by0, by1 = BRIDGE_Y
     bx0, bx1 = BRIDGE_X
     deck_top = ground(bx0, (by0 + by1) / 2)  # the level ground where it lands
     g.append(aabb("bridge_deck", bx0, bx1, by0, by1, deck_top - BRIDGE_THICK, deck_top,
                   "0.5 0.42 0.32 1"))
+    rw0, rw1 = cx0 - CANYON_WALL_M, cx1 + CANYON_WALL_M  # the rims' edges
+    for i, (y0, y1) in enumerate(((by0, by0 + 0.2), (by1 - 0.2, by1))):
+        g.append(aabb(f"parapet_{i}", rw0 - 0.5, rw1 + 0.5, y0, y1, deck_top,
+                      deck_top + PARAPET_HEIGHT, "0.5 0.42 0.32 1"))
     floor_under = ground((cx0 + cx1) / 2, (by0 + by1) / 2)
+    # Stone walls along the rims, open where the bridge lands: on the west from where the ramp
+    # is 1 m deep, on the east from the ramp's top (the ramp is entered from the west only, so
+    # the bridge is the one pass between the halves); round the basin.
+    wall_y0 = CANYON_RAMP_Y[0] + (CANYON_RAMP_Y[1] - CANYON_RAMP_Y[0]) / CANYON_DEPTH
+    bw0, bw1 = BRANCH_X[0] - CANYON_WALL_M, BRANCH_Y[0] - CANYON_WALL_M
+    top = BRANCH_Y[1] + CANYON_WALL_M
+    rim_walls = [
+        (rw0 - 0.3, rw0, wall_y0, by0),                    # west rim, south of the bridge
+        (rw1, rw1 + 0.3, CANYON_Y[0], by0),                # east rim, south of the bridge
+        (rw1, rw1 + 0.3, by1, top + 0.3),                  # east rim, north of the bridge
+        (bw0 - 0.3, rw0, bw1 - 0.3, bw1),                  # the basin's south rim
+        (bw0 - 0.3, rw1 + 0.3, top, top + 0.3),            # the north rim
+        (bw0 - 0.3, bw0, bw1 - 0.3, top + 0.3),            # the basin's west rim
+    ]
+    for i, (x0, x1, y0, y1) in enumerate(rim_walls):
+        z0 = max(ground(x, y) for x in (x0, x1) for y in (y0, y1)) - 0.3
+        g.append(aabb(f"rim_wall_{i}", x0, x1, y0, y1, z0, z0 + 0.3 + RIM_WALL_HEIGHT,
+                      WALL_RGBA))
     # A house, a raised platform (1.2 m, too high to climb) and a low wall (occlusions).
     g.append(on_ground("house", -15.0, -9.0, 1.0, 6.0, 3.0))
     g.append(on_ground("platform", 4.0, 8.0, -14.0, -10.0, 1.2, FEATURE_RGBA))
@@ -1088,7 +1119,9 @@ def unstructured():
     rocks = []
     while len(rocks) < 12:
         x, y = rng.uniform(-17, 17), rng.uniform(-17, 17)
-        if math.hypot(x - sx, y - sy) < 5 or rx0 - 1 <= x <= rx1 + 1:
+        if math.hypot(x - sx, y - sy) < 5 or rw0 - 1.5 <= x <= rw1 + 1.5:
+            continue
+        if bw0 - 1.5 <= x <= rw0 and bw1 - 1.5 <= y <= top + 1.5:
             continue
         if -16 <= x <= -8 and 0 <= y <= 7:
             continue
@@ -1106,12 +1139,14 @@ def unstructured():
         "<!--",
         f"  Generated by generate_worlds.py. Terrain: unstructured_terrain.bin, {n} x {n}",
         f"  samples 0.5 m apart over x, y in -20..20, heights {f(lo)}..{f(hi)} m (shifted so the",
-        "  lowest point is z = 0). Canyon: floor x -4..0, rims x -5 and 1, 3 m deep from y -2 to",
-        "  its closed north end at y 14; from y -2 its floor rises to the rim level at y -20 (a",
-        "  9.5 deg ramp). Bridge: a 0.3 m deck x -6.5..2.5, y 6..9, its top "
-        f"{deck_top:.2f} m, {deck_top - floor_under:.2f} m",
-        "  above the canyon floor. Steep mounds (no pass for a 12 deg robot) at (10, 3),",
-        "  (13, -6), (5, 14), (-12, 12), (-13, -9). House x -15..-9, y 1..6, 3 m; platform",
+        "  lowest point is z = 0). Canyon: floor x -4..0, rims x -5 and 1, 2.2 m deep from y 0 to",
+        "  its closed north end at y 14; from y 0 its floor rises to the rim level at y -17 (a",
+        "  7.4 deg ramp, entered from the west); north of the bridge it opens west into a basin",
+        "  (floor x -16..-4, y 10.5..16). Stone walls 1.3 m high line the rims (west: from y -9;",
+        "  east: from y -20) and the basin, open where the bridge lands. Bridge: a 0.3 m deck",
+        f"  x -6.5..2.5, y 6..9, its top {deck_top - floor_under:.2f} m above the canyon floor, with 1.2 m",
+        "  parapets. Steep mounds (no pass for a 12 deg robot) at (10, 3), (13, -6), (5, 14),",
+        "  (-13, -9). House x -15..-9, y 1..6, 3 m; platform",
         "  x 4..8, y -14..-10, 1.2 m; wall x 4..9, y 8..8.3, 1.5 m; 12 rocks (seed 2063).",
         f"  Start: ({f(sx)}, {f(sy)}), the top-right corner, flat within 2.5 m. Work area:",
         f"  x {f(wx0)}..{f(wx1)}, y {f(wy0)}..{f(wy1)}.",

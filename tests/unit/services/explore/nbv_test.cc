@@ -586,8 +586,8 @@ TEST(NbvTest, TheTreeGoesOverABridgesDeckFromTheRimsAndUnderItFromTheFloor) {
   params.robot_free_radius_m = 0.0;
   params.candidate_clearance_m = 0.0;
   NbvPlanner planner(params);
-  const NbvDecision d = planner.Decide(map, {}, map.geometry().CenterOf(map.Cell(south)), nullptr,
-                                       {}, 0.f);
+  const NbvDecision d =
+      planner.Decide(map, {}, map.geometry().CenterOf(map.Cell(south)), nullptr, {}, 0.f);
   int on_deck = 0, on_floor = 0;
   for (const Candidate& c : d.candidates) {
     EXPECT_GT(map.Navigability(c.cell), 0.7f);
