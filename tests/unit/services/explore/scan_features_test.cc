@@ -154,6 +154,39 @@ TEST(ScanFeaturesTest, ATwentyDegreeRampIsNavigableForAThirtyDegreeRobot) {
   EXPECT_GT(ramp, 1000);
 }
 
+TEST(ScanFeaturesTest, ARampDownIsNavigableAheadWithTheRobotsDescentAngle) {
+  // Level ground to x 1, then a 7 degree ramp down. From 5.5 m on, a 12 degree climber's
+  // symmetric H calls the ramp ahead unsafe (H about 0.6, tending to 0.56 far down it); with its
+  // 20 degree descent angle below its base it is navigable (about 0.75), and nothing at the
+  // base's height changes.
+  Scene scene;
+  scene.patches = {Floor(0.0, -1e3, 1.0), Ramp(-7 * kDeg, 1.0, 8.0, -3.0, 3.0)};
+  const Fan fan{-10, 10, -40, 0};
+  ScanAnalysisParams descent = Theta(12);
+  descent.max_descent_rad = 20 * kDeg;
+  const Analysed sym = Analyse(scene, fan, Theta(12));
+  const Analysed asym = Analyse(scene, fan, descent);
+  int ramp = 0, navigable_sym = 0, navigable_asym = 0;
+  for (int i = 0; i < sym.cast.scan.size(); ++i) {
+    if (sym.cast.id[i] != 1 || std::isnan(sym.features.navigability[i])) continue;
+    if (sym.cast.scan.points_m[i].x() < 5.5) continue;
+    ++ramp;
+    navigable_sym += sym.features.navigability[i] > 0.65f;
+    navigable_asym += asym.features.navigability[i] > 0.65f;
+  }
+  ASSERT_GT(ramp, 200);
+  EXPECT_LT(navigable_sym, 0.1 * ramp);
+  EXPECT_GT(navigable_asym, 0.9 * ramp);
+  for (int i = 0; i < sym.cast.scan.size(); ++i) {
+    if (sym.cast.id[i] == 0 && !std::isnan(sym.features.navigability[i])) {
+      EXPECT_FLOAT_EQ(asym.features.navigability[i], sym.features.navigability[i]);
+    }
+  }
+  ScanAnalysisParams bad = Theta(12);
+  bad.max_descent_rad = 2.0;
+  EXPECT_THROW(bad.Validate(), std::invalid_argument);
+}
+
 TEST(ScanFeaturesTest, AFortyFiveDegreeSlopeIsNotNavigableForAThirtyDegreeRobot) {
   Scene scene;
   scene.patches = {Floor(0.0), Ramp(45 * kDeg, 3.0, 4.5, -3.0, 3.0)};
