@@ -117,7 +117,7 @@ TEST(ScenarioTest, ShippedRobotsLoadAndHelpListsWorlds) {
   }
   const auto worlds = paths.ShippedWorlds();
   EXPECT_EQ(worlds, (std::vector<std::string>{"apartment", "arena", "outdoor", "room", "simple",
-                                              "structured", "terraces", "tunnel"}));
+                                              "structured", "terraces", "tunnel", "unstructured"}));
   for (const std::string& w : worlds) EXPECT_FALSE(paths.WorldSummary(w).empty()) << w;
 }
 

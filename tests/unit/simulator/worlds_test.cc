@@ -2,6 +2,8 @@
 // tunnel_lanes.yaml promise (the contract the mapper, navigator and demo tests rely on).
 
 #include <cmath>
+#include <string>
+#include <tuple>
 #include <utility>
 
 #include <gtest/gtest.h>
@@ -42,11 +44,23 @@ TEST_F(WorldsTest, EveryShippedWorldHostsEveryRobot) {
     Scenario s = WorldOnly(world);
     SpawnPose at;
     // Free floor in each world (the apartment's living room, the arena's hall, the room's
-    // middle; the start areas of outdoor, simple and structured at the origin).
+    // middle; the start areas of outdoor, simple and structured at the origin, unstructured's
+    // in its top-right corner: its origin is the canyon's floor by a rim's wall).
     const bool lanes = world == "tunnel" || world == "terraces";
     const bool room = world == "room";
-    at.x_m = lanes ? 4.0 : world == "apartment" ? 1.5 : world == "arena" ? 5.0 : room ? 1.0 : 0.0;
-    at.y_m = lanes ? 6.0 : world == "apartment" ? 2.5 : world == "arena" ? 4.0 : room ? 2.0 : 0.0;
+    const bool corner = world == "unstructured";
+    at.x_m = lanes                  ? 4.0
+             : world == "apartment" ? 1.5
+             : world == "arena"     ? 5.0
+             : room                 ? 1.0
+             : corner               ? 13.5
+                                    : 0.0;
+    at.y_m = lanes                  ? 6.0
+             : world == "apartment" ? 2.5
+             : world == "arena"     ? 4.0
+             : room                 ? 2.0
+             : corner               ? 15.0
+                                    : 0.0;
     int k = 0;
     for (const std::string& model : paths.ShippedRobots()) {
       SpawnPose p = at;
@@ -340,6 +354,52 @@ TEST_F(WorldsTest, RoverDrivesFromTheStartOfSimpleAndStructured) {
     testing::Drive(sim, "rover", 0.5, 0.0, 6.0, &out);
     EXPECT_GT(sim.RobotPose("rover").orientation.toRotationMatrix()(2, 2), 0.98);
     EXPECT_GT((sim.RobotPose("rover").position_m - p.position_m).norm(), 2.0);
+  }
+}
+
+// The unstructured world's canyon, bridge and basin (simulator/worlds/README.md), and the rover
+// driving under the deck along the canyon's floor and over it between the rims.
+TEST_F(WorldsTest, UnstructuredCanyonBridgeAndBasinAreDrivenOverAndUnder) {
+  MujocoSim sim(WorldOnly("unstructured"));
+  int geom = -1;
+  EXPECT_NEAR(SurfaceZ(sim, -2.0, 7.5, &geom), 2.2, 1e-6);  // the deck's top
+  EXPECT_STREQ(mj_id2name(sim.model(), mjOBJ_GEOM, geom), "bridge_deck");
+  EXPECT_NEAR(SurfaceZ(sim, -2.0, 3.0), 0.0, 1e-6);    // the canyon's floor
+  EXPECT_NEAR(SurfaceZ(sim, -2.0, 12.0), 0.0, 1e-6);   // north of the bridge
+  EXPECT_NEAR(SurfaceZ(sim, -10.0, 13.0), 0.0, 1e-6);  // the basin
+  EXPECT_NEAR(SurfaceZ(sim, -2.0, -17.0), 2.2, 0.2);   // the ramp's top, at the rims' level
+  EXPECT_NEAR(SurfaceZ(sim, -2.0, 6.1), 3.4, 1e-6);    // a parapet
+  // The walls, 1.3 m above the highest ground under them (waves of 0.15 m).
+  EXPECT_NEAR(SurfaceZ(sim, 1.15, -5.0), 3.5, 0.35);   // the east rim's
+  EXPECT_NEAR(SurfaceZ(sim, -5.15, -5.0), 3.5, 0.35);  // the west rim's
+  EXPECT_NEAR(SurfaceZ(sim, -10.0, 9.35), 3.5, 0.35);  // the basin's south one
+  for (const auto& [name, x, y, yaw, v, seconds] :
+       {std::tuple<const char*, double, double, double, double, double>{"under", -2.0, 2.0,
+                                                                        M_PI / 2, 0.5, 18.0},
+        {"over", 3.5, 7.5, M_PI, 0.5, 24.0}}) {
+    SCOPED_TRACE(name);
+    Scenario s = WorldOnly("unstructured");
+    SpawnPose at;
+    at.x_m = x;
+    at.y_m = y;
+    at.yaw_rad = yaw;
+    s.robots.push_back(MakeRobotSpec("rover", "rover", "", at, testing::TestPaths()));
+    s.robots[0].sensors = SensorSet{};
+    MujocoSim drive(s);
+    SimOutputs out;
+    testing::Drive(drive, "rover", v, 0.0, seconds, &out);
+    const common::Pose3 p = drive.RobotPose("rover");
+    EXPECT_GT(p.orientation.toRotationMatrix()(2, 2), 0.98);
+    if (std::string(name) == "under") {
+      // Along the floor, under the deck (y 6..9), out north of it.
+      EXPECT_GT(p.position_m.y(), 10.0);
+      EXPECT_LT(p.position_m.y(), 13.5);
+      EXPECT_NEAR(p.position_m.z(), 0.2, 0.1);
+    } else {
+      // Along the deck, between its parapets, to the west rim.
+      EXPECT_LT(p.position_m.x(), -5.5);
+      EXPECT_NEAR(p.position_m.z(), 2.2 + 0.2, 0.1);
+    }
   }
 }
 
