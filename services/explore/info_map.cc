@@ -15,7 +15,32 @@ constexpr float kSteepNormalZ = 0.70710678f;
 // that surface: more than a deck's thickness, less than a cliff's last half metre.
 constexpr float kUnderSurfaceM = 0.5f;
 
+// A per-level layer's name: the lower level's as given, the upper level's under kUpperPrefix.
+std::string LevelLayer(const char* lower, int level) {
+  if (level == 0) return lower;
+  return info_layers::kUpperPrefix + std::string(lower).substr(std::string("explore/").size());
+}
+
 }  // namespace
+
+const std::array<InfoMap::Statistic, 13>& InfoMap::Statistics() {
+  static const std::array<Statistic, 13> kStatistics = {{
+      {info_layers::kPoints, &InfoMap::points_},
+      {info_layers::kNavigablePoints, &InfoMap::navigable_points_},
+      {info_layers::kObstaclePoints, &InfoMap::obstacle_points_},
+      {info_layers::kSumNavigability, &InfoMap::sum_navigability_},
+      {info_layers::kSumObstacle, &InfoMap::sum_obstacle_},
+      {info_layers::kSumQuality, &InfoMap::sum_quality_},
+      {info_layers::kSumX, &InfoMap::sum_x_},
+      {info_layers::kSumY, &InfoMap::sum_y_},
+      {info_layers::kSumZ, &InfoMap::sum_z_},
+      {info_layers::kSumNormalX, &InfoMap::sum_nx_},
+      {info_layers::kSumNormalY, &InfoMap::sum_ny_},
+      {info_layers::kSumNormalZ, &InfoMap::sum_nz_},
+      {info_layers::kSumNavigableZ, &InfoMap::sum_navigable_z_},
+  }};
+  return kStatistics;
+}
 
 void InfoMapParams::Validate() const {
   if (!(cell_size_m > 0.0) || !std::isfinite(cell_size_m)) {
@@ -82,11 +107,7 @@ InfoMap::InfoMap(const WorkArea& area, const InfoMapParams& params) : area_(area
   steep_high_z_.assign(n, kNaN);
   if (num_levels_ > 1) floor_z_.assign(n, kNaN);
   const size_t nodes = n * static_cast<size_t>(num_levels_);
-  for (auto* v : {&points_, &navigable_points_, &obstacle_points_, &sum_navigability_,
-                  &sum_obstacle_, &sum_quality_, &sum_x_, &sum_y_, &sum_z_, &sum_nx_, &sum_ny_,
-                  &sum_nz_, &sum_navigable_z_}) {
-    v->assign(nodes, 0.f);
-  }
+  for (const Statistic& s : Statistics()) (this->*s.values).assign(nodes, 0.f);
   step_low_z_.assign(nodes, kNaN);
   step_high_z_.assign(nodes, kNaN);
   navigability_.assign(nodes, 0.5f);
@@ -123,11 +144,10 @@ void InfoMap::AddToNode(int64_t i, const ScoredPoint& p, bool steep, bool counts
 
 void InfoMap::LiftLowerLevel(int64_t cell) {
   const int64_t up = cell + num_cells();
-  for (auto* v : {&points_, &navigable_points_, &obstacle_points_, &sum_navigability_,
-                  &sum_obstacle_, &sum_quality_, &sum_x_, &sum_y_, &sum_z_, &sum_nx_, &sum_ny_,
-                  &sum_nz_, &sum_navigable_z_}) {
-    (*v)[up] = (*v)[cell];
-    (*v)[cell] = 0.f;
+  for (const Statistic& s : Statistics()) {
+    std::vector<float>& v = this->*s.values;
+    v[up] = v[cell];
+    v[cell] = 0.f;
   }
   step_low_z_[up] = step_low_z_[cell];
   step_high_z_[up] = step_high_z_[cell];
@@ -356,37 +376,19 @@ common::GridMap InfoMap::ToGridMap() const {
   if (num_levels_ > 1) put(info_layers::kFloorZ, floor_z_, 0);
   for (int l = 0; l < num_levels_; ++l) {
     const size_t offset = n * static_cast<size_t>(l);
-    // The upper level's layers are the lower's names with the upper prefix.
-    auto name = [&](const char* lower) {
-      return l == 0 ? std::string(lower)
-                    : info_layers::kUpperPrefix +
-                          std::string(lower).substr(std::string("explore/").size());
-    };
     std::vector<float> nav(n), explored(n);
     for (size_t i = 0; i < n; ++i) {
       const bool seen = points_[offset + i] > 0.f;
       nav[i] = seen ? navigability_[offset + i] : kNaN;
       explored[i] = seen ? 1.f : 0.f;
     }
-    put(name(info_layers::kNavigability), nav, 0);
-    put(name(info_layers::kQuality), quality_, offset);
-    put(name(info_layers::kExplored), explored, 0);
-    put(name(info_layers::kPoints), points_, offset);
-    put(name(info_layers::kNavigablePoints), navigable_points_, offset);
-    put(name(info_layers::kObstaclePoints), obstacle_points_, offset);
-    put(name(info_layers::kSumNavigability), sum_navigability_, offset);
-    put(name(info_layers::kSumObstacle), sum_obstacle_, offset);
-    put(name(info_layers::kSumQuality), sum_quality_, offset);
-    put(name(info_layers::kSumX), sum_x_, offset);
-    put(name(info_layers::kSumY), sum_y_, offset);
-    put(name(info_layers::kSumZ), sum_z_, offset);
-    put(name(info_layers::kSumNormalX), sum_nx_, offset);
-    put(name(info_layers::kSumNormalY), sum_ny_, offset);
-    put(name(info_layers::kSumNormalZ), sum_nz_, offset);
-    put(name(info_layers::kSumNavigableZ), sum_navigable_z_, offset);
+    put(LevelLayer(info_layers::kNavigability, l), nav, 0);
+    put(LevelLayer(info_layers::kQuality, l), quality_, offset);
+    put(LevelLayer(info_layers::kExplored, l), explored, 0);
+    for (const Statistic& s : Statistics()) put(LevelLayer(s.layer, l), this->*s.values, offset);
     if (num_levels_ > 1) {
-      put(name(info_layers::kStepLowZ), step_low_z_, offset);
-      put(name(info_layers::kStepHighZ), step_high_z_, offset);
+      put(LevelLayer(info_layers::kStepLowZ, l), step_low_z_, offset);
+      put(LevelLayer(info_layers::kStepHighZ, l), step_high_z_, offset);
     }
   }
   return grid;
@@ -413,27 +415,10 @@ InfoMap InfoMap::FromGridMap(const common::GridMap& grid, const WorkArea& area,
   for (int l = 0; l < map.num_levels_; ++l) {
     if (l == 1 && !stored_upper) break;
     const size_t offset = n * static_cast<size_t>(l);
-    auto name = [&](const char* lower) {
-      return l == 0 ? std::string(lower)
-                    : info_layers::kUpperPrefix +
-                          std::string(lower).substr(std::string("explore/").size());
-    };
-    get(name(info_layers::kPoints), &map.points_, offset);
-    get(name(info_layers::kNavigablePoints), &map.navigable_points_, offset);
-    get(name(info_layers::kObstaclePoints), &map.obstacle_points_, offset);
-    get(name(info_layers::kSumNavigability), &map.sum_navigability_, offset);
-    get(name(info_layers::kSumObstacle), &map.sum_obstacle_, offset);
-    get(name(info_layers::kSumQuality), &map.sum_quality_, offset);
-    get(name(info_layers::kSumX), &map.sum_x_, offset);
-    get(name(info_layers::kSumY), &map.sum_y_, offset);
-    get(name(info_layers::kSumZ), &map.sum_z_, offset);
-    get(name(info_layers::kSumNormalX), &map.sum_nx_, offset);
-    get(name(info_layers::kSumNormalY), &map.sum_ny_, offset);
-    get(name(info_layers::kSumNormalZ), &map.sum_nz_, offset);
-    get(name(info_layers::kSumNavigableZ), &map.sum_navigable_z_, offset);
-    if (grid.HasLayer(name(info_layers::kStepLowZ))) {
-      get(name(info_layers::kStepLowZ), &map.step_low_z_, offset);
-      get(name(info_layers::kStepHighZ), &map.step_high_z_, offset);
+    for (const Statistic& s : Statistics()) get(LevelLayer(s.layer, l), &(map.*s.values), offset);
+    if (grid.HasLayer(LevelLayer(info_layers::kStepLowZ, l))) {
+      get(LevelLayer(info_layers::kStepLowZ, l), &map.step_low_z_, offset);
+      get(LevelLayer(info_layers::kStepHighZ, l), &map.step_high_z_, offset);
     }
   }
   if (grid.HasLayer(info_layers::kSteepLowZ)) {

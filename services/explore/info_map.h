@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -190,6 +191,12 @@ class InfoMap {
   void AddToNode(int64_t node, const ScoredPoint& p, bool steep, bool counts);
   /// Moves the lower level of `cell` to its (empty) upper level.
   void LiftLowerLevel(int64_t cell);
+  /// The per-node point statistics with their (lower level's) layer names.
+  struct Statistic {
+    const char* layer;
+    std::vector<float> InfoMap::*values;
+  };
+  static const std::array<Statistic, 13>& Statistics();
 
   WorkArea area_;
   InfoMapParams params_;
