@@ -438,5 +438,42 @@ TEST(NbvPresetsTest, Seed002Test25TheUnstructuredWorldOverAndUnderTheBridge) {
   EXPECT_GT(scans_pairs, 0.0);
 }
 
+// Seed 002 test 26 over real processes: from the simple world's start, after the first scan,
+// the information-heavy weights of table 6-8 (cartif-fast: 0.84, 0.10, 0.05, 0.05) hop far, to
+// the border of what that scan saw; the quality-heavy ones with a high cost (cartif-quality:
+// 0.35, 0.40, 0.15, 0.40) stay near the robot. Three runs of each, one leg each. (On a made map,
+// NbvTest.Seed002Test26... checks the border itself.)
+TEST(NbvPresetsTest, Seed002Test26InformationHeavyWeightsHopFarQualityHeavyOnesStayNear) {
+  const std::string dir = testing::TestTempDir();
+  const World world = SeedWorld("simple", dir);
+  std::vector<double> fast_m, quality_m;
+  for (const std::string preset : {"cartif-fast", "cartif-quality"}) {
+    for (int seed = 1; seed <= 3; ++seed) {
+      const PresetRun run = RunPreset(preset, seed, world, dir, "2");
+      const std::string name = preset + " seed " + std::to_string(seed);
+      ASSERT_TRUE(run.done) << name << "\n" << run.log;
+      ASSERT_EQ(run.scans, 2) << name << "\n" << run.log;
+      // The first leg: 4-neighbour steps of 0.3 m between its path cells.
+      int cells = 0;
+      for (const PathRow& r : ReadPathCsv(run.out_dir + "/nbv_path.csv")) {
+        cells += !r.view && r.index == 1;
+      }
+      ASSERT_GT(cells, 1) << name;
+      (preset == "cartif-fast" ? fast_m : quality_m).push_back(0.3 * (cells - 1));
+    }
+  }
+  std::printf("first leg (m): cartif-fast");
+  for (double d : fast_m) std::printf(" %.1f", d);
+  std::printf("; cartif-quality");
+  for (double d : quality_m) std::printf(" %.1f", d);
+  std::printf("\n");
+  // 9.9..13.2 m against 3.6..5.1 m in the runs made while writing this test: every fast hop is
+  // longer than every quality one, and at least twice the candidates' 3 m spacing.
+  for (double fast : fast_m) {
+    EXPECT_GT(fast, 6.0);
+    for (double quality : quality_m) EXPECT_GT(fast, quality);
+  }
+}
+
 }  // namespace
 }  // namespace cairn::explore
