@@ -1111,6 +1111,15 @@ def unstructured():
         z0 = max(ground(x, y) for x in (x0, x1) for y in (y0, y1)) - 0.3
         g.append(aabb(f"rim_wall_{i}", x0, x1, y0, y1, z0, z0 + 0.3 + RIM_WALL_HEIGHT,
                       WALL_RGBA))
+    # The world ends at a wall along the height field's edges: no path leaves it.
+    edge = [-half + 0.5 * k for k in range(int(4 * half) + 1)]
+    for name, (x0, x1, y0, y1), along in (
+            ("edge_south", (-half, half, -half, -half + 0.3), [(x, -half) for x in edge]),
+            ("edge_north", (-half, half, half - 0.3, half), [(x, half) for x in edge]),
+            ("edge_west", (-half, -half + 0.3, -half, half), [(-half, y) for y in edge]),
+            ("edge_east", (half - 0.3, half, -half, half), [(half, y) for y in edge])):
+        z0 = max(ground(x, y) for x, y in along) - 0.3
+        g.append(aabb(name, x0, x1, y0, y1, z0, z0 + 0.3 + RIM_WALL_HEIGHT, WALL_RGBA))
     # A house, a raised platform (1.2 m, too high to climb) and a low wall (occlusions).
     g.append(on_ground("house", -15.0, -9.0, 1.0, 6.0, 3.0))
     g.append(on_ground("platform", 4.0, 8.0, -14.0, -10.0, 1.2, FEATURE_RGBA))
@@ -1148,8 +1157,8 @@ def unstructured():
         "  parapets. Steep mounds (no pass for a 12 deg robot) at (10, 3), (13, -6), (5, 14),",
         "  (-13, -9). House x -15..-9, y 1..6, 3 m; platform",
         "  x 4..8, y -14..-10, 1.2 m; wall x 4..9, y 8..8.3, 1.5 m; 12 rocks (seed 2063).",
-        f"  Start: ({f(sx)}, {f(sy)}), the top-right corner, flat within 2.5 m. Work area:",
-        f"  x {f(wx0)}..{f(wx1)}, y {f(wy0)}..{f(wy1)}.",
+        f"  Start: ({f(sx)}, {f(sy)}), the top-right corner, flat within 2.5 m. A 1.3 m wall runs",
+        f"  round the edge. Work area: x {f(wx0)}..{f(wx1)}, y {f(wy0)}..{f(wy1)}.",
         "-->",
     ]
     lines += heightfield_body("unstructured_terrain.bin", half, hi - lo, g)

@@ -361,7 +361,7 @@ TEST(NbvPresetsTest, Seed002Test25TheUnstructuredWorldOverAndUnderTheBridge) {
   auto on_deck_span = [](const PathRow& r) {
     return r.x_m > -4.0 && r.x_m < 0.0 && r.y_m > 6.0 && r.y_m < 9.0;
   };
-  int under_balanced = 0, under_information = 0;
+  int runs_under = 0;
   for (const PresetRun& run : runs) {
     const std::string name = run.preset + " seed " + std::to_string(run.seed);
     const std::vector<PathRow> rows = ReadPathCsv(run.out_dir + "/nbv_path.csv");
@@ -410,19 +410,18 @@ TEST(NbvPresetsTest, Seed002Test25TheUnstructuredWorldOverAndUnderTheBridge) {
     EXPECT_GE(safe_at_end, 0.97 * path_cells) << name;
     // Over the bridge in every run: it is the one pass between the world's halves.
     EXPECT_GT(over, 0) << name << ": never on the deck";
-    (run.preset == "unstructured-balanced" ? under_balanced : under_information) += under > 0;
+    runs_under += under > 0;
     // `cairn-map eval` from the start: the safe cells are free in the world and the reachable
     // cells known (100 % and 96..97 % when the robot passed under the bridge, 86..89 % when it
     // spent its scans elsewhere, in the runs made while writing this test).
     EXPECT_GE(run.free_precision, 0.98) << name << "\n" << run.eval;
     EXPECT_GE(run.reachable_coverage, 0.80) << name << "\n" << run.eval;
   }
-  // Under the bridge along the canyon's floor, into the basin: in 7 of 9 runs of the balanced
-  // preset and 4 of 4 of the information-dominant one made while writing this test. The runs
-  // that did not spent their 60 scans on quality elsewhere, the canyon's ramp far away; one of
-  // three runs of each preset must.
-  EXPECT_GT(under_balanced, 0) << "no balanced run passed under the bridge";
-  EXPECT_GT(under_information, 0) << "no information-dominant run passed under the bridge";
+  // Under the bridge along the canyon's floor, into the basin: in 12 of 15 runs of the balanced
+  // preset and 8 of 10 of the information-dominant one made while writing this test. The runs
+  // that did not spent their 60 scans on quality elsewhere, the canyon's ramp far away. Two of
+  // the six runs must (at 4 in 5 a run, all but one fail together once in 400 test runs).
+  EXPECT_GE(runs_under, 2) << "runs that passed under the bridge";
   // Table 6-7: preset I drives further and scans more than preset II (424 against 290 m, 60
   // against 46 scans there; 270..470 m and 39..74 scans against 215..290 m and 35..51 here).
   // With three runs each only a full reversal (all nine pairs) is significant at 5 %.
