@@ -1095,7 +1095,8 @@ def unstructured():
     floor_under = ground((cx0 + cx1) / 2, (by0 + by1) / 2)
     # Stone walls along the rims, open where the bridge lands: on the west from where the ramp
     # is 1 m deep, on the east from the ramp's top (the ramp is entered from the west only, so
-    # the bridge is the one pass between the halves); round the basin.
+    # the bridge is the short pass between the halves; the long one runs north of the canyon's
+    # end); round the basin.
     wall_y0 = CANYON_RAMP_Y[0] + (CANYON_RAMP_Y[1] - CANYON_RAMP_Y[0]) / CANYON_DEPTH
     bw0, bw1 = BRANCH_X[0] - CANYON_WALL_M, BRANCH_Y[0] - CANYON_WALL_M
     top = BRANCH_Y[1] + CANYON_WALL_M
