@@ -46,10 +46,12 @@ std::string NbvPathCsv(const NbvMission& mission) {
   for (size_t i = 0; i < views.size(); ++i) {
     const ViewPoint& v = views[i];
     const bool on_map = v.node >= 0 && v.node < map.num_nodes();
+    // The surface it stood on, in the final map: a later scan may have found a lower one under
+    // it (the road under a deck) and moved it to the upper level.
+    const int64_t now = on_map ? map.NearestLevel(map.NodeCell(v.node), v.ground_z_m) : -1;
     std::snprintf(line, sizeof(line), "view,%zu,%.3f,%.3f,%d,%.3f,nan,%.4f\n", i + 1,
-                  v.position_m.x(), v.position_m.y(), on_map ? map.NodeLevel(v.node) : -1,
-                  v.ground_z_m,
-                  on_map ? final_cnc(v.node) : std::numeric_limits<float>::quiet_NaN());
+                  v.position_m.x(), v.position_m.y(), on_map ? map.NodeLevel(now) : -1,
+                  v.ground_z_m, on_map ? final_cnc(now) : std::numeric_limits<float>::quiet_NaN());
     out += line;
   }
   const auto& legs = mission.legs();
