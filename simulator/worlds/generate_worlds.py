@@ -1103,7 +1103,9 @@ def unstructured():
     rim_walls = [
         (rw0 - 0.3, rw0, wall_y0, by0),                    # west rim, south of the bridge
         (rw1, rw1 + 0.3, CANYON_Y[0], by0),                # east rim, south of the bridge
-        (rw1, rw1 + 0.3, by1, top + 0.3),                  # east rim, north of the bridge
+        (rw1, rw1 + 0.3, by1, half),                       # east rim, north of the bridge,
+                                                           # to the edge: the bridge is the
+                                                           # one pass between the halves
         (bw0 - 0.3, rw0, bw1 - 0.3, bw1),                  # the basin's south rim
         (bw0 - 0.3, rw1 + 0.3, top, top + 0.3),            # the north rim
         (bw0 - 0.3, bw0, bw1 - 0.3, top + 0.3),            # the basin's west rim
