@@ -1094,18 +1094,15 @@ def unstructured():
                       deck_top + PARAPET_HEIGHT, "0.5 0.42 0.32 1"))
     floor_under = ground((cx0 + cx1) / 2, (by0 + by1) / 2)
     # Stone walls along the rims, open where the bridge lands: on the west from where the ramp
-    # is 1 m deep, on the east from the ramp's top (the ramp is entered from the west only, so
-    # the bridge is the short pass between the halves; the long one runs north of the canyon's
-    # end); round the basin.
+    # is 1 m deep, on the east from edge to edge (the ramp is entered from the west only, so the
+    # bridge is the one pass between the halves); round the basin.
     wall_y0 = CANYON_RAMP_Y[0] + (CANYON_RAMP_Y[1] - CANYON_RAMP_Y[0]) / CANYON_DEPTH
     bw0, bw1 = BRANCH_X[0] - CANYON_WALL_M, BRANCH_Y[0] - CANYON_WALL_M
     top = BRANCH_Y[1] + CANYON_WALL_M
     rim_walls = [
         (rw0 - 0.3, rw0, wall_y0, by0),                    # west rim, south of the bridge
         (rw1, rw1 + 0.3, CANYON_Y[0], by0),                # east rim, south of the bridge
-        (rw1, rw1 + 0.3, by1, half),                       # east rim, north of the bridge,
-                                                           # to the edge: the bridge is the
-                                                           # one pass between the halves
+        (rw1, rw1 + 0.3, by1, half),                       # east rim, north of the bridge
         (bw0 - 0.3, rw0, bw1 - 0.3, bw1),                  # the basin's south rim
         (bw0 - 0.3, rw1 + 0.3, top, top + 0.3),            # the north rim
         (bw0 - 0.3, bw0, bw1 - 0.3, top + 0.3),            # the basin's west rim

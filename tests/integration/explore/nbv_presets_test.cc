@@ -345,7 +345,7 @@ std::vector<PathRow> ReadPathCsv(const std::string& path) {
 
 // Seed 002 test 25: the unstructured world (simulator/worlds/unstructured.xml: a canyon 2.2 m
 // deep, walled along its rims, entered by a ramp from the west; a bridge with parapets across
-// it, the short pass between the world's halves; north of the bridge a basin that only a robot
+// it, the one pass between the world's halves; north of the bridge a basin that only a robot
 // passing under the bridge sees) under the two presets of table 6-6, three runs each. The
 // information map keeps two levels per cell (config/explore/unstructured_nbv.yaml's
 // level_gap_m), so the deck and the canyon floor under it are both drivable.
@@ -408,8 +408,7 @@ TEST(NbvPresetsTest, Seed002Test25TheUnstructuredWorldOverAndUnderTheBridge) {
     // the runs made while writing this test (a cell or two of a leg is found a step later,
     // where the ground under the deck's ends or a crest was seen from below).
     EXPECT_GE(safe_at_end, 0.97 * path_cells) << name;
-    // Over the bridge in every run: it is the short pass between the world's halves (the long
-    // one runs north of the canyon's end); every run made while writing this test took it.
+    // Over the bridge in every run: it is the one pass between the world's halves.
     EXPECT_GT(over, 0) << name << ": never on the deck";
     runs_under += under > 0;
     // `cairn-map eval` from the start: the safe cells are free in the world and the reachable
