@@ -120,35 +120,14 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   scan_retries_ = 0;
   skipped_in_row_ = 0;
   ViewPoint view;
-  auto t0 = std::chrono::steady_clock::now();
-  BuildScanMesh(scan, params_.mesh, &mesh_);
-  view.mesh_ms = MsSince(t0);
-  t0 = std::chrono::steady_clock::now();
-  const ScanFeatures features = AnalyseScan(scan, mesh_, params_.analysis);
-  view.analysis_ms = MsSince(t0);
-  t0 = std::chrono::steady_clock::now();
-  std::vector<ScoredPoint> scored(scan.points_m.size());
-  std::vector<uint8_t> valid(scan.points_m.size(), 0);
-  std::vector<ScoredPoint> points;
-  points.reserve(scan.points_m.size());
-  for (size_t i = 0; i < scan.points_m.size(); ++i) {
-    if (!std::isfinite(features.navigability[i])) continue;
-    ScoredPoint& p = scored[i];
-    p.position_m = scan.points_m[i];
-    p.normal = mesh_.normals[i].allFinite() ? mesh_.normals[i] : Eigen::Vector3f::Zero();
-    p.navigability = features.navigability[i];
-    p.obstacle = std::isfinite(features.obstacle[i]) ? features.obstacle[i] : 0.f;
-    p.quality = std::isfinite(features.quality[i]) ? features.quality[i] : 0.f;
-    valid[i] = p.position_m.allFinite();
-    points.push_back(p);
-  }
-  if (params_.fill_surface) {
-    const std::vector<ScoredPoint> filled = FillSurfaceCells(info_, scored, valid, mesh_.triangles);
-    points.insert(points.end(), filled.begin(), filled.end());
-  }
+  const IntegratedScan integrated = IntegrateScan(scan, params_.Integration(), &info_, &mesh_);
+  const ScanFeatures& features = integrated.features;
+  view.mesh_ms = integrated.mesh_ms;
+  view.analysis_ms = integrated.analysis_ms;
+  const auto t0 = std::chrono::steady_clock::now();
   view.position_m = common::Vector2(scan.sensor_origin_m.x(), scan.sensor_origin_m.y());
   view.time_s = now_s;
-  view.points_used = info_.AddPoints(points, scan.sensor_origin_m.z());
+  view.points_used = integrated.points_used;
   // The ground under the scanner: it picks the level the robot stands on (a deck or the road
   // below it) for the next decision.
   ground_z_m_ = scan.sensor_origin_m.z() - static_cast<float>(params_.nbv.scanner_height_m);
@@ -174,7 +153,7 @@ NbvAction NbvMission::OnScan(const OrderedScan& scan, double now_s) {
   });
   if (zones_.size() > static_cast<size_t>(params_.max_zones)) zones_.resize(params_.max_zones);
 
-  view.map_ms = MsSince(t0);
+  view.map_ms = integrated.map_ms + MsSince(t0);
   view.coverage = info_.Coverage();
   view.mean_quality = info_.MeanQuality();
   view.zones = static_cast<int>(zones_.size());

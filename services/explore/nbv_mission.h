@@ -10,6 +10,7 @@
 #include "services/explore/interest_zone.h"
 #include "services/explore/nbv.h"
 #include "services/explore/scan_features.h"
+#include "services/explore/scan_integration.h"
 #include "services/explore/scan_mesh.h"
 #include "services/explore/turret_scan.h"
 #include "services/explore/work_area.h"
@@ -56,6 +57,14 @@ struct NbvMissionParams {
 
   /// @throws std::invalid_argument naming the first bad field.
   void Validate() const;
+  /// How each scan goes onto the information map (mesh, analysis, fill_surface).
+  ScanIntegrationParams Integration() const {
+    ScanIntegrationParams p;
+    p.mesh = mesh;
+    p.analysis = analysis;
+    p.fill_surface = fill_surface;
+    return p;
+  }
 };
 
 /// What the caller must do now.

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "services/mapping/dynamic_mapper_layer.h"
+#include "services/mapping/explore_mapper_layer.h"
 #include "services/mapping/mapper_layer.h"
 #include "services/mapping/occupancy_band.h"
 #include "services/mapping/occupancy_mapper_layer.h"
@@ -28,6 +29,7 @@ inline constexpr char kTerrainLayerName[] = "terrain";
 inline constexpr char kOccupancyLayerName[] = "occupancy";
 inline constexpr char kOctomapLayerName[] = "octomap";
 inline constexpr char kDynamicLayerName[] = "dynamic";
+inline constexpr char kExploreLayerName[] = "explore";
 
 struct MapperCoreParams {
   /// The configured layers, in the order they take each input (names of RegisteredLayers()).
@@ -41,6 +43,9 @@ struct MapperCoreParams {
   /// Seed 001's dynamic layers (static, short-term, long-term, final) from the planar laser
   /// and the lidar's obstacle band, over the static map's grid or an extent.
   DynamicMapperLayerParams dynamic;
+  /// Seed 002's information map from the turret's sweeps, with an explorer configuration's
+  /// parameters.
+  ExploreMapperLayerParams explore;
 
   /// Whether `layer` is listed.
   bool Has(const std::string& layer) const;
@@ -90,6 +95,12 @@ inline const std::vector<LayerRegistration>& LayerRegistry() {
          const double period = p->dynamic.publish_period_s;  // the top-level occupancy period
          p->dynamic = LoadDynamicMapperLayerParams(m);
          p->dynamic.publish_period_s = period;
+       }},
+      {kExploreLayerName,
+       [](const MapperCoreParams& p) { return std::make_unique<ExploreMapperLayer>(p.explore); },
+       [](const MapperCoreParams& p) { p.explore.Validate(); },
+       [](common::YamlMap& m, MapperCoreParams* p) {
+         p->explore = LoadExploreMapperLayerParams(m);
        }},
   };
   return registry;

@@ -18,6 +18,7 @@ namespace {
 struct Flags {
   std::string robot, config, profiles, profiles_dir = CAIRN_CONFIG_DIR "/profiles";
   std::string lcm_url, replay, output, pose_source, static_map, long_term_store;
+  std::string explore_config, work_area;
 };
 
 // Parses the command line; returns an exit code when the process is done (help, bad flags).
@@ -39,6 +40,13 @@ int ParseFlags(int argc, char** argv, Flags* f) {
   flags.AddString("pose-source", &f->pose_source, "ground_truth or odometry; overrides the config");
   flags.AddString("static-map", &f->static_map,
                   "a map_server YAML: turns the dynamic layers (seed 001) on over that map");
+  flags.AddString("explore-config", &f->explore_config,
+                  "an explorer YAML with an nbv section (config/explore/*_nbv.yaml): turns the "
+                  "information-map layer (explore/*, seed 002) on with its parameters, built from "
+                  "<robot>.TURRET_SCAN");
+  flags.AddString("work-area", &f->work_area,
+                  "with --explore-config: the information map's work area (\"x0,y0 x1,y1 ...\"), "
+                  "over the configuration's");
   flags.AddString("long-term-store", &f->long_term_store,
                   "SITE/MAP in cairn-mapstore: restore the long-term layer from there at start "
                   "and save it there periodically (dynamic.long_term_save_period_s); overrides "
@@ -51,6 +59,7 @@ int ParseFlags(int argc, char** argv, Flags* f) {
   flags.AddHelpSection(
       "Channels",
       "in:  <robot>.LIDAR .SCAN .POSE .ODOM .IMU .MAP.CONTROL .MAP.TILE_RESEND\n"
+      "     <robot>.TURRET_SCAN (with the explore layer)\n"
       "out: <robot>.MAP.TILES .MAP.MANIFEST .MAP.OCCUPANCY .MAP.OBSTACLES "
       ".MAP.OCTOMAP .MAP.CONTROL_REPLY, HEALTH\n"
       "with --long-term-store: MAPSTORE.REQUEST (load at start, periodic pull "
@@ -77,6 +86,17 @@ MapperConfig LoadConfig(const Flags& f, std::vector<common::RobotProfile>* profi
   if (!f.static_map.empty()) {
     params.core.SetListed(kDynamicLayerName, true);
     params.core.dynamic.static_map_path = f.static_map;
+  }
+  if (!f.explore_config.empty() || !f.work_area.empty()) {
+    ExploreMapperLayerParams& explore = params.core.explore;
+    if (!f.explore_config.empty()) explore.explorer_config = f.explore_config;
+    if (!f.work_area.empty()) explore.work_area = f.work_area;
+    if (explore.explorer_config.empty()) {
+      throw std::invalid_argument(
+          "--work-area needs --explore-config (or explore.explorer_config)");
+    }
+    ReadExplorerConfig(&explore);
+    params.core.SetListed(kExploreLayerName, true);
   }
   if (!f.long_term_store.empty()) params.long_term_store = f.long_term_store;
   if (!f.pose_source.empty()) {

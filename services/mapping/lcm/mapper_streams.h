@@ -22,7 +22,7 @@ struct StreamConverter {
   std::function<common::Result<std::unique_ptr<SensorReading>>(const void* data, int size)> convert;
 };
 
-/// The registered converters, one per stream (none yet: the sensors to come add theirs).
+/// The registered converters, one per stream.
 const std::vector<StreamConverter>& RegisteredStreams();
 
 }  // namespace cairn::mapping

@@ -3,7 +3,8 @@
 // cost layer from the lidar), cairn-navigator (drives to each view point) and cairn-explorer
 // --mode nbv, as real processes on a private bus. The explorer asks the simulator for each scan
 // over SIM.CONTROL, assembles the turret's lines, builds its information map and sends the next
-// best view to the navigator.
+// best view to the navigator. The mapper builds the same information map live as its explore
+// layer (--explore-config), and cairn-mapstore saves it with the mapper's map.
 
 #include <algorithm>
 #include <cmath>
@@ -22,6 +23,7 @@
 #include "common/channels.h"
 #include "common/grid_map.h"
 #include "mapstore/sqlite_map_store.h"
+#include "tests/integration/mapstore/mapstore_fixture.h"
 #include "tests/support/harness.h"
 
 namespace cairn::explore {
@@ -53,8 +55,10 @@ TEST(NbvStackTest, StopsScansAndDrivesToTheNextBestViewUntilTheScanLimit) {
   auto& sim = procs.Start(
       "cairn-sim",
       {"--scenario", testing::SourcePath("config/sim/outdoor_nbv.yaml"), "--speed", "2"});
-  procs.Start("cairn-mapper", {"--robot", kRobot, "--profiles", "rover", "--config",
-                               testing::SourcePath("config/mapping/mapper.yaml")});
+  procs.Start("cairn-mapper",
+              {"--robot", kRobot, "--profiles", "rover", "--config",
+               testing::SourcePath("config/mapping/mapper.yaml"), "--explore-config",
+               testing::SourcePath("config/explore/outdoor_nbv.yaml")});
   procs.Start("cairn-navigator", {"--robot", kRobot, "--profile", "rover", "--config",
                                   testing::SourcePath("config/navigator/navigator.yaml")});
   auto& explorer =
@@ -150,6 +154,46 @@ TEST(NbvStackTest, StopsScansAndDrivesToTheNextBestViewUntilTheScanLimit) {
     }
     ASSERT_GT(in_area, 0);
     EXPECT_NEAR(static_cast<double>(seen) / static_cast<double>(in_area), last.coverage, 1e-9);
+  }
+
+  // The mapper's explore layer, pulled from the live map into the store as the mapper's other
+  // layers are, is the explorer's map: the same sweeps through the same code. Its own socket
+  // may lose a turret line the explorer had (a no-return line in one sweep), so 1 % of the
+  // cells may differ.
+  {
+    lcm::LCM lcm(procs.url());
+    mapstore::MapstoreClient client(lcm, "nbv-stack-test",
+                                    mapstore::testing::TestClientOptions(90));
+    auto save =
+        mapstore::testing::MakeRequest(mapstore::testing::Request::OP_SAVE, "nbv_test", "live");
+    save.robot = kRobot;
+    save.profile = "rover";
+    auto saved = client.Call(save);
+    ASSERT_TRUE(saved.ok()) << saved.status().ToString();
+    ASSERT_EQ(saved->status, mapstore::testing::kStatusOk) << saved->message;
+    std::string live_name;
+    for (const auto& m : saved->maps) {
+      if (m.name.rfind("live-explore", 0) == 0) live_name = m.name;
+    }
+    ASSERT_FALSE(live_name.empty()) << "no explore companion map in the pull save";
+    mapstore::MapRef live_ref;
+    live_ref.site = "nbv_test";
+    live_ref.name = live_name;
+    auto live = (*store)->LoadLayers(live_ref, {});
+    ASSERT_TRUE(live.ok()) << live.status().ToString();
+    ASSERT_TRUE(stored.ok());
+    ASSERT_TRUE(live->geometry() == stored->geometry());
+    const common::Layer& a = live->at("explore/navigability");
+    const common::Layer& b = stored->at("explore/navigability");
+    int64_t known = 0, same = 0;
+    for (int i = 0; i < a.size(); ++i) {
+      const float x = a.data()[i], y = b.data()[i];
+      if (std::isnan(x) && std::isnan(y)) continue;
+      ++known;
+      same += !std::isnan(x) && !std::isnan(y) && std::abs(x - y) < 1e-4f;
+    }
+    ASSERT_GT(known, 100);
+    EXPECT_GE(same, known * 99 / 100) << same << " of " << known << " known cells agree";
   }
 
   // Each scan was asked of the simulator, and the turret swept only when asked: at most one

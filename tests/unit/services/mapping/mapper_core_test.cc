@@ -229,7 +229,7 @@ TEST(MapperCoreTest, TheLayerListComesFromTheParams) {
   params.layers = {"terrain", "terrain"};
   EXPECT_THROW(params.Validate(), std::invalid_argument);
   EXPECT_EQ(RegisteredLayers(),
-            (std::vector<std::string>{"terrain", "occupancy", "octomap", "dynamic"}));
+            (std::vector<std::string>{"terrain", "occupancy", "octomap", "dynamic", "explore"}));
 }
 
 // The dynamic layers on a 4 x 3 m extent.
