@@ -1,6 +1,7 @@
 #include "services/mapping/explore_mapper_layer.h"
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "common/check.h"
@@ -71,24 +72,39 @@ LayerSchedule ExploreMapperLayer::schedule() const {
 void ExploreMapperLayer::OnReading(const SensorReading& reading) {
   const auto* turret = dynamic_cast<const TurretLineReading*>(&reading);
   if (turret == nullptr) return;
+  using State = explore::TurretScanAssembler::State;
   const double now_s = static_cast<double>(reading.utime) * 1e-6;
   // Passive: wait for the next sweep's pan 0 unless one is being collected.
-  const auto state = assembler_.state();
-  if (state == explore::TurretScanAssembler::State::kTimedOut) ++timeouts_;
-  if (state != explore::TurretScanAssembler::State::kCollecting) assembler_.Request(now_s);
-  std::optional<explore::OrderedScan> scan = assembler_.Add(turret->line, turret->pan_rad, now_s);
-  if (!scan && assembler_.state() != explore::TurretScanAssembler::State::kCollecting) {
+  if (assembler_.state() != State::kCollecting) assembler_.Request(now_s);
+  std::string event;
+  std::optional<explore::OrderedScan> scan =
+      assembler_.Add(turret->line, turret->pan_rad, now_s, &event);
+  if (!scan && assembler_.state() != State::kCollecting) {
     // The line that broke a sweep (a new sweep's pan 0, say) may start the next one.
-    if (assembler_.state() == explore::TurretScanAssembler::State::kTimedOut) {
+    if (assembler_.state() == State::kTimedOut) {
       ++timeouts_;
       assembler_.Request(now_s);
     }
     scan = assembler_.Add(turret->line, turret->pan_rad, now_s);
   }
+  if (!event.empty()) events_.push_back("sweep dropped: " + event);
   if (!scan) return;
-  explore::IntegrateScan(*scan, params_.mission.Integration(), &info_, &mesh_);
+  const explore::IntegratedScan done =
+      explore::IntegrateScan(*scan, params_.mission.Integration(), &info_, &mesh_);
   ++scans_;
   ++version_;
+  char line[160];
+  std::snprintf(line, sizeof(line),
+                "sweep %d at (%.1f, %.1f) on the information map: %lld points, coverage %.1f %%",
+                scans_, scan->sensor_origin_m.x(), scan->sensor_origin_m.y(),
+                static_cast<long long>(done.points_used), 100.0 * info_.Coverage());
+  events_.emplace_back(line);
+}
+
+std::vector<std::string> ExploreMapperLayer::TakeEvents() {
+  std::vector<std::string> out;
+  out.swap(events_);
+  return out;
 }
 
 void ExploreMapperLayer::Reset() {
@@ -96,6 +112,7 @@ void ExploreMapperLayer::Reset() {
   assembler_ = explore::TurretScanAssembler(params_.mission.turret);
   scans_ = 0;
   timeouts_ = 0;
+  events_.clear();
   ++version_;
 }
 

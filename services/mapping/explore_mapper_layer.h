@@ -74,6 +74,7 @@ class ExploreMapperLayer : public MapperLayer {
   std::vector<GridOutput> GridOutputs() const override;
   std::optional<common::GridMap> ExportGrids() const override;
   int64_t version() const override { return version_; }
+  std::vector<std::string> TakeEvents() override;
 
   const explore::InfoMap& info_map() const { return info_; }
   /// Whole sweeps integrated, and sweeps dropped (broken or timed out) since the start.
@@ -89,6 +90,7 @@ class ExploreMapperLayer : public MapperLayer {
   int timeouts_{0};
   std::vector<std::string> layer_names_;  ///< the map's layers (the levels' included)
   int64_t version_{0};
+  std::vector<std::string> events_;
 };
 
 }  // namespace cairn::mapping

@@ -126,6 +126,9 @@ class MapperLayer {
   }
   /// Forgets every measurement (OP_RESET).
   virtual void Reset() = 0;
+  /// Notable events since the last call, one log line each (a reading layer's sweep done or
+  /// dropped); the service logs them after each reading.
+  virtual std::vector<std::string> TakeEvents() { return {}; }
 
   // Outputs.
   /// Dense grids the service publishes and writes; none for layers published their own way

@@ -522,6 +522,9 @@ OccupancyParams ReadOccupancyParams(common::YamlMap& m) {
   m.Get("min_range_m", &p.min_range_m);
   m.Get("max_range_m", &p.max_range_m);
   m.Get("no_return_range_m", &p.no_return_range_m);
+  // Seed 003 test 36's "improved" mode raises it above clamp_max_logodds (.inf: misses always
+  // apply).
+  m.Get("protect_occupied_logodds", &p.protect_occupied_logodds);
   return p;
 }
 

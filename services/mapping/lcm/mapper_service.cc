@@ -88,7 +88,12 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
   if (core_.terrain() != nullptr) {
     for (const auto& p : core_.terrain()->profiles()) names += (names.empty() ? "" : ",") + p.name;
   }
-  node_.Event("mapping %s for profiles [%s], poses from %s", params_.robot.c_str(), names.c_str(),
+  std::string layer_names;
+  for (const auto& layer : core_.layers()) {
+    layer_names += (layer_names.empty() ? "" : ",") + layer->name();
+  }
+  node_.Event("mapping %s for profiles [%s], layers [%s], poses from %s", params_.robot.c_str(),
+              names.c_str(), layer_names.c_str(),
               params_.inputs.pose_source == PoseSource::kGroundTruth ? "ground truth" : "odometry");
   if (!core_.long_term_restore_status().ok()) {
     node_.Warn("long_term_restore", "the stored long-term layer was not used: " +
@@ -429,6 +434,11 @@ void MapperService::Process(Job& job) {
       break;
     case Job::Kind::kReading:
       core_.ProcessReading(*job.reading);
+      for (const auto& layer : core_.layers()) {
+        for (const std::string& e : layer->TakeEvents()) {
+          node_.Event("%s: %s", layer->name().c_str(), e.c_str());
+        }
+      }
       break;
     case Job::Kind::kControl:
       ProcessControl(job.control);

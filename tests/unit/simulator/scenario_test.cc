@@ -116,8 +116,9 @@ TEST(ScenarioTest, ShippedRobotsLoadAndHelpListsWorlds) {
     EXPECT_FALSE(m.default_sensors.Names().empty());
   }
   const auto worlds = paths.ShippedWorlds();
-  EXPECT_EQ(worlds, (std::vector<std::string>{"apartment", "arena", "outdoor", "room", "simple",
-                                              "structured", "terraces", "tunnel", "unstructured"}));
+  EXPECT_EQ(worlds,
+            (std::vector<std::string>{"apartment", "arena", "hall", "outdoor", "room", "simple",
+                                      "structured", "terraces", "tunnel", "unstructured"}));
   for (const std::string& w : worlds) EXPECT_FALSE(paths.WorldSummary(w).empty()) << w;
 }
 

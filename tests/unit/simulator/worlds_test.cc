@@ -43,11 +43,11 @@ TEST_F(WorldsTest, EveryShippedWorldHostsEveryRobot) {
   for (const std::string& world : paths.ShippedWorlds()) {
     Scenario s = WorldOnly(world);
     SpawnPose at;
-    // Free floor in each world (the apartment's living room, the arena's hall, the room's
-    // middle; the start areas of outdoor, simple and structured at the origin, unstructured's
-    // in its top-right corner: its origin is the canyon's floor by a rim's wall).
+    // Free floor in each world (the apartment's living room, the arena's hall, the west side of
+    // the room and of the hall; the start areas of outdoor, simple and structured at the origin,
+    // unstructured's in its top-right corner: its origin is the canyon's floor by a rim's wall).
     const bool lanes = world == "tunnel" || world == "terraces";
-    const bool room = world == "room";
+    const bool room = world == "room" || world == "hall";
     const bool corner = world == "unstructured";
     at.x_m = lanes                  ? 4.0
              : world == "apartment" ? 1.5

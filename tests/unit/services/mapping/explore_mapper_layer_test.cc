@@ -114,6 +114,12 @@ TEST(ExploreMapperLayerTest, ABrokenSweepIsDroppedAndTheNextPanZeroStartsAnother
   Sweep(&layer, 0, 90, 0.0, 20.0);  // ... and the next one starts at pan 0
   EXPECT_EQ(layer.scans(), 1);
   EXPECT_EQ(layer.broken_sweeps(), 1);
+  // One log line each: the sweep that broke, the one that went on the map.
+  const std::vector<std::string> events = layer.TakeEvents();
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_NE(events[0].find("sweep dropped"), std::string::npos) << events[0];
+  EXPECT_NE(events[1].find("sweep 1 at (0.0, 0.0)"), std::string::npos) << events[1];
+  EXPECT_TRUE(layer.TakeEvents().empty());
   // A sweep during which the scanner moved is dropped.
   Sweep(&layer, 0, 45, 3.0, 30.0);
   Sweep(&layer, 45, 90, 3.5, 30.0);

@@ -3,9 +3,14 @@
 
 #include "services/mapping/lcm/mapper_streams.h"
 
+#include <cmath>
 #include <set>
+#include <vector>
 
 #include <gtest/gtest.h>
+
+#include "cairn/lcmt_laser_scan.hpp"
+#include "services/mapping/explore_mapper_layer.h"
 
 namespace cairn::mapping {
 namespace {
@@ -20,6 +25,61 @@ TEST(MapperStreamsTest, OneConverterPerStream) {
     const char garbage[] = "not a message";
     EXPECT_FALSE(c.convert(garbage, sizeof(garbage)).ok()) << c.stream;
   }
+}
+
+const StreamConverter& Turret() {
+  for (const StreamConverter& c : RegisteredStreams()) {
+    if (c.stream == "TURRET_SCAN") return c;
+  }
+  throw std::runtime_error("no TURRET_SCAN converter");
+}
+
+std::vector<uint8_t> Encode(const cairn::lcmt_laser_scan& m) {
+  std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+cairn::lcmt_laser_scan TurretLine(double pan_rad) {
+  cairn::lcmt_laser_scan m{};
+  m.utime = 1000000;
+  m.robot = "rover";
+  m.sensor_position_m[2] = 1.0;
+  m.sensor_orientation_wxyz[0] = 1.0;
+  m.angle_min_rad = -2.0f;
+  m.angle_increment_rad = 0.01f;
+  m.range_min_m = 0.1f;
+  m.range_max_m = 30.0f;
+  m.ranges_m.assign(400, 5.0f);
+  m.num_ranges = 400;
+  m.turret_angle_rad = pan_rad;
+  return m;
+}
+
+// A turret line becomes a reading with its pan and its line; a line with a bad pan or arrays
+// that disagree with their counts is refused with the reason.
+TEST(MapperStreamsTest, TurretLinesAreCheckedBeforeTheyBecomeReadings) {
+  const StreamConverter& c = Turret();
+  const auto good = Encode(TurretLine(0.25));
+  auto reading = c.convert(good.data(), static_cast<int>(good.size()));
+  ASSERT_TRUE(reading.ok()) << reading.status().message();
+  const auto* line = dynamic_cast<const TurretLineReading*>(reading.value().get());
+  ASSERT_NE(line, nullptr);
+  EXPECT_DOUBLE_EQ(line->pan_rad, 0.25);
+  EXPECT_EQ(line->line.ranges_m.size(), 400u);
+  EXPECT_EQ(line->utime, 1000000);
+  for (const double pan : {static_cast<double>(NAN), 7.0, -7.0}) {
+    const auto bad = Encode(TurretLine(pan));
+    auto refused = c.convert(bad.data(), static_cast<int>(bad.size()));
+    ASSERT_FALSE(refused.ok()) << pan;
+    EXPECT_NE(refused.status().message().find("turret angle"), std::string::npos);
+  }
+  cairn::lcmt_laser_scan nan_pose = TurretLine(0.0);
+  nan_pose.sensor_position_m[0] = NAN;
+  const auto bad_pose = Encode(nan_pose);
+  EXPECT_FALSE(c.convert(bad_pose.data(), static_cast<int>(bad_pose.size())).ok());
+  // Cut short: the bytes end inside the ranges.
+  EXPECT_FALSE(c.convert(good.data(), static_cast<int>(good.size()) - 100).ok());
 }
 
 }  // namespace
