@@ -490,6 +490,18 @@ class OccupancyRig {
     return done;
   }
 
+  // Once up, one turn in place at 0.6 rad/s (seed 003 test 34), two more scans, then the map
+  // (empty when a step failed; the failure is reported).
+  common::GridMap SpinOnceAndSnapshot() {
+    if (!WaitReady()) {
+      ADD_FAILURE() << "the simulator or the mapper did not come up";
+      return {};
+    }
+    if (!Spin(0.6, 2.0 * M_PI + 0.2, 60.0)) return {};
+    WaitScans(OccupancyVersion(), 2, 10.0);
+    return Snapshot();
+  }
+
   // The highest version of the occupancy layer in a manifest so far: it grows by one with every
   // scan the mapper has applied.
   int64_t OccupancyVersion() {
@@ -568,11 +580,7 @@ class OccupancyRig {
 // free (l < 0), and no occupied cell lies more than a cell from a true wall.
 TEST(ExploreStackTest, ARobotSpinningInAClosedRoomMapsItsWallsAndItsFloor) {
   OccupancyRig rig("config/sim/room_p3dx.yaml");
-  ASSERT_TRUE(rig.WaitReady());
-  ASSERT_TRUE(rig.Spin(0.6, 2.0 * M_PI + 0.2, 60.0));
-  // Two more occupancy publications, then the map.
-  rig.WaitScans(rig.OccupancyVersion(), 2, 10.0);
-  const common::GridMap logodds = rig.Snapshot();
+  const common::GridMap logodds = rig.SpinOnceAndSnapshot();
   ASSERT_TRUE(logodds.HasLayer(kLogOdds));
   const common::Layer& l = logodds.at(kLogOdds);
   int64_t interior = 0, interior_free = 0;
@@ -609,10 +617,7 @@ constexpr double kHallX = 8.0, kHallY = 1.0;  // the start: 1 m from the south w
 // off the robot's centre (its 0.2 m circle over the spin), and a cell is 0.05 m.
 TEST(ExploreStackTest, Seed003Test35BeamsThatReturnNothingClearUpToFourPointNineMetres) {
   OccupancyRig rig("config/sim/hall_p3dx.yaml", kHallCellsX, kHallCellsY);
-  ASSERT_TRUE(rig.WaitReady());
-  ASSERT_TRUE(rig.Spin(0.6, 2.0 * M_PI + 0.2, 60.0));
-  rig.WaitScans(rig.OccupancyVersion(), 2, 10.0);
-  const common::GridMap logodds = rig.Snapshot();
+  const common::GridMap logodds = rig.SpinOnceAndSnapshot();
   ASSERT_TRUE(logodds.HasLayer(kLogOdds));
   const common::Layer& l = logodds.at(kLogOdds);
   int64_t near = 0, near_free = 0, far = 0, far_untouched = 0;
