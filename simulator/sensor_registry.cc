@@ -8,6 +8,7 @@
 #include "simulator/sensors/lidar_sensor.h"
 #include "simulator/sensors/odometry_sensor.h"
 #include "simulator/sensors/planar_laser_sensor.h"
+#include "simulator/sensors/sonar_sensor.h"
 #include "simulator/sensors/turret_sensor.h"
 
 namespace cairn::sim {
@@ -22,6 +23,7 @@ const SensorRegistry& BuiltinSensors() {
     r.Add(KindOf<OdometrySensor>());
     r.Add(KindOf<ImuSensor>());
     r.Add(KindOf<GroundTruthSensor>());
+    r.Add(KindOf<SonarSensor>());
     return r;
   }();
   return registry;

@@ -7,6 +7,7 @@
 #include "cairn/lcmt_odometry.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
+#include "cairn/lcmt_sonar_ping.hpp"
 
 #include "common/channels.h"
 #include "services/runtime/conversions.h"
@@ -15,6 +16,7 @@
 #include "simulator/sensors/lidar_sensor.h"
 #include "simulator/sensors/odometry_sensor.h"
 #include "simulator/sensors/planar_laser_sensor.h"
+#include "simulator/sensors/sonar_sensor.h"
 #include "simulator/sensors/turret_sensor.h"
 
 namespace cairn::sim {
@@ -28,6 +30,22 @@ cairn::lcmt_laser_scan TurretLineToLcm(const TurretLine& line) {
   m.frame = "turret";
   m.turret_angle_rad = line.pan_rad;
   m.scan_time_s = static_cast<float>(line.line_period_s);
+  return m;
+}
+
+/// One sonar ping in frame "sonar": the head's pose and angle, one beam of bins.
+cairn::lcmt_sonar_ping SonarToLcm(const SonarPing& ping) {
+  cairn::lcmt_sonar_ping m{};
+  m.utime = ping.utime;
+  m.robot = ping.robot;
+  m.frame = "sonar";
+  runtime::ToLcm(ping.sensor_pose, m.sensor_position_m, m.sensor_orientation_wxyz);
+  m.pan_rad = ping.pan_rad;
+  m.range_min_m = ping.range_min_m;
+  m.range_max_m = ping.range_max_m;
+  m.sound_speed_mps = ping.sound_speed_mps;
+  m.num_bins = static_cast<int32_t>(ping.bins.size());
+  m.intensities = ping.bins;
   return m;
 }
 
@@ -93,6 +111,7 @@ const SensorPublishers& BuiltinSensorPublishers() {
     p.Add(MakeSensorPublisher(LidarSensor::kName, channels::kLidar, &LidarToLcm));
     p.Add(MakeSensorPublisher(PlanarLaserSensor::kName, channels::kScan, &ScanToLcm));
     p.Add(MakeSensorPublisher(TurretSensor::kName, channels::kTurretScan, &TurretLineToLcm));
+    p.Add(MakeSensorPublisher(SonarSensor::kName, channels::kSonar, &SonarToLcm));
     p.Add(MakeSensorPublisher(OdometrySensor::kName, channels::kOdom, &OdometryToLcm));
     p.Add(MakeSensorPublisher(ImuSensor::kName, channels::kImu, &ImuToLcm));
     p.Add(MakeSensorPublisher(GroundTruthSensor::kName, channels::kPose, &GroundTruthToLcm));

@@ -50,8 +50,8 @@ TEST(ScenarioTest, UnknownKeysAndBadValuesNameFileAndLine) {
   expect_error("world: tunnel\nrobots:\n  - {id: a, model: kobuki, profile: ghost}\n",
                "unknown profile 'ghost'");
   expect_error(
-      "world: tunnel\nrobots:\n  - id: a\n    model: kobuki\n    sensors:\n      sonar: {}\n",
-      "unknown sensor 'sonar'");
+      "world: tunnel\nrobots:\n  - id: a\n    model: kobuki\n    sensors:\n      sidescan: {}\n",
+      "unknown sensor 'sidescan'");
   expect_error(
       "world: tunnel\nrobots:\n  - id: a\n    model: kobuki\n    sensors:\n"
       "      planar_laser: {beams: 1}\n",

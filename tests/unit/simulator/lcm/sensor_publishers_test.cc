@@ -11,6 +11,7 @@
 #include "cairn/lcmt_odometry.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
+#include "cairn/lcmt_sonar_ping.hpp"
 
 #include "common/channels.h"
 #include "simulator/lcm/sim_service.h"
@@ -20,6 +21,7 @@
 #include "simulator/sensors/lidar_sensor.h"
 #include "simulator/sensors/odometry_sensor.h"
 #include "simulator/sensors/planar_laser_sensor.h"
+#include "simulator/sensors/sonar_sensor.h"
 #include "simulator/sensors/turret_sensor.h"
 #include "tests/unit/simulator/sim_test_util.h"
 
@@ -62,7 +64,8 @@ TEST(SensorPublishersTest, EveryBuiltinSensorHasOneOnItsChannel) {
   const std::map<std::string, std::string> streams = {
       {"hdl32e", channels::kLidar},      {"planar_laser", channels::kScan},
       {"turret", channels::kTurretScan}, {"odometry", channels::kOdom},
-      {"imu", channels::kImu},           {"ground_truth", channels::kPose}};
+      {"imu", channels::kImu},           {"ground_truth", channels::kPose},
+      {"sonar", channels::kSonar}};
   for (const auto& [name, stream] : streams) {
     const SensorPublisher* p = BuiltinSensorPublishers().Find(name);
     ASSERT_NE(p, nullptr) << name;
@@ -119,6 +122,27 @@ TEST(SensorPublishersTest, TurretLineCarriesPanPeriodAndFrame) {
   EXPECT_EQ(m.turret_angle_rad, 0.25);
   EXPECT_EQ(m.scan_time_s, 0.02f);
   EXPECT_EQ(m.utime, 20000);
+}
+
+TEST(SensorPublishersTest, SonarPingCarriesItsBeamOfBinsAndTheHeadsPose) {
+  SimOutputs out;
+  SonarPing ping;
+  ping.utime = 66667;
+  ping.robot = "auv";
+  ping.sensor_pose.position_m = {1.0, 2.0, -3.0};
+  ping.pan_rad = -0.5;
+  ping.range_max_m = 50.0;
+  ping.sound_speed_mps = 1500.0;
+  ping.bins = {0, 81, 255, 0};
+  out.Add(SonarSensor::kName, ping);
+  const auto m = PublishAndReceive<cairn::lcmt_sonar_ping>(out, "auv.SONAR");
+  EXPECT_EQ(m.frame, "sonar");
+  EXPECT_EQ(m.utime, 66667);
+  EXPECT_EQ(m.pan_rad, -0.5);
+  EXPECT_EQ(m.num_bins, 4);
+  EXPECT_EQ(m.intensities, (std::vector<uint8_t>{0, 81, 255, 0}));
+  EXPECT_EQ(m.sensor_position_m[2], -3.0);
+  EXPECT_EQ(m.range_max_m, 50.0);
 }
 
 TEST(SensorPublishersTest, OdometryImuAndGroundTruth) {
