@@ -11,6 +11,7 @@
 #include "services/mapping/occupancy_band.h"
 #include "services/mapping/occupancy_mapper_layer.h"
 #include "services/mapping/octomap_mapper_layer.h"
+#include "services/mapping/sonar_mapper_layer.h"
 #include "services/mapping/terrain_mapper_layer.h"
 
 /// @file
@@ -30,6 +31,7 @@ inline constexpr char kOccupancyLayerName[] = "occupancy";
 inline constexpr char kOctomapLayerName[] = "octomap";
 inline constexpr char kDynamicLayerName[] = "dynamic";
 inline constexpr char kExploreLayerName[] = "explore";
+inline constexpr char kSonarLayerName[] = "sonar";
 
 struct MapperCoreParams {
   /// The configured layers, in the order they take each input (names of RegisteredLayers()).
@@ -46,6 +48,8 @@ struct MapperCoreParams {
   /// Seed 002's information map from the turret's sweeps, with an explorer configuration's
   /// parameters.
   ExploreMapperLayerParams explore;
+  /// Seed 004's sonar obstacles from the imaging sonar's pings, on a 2-D occupancy of their own.
+  SonarMapperLayerParams sonar;
 
   /// Whether `layer` is listed.
   bool Has(const std::string& layer) const;
@@ -102,6 +106,10 @@ inline const std::vector<LayerRegistration>& LayerRegistry() {
        [](common::YamlMap& m, MapperCoreParams* p) {
          p->explore = LoadExploreMapperLayerParams(m);
        }},
+      {kSonarLayerName,
+       [](const MapperCoreParams& p) { return std::make_unique<SonarMapperLayer>(p.sonar); },
+       [](const MapperCoreParams& p) { p.sonar.Validate(); },
+       [](common::YamlMap& m, MapperCoreParams* p) { p->sonar = LoadSonarMapperLayerParams(m); }},
   };
   return registry;
 }

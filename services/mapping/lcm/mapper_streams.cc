@@ -4,8 +4,10 @@
 #include <memory>
 
 #include "cairn/lcmt_laser_scan.hpp"
+#include "cairn/lcmt_sonar_ping.hpp"
 
 #include "services/mapping/explore_mapper_layer.h"
+#include "services/mapping/sonar_mapper_layer.h"
 #include "services/runtime/conversions.h"
 
 namespace cairn::mapping {
@@ -30,13 +32,48 @@ common::Result<std::unique_ptr<SensorReading>> ConvertTurretLine(const void* dat
   return std::unique_ptr<SensorReading>(std::move(reading));
 }
 
+// At most this many bins in a ping (a Miniking gives up to 800).
+constexpr int kMaxSonarBins = 10000;
+
+// A sonar ping: one beam of bins at the head's angle (sonar_mapper_layer.h).
+common::Result<std::unique_ptr<SensorReading>> ConvertSonarPing(const void* data, int size) {
+  cairn::lcmt_sonar_ping msg;
+  if (msg.decode(data, 0, size) < 0) {
+    return common::InvalidArgumentError("the message does not decode as lcmt_sonar_ping");
+  }
+  if (msg.num_bins < 1 || msg.num_bins > kMaxSonarBins ||
+      msg.intensities.size() != static_cast<size_t>(msg.num_bins)) {
+    return common::InvalidArgumentError("a ping of " + std::to_string(msg.num_bins) + " bins (1.." +
+                                        std::to_string(kMaxSonarBins) + ")");
+  }
+  if (!std::isfinite(msg.pan_rad) || std::abs(msg.pan_rad) > M_PI) {
+    return common::InvalidArgumentError("the head's angle is not finite or beyond pi");
+  }
+  if (!std::isfinite(msg.range_min_m) || !std::isfinite(msg.range_max_m) || msg.range_min_m < 0.0 ||
+      msg.range_max_m <= msg.range_min_m || msg.range_max_m > 1000.0) {
+    return common::InvalidArgumentError("the ping's range is not 0 <= min < max <= 1000 m");
+  }
+  auto pose = runtime::PoseFromArrays(msg.sensor_position_m, msg.sensor_orientation_wxyz);
+  if (!pose.ok())
+    return common::InvalidArgumentError("the ping's pose: " + pose.status().message());
+  auto reading = std::make_unique<SonarReading>();
+  reading->utime = msg.utime;
+  reading->sensor_pose = *pose;
+  reading->pan_rad = msg.pan_rad;
+  reading->range_min_m = msg.range_min_m;
+  reading->range_max_m = msg.range_max_m;
+  reading->bins = std::move(msg.intensities);
+  return std::unique_ptr<SensorReading>(std::move(reading));
+}
+
 }  // namespace
 
 const std::vector<StreamConverter>& RegisteredStreams() {
-  // One entry per stream: {"SONAR", [](const void* data, int size) { decode the lcmt_..., check
-  // it, return a SonarReading (sonar_mapper_layer.h) }}.
+  // One entry per stream: its name and a function that decodes the message, checks it and
+  // makes the reading the layer's header declares.
   static const std::vector<StreamConverter> streams{
       {"TURRET_SCAN", ConvertTurretLine},
+      {"SONAR", ConvertSonarPing},
   };
   return streams;
 }

@@ -228,8 +228,8 @@ TEST(MapperCoreTest, TheLayerListComesFromTheParams) {
   EXPECT_THROW(params.Validate(), std::invalid_argument);
   params.layers = {"terrain", "terrain"};
   EXPECT_THROW(params.Validate(), std::invalid_argument);
-  EXPECT_EQ(RegisteredLayers(),
-            (std::vector<std::string>{"terrain", "occupancy", "octomap", "dynamic", "explore"}));
+  EXPECT_EQ(RegisteredLayers(), (std::vector<std::string>{"terrain", "occupancy", "octomap",
+                                                          "dynamic", "explore", "sonar"}));
 }
 
 // The dynamic layers on a 4 x 3 m extent.

@@ -10,7 +10,10 @@
 #include <gtest/gtest.h>
 
 #include "cairn/lcmt_laser_scan.hpp"
+#include "cairn/lcmt_sonar_ping.hpp"
+
 #include "services/mapping/explore_mapper_layer.h"
+#include "services/mapping/sonar_mapper_layer.h"
 
 namespace cairn::mapping {
 namespace {
@@ -27,14 +30,16 @@ TEST(MapperStreamsTest, OneConverterPerStream) {
   }
 }
 
-const StreamConverter& Turret() {
+const StreamConverter& Converter(const std::string& stream) {
   for (const StreamConverter& c : RegisteredStreams()) {
-    if (c.stream == "TURRET_SCAN") return c;
+    if (c.stream == stream) return c;
   }
-  throw std::runtime_error("no TURRET_SCAN converter");
+  throw std::runtime_error("no " + stream + " converter");
 }
+const StreamConverter& Turret() { return Converter("TURRET_SCAN"); }
 
-std::vector<uint8_t> Encode(const cairn::lcmt_laser_scan& m) {
+template <typename Msg>
+std::vector<uint8_t> Encode(const Msg& m) {
   std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
   m.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
   return bytes;
@@ -80,6 +85,65 @@ TEST(MapperStreamsTest, TurretLinesAreCheckedBeforeTheyBecomeReadings) {
   EXPECT_FALSE(c.convert(bad_pose.data(), static_cast<int>(bad_pose.size())).ok());
   // Cut short: the bytes end inside the ranges.
   EXPECT_FALSE(c.convert(good.data(), static_cast<int>(good.size()) - 100).ok());
+}
+
+cairn::lcmt_sonar_ping SonarPing() {
+  cairn::lcmt_sonar_ping m{};
+  m.utime = 2000000;
+  m.robot = "auv";
+  m.frame = "sonar";
+  m.sensor_position_m[2] = -5.0;
+  m.sensor_orientation_wxyz[0] = 1.0;
+  m.pan_rad = 0.3;
+  m.range_max_m = 50.0;
+  m.sound_speed_mps = 1500.0;
+  m.num_bins = 50;
+  m.intensities.assign(50, 0);
+  m.intensities[10] = 247;
+  return m;
+}
+
+// A sonar ping becomes a reading with its bins and range; a wrong bin count, a head angle
+// beyond pi or not finite, a bad range or pose is refused with the reason (the service counts
+// and drops it).
+TEST(MapperStreamsTest, SonarPingsAreCheckedBeforeTheyBecomeReadings) {
+  const StreamConverter& c = Converter("SONAR");
+  const auto good = Encode(SonarPing());
+  auto reading = c.convert(good.data(), static_cast<int>(good.size()));
+  ASSERT_TRUE(reading.ok()) << reading.status().message();
+  const auto* ping = dynamic_cast<const SonarReading*>(reading.value().get());
+  ASSERT_NE(ping, nullptr);
+  EXPECT_EQ(ping->bins.size(), 50u);
+  EXPECT_EQ(ping->bins[10], 247);
+  EXPECT_DOUBLE_EQ(ping->pan_rad, 0.3);
+  EXPECT_DOUBLE_EQ(ping->range_max_m, 50.0);
+  auto refused = [&](cairn::lcmt_sonar_ping m, const std::string& why) {
+    const auto bytes = Encode(m);
+    auto r = c.convert(bytes.data(), static_cast<int>(bytes.size()));
+    ASSERT_FALSE(r.ok()) << why;
+    EXPECT_NE(r.status().message().find(why), std::string::npos) << r.status().message();
+  };
+  cairn::lcmt_sonar_ping m = SonarPing();
+  m.num_bins = 0;
+  m.intensities.clear();
+  refused(m, "bins");
+  m = SonarPing();
+  m.num_bins = 20000;
+  m.intensities.assign(20000, 1);
+  refused(m, "bins");
+  m = SonarPing();
+  m.pan_rad = 4.0;
+  refused(m, "angle");
+  m.pan_rad = NAN;
+  refused(m, "angle");
+  m = SonarPing();
+  m.range_max_m = NAN;
+  refused(m, "range");
+  m = SonarPing();
+  m.sensor_orientation_wxyz[0] = NAN;
+  refused(m, "pose");
+  // Cut short: a count that claims more bytes than there are does not decode.
+  EXPECT_FALSE(c.convert(good.data(), static_cast<int>(good.size()) - 20).ok());
 }
 
 }  // namespace

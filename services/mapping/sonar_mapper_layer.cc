@@ -1,0 +1,136 @@
+#include "services/mapping/sonar_mapper_layer.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/check.h"
+#include "common/layers.h"
+#include "common/yaml_reader.h"
+
+namespace cairn::mapping {
+
+OccupancyParams SonarMapperLayerParams::DefaultGrid() {
+  OccupancyParams g;
+  g.resolution_m = 0.25;
+  g.size_x_cells = 8000;
+  g.size_y_cells = 8000;
+  g.origin_x_m = -1000.0;
+  g.origin_y_m = -1000.0;
+  g.max_range_m = 1000.0;  // the ping says what its range is
+  g.no_return_range_m = 1000.0;
+  g.min_range_m = 0.0;
+  return g;
+}
+
+void SonarMapperLayerParams::Validate() const {
+  grid.Validate();
+  CAIRN_THROW_UNLESS(peaks.min_peak_height >= 1 && peaks.min_peak_height <= 255,
+                     "sonar.min_peak_height must be in [1, 255]");
+  CAIRN_THROW_UNLESS(peaks.min_peak_distance >= 1 && peaks.min_peak_distance <= 1000,
+                     "sonar.min_peak_distance must be in [1, 1000]");
+  CAIRN_THROW_UNLESS(std::isfinite(publish_period_s) && publish_period_s > 0.0,
+                     "sonar.publish_period_s must be > 0");
+}
+
+SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map) {
+  SonarMapperLayerParams p;
+  map.Get("min_peak_height", &p.peaks.min_peak_height);
+  map.Get("min_peak_distance", &p.peaks.min_peak_distance);
+  map.Get("verify_shadow", &p.peaks.verify_shadow);
+  map.Get("publish_period_s", &p.publish_period_s);
+  // The grid keys read over the sonar's defaults.
+  const OccupancyParams defaults = p.grid;
+  p.grid = ReadOccupancyParams(map);
+  if (!map.Has("resolution_m")) p.grid.resolution_m = defaults.resolution_m;
+  if (!map.Has("size_x_cells")) p.grid.size_x_cells = defaults.size_x_cells;
+  if (!map.Has("size_y_cells")) p.grid.size_y_cells = defaults.size_y_cells;
+  if (!map.Has("origin_x_m")) p.grid.origin_x_m = defaults.origin_x_m;
+  if (!map.Has("origin_y_m")) p.grid.origin_y_m = defaults.origin_y_m;
+  if (!map.Has("max_range_m")) p.grid.max_range_m = defaults.max_range_m;
+  if (!map.Has("no_return_range_m")) p.grid.no_return_range_m = defaults.no_return_range_m;
+  if (!map.Has("min_range_m")) p.grid.min_range_m = defaults.min_range_m;
+  map.Finish();
+  return p;
+}
+
+std::vector<PlanarRay> SonarPingRays(const SonarReading& ping, const SonarPeakParams& peaks,
+                                     std::vector<int>* obstacle_bins) {
+  std::vector<PlanarRay> rays;
+  const int bins = static_cast<int>(ping.bins.size());
+  if (bins == 0 || !(ping.range_max_m > ping.range_min_m)) return rays;
+  const double bin_m = (ping.range_max_m - ping.range_min_m) / bins;
+  const common::Vector2 origin = ping.sensor_pose.position_m.head<2>();
+  const Eigen::Vector3d along = ping.sensor_pose.orientation * Eigen::Vector3d::UnitX();
+  const double yaw = std::atan2(along.y(), along.x());
+  const common::Vector2 dir(std::cos(yaw), std::sin(yaw));
+  const std::vector<int> found = SonarObstacleBins(ping.bins, peaks);
+  if (obstacle_bins != nullptr) *obstacle_bins = found;
+  if (found.empty()) {
+    rays.push_back({origin, origin + ping.range_max_m * dir, false});
+    return rays;
+  }
+  // Free up to the nearest peak; every peak an obstacle at its bin's near edge.
+  for (size_t i = 0; i < found.size(); ++i) {
+    const common::Vector2 at = origin + (ping.range_min_m + found[i] * bin_m) * dir;
+    rays.push_back({i == 0 ? origin : at, at, true});
+  }
+  return rays;
+}
+
+SonarMapperLayer::SonarMapperLayer(const SonarMapperLayerParams& params)
+    : params_((params.Validate(), params)), grid_(params.grid) {}
+
+const std::string& SonarMapperLayer::name() const {
+  static const std::string kName = "sonar";
+  return kName;
+}
+
+LayerSchedule SonarMapperLayer::schedule() const {
+  LayerSchedule s;
+  s.publish_period_s = params_.publish_period_s;
+  return s;
+}
+
+void SonarMapperLayer::OnReading(const SensorReading& reading) {
+  const auto* ping = dynamic_cast<const SonarReading*>(&reading);
+  if (ping == nullptr) return;
+  std::vector<int> found;
+  grid_.InsertRays(SonarPingRays(*ping, params_.peaks, &found));
+  ++pings_;
+  last_obstacles_ = static_cast<int>(found.size());
+  obstacles_ += last_obstacles_;
+  if (pings_ == 1) {
+    events_.push_back("first ping mapped: " + std::to_string(found.size()) + " obstacle bins of " +
+                      std::to_string(ping->bins.size()));
+  }
+}
+
+void SonarMapperLayer::Reset() {
+  grid_.Clear();
+  pings_ = 0;
+  obstacles_ = 0;
+  last_obstacles_ = 0;
+}
+
+std::vector<GridOutput> SonarMapperLayer::GridOutputs() const {
+  return {{kSonarOccupancy, GridEncoding::kOccupancy, true, false},
+          {kSonarLogOdds, GridEncoding::kFloat, true, true}};
+}
+
+std::optional<common::GridMap> SonarMapperLayer::ExportGrids() const {
+  const common::GridGeometry bounds = grid_.ObservedBounds();
+  if (bounds.size_x <= 0 || bounds.size_y <= 0) return std::nullopt;
+  common::GridMap exported = grid_.Export(bounds);
+  common::GridMap out(exported.geometry());
+  out.AddLayer(kSonarOccupancy, std::move(exported.at(layers::kOccupancy)));
+  out.AddLayer(kSonarLogOdds, std::move(exported.at(layers::kOccupancyLogOdds)));
+  return out;
+}
+
+std::vector<std::string> SonarMapperLayer::TakeEvents() {
+  std::vector<std::string> out;
+  out.swap(events_);
+  return out;
+}
+
+}  // namespace cairn::mapping

@@ -1,0 +1,87 @@
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "services/mapping/mapper_layer.h"
+#include "services/mapping/occupancy_grid.h"
+#include "services/mapping/sonar_detection.h"
+
+/// @file
+/// Seed 004's sonar obstacles as a mapper layer ("sonar"): each ping of the imaging sonar
+/// (the stream SONAR, one beam of range bins at the head's angle) is searched for obstacle
+/// peaks (sonar_detection.h: mph 110, mpd 2, the shadow check when asked for), and goes into a
+/// 2-D log-odds occupancy of its own: free along the beam up to the nearest peak, occupied at
+/// every peak (the near edge of its bin); free to range_max when nothing echoes above the
+/// threshold. Publishes `sonar/occupancy` (0..100, -1 unknown) and `sonar/occupancy_logodds`.
+
+namespace cairn::mapping {
+
+/// Layer names.
+inline constexpr char kSonarOccupancy[] = "sonar/occupancy";
+inline constexpr char kSonarLogOdds[] = "sonar/occupancy_logodds";
+
+/// One sonar ping (lcmt_sonar_ping on <robot>.SONAR, checked by its converter).
+struct SonarReading : SensorReading {
+  double pan_rad{0.0};  ///< the head's angle (the pose already points along the beam)
+  double range_min_m{0.0};
+  double range_max_m{50.0};
+  std::vector<uint8_t> bins;
+};
+
+struct SonarMapperLayerParams {
+  OccupancyParams grid = DefaultGrid();
+  SonarPeakParams peaks;
+  double publish_period_s{1.0};
+
+  /// The default grid: 0.25 m cells over 2 km round the site origin, OctoMap's log-odds.
+  static OccupancyParams DefaultGrid();
+  /// @throws std::invalid_argument naming a bad field.
+  void Validate() const;
+};
+
+/// Reads a `sonar` section (the grid keys of occupancy, min_peak_height, min_peak_distance,
+/// verify_shadow, publish_period_s): the caller reads `enabled` first.
+/// @throws common::ConfigError naming the file and line of a bad or unknown key.
+SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map);
+
+/// The rays one ping puts on the map (the beam's heading from the head's pose), and the bins
+/// found as obstacles in it.
+std::vector<PlanarRay> SonarPingRays(const SonarReading& ping, const SonarPeakParams& peaks,
+                                     std::vector<int>* obstacle_bins = nullptr);
+
+class SonarMapperLayer : public MapperLayer {
+ public:
+  /// @throws std::invalid_argument if the params are invalid.
+  explicit SonarMapperLayer(const SonarMapperLayerParams& params);
+
+  const std::string& name() const override;
+  uint32_t inputs() const override { return kSensorReadings; }
+  LayerSchedule schedule() const override;
+  std::vector<std::string> OwnedLayers() const override { return {kSonarOccupancy, kSonarLogOdds}; }
+  std::vector<std::string> ReadingStreams() const override { return {"SONAR"}; }
+  void OnReading(const SensorReading& reading) override;
+  void Reset() override;
+  std::vector<GridOutput> GridOutputs() const override;
+  std::optional<common::GridMap> ExportGrids() const override;
+  int64_t version() const override { return grid_.version(); }
+  std::vector<std::string> TakeEvents() override;
+
+  const OccupancyGrid& grid() const { return grid_; }
+  int64_t pings() const { return pings_; }
+  int64_t obstacles() const { return obstacles_; }  ///< obstacle bins over all pings
+  /// Obstacle bins in the last ping.
+  int last_obstacles() const { return last_obstacles_; }
+
+ private:
+  SonarMapperLayerParams params_;
+  OccupancyGrid grid_;
+  int64_t pings_{0};
+  int64_t obstacles_{0};
+  int last_obstacles_{0};
+  std::vector<std::string> events_;
+};
+
+}  // namespace cairn::mapping
