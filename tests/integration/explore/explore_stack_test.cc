@@ -652,7 +652,7 @@ TEST(ExploreStackTest, Seed003Test35BeamsThatReturnNothingClearUpToFourPointNine
 
 // Seed 003 test 36 in both modes: a box placed in front of the robot, seen, then removed while
 // the robot watches for 50 more scans. With the seed's protection (faithful, the arena's
-// config) its cells keep the value they had (at least 2.0: never cleared again); with the
+// config) no miss lowers its cells again (they stay at 2.0 or more); with the
 // threshold raised above the clamp (improved) the same cells clear (l < 0).
 void ExpectBoxPersistence(bool faithful) {
   OccupancyRig rig("config/sim/hall_p3dx.yaml", kHallCellsX, kHallCellsY,
@@ -692,13 +692,15 @@ void ExpectBoxPersistence(bool faithful) {
   int kept = 0, cleared = 0;
   for (const int64_t i : face) {
     const float was = before.at(kLogOdds).data()[i], now = after.at(kLogOdds).data()[i];
-    kept += now == was;
+    // Protected: no miss lowers it (hits of scans still on their way when the box went may
+    // raise it towards the clamp).
+    kept += now >= was && now >= 2.0f;
     cleared += now < 0.f;
   }
   std::printf("box persistence (%s): %d face cells, %d kept, %d cleared after 50 scans\n",
               faithful ? "faithful" : "improved", static_cast<int>(face.size()), kept, cleared);
   if (faithful) {
-    EXPECT_EQ(kept, static_cast<int>(face.size())) << "a protected cell changed";
+    EXPECT_EQ(kept, static_cast<int>(face.size())) << "a protected cell was lowered";
   } else {
     EXPECT_EQ(cleared, static_cast<int>(face.size())) << "a cell of the removed box stayed";
   }
