@@ -93,7 +93,8 @@ TEST(MapperConfigTest, UnknownKeysAndBadValuesNameTheirLine) {
   ExpectConfigError("pose_source: gps\n", "pose_source");
   ExpectConfigError("occupancy: {preset: fast}\n", "preset");
   ExpectConfigError("lidar_mount: {x: 1}\n", "x");
-  ExpectConfigError("sonar: {enabled: true}\n", "sonar");
+  ExpectConfigError("sidescan: {enabled: true}\n", "sidescan");
+  ExpectConfigError("sonar: {min_peak_hieght: 100}\n", "min_peak_hieght");
 }
 
 TEST(MapperConfigTest, ParamsAreValidated) {
