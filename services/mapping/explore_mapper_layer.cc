@@ -8,7 +8,6 @@
 #include "common/yaml_reader.h"
 #include "services/explore/explorer_config.h"
 #include "services/explore/scan_integration.h"
-#include "services/explore/work_area.h"
 
 namespace cairn::mapping {
 

@@ -501,10 +501,10 @@ void OccupancyGrid::Import(const common::GridMap& map) {
   ++version_;
 }
 
-OccupancyParams ReadOccupancyParams(common::YamlMap& m) {
+OccupancyParams ReadOccupancyParams(common::YamlMap& m, const OccupancyParams& base) {
   std::string preset = "octomap";
   m.Get("preset", &preset);
-  OccupancyParams p;
+  OccupancyParams p = base;
   if (preset == "seed003") {
     p = OccupancyParams::Seed003();
   } else if (preset != "octomap") {

@@ -92,7 +92,8 @@ struct OccupancyParams {
 /// default, or seed003: OccupancyParams::Seed003()) first, then the sensor model, beam and grid
 /// keys. Does not call Finish: the section also holds the mapper layer's keys.
 /// @throws common::ConfigError naming the file and line of a bad key.
-OccupancyParams ReadOccupancyParams(common::YamlMap& map);
+/// `base`: the params the octomap preset (or no preset key) starts from.
+OccupancyParams ReadOccupancyParams(common::YamlMap& map, const OccupancyParams& base = {});
 
 /// What one Insert call did.
 struct OccupancyInsertStats {

@@ -38,17 +38,7 @@ SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map) {
   map.Get("min_peak_distance", &p.peaks.min_peak_distance);
   map.Get("verify_shadow", &p.peaks.verify_shadow);
   map.Get("publish_period_s", &p.publish_period_s);
-  // The grid keys read over the sonar's defaults.
-  const OccupancyParams defaults = p.grid;
-  p.grid = ReadOccupancyParams(map);
-  if (!map.Has("resolution_m")) p.grid.resolution_m = defaults.resolution_m;
-  if (!map.Has("size_x_cells")) p.grid.size_x_cells = defaults.size_x_cells;
-  if (!map.Has("size_y_cells")) p.grid.size_y_cells = defaults.size_y_cells;
-  if (!map.Has("origin_x_m")) p.grid.origin_x_m = defaults.origin_x_m;
-  if (!map.Has("origin_y_m")) p.grid.origin_y_m = defaults.origin_y_m;
-  if (!map.Has("max_range_m")) p.grid.max_range_m = defaults.max_range_m;
-  if (!map.Has("no_return_range_m")) p.grid.no_return_range_m = defaults.no_return_range_m;
-  if (!map.Has("min_range_m")) p.grid.min_range_m = defaults.min_range_m;
+  p.grid = ReadOccupancyParams(map, SonarMapperLayerParams::DefaultGrid());
   map.Finish();
   return p;
 }

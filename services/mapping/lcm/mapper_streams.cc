@@ -1,7 +1,9 @@
 #include "services/mapping/lcm/mapper_streams.h"
 
 #include <cmath>
+#include <cstdint>
 #include <memory>
+#include <optional>
 
 #include "cairn/lcmt_laser_scan.hpp"
 #include "cairn/lcmt_sonar_ping.hpp"
@@ -35,8 +37,36 @@ common::Result<std::unique_ptr<SensorReading>> ConvertTurretLine(const void* dat
 // At most this many bins in a ping (a Miniking gives up to 800).
 constexpr int kMaxSonarBins = 10000;
 
+// The bin count of an encoded lcmt_sonar_ping, read where it lies (after the type's hash,
+// utime, two strings and eight doubles: big-endian, strings as int32 length with their NUL),
+// so a count the bytes cannot hold is refused before the generated decoder sizes an array by
+// it. nullopt when the bytes end first.
+std::optional<int64_t> SonarBinCount(const void* data, int size) {
+  const auto* b = static_cast<const uint8_t*>(data);
+  auto int32_at = [&](int64_t at) -> std::optional<int64_t> {
+    if (at < 0 || at + 4 > size) return std::nullopt;
+    const uint32_t v = (uint32_t{b[at]} << 24) | (uint32_t{b[at + 1]} << 16) |
+                       (uint32_t{b[at + 2]} << 8) | uint32_t{b[at + 3]};
+    return static_cast<int64_t>(static_cast<int32_t>(v));
+  };
+  int64_t at = 8 + 8;            // hash, utime
+  for (int s = 0; s < 2; ++s) {  // robot, frame
+    const auto length = int32_at(at);
+    if (!length || *length < 0 || *length > size) return std::nullopt;
+    at += 4 + *length;
+  }
+  at += 8 * (3 + 4 + 4);  // position, orientation, pan, range_min, range_max, sound_speed
+  return int32_at(at);
+}
+
 // A sonar ping: one beam of bins at the head's angle (sonar_mapper_layer.h).
 common::Result<std::unique_ptr<SensorReading>> ConvertSonarPing(const void* data, int size) {
+  const std::optional<int64_t> count = SonarBinCount(data, size);
+  if (!count || *count < 1 || *count > kMaxSonarBins || *count > size) {
+    return common::InvalidArgumentError(
+        "a ping of " + (count ? std::to_string(*count) : std::string("unreadable")) + " bins (1.." +
+        std::to_string(kMaxSonarBins) + ", within the message's bytes)");
+  }
   cairn::lcmt_sonar_ping msg;
   if (msg.decode(data, 0, size) < 0) {
     return common::InvalidArgumentError("the message does not decode as lcmt_sonar_ping");

@@ -144,6 +144,16 @@ TEST(MapperStreamsTest, SonarPingsAreCheckedBeforeTheyBecomeReadings) {
   refused(m, "pose");
   // Cut short: a count that claims more bytes than there are does not decode.
   EXPECT_FALSE(c.convert(good.data(), static_cast<int>(good.size()) - 20).ok());
+  // A count of two billion in a 150-byte message is refused before anything is sized by it:
+  // num_bins is the int32 just before the 50 bins.
+  auto hostile = good;
+  const size_t at = hostile.size() - 50 - 4;
+  hostile[at] = 0x7f;
+  hostile[at + 1] = hostile[at + 2] = hostile[at + 3] = 0xff;
+  auto bomb = c.convert(hostile.data(), static_cast<int>(hostile.size()));
+  ASSERT_FALSE(bomb.ok());
+  EXPECT_NE(bomb.status().message().find("2147483647 bins"), std::string::npos)
+      << bomb.status().message();
 }
 
 }  // namespace
