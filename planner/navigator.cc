@@ -33,6 +33,8 @@ void NavigatorParams::Validate() const {
   CAIRN_THROW_UNLESS(occupied_goal_far_m >= 0.0, "occupied_goal_far_m must not be negative");
   CAIRN_THROW_UNLESS(occupied_goal_shift_m >= 0.0, "occupied_goal_shift_m must not be negative");
   CAIRN_THROW_UNLESS(yaw_goal_tolerance_rad > 0.0, "yaw_goal_tolerance_rad must be positive");
+  CAIRN_THROW_UNLESS(std::isfinite(wait_for_map_s) && wait_for_map_s >= 0.0,
+                     "wait_for_map_s must not be negative");
   CAIRN_THROW_UNLESS(
       max_pose_age_s > control_period_s,
       "max_pose_age_s must exceed the control period (" << control_period_s << " s)");
@@ -122,6 +124,7 @@ void Navigator::ResetGoalState() {
   path_deviation_m_ = 0.0;
   phase_ = Phase::kFollow;
   no_valid_since_s_ = -1.0;
+  map_wait_start_s_ = -1.0;
   recovery_index_ = 0;
   failure_reason_ = NavReason::kNone;
   status_.progress = 0.0;
@@ -227,6 +230,12 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
       resume_state_ = NavState::kDriving;
       resume_reason_ = NavReason::kNone;
     } else if (status_.state != NavState::kDriving) {
+      if (map_wait_start_s_ >= 0.0) {
+        pending_events_.push_back(
+            Format("explore first: the map showed a way after %.1f s of waiting; moving",
+                   now_s - map_wait_start_s_));
+        map_wait_start_s_ = -1.0;
+      }
       std::ostringstream m;
       m << "driving a " << path_.length_m() << " m path";
       SetState(NavState::kDriving, NavReason::kNone, m.str());
@@ -237,6 +246,7 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
   const NavReason reason = ReasonOf(result.status);
   const std::string why = std::string("plan failed: ") + PlanStatusName(result.status) +
                           (result.message.empty() ? "" : " (" + result.message + ")");
+  if (WaitForMap(result.status, why, now_s)) return;
   if (result.status == PlanStatus::kOutOfBounds) {
     Fail(reason, why);
     return;
@@ -255,6 +265,38 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
     return;
   }
   StartRecoveryOrFail(reason, why, now_s);
+}
+
+bool Navigator::WaitForMap(PlanStatus status, const std::string& why, double now_s) {
+  if (!(params_.wait_for_map_s > 0.0) || status_.state != NavState::kPlanning ||
+      recovery_index_ > 0) {
+    return false;
+  }
+  switch (status) {
+    case PlanStatus::kNoPath:
+    case PlanStatus::kStartOccupied:
+    case PlanStatus::kGoalOccupied:
+    case PlanStatus::kOutOfBounds:
+    case PlanStatus::kTimedOut:
+    case PlanStatus::kApproximate:
+      break;
+    default:
+      return false;
+  }
+  if (map_wait_start_s_ < 0.0) {
+    map_wait_start_s_ = now_s;
+    pending_events_.push_back("explore first: waiting for the map to show a way to the goal (" +
+                              why + ")");
+  }
+  if (now_s - map_wait_start_s_ > params_.wait_for_map_s) {
+    pending_events_.push_back(
+        Format("explore first: no way after %.1f s of waiting", now_s - map_wait_start_s_));
+    map_wait_start_s_ = -1.0;
+    return false;
+  }
+  status_.message = why + "; waiting for the map to show a way";
+  plan_wanted_ = true;  // StartWantedPlan waits min_replan_interval_s between tries
+  return true;
 }
 
 void Navigator::StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s) {
@@ -663,6 +705,10 @@ void Navigator::DecideReplan(double now_s) {
 bool Navigator::StartWantedPlan(double now_s, StepOutput* out) {
   if (!plan_wanted_ ||
       (status_.state != NavState::kPlanning && status_.state != NavState::kDriving)) {
+    return true;
+  }
+  // Waiting for the map: one try per min_replan_interval_s.
+  if (map_wait_start_s_ >= 0.0 && now_s - last_plan_request_s_ < params_.min_replan_interval_s) {
     return true;
   }
   if (!ResolveGoal()) return false;

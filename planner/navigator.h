@@ -79,6 +79,12 @@ struct NavigatorParams {
   double occupied_goal_far_m{3.0};
   double occupied_goal_shift_m{1.0};
   double no_valid_trajectory_patience_s{1.5};
+  /// > 0: explore first (seed 004). A plan that fails because the map shows no way yet (no path,
+  /// goal or start blocked, goal beyond the map, timed out) while the robot is still to start is
+  /// tried again every min_replan_interval_s for up to this long, the robot held still; the wait
+  /// is logged where it starts and ends. With unknown cells as obstacles the robot then moves
+  /// only once its sensors have shown a way. 0: such a plan fails (or recovers) at once.
+  double wait_for_map_s{0.0};
   double progress_distance_m{0.2};        ///< must move this far ...
   double progress_timeout_s{10.0};        ///< ... within this time, else recover
   double recovery_reset_distance_m{1.0};  ///< driving this far re-arms the first recovery
@@ -157,6 +163,8 @@ class Navigator {
   enum class Phase { kFollow, kAlign };
   void SetState(NavState state, NavReason reason, const std::string& message);
   void Fail(NavReason reason, const std::string& message);
+  /// Explore first: true when a failed plan is to be tried again on a later map.
+  bool WaitForMap(PlanStatus status, const std::string& why, double now_s);
   void RequestPlan(double now_s, const std::string& why);
   bool ResolveGoal();
   /// A place goal chosen on an earlier map moves when the map now shows obstacles near it.
@@ -224,6 +232,7 @@ class Navigator {
   Phase phase_{Phase::kFollow};
   Velocity last_command_;
   double no_valid_since_s_{-1.0};
+  double map_wait_start_s_{-1.0};  ///< explore first: waiting for the map since, or -1
   common::Vector2 progress_anchor_{common::Vector2::Zero()};
   double progress_anchor_s_{0.0};
   bool turn_extended_{false};  ///< the turn-in-place extension of this timer is spent

@@ -169,6 +169,7 @@ void LoadNavigator(YamlMap map, NavigatorParams* p) {
   map.Get("replace_path_ratio", &p->replace_path_ratio);
   map.Get("plan_time_budget_s", &p->plan_time_budget_s);
   map.Get("no_valid_trajectory_patience_s", &p->no_valid_trajectory_patience_s);
+  map.Get("wait_for_map_s", &p->wait_for_map_s);
   map.Get("progress_distance_m", &p->progress_distance_m);
   map.Get("progress_timeout_s", &p->progress_timeout_s);
   map.Get("occupied_goal_far_m", &p->occupied_goal_far_m);
@@ -229,6 +230,7 @@ void NavigatorConfig::Finalize() {
 NavigatorConfig LoadNavigatorConfig(YamlMap& root) {
   NavigatorConfig c;
   GetNamed(root, "pose_source", &c.pose_source, PoseSourceFromName);
+  GetNamed(root, "command_output", &c.command_output, CommandOutputFromName);
   root.Get("control_rate_hz", &c.control_rate_hz);
   root.Get("status_rate_hz", &c.status_rate_hz);
   root.Get("map_name", &c.map_name);
@@ -253,6 +255,13 @@ NavigatorConfig LoadNavigatorConfig(YamlMap& root) {
 NavigatorConfig LoadNavigatorConfigFile(const std::string& path) {
   YamlMap root = YamlMap::LoadFile(path);
   return LoadNavigatorConfig(root);
+}
+
+CommandOutput CommandOutputFromName(const std::string& name) {
+  if (name == "velocity") return CommandOutput::kVelocity;
+  if (name == "body_velocity") return CommandOutput::kBodyVelocity;
+  CAIRN_THROW_UNLESS(false, "unknown command output '" << name << "' (velocity, body_velocity)");
+  return CommandOutput::kVelocity;
 }
 
 }  // namespace cairn::planner

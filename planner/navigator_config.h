@@ -17,6 +17,11 @@ namespace cairn::planner {
 /// Where the robot pose comes from.
 enum class PoseSource { kPose, kOdom };
 
+/// How commands go out: lcmt_velocity_command on <robot>.CMD_VEL, or through seed 004's velocity
+/// bridge as lcmt_body_velocity_request on <robot>.BODY_VELOCITY_REQ (surge and yaw enabled,
+/// frame the profile's name: what an AUV's controller takes). One message per command either way.
+enum class CommandOutput { kVelocity, kBodyVelocity };
+
 /// Which of the mapper's layers the navigator plans on (the `map:` section).
 struct MapLayerConfig {
   /// "" (default): the profile's cost layer "cost/<profile>" with encoding cost; with encoding
@@ -45,6 +50,7 @@ struct MapLayerConfig {
 
 struct NavigatorConfig {
   PoseSource pose_source{PoseSource::kPose};  ///< <robot>.POSE (lcmt_pose) or <robot>.ODOM
+  CommandOutput command_output{CommandOutput::kVelocity};
   double control_rate_hz{20.0};
   double status_rate_hz{2.0};
   /// Accept map tiles of this map name only ("" = any).
@@ -72,6 +78,8 @@ NavigatorConfig LoadNavigatorConfig(common::YamlMap& root);
 NavigatorConfig LoadNavigatorConfigFile(const std::string& path);
 
 const char* PoseSourceName(PoseSource source);
+/// "velocity" or "body_velocity". @throws std::invalid_argument otherwise.
+CommandOutput CommandOutputFromName(const std::string& name);
 /// "pose" or "odom". @throws std::invalid_argument otherwise.
 PoseSource PoseSourceFromName(const std::string& name);
 

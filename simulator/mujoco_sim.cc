@@ -21,9 +21,6 @@ using common::Status;
 using common::Vector3;
 
 constexpr double kParkedZ = -50.0;
-// Wheel speed loop: integral gain (1/s) and the most it may add to a servo target (rad/s).
-constexpr double kWheelIntegralGain = 8.0;
-constexpr double kWheelIntegralLimit = 10.0;
 constexpr char kDoorPrefix[] = "door_";
 
 double Seconds(Clock::time_point a, Clock::time_point b) {
@@ -40,13 +37,6 @@ int RequireId(const mjModel* m, mjtObj type, const std::string& name, const std:
   return id;
 }
 
-// Mean rotation of a set of wheel joints.
-double MeanAngle(const mjData* d, const std::vector<int>& qpos) {
-  double sum = 0.0;
-  for (int a : qpos) sum += d->qpos[a];
-  return sum / static_cast<double>(qpos.size());
-}
-
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -58,13 +48,8 @@ struct MujocoSim::Robot {
   int qpos_adr{0};
   int qvel_adr{0};
   double base_height_m{0.0};  ///< base origin above the contact plane in the model file
-  std::vector<int> left_actuators, right_actuators;
-  std::vector<int> left_qpos, right_qpos;
-  std::vector<int> left_dof, right_dof;
-  /// Integral term of each wheel's speed loop (rad/s added to the servo target).
-  std::vector<double> left_integral, right_integral;
-  double left_angle{0.0}, right_angle{0.0};
   std::unique_ptr<DriveController> drive;
+  std::unique_ptr<DriveModel> drive_model;  ///< wheels or thrusters
   /// In the order of the robot's SensorSet.
   std::vector<std::unique_ptr<SimSensor>> sensors;
   std::vector<std::string> sensor_names;
@@ -115,6 +100,16 @@ void MujocoSim::Compose() {
   m->opt.integrator = integ == "rk4"        ? mjINT_RK4
                       : integ == "implicit" ? mjINT_IMPLICIT
                                             : mjINT_EULER;
+  const PhysicsParams& physics = scenario_.physics;
+  if (physics.current_x_mps != 0.0 || physics.current_y_mps != 0.0) {
+    if (!(m->opt.density > 0.0)) {
+      throw std::runtime_error(scenario_.world_path +
+                               ": a current needs water (<option density=\"1000\"/>); this "
+                               "world has none");
+    }
+    m->opt.wind[0] = physics.current_x_mps;
+    m->opt.wind[1] = physics.current_y_mps;
+  }
   data_.reset(mj_makeData(m));
   if (!data_) throw std::runtime_error(scenario_.world_path + ": MuJoCo could not allocate data");
 }
@@ -165,10 +160,7 @@ void MujocoSim::SetupRobots() {
     SetupRobot(*robots_.back(), static_cast<int>(i));
   }
   mj_forward(model_.get(), data_.get());
-  for (auto& robot : robots_) {
-    robot->left_angle = MeanAngle(data_.get(), robot->left_qpos);
-    robot->right_angle = MeanAngle(data_.get(), robot->right_qpos);
-  }
+  for (auto& robot : robots_) robot->drive_model->Reset(data_.get());
 }
 
 void MujocoSim::SetupRobot(Robot& robot, int index) {
@@ -198,35 +190,19 @@ void MujocoSim::SetupRobot(Robot& robot, int index) {
   for (int g = 0; g < m->ngeom; ++g) {
     if (m->body_rootid[m->geom_bodyid[g]] == root) rays_->scene().SetOwner(g, index);
   }
-  SetupWheels(robot, where);
+  DriveSite site;
+  site.model = model_.get();
+  site.robot = &robot.spec.model;
+  site.prefix = prefix;
+  site.where = where;
+  site.root_body = root;
+  site.qpos_adr = robot.qpos_adr;
+  site.qvel_adr = robot.qvel_adr;
+  robot.drive_model = MakeDriveModel(site);
   robot.drive = std::make_unique<DriveController>(common::VelocityLimits::FromProfile(spec.profile),
                                                   spec.model.wheel_radius_m, spec.model.track_m);
   CreateSensors(robot);
   PlaceRobot(robot, spec.spawn.x_m, spec.spawn.y_m, spec.spawn.yaw_rad, spec.spawn.z_m);
-}
-
-void MujocoSim::SetupWheels(Robot& robot, const std::string& where) {
-  // Wheels: hinge joints with velocity actuators of the same name.
-  const mjModel* m = model_.get();
-  const std::string prefix = robot.spec.id + "/";
-  auto wheels = [&](const std::vector<std::string>& names, std::vector<int>* actuators,
-                    std::vector<int>* qpos, std::vector<int>* dof) {
-    for (const std::string& wheel : names) {
-      const int joint = RequireId(m, mjOBJ_JOINT, prefix + wheel, where + "wheel joint");
-      const int act = RequireId(m, mjOBJ_ACTUATOR, prefix + wheel, where + "wheel actuator");
-      if (m->jnt_type[joint] != mjJNT_HINGE) {
-        throw std::invalid_argument(where + "wheel joint '" + wheel + "' is not a hinge");
-      }
-      actuators->push_back(act);
-      qpos->push_back(m->jnt_qposadr[joint]);
-      dof->push_back(m->jnt_dofadr[joint]);
-    }
-  };
-  const RobotModel& model = robot.spec.model;
-  wheels(model.left_wheels, &robot.left_actuators, &robot.left_qpos, &robot.left_dof);
-  wheels(model.right_wheels, &robot.right_actuators, &robot.right_qpos, &robot.right_dof);
-  robot.left_integral.assign(robot.left_dof.size(), 0.0);
-  robot.right_integral.assign(robot.right_dof.size(), 0.0);
 }
 
 void MujocoSim::CreateSensors(Robot& robot) {
@@ -272,8 +248,7 @@ void MujocoSim::PlaceRobot(Robot& robot, double x_m, double y_m, double yaw_rad,
   q[6] = quat.z();
   for (int i = 0; i < 6; ++i) d->qvel[robot.qvel_adr + i] = 0.0;
   robot.drive->Halt();
-  std::fill(robot.left_integral.begin(), robot.left_integral.end(), 0.0);
-  std::fill(robot.right_integral.begin(), robot.right_integral.end(), 0.0);
+  robot.drive_model->Reset(d);
   for (auto& sensor : robot.sensors) sensor->OnPlaced({x_m, y_m, yaw_rad}, z);
   mj_kinematics(model_.get(), d);
   rays_->MarkMoved();
@@ -414,20 +389,7 @@ void MujocoSim::ApplyDrive(double now_s, double dt_s, SimOutputs* out) {
       out->events.push_back("watchdog stopped robot '" + r->spec.id +
                             "': no velocity command for 0.5 s of sim time");
     }
-    // Each wheel runs a PI speed loop, like motor firmware: the MJCF velocity servo is the P
-    // part, the integral of the speed error raises its target until the wheel keeps up under
-    // load (skid-steer turning, slopes) and holds a parked robot still.
-    auto servo = [&](const std::vector<int>& actuators, const std::vector<int>& dofs,
-                     std::vector<double>& integral, double target) {
-      for (size_t i = 0; i < actuators.size(); ++i) {
-        const double error = target - d->qvel[dofs[i]];
-        integral[i] = std::clamp(integral[i] + kWheelIntegralGain * error * dt_s,
-                                 -kWheelIntegralLimit, kWheelIntegralLimit);
-        d->ctrl[actuators[i]] = target + integral[i];
-      }
-    };
-    servo(r->left_actuators, r->left_dof, r->left_integral, r->drive->left_wheel_radps());
-    servo(r->right_actuators, r->right_dof, r->right_integral, r->drive->right_wheel_radps());
+    r->drive_model->Apply(*r->drive, d, dt_s);
   }
 }
 
@@ -467,12 +429,8 @@ void MujocoSim::UndoBadStep(double time_before_s, double dt_s, SimOutputs* out) 
 void MujocoSim::AfterPhysicsStep(double dt_s) {
   // The wheels' rotation over the step, for sensors that integrate it (odometry).
   for (auto& r : robots_) {
-    const double left = MeanAngle(data_.get(), r->left_qpos);
-    const double right = MeanAngle(data_.get(), r->right_qpos);
-    const StepMotion motion{dt_s, left - r->left_angle, right - r->right_angle};
+    const StepMotion motion = r->drive_model->Measure(data_.get(), dt_s);
     for (auto& sensor : r->sensors) sensor->OnStep(motion);
-    r->left_angle = left;
-    r->right_angle = right;
   }
 }
 

@@ -10,6 +10,7 @@
 #include "common/status.h"
 #include "common/types.h"
 #include "simulator/drive.h"
+#include "simulator/drive_model.h"
 #include "simulator/mujoco_model.h"
 #include "simulator/scenario.h"
 #include "simulator/scene_rays.h"
@@ -138,7 +139,6 @@ class MujocoSim {
   Robot& FindRobot(const std::string& id);
   const Robot& FindRobot(const std::string& id) const;
   void SetupRobot(Robot& robot, int index);
-  void SetupWheels(Robot& robot, const std::string& where);
   void CreateSensors(Robot& robot);
   double GroundHeight(double x_m, double y_m) const;
   void PlaceRobot(Robot& robot, double x_m, double y_m, double yaw_rad, std::optional<double> z_m);

@@ -150,16 +150,37 @@ RobotModel LoadRobotModel(const SimPaths& paths, const std::string& model) {
   } catch (const std::invalid_argument& e) {
     map.Fail(map.Raw("drive"), e.what());
   }
-  m.wheel_radius_m = map.Require<double>("wheel_radius_m");
-  m.track_m = map.Require<double>("track_m");
-  m.left_wheels = GetStringList(map, "left_wheels");
-  m.right_wheels = GetStringList(map, "right_wheels");
+  if (m.drive == common::DriveKind::kAuv) {
+    // No wheels: thrusters, and a unicycle track for the odometry's wheel motion.
+    m.wheel_radius_m = 1.0;
+    m.track_m = 1.0;
+    map.Get("track_m", &m.track_m);
+    map.Get("max_surge_thrust_n", &m.thrusters.max_surge_thrust_n);
+    map.Get("max_yaw_torque_nm", &m.thrusters.max_yaw_torque_nm);
+    map.Get("max_heave_thrust_n", &m.thrusters.max_heave_thrust_n);
+    map.Get("buoyancy_centre_m", &m.thrusters.buoyancy_centre_m);
+  } else {
+    m.wheel_radius_m = map.Require<double>("wheel_radius_m");
+    m.track_m = map.Require<double>("track_m");
+    m.left_wheels = GetStringList(map, "left_wheels");
+    m.right_wheels = GetStringList(map, "right_wheels");
+  }
   m.default_profile = map.Require<std::string>("default_profile");
   common::YamlMap sensors = map.Child("sensors");
   m.default_sensors = LoadSensorSet(sensors, SensorSet{});
   map.Finish();
-  if (!(m.wheel_radius_m > 0.0) || !(m.track_m > 0.0) || m.left_wheels.empty() ||
-      m.right_wheels.empty()) {
+  if (m.drive == common::DriveKind::kAuv) {
+    const RobotModel::Thrusters& t = m.thrusters;
+    if (!(m.track_m > 0.0) || !(t.max_surge_thrust_n > 0.0) || !(t.max_yaw_torque_nm > 0.0) ||
+        !(t.max_heave_thrust_n > 0.0) || !std::isfinite(t.max_surge_thrust_n) ||
+        !std::isfinite(t.max_yaw_torque_nm) || !std::isfinite(t.max_heave_thrust_n) ||
+        !(std::abs(t.buoyancy_centre_m) <= 1.0)) {
+      throw common::ConfigError(yaml_path +
+                                ": an auv needs track_m, max_surge_thrust_n, max_yaw_torque_nm "
+                                "and max_heave_thrust_n > 0 and |buoyancy_centre_m| <= 1");
+    }
+  } else if (!(m.wheel_radius_m > 0.0) || !(m.track_m > 0.0) || m.left_wheels.empty() ||
+             m.right_wheels.empty()) {
     throw common::ConfigError(yaml_path +
                               ": needs wheel_radius_m > 0, track_m > 0 and left/right wheels");
   }
@@ -224,6 +245,9 @@ void PhysicsParams::Validate() const {
                      "physics.timestep_s must be in (0, 0.05]");
   CAIRN_THROW_UNLESS(integrator == "euler" || integrator == "rk4" || integrator == "implicit",
                      "physics.integrator must be euler, rk4 or implicit (MuJoCo 2.2)");
+  CAIRN_THROW_UNLESS(std::isfinite(current_x_mps) && std::isfinite(current_y_mps) &&
+                         std::hypot(current_x_mps, current_y_mps) <= 5.0,
+                     "physics.current_x_mps and current_y_mps must be finite, at most 5 m/s");
 }
 
 void Scenario::Validate() const {
@@ -253,6 +277,8 @@ PhysicsParams LoadPhysicsParams(common::YamlMap& map) {
   PhysicsParams p;
   map.Get("timestep_s", &p.timestep_s);
   map.Get("integrator", &p.integrator);
+  map.Get("current_x_mps", &p.current_x_mps);
+  map.Get("current_y_mps", &p.current_y_mps);
   map.Finish();
   return p;
 }

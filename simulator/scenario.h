@@ -53,6 +53,15 @@ struct RobotModel {
   std::vector<std::string> right_wheels;
   std::string default_profile;
   SensorSet default_sensors;
+
+  /// drive: auv. The thrusters' limits and the hull's buoyancy (ThrusterDrive). wheel_radius_m is
+  /// then 1 and track_m the unicycle track its odometry reports wheel motion with.
+  struct Thrusters {
+    double max_surge_thrust_n{60.0};
+    double max_yaw_torque_nm{20.0};
+    double max_heave_thrust_n{60.0};  ///< the depth hold's
+    double buoyancy_centre_m{0.02};   ///< centre of buoyancy above the centre of mass
+  } thrusters;
 };
 
 /// Loads simulator/robots/<model>.yaml and .xml.
@@ -88,6 +97,10 @@ struct RobotSpec {
 struct PhysicsParams {
   double timestep_s{0.002};
   std::string integrator{"euler"};  ///< euler, rk4 or implicit (MuJoCo 2.2)
+  /// A constant water current (world frame): the medium's velocity (MuJoCo's option wind), which
+  /// drags what moves in it. Needs a world with water (option density > 0).
+  double current_x_mps{0.0};
+  double current_y_mps{0.0};
 
   void Validate() const;
 };

@@ -4,10 +4,12 @@
 #include <cmath>
 #include <cstdio>
 
+#include "cairn/lcmt_body_velocity_request.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_path.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
 
+#include "common/body_velocity.h"
 #include "common/channels.h"
 #include "common/check.h"
 #include "common/layers.h"
@@ -218,6 +220,26 @@ void NavigatorService::AskToClearShortTerm() {
 }
 
 void NavigatorService::PublishCommand(const Velocity& command, bool emergency_stop) {
+  if (config_.command_output == CommandOutput::kBodyVelocity) {
+    // Seed 004's velocity bridge: one body-velocity request per command.
+    const common::BodyVelocityRequest r =
+        common::BridgeVelocity({command.linear_mps, command.angular_radps}, profile_.name);
+    cairn::lcmt_body_velocity_request req{};
+    req.utime = node_.NowUtime();
+    req.robot = robot_;
+    req.frame = r.frame;
+    req.requester = r.requester;
+    req.goal_id = r.goal_id;
+    req.priority = static_cast<int8_t>(r.priority);
+    for (int i = 0; i < 6; ++i) {
+      req.twist[i] = r.twist[i];
+      req.disable_axis[i] = r.disable_axis[i];
+    }
+    node_.Publish(ch::ForRobot(robot_, ch::kBodyVelocity), req);
+    node_.Count("commands");
+    if (emergency_stop) node_.Count("safety_stops");
+    return;
+  }
   cairn::lcmt_velocity_command cmd{};
   cmd.utime = node_.NowUtime();
   cmd.robot = robot_;

@@ -30,6 +30,9 @@ void SonarMapperLayerParams::Validate() const {
                      "sonar.min_peak_distance must be in [1, 1000]");
   CAIRN_THROW_UNLESS(std::isfinite(publish_period_s) && publish_period_s > 0.0,
                      "sonar.publish_period_s must be > 0");
+  CAIRN_THROW_UNLESS(std::isfinite(vehicle_clear_radius_m) && vehicle_clear_radius_m >= 0.0 &&
+                         vehicle_clear_radius_m <= 20.0,
+                     "sonar.vehicle_clear_radius_m must be in [0, 20]");
 }
 
 SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map) {
@@ -38,6 +41,7 @@ SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map) {
   map.Get("min_peak_distance", &p.peaks.min_peak_distance);
   map.Get("verify_shadow", &p.peaks.verify_shadow);
   map.Get("publish_period_s", &p.publish_period_s);
+  map.Get("vehicle_clear_radius_m", &p.vehicle_clear_radius_m);
   p.grid = ReadOccupancyParams(map, SonarMapperLayerParams::DefaultGrid());
   map.Finish();
   return p;
@@ -85,7 +89,25 @@ void SonarMapperLayer::OnReading(const SensorReading& reading) {
   const auto* ping = dynamic_cast<const SonarReading*>(&reading);
   if (ping == nullptr) return;
   std::vector<int> found;
-  grid_.InsertRays(SonarPingRays(*ping, params_.peaks, &found));
+  std::vector<PlanarRay> rays = SonarPingRays(*ping, params_.peaks, &found);
+  if (params_.vehicle_clear_radius_m > 0.0) {
+    // The vehicle's own water: free rays out of the head in every direction, cleared first.
+    const common::Vector2 head = ping->sensor_pose.position_m.head<2>();
+    const double step_m = grid_.params().resolution_m;
+    const int count = std::max(
+        8, static_cast<int>(std::ceil(2.0 * M_PI * params_.vehicle_clear_radius_m / step_m)));
+    std::vector<PlanarRay> disc;
+    disc.reserve(count + rays.size());
+    for (int i = 0; i < count; ++i) {
+      const double a = 2.0 * M_PI * i / count;
+      disc.push_back(
+          {head, head + params_.vehicle_clear_radius_m * common::Vector2(std::cos(a), std::sin(a)),
+           false});
+    }
+    disc.insert(disc.end(), rays.begin(), rays.end());
+    rays.swap(disc);
+  }
+  grid_.InsertRays(rays);
   ++pings_;
   last_obstacles_ = static_cast<int>(found.size());
   obstacles_ += last_obstacles_;

@@ -35,6 +35,10 @@ struct SonarMapperLayerParams {
   OccupancyParams grid = DefaultGrid();
   SonarPeakParams peaks;
   double publish_period_s{1.0};
+  /// > 0: every ping also clears a disc of this radius round the head: the water the vehicle is
+  /// in (the hull behind a nose-mounted head is never in its beam; 1.6 m covers the Sparus II).
+  /// Planners that treat unknown cells as obstacles then find the vehicle's own cells free.
+  double vehicle_clear_radius_m{0.0};
 
   /// The default grid: 0.25 m cells over 2 km round the site origin, OctoMap's log-odds.
   static OccupancyParams DefaultGrid();
@@ -43,7 +47,7 @@ struct SonarMapperLayerParams {
 };
 
 /// Reads a `sonar` section (the grid keys of occupancy, min_peak_height, min_peak_distance,
-/// verify_shadow, publish_period_s): the caller reads `enabled` first.
+/// verify_shadow, publish_period_s, vehicle_clear_radius_m): the caller reads `enabled` first.
 /// @throws common::ConfigError naming the file and line of a bad or unknown key.
 SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map);
 

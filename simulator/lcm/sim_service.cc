@@ -7,6 +7,7 @@
 
 #include "cairn/lcmt_sim_clock.hpp"
 
+#include "common/body_velocity.h"
 #include "common/channels.h"
 
 namespace cairn::sim {
@@ -113,6 +114,11 @@ SimService::SimService(runtime::Node& node, MujocoSim& sim, SimServiceParams par
     node_.Subscribe<cairn::lcmt_velocity_command>(
         channels::ForRobot(robot, channels::kCmdVel),
         [this, robot](const cairn::lcmt_velocity_command& msg) { OnCommand(robot, msg); });
+    node_.Subscribe<cairn::lcmt_body_velocity_request>(
+        channels::ForRobot(robot, channels::kBodyVelocity),
+        [this, robot](const cairn::lcmt_body_velocity_request& msg) {
+          OnBodyVelocity(robot, msg);
+        });
   }
   node_.Subscribe<Request>(channels::kSimControl, [this](const Request& msg) { OnControl(msg); });
   Reanchor();
@@ -137,7 +143,36 @@ void SimService::OnCommand(const std::string& robot, const cairn::lcmt_velocity_
                                            " names robot '" + msg.robot + "'; dropped");
     return;
   }
-  switch (sim_.Command(robot, msg.linear_mps, msg.angular_radps)) {
+  ApplyCommand(robot, msg.linear_mps, msg.angular_radps);
+}
+
+void SimService::OnBodyVelocity(const std::string& robot,
+                                const cairn::lcmt_body_velocity_request& msg) {
+  if (!msg.robot.empty() && msg.robot != robot) {
+    node_.CountDropped("wrong_robot_commands");
+    node_.Warn("wrong_robot:" + robot, "body-velocity request on " + robot + "." +
+                                           channels::kBodyVelocity + " names robot '" + msg.robot +
+                                           "'; dropped");
+    return;
+  }
+  common::BodyVelocityRequest request;
+  for (int i = 0; i < 6; ++i) {
+    request.twist[i] = msg.twist[i];
+    request.disable_axis[i] = msg.disable_axis[i];
+  }
+  const common::SurgeYaw taken = common::SurgeYawOf(request);
+  if (taken.ignored_axes) {
+    node_.Count("ignored_axis_requests");
+    node_.Warn("ignored_axes:" + robot, "a body-velocity request for " + robot + " (from '" +
+                                            msg.requester +
+                                            "') enables axes it cannot follow; only surge and "
+                                            "yaw are taken");
+  }
+  ApplyCommand(robot, taken.command.linear_mps, taken.command.angular_radps);
+}
+
+void SimService::ApplyCommand(const std::string& robot, double linear_mps, double angular_radps) {
+  switch (sim_.Command(robot, linear_mps, angular_radps)) {
     case CommandVerdict::kAccepted:
       break;
     case CommandVerdict::kDropped:
@@ -147,10 +182,9 @@ void SimService::OnCommand(const std::string& robot, const cairn::lcmt_velocity_
       break;
     case CommandVerdict::kClamped:
       node_.Count("clamped_commands");
-      node_.Warn("clamped_command:" + robot, "clamped a velocity command for " + robot +
-                                                 " to its profile's limits (v " +
-                                                 std::to_string(msg.linear_mps) + ", w " +
-                                                 std::to_string(msg.angular_radps) + ")");
+      node_.Warn("clamped_command:" + robot,
+                 "clamped a velocity command for " + robot + " to its profile's limits (v " +
+                     std::to_string(linear_mps) + ", w " + std::to_string(angular_radps) + ")");
       break;
   }
 }

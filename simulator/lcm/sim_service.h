@@ -7,6 +7,7 @@
 #include <string>
 #include <utility>
 
+#include "cairn/lcmt_body_velocity_request.hpp"
 #include "cairn/lcmt_sim_control_reply.hpp"
 #include "cairn/lcmt_sim_control_request.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
@@ -74,6 +75,9 @@ class SimService {
   using Clock = std::chrono::steady_clock;
 
   void OnCommand(const std::string& robot, const cairn::lcmt_velocity_command& msg);
+  /// A body-velocity request (the AUV's bridge): surge and yaw taken, disabled axes as 0.
+  void OnBodyVelocity(const std::string& robot, const cairn::lcmt_body_velocity_request& msg);
+  void ApplyCommand(const std::string& robot, double linear_mps, double angular_radps);
   void OnControl(const cairn::lcmt_sim_control_request& msg);
   /// Carries out every op but LIST; returns the outcome and what was done.
   std::pair<common::Status, std::string> Apply(const cairn::lcmt_sim_control_request& msg);

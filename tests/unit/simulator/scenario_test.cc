@@ -109,16 +109,16 @@ TEST(ScenarioTest, RobotFlag) {
 TEST(ScenarioTest, ShippedRobotsLoadAndHelpListsWorlds) {
   const SimPaths paths = testing::TestPaths();
   const auto robots = paths.ShippedRobots();
-  EXPECT_EQ(robots, (std::vector<std::string>{"kobuki", "p3dx", "pioneer3at", "rover"}));
+  EXPECT_EQ(robots, (std::vector<std::string>{"kobuki", "p3dx", "pioneer3at", "rover", "sparus2"}));
   for (const std::string& name : robots) {
     const RobotModel m = LoadRobotModel(paths, name);
     EXPECT_FALSE(m.description.empty());
     EXPECT_FALSE(m.default_sensors.Names().empty());
   }
   const auto worlds = paths.ShippedWorlds();
-  EXPECT_EQ(worlds,
-            (std::vector<std::string>{"apartment", "arena", "hall", "outdoor", "room", "simple",
-                                      "structured", "terraces", "tunnel", "unstructured"}));
+  EXPECT_EQ(worlds, (std::vector<std::string>{"apartment", "arena", "breakwater", "cave", "floor",
+                                              "hall", "outdoor", "rocks", "room", "simple",
+                                              "structured", "terraces", "tunnel", "unstructured"}));
   for (const std::string& w : worlds) EXPECT_FALSE(paths.WorldSummary(w).empty()) << w;
 }
 

@@ -18,9 +18,11 @@ namespace {
 constexpr double kDeg = M_PI / 180.0;
 constexpr char kNav[] = "explore/navigability";
 
+// A folder per test: ctest runs the tests of this file side by side.
 std::string TempPath(const std::string& name) {
-  const std::filesystem::path dir =
-      std::filesystem::path(CAIRN_BINARY_DIR) / "test-tmp" / "explore_mapper_layer_test";
+  const std::filesystem::path dir = std::filesystem::path(CAIRN_BINARY_DIR) / "test-tmp" /
+                                    "explore_mapper_layer_test" /
+                                    ::testing::UnitTest::GetInstance()->current_test_info()->name();
   std::filesystem::create_directories(dir);
   return (dir / name).string();
 }
