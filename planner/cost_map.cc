@@ -31,6 +31,9 @@ void CostMapParams::Validate() const {
                      "lethal_cost must be positive, got " << lethal_cost);
   CAIRN_THROW_UNLESS(std::isfinite(planning_padding_m) && planning_padding_m >= 0.0,
                      "planning_padding_m must not be negative, got " << planning_padding_m);
+  CAIRN_THROW_UNLESS(std::isfinite(footprint_padding_m) && footprint_padding_m >= 0.0 &&
+                         footprint_padding_m <= 10.0,
+                     "footprint_padding_m must lie in [0, 10], got " << footprint_padding_m);
   CAIRN_THROW_UNLESS(
       std::isfinite(unknown_cost) && unknown_cost >= 0.0f && unknown_cost < lethal_cost,
       "unknown_cost must lie in [0, lethal_cost), got " << unknown_cost);
@@ -89,7 +92,11 @@ CostMap::CostMap(const common::GridGeometry& geometry, common::Layer cost,
   cos_origin_ = std::cos(geometry_.origin.yaw_rad);
   sin_origin_ = std::sin(geometry_.origin.yaw_rad);
   // The robot's footprint and the padded one the global planner checks its states with.
-  FootprintRasterizer robot(footprint_m);
+  FootprintRasterizer own(footprint_m);
+  FootprintRasterizer robot =
+      params_.footprint_padding_m > 0.0
+          ? FootprintRasterizer(GrowConvexPolygon(own.hull_m(), params_.footprint_padding_m))
+          : own;
   FootprintRasterizer padded(GrowConvexPolygon(robot.hull_m(), params_.planning_padding_m));
   for (const FootprintRasterizer* r : {&robot, &padded}) {
     shapes_.push_back({*r, r->circumscribed_radius_m() / geometry_.resolution_m,

@@ -53,6 +53,10 @@ struct CostMapParams {
   /// Margin around the footprint for FootprintKind::kPadded (the global planner's states), so
   /// that poses between the states it checked keep clear too.
   double planning_padding_m{0.05};
+  /// Margin around the robot's own footprint (FootprintKind::kRobot, both planners), 0 by
+  /// default: water a hull keeps round it when its map draws obstacles thinly (a sonar's peaks
+  /// on the faces it looked at, sides it never saw).
+  double footprint_padding_m{0.0};
   /// Cost of a one-way cell (only with a directed layer, see the file comment), >= 0: graded
   /// high, so paths cross steps where they must and not along them. At or above lethal_cost it
   /// reads as the highest graded cost below it.

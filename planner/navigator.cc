@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "common/check.h"
+#include "planner/approach.h"
 
 namespace cairn::planner {
 
@@ -35,6 +36,8 @@ void NavigatorParams::Validate() const {
   CAIRN_THROW_UNLESS(yaw_goal_tolerance_rad > 0.0, "yaw_goal_tolerance_rad must be positive");
   CAIRN_THROW_UNLESS(std::isfinite(wait_for_map_s) && wait_for_map_s >= 0.0,
                      "wait_for_map_s must not be negative");
+  CAIRN_THROW_UNLESS(std::isfinite(approach_min_gain_m) && approach_min_gain_m >= 0.0,
+                     "approach_min_gain_m must not be negative");
   CAIRN_THROW_UNLESS(
       max_pose_age_s > control_period_s,
       "max_pose_age_s must exceed the control period (" << control_period_s << " s)");
@@ -125,6 +128,9 @@ void Navigator::ResetGoalState() {
   phase_ = Phase::kFollow;
   no_valid_since_s_ = -1.0;
   map_wait_start_s_ = -1.0;
+  waypoint_.reset();
+  plan_waypoint_next_ = false;
+  pending_to_waypoint_ = false;
   recovery_index_ = 0;
   failure_reason_ = NavReason::kNone;
   status_.progress = 0.0;
@@ -196,8 +202,16 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
   const bool stopped = status_.state == NavState::kStopped;
   const bool periodic = periodic_replan_;
   periodic_replan_ = false;
-  if (result.ok() && periodic && status_.state == NavState::kDriving && !path_.empty() &&
-      !PathBlockedAhead()) {
+  const bool to_waypoint = pending_to_waypoint_;
+  pending_to_waypoint_ = false;
+  // A path to the goal while approaching through known space replaces the waypoint's.
+  const bool target_changes = waypoint_.has_value() && !to_waypoint;
+  if (result.ok() && target_changes) {
+    waypoint_.reset();
+    pending_events_.push_back("approach: the map now shows a way to the goal itself");
+  }
+  if (result.ok() && periodic && !target_changes && status_.state == NavState::kDriving &&
+      !path_.empty() && !PathBlockedAhead()) {
     // Keep the current path unless the new one costs clearly less than what is left of it.
     const double left = path_.length_m() > 0.0
                             ? path_cost_ * (path_.length_m() - path_arc_m_) / path_.length_m()
@@ -246,6 +260,7 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
   const NavReason reason = ReasonOf(result.status);
   const std::string why = std::string("plan failed: ") + PlanStatusName(result.status) +
                           (result.message.empty() ? "" : " (" + result.message + ")");
+  if (!to_waypoint && ApproachThroughKnown(result.status)) return;
   if (WaitForMap(result.status, why, now_s)) return;
   if (result.status == PlanStatus::kOutOfBounds) {
     Fail(reason, why);
@@ -267,11 +282,45 @@ void Navigator::OnPlanResult(int64_t request_id, const PlanResult& result, doubl
   StartRecoveryOrFail(reason, why, now_s);
 }
 
-bool Navigator::WaitForMap(PlanStatus status, const std::string& why, double now_s) {
-  if (!(params_.wait_for_map_s > 0.0) || status_.state != NavState::kPlanning ||
-      recovery_index_ > 0) {
+bool Navigator::ApproachThroughKnown(PlanStatus status) {
+  if (!params_.approach_through_known || !map_ || !pose_ || !goal_pose_) return false;
+  if (status != PlanStatus::kNoPath && status != PlanStatus::kGoalOccupied &&
+      status != PlanStatus::kOutOfBounds && status != PlanStatus::kTimedOut &&
+      status != PlanStatus::kApproximate) {
     return false;
   }
+  const Vector2 goal = goal_pose_->position();
+  const std::optional<Pose2> pose = ApproachPose(*map_, *pose_, goal);
+  const double now_to_goal = (pose_->position() - goal).norm();
+  // To set out, the known water must lead approach_min_gain_m nearer; once under way, any metre.
+  const double needed_m = waypoint_ ? 1.0 : params_.approach_min_gain_m;
+  if (!pose || now_to_goal - (pose->position() - goal).norm() < needed_m) {
+    // Nothing nearer the goal is known yet: keep a waypoint path still driven, else wait.
+    return waypoint_.has_value() && status_.state == NavState::kDriving && !path_.empty() &&
+           !PathBlockedAhead();
+  }
+  if (waypoint_ && (waypoint_->position() - pose->position()).norm() < 1.0 &&
+      status_.state == NavState::kDriving && !path_.empty() && !PathBlockedAhead()) {
+    return true;  // the same waypoint: keep its path
+  }
+  const bool first = !waypoint_.has_value();
+  waypoint_ = pose;
+  plan_waypoint_next_ = true;
+  plan_wanted_ = true;
+  const std::string note = Format(
+      "approach: the map shows no way to the goal yet; heading for the known pose (%.1f, "
+      "%.1f), %.1f m from it",
+      pose->x_m, pose->y_m, (pose->position() - goal).norm());
+  status_.message = note;
+  if (first) pending_events_.push_back(note);
+  return true;
+}
+
+bool Navigator::WaitForMap(PlanStatus status, const std::string& why, double now_s) {
+  const bool planning =
+      status_.state == NavState::kPlanning ||
+      (status_.state == NavState::kStopped && resume_state_ == NavState::kPlanning);
+  if (!(params_.wait_for_map_s > 0.0) || !planning || recovery_index_ > 0) return false;
   switch (status) {
     case PlanStatus::kNoPath:
     case PlanStatus::kStartOccupied:
@@ -417,7 +466,7 @@ Velocity Navigator::Drive(double now_s) {
   if (const auto command = RecoverWithoutProgress(now_s)) return *command;
   // The local goal: a carrot `lookahead_m` along the path (nearer where a corner hides it), or
   // the goal itself near the end.
-  Vector2 carrot = goal_pose_->position();
+  Vector2 carrot = Target().position();
   if (path_arc_m_ + params_.lookahead_m < path_.length_m()) {
     carrot = VisibleCarrot(*map_, path_, *pose_, path_arc_m_, params_.lookahead_m,
                            params_.min_lookahead_m);
@@ -432,6 +481,17 @@ std::optional<Velocity> Navigator::ArriveOrAlign(double now_s) {
   const Pose2& pose = *pose_;
   const Pose2& goal = *goal_pose_;
   const double to_goal = (pose.position() - goal.position()).norm();
+  if (waypoint_ && phase_ == Phase::kFollow && to_goal > xy_tolerance_m_ &&
+      (pose.position() - waypoint_->position()).norm() <= xy_tolerance_m_) {
+    // At the edge of what the map showed: try the goal again from here.
+    waypoint_.reset();
+    path_ = Path();
+    path_changed_pending_ = true;
+    SetState(NavState::kPlanning, NavReason::kNone,
+             "approach: at the known pose nearest the goal; planning again");
+    plan_wanted_ = true;
+    return gen.Brake(last_command_);
+  }
   if (phase_ == Phase::kFollow && to_goal <= xy_tolerance_m_) {
     if (!goal_has_yaw_) {
       SetState(NavState::kReached, NavReason::kSuccess, "goal reached");
@@ -724,7 +784,9 @@ bool Navigator::StartWantedPlan(double now_s, StepOutput* out) {
   PlanJob job;
   job.request_id = next_request_id_++;
   job.request.start = *pose_;
-  job.request.goal = *goal_pose_;
+  pending_to_waypoint_ = plan_waypoint_next_ && waypoint_.has_value();
+  plan_waypoint_next_ = false;
+  job.request.goal = pending_to_waypoint_ ? *waypoint_ : *goal_pose_;
   job.request.goal_has_yaw = goal_has_yaw_;
   job.request.time_budget_s = params_.plan_time_budget_s;
   if (to_goal > params_.occupied_goal_far_m) {

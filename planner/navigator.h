@@ -85,6 +85,13 @@ struct NavigatorParams {
   /// is logged where it starts and ends. With unknown cells as obstacles the robot then moves
   /// only once its sensors have shown a way. 0: such a plan fails (or recovers) at once.
   double wait_for_map_s{0.0};
+  /// Approach through known space (seed 004's AUV navigates only through discovered cells;
+  /// meaningful with unknown cells blocking): when a plan to the goal fails because the map
+  /// does not show a way yet, drive to the reachable known pose nearest the goal
+  /// (ApproachPose) if that brings the robot at least approach_min_gain_m nearer, and try the
+  /// goal again from there (and at every replan on the way); else wait as above.
+  bool approach_through_known{false};
+  double approach_min_gain_m{5.0};
   double progress_distance_m{0.2};        ///< must move this far ...
   double progress_timeout_s{10.0};        ///< ... within this time, else recover
   double recovery_reset_distance_m{1.0};  ///< driving this far re-arms the first recovery
@@ -165,6 +172,11 @@ class Navigator {
   void Fail(NavReason reason, const std::string& message);
   /// Explore first: true when a failed plan is to be tried again on a later map.
   bool WaitForMap(PlanStatus status, const std::string& why, double now_s);
+  /// Approach through known space: true when a failed plan to the goal was answered with a
+  /// plan to a known pose nearer it (or the current such path is kept).
+  bool ApproachThroughKnown(PlanStatus status);
+  /// Where the robot is driving: the waypoint when approaching, else the goal.
+  const common::Pose2& Target() const { return waypoint_ ? *waypoint_ : *goal_pose_; }
   void RequestPlan(double now_s, const std::string& why);
   bool ResolveGoal();
   /// A place goal chosen on an earlier map moves when the map now shows obstacles near it.
@@ -233,6 +245,10 @@ class Navigator {
   Velocity last_command_;
   double no_valid_since_s_{-1.0};
   double map_wait_start_s_{-1.0};  ///< explore first: waiting for the map since, or -1
+  /// Approach through known space: the known pose driven to instead of the goal, if any.
+  std::optional<common::Pose2> waypoint_;
+  bool plan_waypoint_next_{false};   ///< the next plan goes to waypoint_, not the goal
+  bool pending_to_waypoint_{false};  ///< the running plan goes to waypoint_
   common::Vector2 progress_anchor_{common::Vector2::Zero()};
   double progress_anchor_s_{0.0};
   bool turn_extended_{false};  ///< the turn-in-place extension of this timer is spent

@@ -32,6 +32,8 @@ void LoadCostMap(YamlMap map, CostMapParams* p) {
   map.Get("unknown_cost", &p->unknown_cost);
   map.Get("lethal_cost", &p->lethal_cost);
   map.Get("one_way_cost", &p->one_way_cost);
+  map.Get("planning_padding_m", &p->planning_padding_m);
+  map.Get("footprint_padding_m", &p->footprint_padding_m);
   map.Finish();
 }
 
@@ -170,6 +172,8 @@ void LoadNavigator(YamlMap map, NavigatorParams* p) {
   map.Get("plan_time_budget_s", &p->plan_time_budget_s);
   map.Get("no_valid_trajectory_patience_s", &p->no_valid_trajectory_patience_s);
   map.Get("wait_for_map_s", &p->wait_for_map_s);
+  map.Get("approach_through_known", &p->approach_through_known);
+  map.Get("approach_min_gain_m", &p->approach_min_gain_m);
   map.Get("progress_distance_m", &p->progress_distance_m);
   map.Get("progress_timeout_s", &p->progress_timeout_s);
   map.Get("occupied_goal_far_m", &p->occupied_goal_far_m);

@@ -33,6 +33,12 @@ void SonarMapperLayerParams::Validate() const {
   CAIRN_THROW_UNLESS(std::isfinite(vehicle_clear_radius_m) && vehicle_clear_radius_m >= 0.0 &&
                          vehicle_clear_radius_m <= 20.0,
                      "sonar.vehicle_clear_radius_m must be in [0, 20]");
+  CAIRN_THROW_UNLESS(
+      std::isfinite(vehicle_centre_behind_head_m) && std::abs(vehicle_centre_behind_head_m) <= 20.0,
+      "sonar.vehicle_centre_behind_head_m must be in [-20, 20]");
+  CAIRN_THROW_UNLESS(
+      std::isfinite(beam_width_deg) && beam_width_deg >= 0.0 && beam_width_deg <= 30.0,
+      "sonar.beam_width_deg must be in [0, 30]");
 }
 
 SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map) {
@@ -42,13 +48,16 @@ SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map) {
   map.Get("verify_shadow", &p.peaks.verify_shadow);
   map.Get("publish_period_s", &p.publish_period_s);
   map.Get("vehicle_clear_radius_m", &p.vehicle_clear_radius_m);
+  map.Get("vehicle_centre_behind_head_m", &p.vehicle_centre_behind_head_m);
+  map.Get("beam_width_deg", &p.beam_width_deg);
   p.grid = ReadOccupancyParams(map, SonarMapperLayerParams::DefaultGrid());
   map.Finish();
   return p;
 }
 
 std::vector<PlanarRay> SonarPingRays(const SonarReading& ping, const SonarPeakParams& peaks,
-                                     std::vector<int>* obstacle_bins) {
+                                     std::vector<int>* obstacle_bins, double beam_width_rad,
+                                     double cell_m) {
   std::vector<PlanarRay> rays;
   const int bins = static_cast<int>(ping.bins.size());
   if (bins == 0 || !(ping.range_max_m > ping.range_min_m)) return rays;
@@ -65,8 +74,20 @@ std::vector<PlanarRay> SonarPingRays(const SonarReading& ping, const SonarPeakPa
   }
   // Free up to the nearest peak; every peak an obstacle at its bin's near edge.
   for (size_t i = 0; i < found.size(); ++i) {
-    const common::Vector2 at = origin + (ping.range_min_m + found[i] * bin_m) * dir;
+    const double range_m = ping.range_min_m + found[i] * bin_m;
+    const common::Vector2 at = origin + range_m * dir;
     rays.push_back({i == 0 ? origin : at, at, true});
+    // Across the beam's width: a point a cell apart along the arc at that range.
+    const int side = beam_width_rad > 0.0 && cell_m > 0.0
+                         ? static_cast<int>(std::floor(0.5 * beam_width_rad * range_m / cell_m))
+                         : 0;
+    for (int k = 1; k <= side; ++k) {
+      for (int sign : {-1, 1}) {
+        const double a = yaw + sign * k * cell_m / std::max(range_m, cell_m);
+        const common::Vector2 p = origin + range_m * common::Vector2(std::cos(a), std::sin(a));
+        rays.push_back({p, p, true});
+      }
+    }
   }
   return rays;
 }
@@ -89,10 +110,16 @@ void SonarMapperLayer::OnReading(const SensorReading& reading) {
   const auto* ping = dynamic_cast<const SonarReading*>(&reading);
   if (ping == nullptr) return;
   std::vector<int> found;
-  std::vector<PlanarRay> rays = SonarPingRays(*ping, params_.peaks, &found);
+  std::vector<PlanarRay> rays =
+      SonarPingRays(*ping, params_.peaks, &found, params_.beam_width_deg * M_PI / 180.0,
+                    grid_.params().resolution_m);
   if (params_.vehicle_clear_radius_m > 0.0) {
-    // The vehicle's own water: free rays out of the head in every direction, cleared first.
-    const common::Vector2 head = ping->sensor_pose.position_m.head<2>();
+    // The vehicle's own water: free rays out of its centre in every direction, cleared first.
+    const Eigen::Vector3d beam = ping->sensor_pose.orientation * Eigen::Vector3d::UnitX();
+    const double hull_yaw = std::atan2(beam.y(), beam.x()) - ping->pan_rad;
+    const common::Vector2 head = ping->sensor_pose.position_m.head<2>() -
+                                 params_.vehicle_centre_behind_head_m *
+                                     common::Vector2(std::cos(hull_yaw), std::sin(hull_yaw));
     const double step_m = grid_.params().resolution_m;
     const int count = std::max(
         8, static_cast<int>(std::ceil(2.0 * M_PI * params_.vehicle_clear_radius_m / step_m)));

@@ -35,10 +35,17 @@ struct SonarMapperLayerParams {
   OccupancyParams grid = DefaultGrid();
   SonarPeakParams peaks;
   double publish_period_s{1.0};
-  /// > 0: every ping also clears a disc of this radius round the head: the water the vehicle is
-  /// in (the hull behind a nose-mounted head is never in its beam; 1.6 m covers the Sparus II).
-  /// Planners that treat unknown cells as obstacles then find the vehicle's own cells free.
+  /// > 0: every ping also clears a disc of this radius round the vehicle's centre, which lies
+  /// vehicle_centre_behind_head_m behind the head along the hull (the head's heading less its
+  /// pan): the water the vehicle is in, which a nose-mounted head never sees. Planners that
+  /// treat unknown cells as obstacles then find the vehicle's own cells free. Keep the disc to
+  /// the hull (the Sparus II: 0.7 m behind, 0.9 m round): anything it covers is cleared.
   double vehicle_clear_radius_m{0.0};
+  /// > 0: each peak marks the arc of the beam's horizontal width at its range, not one point
+  /// (the thesis's ray fan has no width; a Miniking's beam is 3 deg wide): an echo comes from
+  /// anywhere across the beam, and faces seen at a slant fill in between beams.
+  double beam_width_deg{0.0};
+  double vehicle_centre_behind_head_m{0.0};
 
   /// The default grid: 0.25 m cells over 2 km round the site origin, OctoMap's log-odds.
   static OccupancyParams DefaultGrid();
@@ -47,14 +54,16 @@ struct SonarMapperLayerParams {
 };
 
 /// Reads a `sonar` section (the grid keys of occupancy, min_peak_height, min_peak_distance,
-/// verify_shadow, publish_period_s, vehicle_clear_radius_m): the caller reads `enabled` first.
+/// verify_shadow, publish_period_s, vehicle_clear_radius_m,
+/// vehicle_centre_behind_head_m, beam_width_deg): the caller reads `enabled` first.
 /// @throws common::ConfigError naming the file and line of a bad or unknown key.
 SonarMapperLayerParams LoadSonarMapperLayerParams(common::YamlMap& map);
 
 /// The rays one ping puts on the map (the beam's heading from the head's pose), and the bins
 /// found as obstacles in it.
 std::vector<PlanarRay> SonarPingRays(const SonarReading& ping, const SonarPeakParams& peaks,
-                                     std::vector<int>* obstacle_bins = nullptr);
+                                     std::vector<int>* obstacle_bins = nullptr,
+                                     double beam_width_rad = 0.0, double cell_m = 0.25);
 
 class SonarMapperLayer : public MapperLayer {
  public:

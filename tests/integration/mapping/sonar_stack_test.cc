@@ -24,39 +24,23 @@
 #include "common/grid_map.h"
 #include "services/runtime/layer_assembler.h"
 #include "tests/support/harness.h"
+#include "tests/support/sonar_layer.h"
 
 namespace cairn::mapping {
 namespace {
 
 namespace ch = channels;
 using testing::Bus;
+using testing::Cluster;
+using testing::Clusters;
+using testing::CountCells;
 using testing::ProcessSet;
+using testing::SonarTiles;
 using testing::WaitFor;
 
 constexpr char kRobot[] = "p3dx";
 constexpr char kAuv[] = "auv";
 constexpr char kLayer[] = "sonar/occupancy";
-
-class SonarTiles {
- public:
-  explicit SonarTiles(lcm::LCM& lcm, const std::string& robot = kRobot) {
-    lcm.subscribe(ch::ForRobot(robot, ch::kMapOccupancy), &SonarTiles::OnTile, this);
-    lcm.subscribe(ch::ForRobot(robot, ch::kMapManifest), &SonarTiles::OnManifest, this);
-  }
-  /// The version of the layer's newest manifest (0 before one).
-  int64_t version() const { return assembler_.version(kLayer); }
-  std::optional<common::GridMap> Layer() const { return assembler_.Layer(kLayer); }
-
- private:
-  void OnTile(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_occupancy_tile* t) {
-    if (t->layer == kLayer) assembler_.OnTile(*t);
-  }
-  void OnManifest(const lcm::ReceiveBuffer*, const std::string&,
-                  const cairn::lcmt_grid_manifest* m) {
-    if (m->layer == kLayer) assembler_.OnManifest(*m);
-  }
-  runtime::LayerAssembler assembler_;
-};
 
 struct Cells {
   // Occupied up to a bin and a cell in front of the west wall's face (x = 0): a peak lies at
@@ -110,7 +94,7 @@ TEST(SonarStackTest, TheWallsEchoesAreObstaclesAndTheFloorsAreNot) {
                            "octomap: {enabled: false}\n"
                            "sonar: {enabled: true, publish_period_s: 0.5}\n";
   Bus bus(procs.url());
-  SonarTiles tiles(bus.lcm());
+  SonarTiles tiles(bus.lcm(), kRobot);
   procs.Start("cairn-sim", {"--scenario", scenario, "--speed", "2"});
   auto& mapper = procs.Start("cairn-mapper", {"--robot", kRobot, "--config", config});
   // 88 pings take the head from 35 deg to 60 deg: the west wall, 8 to 14 m off, all along.
@@ -186,61 +170,6 @@ struct AuvRig {
   }
 };
 
-struct Cluster {
-  int cells{0};
-  common::Vector2 centre{0.0, 0.0};
-};
-
-// Groups of occupied cells linked when within `link_m` of each other (single linkage). The
-// sonar places a peak at its 1 m bin's near edge, so one face's cells lie on range steps a bin
-// apart: 1.5 m joins them and still parts objects farther apart than that.
-std::vector<Cluster> Clusters(const common::GridMap& map, double link_m = 1.5) {
-  const common::Layer& l = map.at(kLayer);
-  std::vector<common::Vector2> cells;
-  for (int iy = 0; iy < map.size_y(); ++iy) {
-    for (int ix = 0; ix < map.size_x(); ++ix) {
-      const float v = l(ix, iy);
-      if (!std::isnan(v) && v >= 50.f) cells.push_back(map.CenterOf({ix, iy}));
-    }
-  }
-  std::vector<int> group(cells.size(), -1);
-  std::vector<Cluster> out;
-  for (size_t seed = 0; seed < cells.size(); ++seed) {
-    if (group[seed] >= 0) continue;
-    const int id = static_cast<int>(out.size());
-    Cluster c;
-    std::vector<size_t> stack{seed};
-    group[seed] = id;
-    while (!stack.empty()) {
-      const size_t i = stack.back();
-      stack.pop_back();
-      ++c.cells;
-      c.centre += cells[i];
-      for (size_t j = 0; j < cells.size(); ++j) {
-        if (group[j] < 0 && (cells[j] - cells[i]).norm() <= link_m) {
-          group[j] = id;
-          stack.push_back(j);
-        }
-      }
-    }
-    c.centre /= c.cells;
-    out.push_back(c);
-  }
-  return out;
-}
-
-int CountCells(const common::GridMap& map, bool occupied) {
-  int n = 0;
-  const common::Layer& l = map.at(kLayer);
-  for (int iy = 0; iy < map.size_y(); ++iy) {
-    for (int ix = 0; ix < map.size_x(); ++ix) {
-      const float v = l(ix, iy);
-      if (!std::isnan(v) && (v >= 50.f) == occupied) ++n;
-    }
-  }
-  return n;
-}
-
 // A full sweep is 840 pings (two passes of 420 over the 120 deg sector); the first reaches the
 // far limit after 88.
 constexpr int64_t kFullSweepPings = 88 + 840;
@@ -301,6 +230,32 @@ TEST(SonarStackTest, Seed004Test14BreakwaterColumnsAreFourClustersWithTheirFront
     }
     EXPECT_EQ(std::count(covered.begin(), covered.end(), 1), steps)
         << "front arc of the column at y = " << column.y() << " not mapped across";
+  }
+}
+
+// Test 13's map from the start: after a full sweep the two rocks in the head's sight (rock_1 at
+// (9, 1) and rock_2 at (15, -2.6); rock_1 hides rock_3 and rock_4 behind it) are one cluster
+// each, at their faces, and nothing else is occupied.
+TEST(SonarStackTest, Seed004Test13TheRocksInSightAreClustersAtTheirFaces) {
+  AuvRig rig("rocks", "10");
+  const auto map = rig.LayerAfter(kFullSweepPings, 120.0);
+  ASSERT_TRUE(map.has_value()) << rig.mapper->Log();
+  const std::vector<Cluster> clusters = Clusters(*map);
+  std::string listed;
+  for (const Cluster& c : clusters) {
+    listed += " (" + std::to_string(c.centre.x()) + ", " + std::to_string(c.centre.y()) +
+              "): " + std::to_string(c.cells);
+  }
+  ASSERT_EQ(clusters.size(), 2u) << "clusters:" << listed;
+  // Each within its rock's size plus a bin of the rock's centre: rock_1 r 1.5 m, rock_2 a 3 x
+  // 3.6 m box (half diagonal 2.3 m).
+  const std::vector<std::pair<common::Vector2, double>> rocks = {{{9.0, 1.0}, 1.5 + 1.0},
+                                                                 {{15.0, -2.6}, 2.3 + 1.0}};
+  for (const auto& [centre, reach_m] : rocks) {
+    int near = 0;
+    for (const Cluster& c : clusters) near += (c.centre - centre).norm() < reach_m;
+    EXPECT_EQ(near, 1) << "rock at (" << centre.x() << ", " << centre.y()
+                       << "); clusters:" << listed;
   }
 }
 
