@@ -44,6 +44,20 @@ TEST(CostMapTest, AsymmetricPatternCatchesTransposedOrFlippedGrids) {
   EXPECT_TRUE(nose->IsValid({4.05 - 0.4, 2.55, M_PI}));  // facing away
 }
 
+// footprint_padding_m grows the robot's own footprint for every check: a pose whose footprint
+// clears a wall by 0.2 m is invalid with 0.3 m of padding.
+TEST(CostMapTest, FootprintPaddingGrowsTheRobotsFootprint) {
+  TestLayer layer(100, 100, 0.05);
+  layer.Rect(0.0, 3.0, 5.0, 5.0, 100.0f);        // a wall from y = 3
+  const Pose2 pose{2.5, 3.0 - 0.25 - 0.2, 0.0};  // the 0.5 m wide footprint 0.2 m below it
+  EXPECT_TRUE(layer.Build(PioneerFootprint())->IsValid(pose));
+  CostMapParams padded;
+  padded.footprint_padding_m = 0.3;
+  const auto map = layer.Build(PioneerFootprint(), padded);
+  EXPECT_FALSE(map->IsValid(pose));
+  EXPECT_NEAR(map->footprint().inscribed_radius_m(), 0.25 + 0.3, 0.02);
+}
+
 TEST(CostMapTest, RotatedGridOrigin) {
   // The grid's x axis points along world +y: cell (ix, iy) sits at world (-iy, ix) · res.
   TestLayer layer(30, 10, 0.1, 0.0f, {0.0, 0.0, M_PI / 2});

@@ -146,5 +146,25 @@ TEST(NavigatorMapConfigTest, LoadsTheShippedApartmentFile) {
   EXPECT_FALSE(c.cost_map.unknown_is_traversable);
 }
 
+// The AUV's configuration (seed 004): the sonar layer, unknown water blocking, explore first and
+// approach through known water, the 2 m goal tolerance, commands through the velocity bridge.
+TEST(NavigatorMapConfigTest, LoadsTheShippedUnderwaterFile) {
+  const NavigatorConfig c =
+      LoadNavigatorConfigFile(std::string(CAIRN_SOURCE_DIR) + "/config/navigator/underwater.yaml");
+  EXPECT_EQ(c.command_output, CommandOutput::kBodyVelocity);
+  EXPECT_EQ(c.map.encoding, MapEncoding::kOccupancy);
+  EXPECT_EQ(c.map.LayerFor("sparus2"), "sonar/occupancy");
+  EXPECT_FALSE(c.cost_map.unknown_is_traversable);
+  EXPECT_GT(c.cost_map.footprint_padding_m, 0.0);
+  EXPECT_EQ(c.navigator.xy_goal_tolerance_m, 2.0);
+  EXPECT_GT(c.navigator.wait_for_map_s, 0.0);
+  EXPECT_TRUE(c.navigator.approach_through_known);
+  EXPECT_NE(ConfigError("command_output: twist\n").find("command output"), std::string::npos);
+  EXPECT_NE(ConfigError("navigator: {wait_for_map_s: -1}\n").find("wait_for_map_s"),
+            std::string::npos);
+  EXPECT_NE(ConfigError("cost_map: {footprint_padding_m: -0.1}\n").find("footprint_padding_m"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace cairn::planner

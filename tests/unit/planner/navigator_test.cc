@@ -1,6 +1,7 @@
 #include "planner/navigator.h"
 
 #include <algorithm>
+#include <limits>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -126,6 +127,70 @@ NavGoal PoseGoal(double x, double y, int64_t id = 1) {
   g.id = id;
   g.pose = {x, y, 0.0};
   return g;
+}
+
+// Seed 004's explore first: with unknown cells blocking and only the start's surroundings
+// known, the robot holds still (zero commands) and says it waits; once the map shows the way it
+// goes, and says after how long.
+TEST(NavigatorTest, ExploreFirstHoldsStillUntilTheMapShowsAWay) {
+  const float unknown = std::numeric_limits<float>::quiet_NaN();
+  TestLayer start_only(200, 100, 0.1, unknown);
+  start_only.Rect(0.0, 0.0, 4.0, 4.0, 0.0f);
+  NavigatorParams params;
+  params.wait_for_map_s = 60.0;
+  NavSim sim(start_only.Build(PioneerFootprint()), params);
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  sim.Run(10.0);
+  EXPECT_EQ(sim.nav_.status().state, NavState::kPlanning) << sim.nav_.status().message;
+  EXPECT_EQ(sim.pose_.position(), Vector2(2.0, 2.0));
+  EXPECT_EQ(sim.last_sent_.linear_mps, 0.0);
+  EXPECT_GE(sim.plans_, 5);  // tried again, once per min_replan_interval_s
+  const auto said = [&](const std::string& text) {
+    return std::any_of(sim.events_.begin(), sim.events_.end(),
+                       [&](const std::string& e) { return e.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(said("explore first: waiting for the map"));
+  sim.map_ = TestLayer(200, 100, 0.1).Build(PioneerFootprint());  // all shown, all free
+  ASSERT_TRUE(sim.RunUntilState(120.0, NavState::kReached)) << sim.nav_.status().message;
+  EXPECT_TRUE(said("explore first: the map showed a way after"));
+}
+
+TEST(NavigatorTest, ExploreFirstGivesUpAfterItsWait) {
+  const float unknown = std::numeric_limits<float>::quiet_NaN();
+  TestLayer start_only(200, 100, 0.1, unknown);
+  start_only.Rect(0.0, 0.0, 4.0, 4.0, 0.0f);
+  NavigatorParams params;
+  params.wait_for_map_s = 3.0;
+  params.recovery.sequence.clear();
+  NavSim sim(start_only.Build(PioneerFootprint()), params);
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  ASSERT_TRUE(sim.RunUntilState(20.0, NavState::kFailed));
+  EXPECT_GT(sim.t_, 3.0);
+  EXPECT_EQ(sim.pose_.position(), Vector2(2.0, 2.0));
+}
+
+// Approach through known space: the goal lies beyond what the map shows; the robot drives
+// through known cells only to the known pose nearest the goal, and on to the goal once the map
+// shows it.
+TEST(NavigatorTest, ApproachesThroughKnownSpaceThenReachesTheGoal) {
+  const float unknown = std::numeric_limits<float>::quiet_NaN();
+  TestLayer corridor(200, 100, 0.1, unknown);
+  corridor.Rect(0.0, 0.0, 12.0, 4.0, 0.0f);
+  NavigatorParams params;
+  params.wait_for_map_s = 60.0;
+  params.approach_through_known = true;
+  NavSim sim(corridor.Build(PioneerFootprint()), params);  // collisions (unknown) checked
+  sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
+  sim.Run(60.0);
+  EXPECT_GT(sim.pose_.x_m, 9.0) << "it did not go through the known corridor";
+  EXPECT_LT(sim.pose_.x_m, 12.0);
+  EXPECT_NE(sim.nav_.status().state, NavState::kFailed) << sim.nav_.status().message;
+  sim.map_ = TestLayer(200, 100, 0.1).Build(PioneerFootprint());
+  ASSERT_TRUE(sim.RunUntilState(120.0, NavState::kReached)) << sim.nav_.status().message;
+  EXPECT_LT((sim.pose_.position() - Vector2(18.0, 2.0)).norm(), 0.5);
+  EXPECT_TRUE(std::any_of(sim.events_.begin(), sim.events_.end(), [](const std::string& e) {
+    return e.find("approach: the map shows no way to the goal yet") != std::string::npos;
+  }));
 }
 
 TEST(NavigatorTest, ReachesAGoalThroughTheGap) {

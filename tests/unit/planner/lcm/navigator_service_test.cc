@@ -1,7 +1,10 @@
 #include "planner/lcm/navigator_service.h"
 
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
+#include "cairn/lcmt_body_velocity_request.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_path.hpp"
 #include "cairn/lcmt_sim_clock.hpp"
@@ -12,8 +15,8 @@
 #include "common/layers.h"
 #include "services/runtime/conversions.h"
 #include "services/runtime/tiler.h"
-#include "tests/unit/planner/test_maps.h"
 #include "tests/support/memq_node.h"
+#include "tests/unit/planner/test_maps.h"
 
 namespace cairn::planner {
 namespace {
@@ -57,10 +60,21 @@ class NavigatorServiceTest : public ::testing::Test {
                                       [this](const auto& m) { paths_.push_back(m); });
     node_.Subscribe<cairn::lcmt_tile_resend_request>(
         ch::ForRobot("r1", ch::kMapTileResend), [this](const auto& m) { resends_.push_back(m); });
+    // The velocity bridge's requests drive the kinematic robot as commands do.
+    node_.Subscribe<cairn::lcmt_body_velocity_request>(ch::ForRobot("r1", ch::kBodyVelocity),
+                                                       [this](const auto& m) {
+                                                         requests_.push_back(m);
+                                                         cairn::lcmt_velocity_command c{};
+                                                         c.robot = m.robot;
+                                                         c.linear_mps = m.twist[0];
+                                                         c.angular_radps = m.twist[5];
+                                                         commands_.push_back(c);
+                                                       });
   }
 
-  void Start(std::vector<Place> places = {}) {
+  void Start(std::vector<Place> places = {}, CommandOutput output = CommandOutput::kVelocity) {
     NavigatorConfig config;
+    config.command_output = output;
     // The test drives the clock and waits for every plan (Step), so a plan's wall-clock budget
     // must not decide the outcome on a loaded machine.
     config.global_planner.time_budget_s = 30.0;
@@ -147,6 +161,7 @@ class NavigatorServiceTest : public ::testing::Test {
   int ticks_{0};
   size_t used_commands_{0};
   std::vector<cairn::lcmt_velocity_command> commands_;
+  std::vector<cairn::lcmt_body_velocity_request> requests_;
   std::vector<cairn::lcmt_nav_status> statuses_;
   std::vector<cairn::lcmt_path> paths_;
   std::vector<cairn::lcmt_tile_resend_request> resends_;
@@ -175,6 +190,37 @@ TEST_F(NavigatorServiceTest, GoalBecomesAPathAndCommandsUntilReached) {
     last_v = c.linear_mps;
   }
   EXPECT_GE(node_.counter("plans"), 1);
+}
+
+// Seed 004 test 11 in the service: with command_output body_velocity every command goes out as
+// exactly one body-velocity request (the twist copied, x and yaw enabled, the rest disabled,
+// priority NORMAL, requester "Twist2BVR", id 0, the profile's name as frame) and no CMD_VEL.
+TEST_F(NavigatorServiceTest, TheVelocityBridgeSendsOneBodyVelocityRequestPerCommand) {
+  Start({}, CommandOutput::kBodyVelocity);
+  PublishMap(true);
+  for (int k = 0; k < 4; ++k) Step();
+  SendGoal(PoseGoal(11, 10.0, 4.0));
+  ASSERT_TRUE(StepUntil([&] { return LastState() == kStateReached; }, 800));
+  EXPECT_NEAR(pose_.x_m, 10.0, 0.5);
+  ASSERT_FALSE(requests_.empty());
+  EXPECT_EQ(static_cast<int64_t>(requests_.size()), node_.counter("commands"));
+  EXPECT_EQ(commands_.size(), requests_.size()) << "CMD_VEL went out too";
+  for (const auto& r : requests_) {
+    EXPECT_EQ(r.robot, "r1");
+    EXPECT_EQ(r.frame, "pioneer3at");
+    EXPECT_EQ(r.requester, "Twist2BVR");
+    EXPECT_EQ(r.goal_id, 0);
+    EXPECT_EQ(r.priority, cairn::lcmt_body_velocity_request::PRIORITY_NORMAL + 0);
+    EXPECT_FALSE(r.disable_axis[0]);
+    EXPECT_TRUE(r.disable_axis[1] && r.disable_axis[2] && r.disable_axis[3] && r.disable_axis[4]);
+    EXPECT_FALSE(r.disable_axis[5]);
+    EXPECT_EQ(r.twist[1], 0.0);
+    EXPECT_EQ(r.twist[2], 0.0);
+  }
+  EXPECT_GT(std::max_element(requests_.begin(), requests_.end(),
+                             [](const auto& a, const auto& b) { return a.twist[0] < b.twist[0]; })
+                ->twist[0],
+            0.2);
 }
 
 TEST_F(NavigatorServiceTest, AReSentGoalIdDoesNotRestartTheGoal) {

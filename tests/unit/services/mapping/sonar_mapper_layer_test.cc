@@ -110,6 +110,56 @@ TEST(SonarMapperLayerTest, ThePeaksBeyondTheFirstAreMarkedWithoutClearing) {
   EXPECT_TRUE(std::isnan(At(*map, kSonarLogOdds, 14.0, 0.1))) << "cleared behind the first peak";
 }
 
+// With a beam width, a peak marks the arc the beam covers at its range (3 deg at 10 m: 0.52 m,
+// a point a cell of 0.25 m either side of the axis), not one point; the clearing stays on the
+// axis.
+TEST(SonarMapperLayerTest, ABeamWidthMarksThePeaksArc) {
+  std::vector<int> found;
+  const auto point = SonarPingRays(Ping(Wall()), SonarPeakParams{}, &found);
+  ASSERT_EQ(point.size(), 1u);
+  const double width_rad = 3.0 * M_PI / 180.0;
+  const auto arc = SonarPingRays(Ping(Wall()), SonarPeakParams{}, &found, width_rad, 0.25);
+  ASSERT_EQ(arc.size(), 1u + 2u * 1u);  // floor(0.5 * 0.0524 * 10 / 0.25) = 1 a side
+  for (size_t i = 1; i < arc.size(); ++i) {
+    EXPECT_TRUE(arc[i].hit);
+    EXPECT_EQ(arc[i].origin_m, arc[i].end_m);  // marks only
+    EXPECT_NEAR(arc[i].end_m.norm(), 10.0, 1e-9);
+    EXPECT_LE(std::abs(std::atan2(arc[i].end_m.y(), arc[i].end_m.x())), 0.5 * width_rad);
+  }
+  SonarMapperLayerParams params;
+  params.beam_width_deg = 3.0;
+  SonarMapperLayer layer{params};
+  layer.OnReading(Ping(Wall()));
+  const auto map = layer.ExportGrids();
+  ASSERT_TRUE(map.has_value());
+  for (const PlanarRay& mark : arc) {
+    EXPECT_GT(At(*map, kSonarLogOdds, mark.end_m.x(), mark.end_m.y()), 0.f);
+  }
+  EXPECT_GT(std::abs(arc[1].end_m.y()), 0.2);
+}
+
+// The vehicle's own water: a disc round the hull's centre, behind the head along the hull (the
+// head's heading less its pan), cleared with every ping.
+TEST(SonarMapperLayerTest, TheVehiclesOwnWaterIsClearedRoundItsCentre) {
+  SonarMapperLayerParams params;
+  params.vehicle_centre_behind_head_m = 0.7;
+  params.vehicle_clear_radius_m = 0.9;
+  SonarMapperLayer layer{params};
+  // The hull faces +x; the head at (0.7, 0) looks 30 deg left.
+  SonarReading ping = Ping(Wall(), 0.7, 0.0, 30.0 * M_PI / 180.0);
+  ping.pan_rad = 30.0 * M_PI / 180.0;
+  layer.OnReading(ping);
+  const auto map = layer.ExportGrids();
+  ASSERT_TRUE(map.has_value());
+  for (const common::Vector2& p : {common::Vector2(-0.7, 0.0), common::Vector2(0.0, -0.8),
+                                   common::Vector2(0.0, 0.8), common::Vector2(0.6, -0.5)}) {
+    EXPECT_LT(At(*map, kSonarLogOdds, p.x(), p.y()), 0.f) << p.transpose();
+  }
+  EXPECT_TRUE(std::isnan(At(*map, kSonarLogOdds, -1.2, 0.0)));  // beyond the disc, behind
+  params.vehicle_clear_radius_m = -1.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+}
+
 TEST(SonarMapperLayerTest, RegisteredAsSonarAndReadFromItsSection) {
   MapperCoreParams core;
   EXPECT_FALSE(core.Has(kSonarLayerName));

@@ -153,6 +153,44 @@ TEST_F(SimServiceTest, NanCommandsAreDroppedAndCountedClampedOnesCounted) {
   EXPECT_GT(sim_->RobotPose("r").position_m.x(), 0.3);
 }
 
+// The velocity bridge's requests on <robot>.BODY_VELOCITY_REQ drive the robot by surge and yaw;
+// disabled axes are ignored, enabled axes it cannot follow are counted and ignored, NaN is
+// dropped, another robot's request is dropped.
+TEST_F(SimServiceTest, BodyVelocityRequestsDriveBySurgeAndYaw) {
+  auto request = [&](double vx, double wz, const std::string& robot = "r") {
+    cairn::lcmt_body_velocity_request r{};
+    r.robot = robot;
+    r.requester = "Twist2BVR";
+    r.twist[0] = vx;
+    r.twist[5] = wz;
+    for (int i = 0; i < 6; ++i) r.disable_axis[i] = i != 0 && i != 5;
+    return r;
+  };
+  auto send = [&](const cairn::lcmt_body_velocity_request& r) {
+    node_->Publish("r.BODY_VELOCITY_REQ", r);
+    dut_->HandlePending();
+  };
+  send(request(std::numeric_limits<double>::quiet_NaN(), 0.0));
+  EXPECT_EQ(node_->counter("nan_commands"), 1);
+  send(request(0.2, 0.0, "someone_else"));
+  EXPECT_EQ(node_->counter("wrong_robot_commands"), 1);
+  auto heave = request(0.3, 0.0);
+  heave.disable_axis[2] = false;
+  heave.twist[2] = 0.5;
+  send(heave);
+  EXPECT_EQ(node_->counter("ignored_axis_requests"), 1);
+  EXPECT_EQ(sim_->drive("r").target_linear_mps(), 0.3);
+  auto no_yaw = request(0.3, 0.4);
+  no_yaw.disable_axis[5] = true;  // a disabled yaw is no turn
+  send(no_yaw);
+  EXPECT_EQ(sim_->drive("r").target_angular_radps(), 0.0);
+  for (int i = 0; i < 10; ++i) {
+    send(request(0.4, 0.0));
+    dut_->StepAndPublish(50);
+  }
+  EXPECT_GT(sim_->RobotPose("r").position_m.x(), 0.3);
+}
+
 TEST_F(SimServiceTest, ControlRepliesAndReplays) {
   Request spawn = Make(Request::OP_SPAWN, "crate", 1);
   spawn.shape = Request::SHAPE_BOX;
