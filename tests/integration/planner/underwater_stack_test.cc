@@ -2,7 +2,8 @@
 // (config/sim/rocks_sparus2.yaml), cairn-mapper with the sonar layer alone
 // (config/mapping/underwater.yaml) and cairn-navigator planning on it with unknown water as an
 // obstacle and commanding through the velocity bridge (config/navigator/underwater.yaml), on a
-// private bus.
+// private bus. The graph runs at --speed 4: the navigator commands at 20 Hz of wall time, so the
+// AUV gets a command every 0.2 s of its own (planner/README.md, "Explore first"); slow, but true.
 
 #include <algorithm>
 #include <cmath>
@@ -101,9 +102,22 @@ class UnderwaterStackTest : public ::testing::Test {
     bus_.Keep(ch::ForRobot(kRobot, ch::kBodyVelocity));
   }
 
-  void Start(const std::string& speed) {
-    procs_.Start("cairn-sim", {"--scenario", testing::SourcePath("config/sim/rocks_sparus2.yaml"),
-                               "--speed", speed});
+  // The stack at --speed `speed` on the shipped rocks scenario, or on a scenario of the AUV at
+  // (0, 0) in `world` with `physics` (a YAML map's contents) when a world is given.
+  void Start(const std::string& speed, const std::string& world = "",
+             const std::string& physics = "") {
+    std::string scenario = testing::SourcePath("config/sim/rocks_sparus2.yaml");
+    if (!world.empty()) {
+      scenario = procs_.dir() + "/" + world + "_auv.yaml";
+      std::ofstream(scenario) << "world: " << world << "\n"
+                              << "seed: 1\n"
+                              << "physics: {" << physics << "}\n"
+                              << "robots:\n"
+                                 "  - id: auv\n"
+                                 "    model: sparus2\n"
+                                 "    spawn: {x_m: 0.0, y_m: 0.0, yaw_deg: 0.0}\n";
+    }
+    procs_.Start("cairn-sim", {"--scenario", scenario, "--speed", speed});
     mapper_ = &procs_.Start(
         "cairn-mapper",
         {"--robot", kRobot, "--config", testing::SourcePath("config/mapping/underwater.yaml")});
@@ -155,6 +169,27 @@ class UnderwaterStackTest : public ::testing::Test {
   SonarTiles tiles_;
   testing::ChildProcess* mapper_{nullptr};
   testing::ChildProcess* navigator_{nullptr};
+
+  // Waits for goal `id` to end; true when reached.
+  bool WaitEnd(int64_t id, double timeout_s) {
+    const bool ended = WaitFor(
+        [&] {
+          auto s = Status();
+          return s && s->goal_id == id && (s->state == kStateReached || s->state == kStateFailed);
+        },
+        timeout_s, [&] { bus_.Pump(20); });
+    EXPECT_TRUE(ended) << "no end within " << timeout_s << " s\n" << navigator_->Log();
+    return ended && Status()->state == kStateReached;
+  }
+  // The sim time (s) of the first body-velocity request with a surge above 1 cm/s, or -1.
+  double FirstSurgeS() {
+    for (const auto& raw : bus_.Kept(ch::ForRobot(kRobot, ch::kBodyVelocity))) {
+      cairn::lcmt_body_velocity_request r;
+      if (r.decode(raw.data(), 0, static_cast<int>(raw.size())) < 0) continue;
+      if (r.twist[0] > 0.01) return r.utime * 1e-6;
+    }
+    return -1.0;
+  }
 };
 
 // Test 13: from (0, 0) to (35, 0) past four rocks. The AUV waits for its sonar to show water
@@ -217,6 +252,57 @@ TEST_F(UnderwaterStackTest, Seed004Test13RocksToTheGoalWithoutContact) {
     for (const Cluster& c : clusters) near += (c.centre - rock.centre).norm() < 3.5;
     EXPECT_GE(near, 1) << rock.name << " is not on the sonar layer; clusters:" << listed;
   }
+}
+
+// Test 16, explore first: the goal (20, -15) lies 37 deg right, where the head (sweeping from 35
+// deg left) has not looked yet. With unknown water an obstacle the navigator commands no motion
+// while the sonar has shown no way towards it (the wait is logged and lasts at least part of a
+// sweep), then goes and reaches the goal.
+TEST_F(UnderwaterStackTest, Seed004Test16ExploreFirstWaitsForTheSonarThenGoes) {
+  Start("4", "floor");
+  SendGoal(16, 20.0, -15.0);
+  const bool reached = WaitEnd(16, 300.0);
+  ASSERT_TRUE(reached) << Status()->message << "\n" << navigator_->Log();
+  WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
+  const std::vector<common::Pose2> poses = Poses();
+  ASSERT_GT(poses.size(), 100u);
+  EXPECT_LE((poses.back().position() - Vector2(20.0, -15.0)).norm(), 2.0);
+  const double first_surge_s = FirstSurgeS();
+  ASSERT_GT(first_surge_s, 0.0);
+  // 88 pings to the left limit and back past the straight ahead: over 10 s at 15 pings/s.
+  EXPECT_GT(first_surge_s, 10.0) << "it moved before the sonar had looked towards the goal";
+  const std::string log = navigator_->Log();
+  EXPECT_NE(log.find("explore first: waiting for the map"), std::string::npos) << log;
+  EXPECT_NE(log.find("explore first: the map showed a way after"), std::string::npos) << log;
+}
+
+// Test 19, drift: a constant 0.1 m/s current across the course (north) sets the AUV aside on its
+// way to (25, 0); it still ends within the 2 m tolerance, or says it failed.
+TEST_F(UnderwaterStackTest, Seed004Test19ACrossCurrentStillEndsWithinTolerance) {
+  Start("4", "floor", "current_y_mps: 0.1");
+  SendGoal(19, 25.0, 0.0);
+  const bool reached = WaitEnd(19, 300.0);
+  const auto status = Status();
+  ASSERT_TRUE(status.has_value());
+  if (!reached) {
+    // A failure is allowed if it is reported with its reason.
+    EXPECT_EQ(status->state, kStateFailed);
+    EXPECT_FALSE(status->message.empty());
+    return;
+  }
+  WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
+  const std::vector<common::Pose2> poses = Poses();
+  ASSERT_GT(poses.size(), 100u);
+  EXPECT_LE((poses.back().position() - Vector2(25.0, 0.0)).norm(), 2.0);
+  // The current did set it aside: somewhere its track left the straight line by a margin, or
+  // it crabbed (heading off the course) to hold it.
+  double most_north = 0.0, most_crab = 0.0;
+  for (const common::Pose2& p : poses) {
+    most_north = std::max(most_north, p.y_m);
+    if (p.x_m > 2.0 && p.x_m < 20.0) most_crab = std::max(most_crab, std::abs(p.yaw_rad));
+  }
+  EXPECT_TRUE(most_north > 0.3 || most_crab > 0.05)
+      << "no sign of the current: " << most_north << " m north, " << most_crab << " rad";
 }
 
 }  // namespace
