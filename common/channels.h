@@ -37,6 +37,7 @@ inline constexpr char kOdom[] = "ODOM";
 inline constexpr char kPose[] = "POSE";  // ground truth
 inline constexpr char kImu[] = "IMU";
 inline constexpr char kSonar[] = "SONAR";
+inline constexpr char kSonarDetections[] = "SONAR_DETECTIONS";  // cairn-mapper: per-ping obstacles
 inline constexpr char kCmdVel[] = "CMD_VEL";
 inline constexpr char kBodyVelocity[] = "BODY_VELOCITY_REQ";  // AUV body-velocity requests
 inline constexpr char kGoal[] = "GOAL";

@@ -59,9 +59,10 @@ int ParseFlags(int argc, char** argv, Flags* f) {
   flags.AddHelpSection(
       "Channels",
       "in:  <robot>.LIDAR .SCAN .POSE .ODOM .IMU .MAP.CONTROL .MAP.TILE_RESEND\n"
-      "     <robot>.TURRET_SCAN (with the explore layer)\n"
+      "     <robot>.TURRET_SCAN (with the explore layer), <robot>.SONAR (with the sonar layer)\n"
       "out: <robot>.MAP.TILES .MAP.MANIFEST .MAP.OCCUPANCY .MAP.OBSTACLES "
       ".MAP.OCTOMAP .MAP.CONTROL_REPLY, HEALTH\n"
+      "     <robot>.SONAR_DETECTIONS (with the sonar layer: each ping's obstacles)\n"
       "with --long-term-store: MAPSTORE.REQUEST (load at start, periodic pull "
       "saves), MAPSTORE.REPLY, MAPSTORE.TILES, MAPSTORE.TILE_BATCHES, MAPSTORE.MANIFEST");
   flags.AddHelpSection("Control (<robot>.MAP.CONTROL)",

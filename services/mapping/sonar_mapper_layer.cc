@@ -135,6 +135,27 @@ void SonarMapperLayer::OnReading(const SensorReading& reading) {
     rays.swap(disc);
   }
   grid_.InsertRays(rays);
+  SonarDetection detection;
+  detection.utime = ping->utime;
+  detection.pan_rad = ping->pan_rad;
+  detection.head_m = ping->sensor_pose.position_m;
+  const Eigen::Vector3d along = ping->sensor_pose.orientation * Eigen::Vector3d::UnitX();
+  detection.beam_yaw_rad = std::atan2(along.y(), along.x());
+  detection.range_max_m = ping->range_max_m;
+  detection.bins = found;
+  if (!ping->bins.empty()) {
+    const double bin_m = (ping->range_max_m - ping->range_min_m) / ping->bins.size();
+    const common::Vector2 dir(std::cos(detection.beam_yaw_rad), std::sin(detection.beam_yaw_rad));
+    for (int bin : found) {
+      detection.points.push_back(detection.head_m.head<2>() +
+                                 (ping->range_min_m + bin * bin_m) * dir);
+    }
+  }
+  if (detections_.size() >= kMaxPendingDetections) {
+    detections_.pop_front();
+    ++dropped_detections_;
+  }
+  detections_.push_back(std::move(detection));
   ++pings_;
   last_obstacles_ = static_cast<int>(found.size());
   obstacles_ += last_obstacles_;
@@ -146,6 +167,7 @@ void SonarMapperLayer::OnReading(const SensorReading& reading) {
 
 void SonarMapperLayer::Reset() {
   grid_.Clear();
+  detections_.clear();
   pings_ = 0;
   obstacles_ = 0;
   last_obstacles_ = 0;
@@ -163,6 +185,13 @@ std::optional<common::GridMap> SonarMapperLayer::ExportGrids() const {
   common::GridMap out(exported.geometry());
   out.AddLayer(kSonarOccupancy, std::move(exported.at(layers::kOccupancy)));
   out.AddLayer(kSonarLogOdds, std::move(exported.at(layers::kOccupancyLogOdds)));
+  return out;
+}
+
+std::vector<SonarDetection> SonarMapperLayer::TakeDetections() {
+  std::vector<SonarDetection> out(std::make_move_iterator(detections_.begin()),
+                                  std::make_move_iterator(detections_.end()));
+  detections_.clear();
   return out;
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <deque>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,17 @@ struct SonarReading : SensorReading {
   double range_min_m{0.0};
   double range_max_m{50.0};
   std::vector<uint8_t> bins;
+};
+
+/// What one ping showed (published per ping as lcmt_sonar_detection).
+struct SonarDetection {
+  int64_t utime{0};
+  double pan_rad{0.0};
+  common::Vector3 head_m{common::Vector3::Zero()};
+  double beam_yaw_rad{0.0};
+  double range_max_m{0.0};
+  std::vector<int> bins;                ///< verified peaks, nearest first
+  std::vector<common::Vector2> points;  ///< world frame, at each bin's near edge
 };
 
 struct SonarMapperLayerParams {
@@ -81,6 +93,11 @@ class SonarMapperLayer : public MapperLayer {
   std::optional<common::GridMap> ExportGrids() const override;
   int64_t version() const override { return grid_.version(); }
   std::vector<std::string> TakeEvents() override;
+  /// The detections of the pings taken since the last call, oldest first (at most
+  /// kMaxPendingDetections: older ones are dropped and counted).
+  std::vector<SonarDetection> TakeDetections();
+  static constexpr size_t kMaxPendingDetections = 256;
+  int64_t dropped_detections() const { return dropped_detections_; }
 
   const OccupancyGrid& grid() const { return grid_; }
   int64_t pings() const { return pings_; }
@@ -95,6 +112,8 @@ class SonarMapperLayer : public MapperLayer {
   int64_t obstacles_{0};
   int last_obstacles_{0};
   std::vector<std::string> events_;
+  std::deque<SonarDetection> detections_;
+  int64_t dropped_detections_{0};
 };
 
 }  // namespace cairn::mapping

@@ -5,12 +5,14 @@
 #include <cmath>
 
 #include "cairn/lcmt_mapstore_request.hpp"
+#include "cairn/lcmt_sonar_detection.hpp"
 
 #include "common/channels.h"
 #include "common/check.h"
 #include "common/layers.h"
 #include "common/log.h"
 #include "services/mapping/derive.h"
+#include "services/mapping/sonar_mapper_layer.h"
 #include "services/runtime/conversions.h"
 
 namespace cairn::mapping {
@@ -424,6 +426,27 @@ void MapperService::LayerWorkerLoop(LayerWorker* w) {
   }
 }
 
+void MapperService::PublishDetections(SonarMapperLayer* layer) {
+  for (const SonarDetection& d : layer->TakeDetections()) {
+    cairn::lcmt_sonar_detection msg{};
+    msg.utime = d.utime;
+    msg.robot = params_.robot;
+    msg.pan_rad = d.pan_rad;
+    for (int i = 0; i < 3; ++i) msg.sensor_position_m[i] = d.head_m[i];
+    msg.beam_yaw_rad = d.beam_yaw_rad;
+    msg.range_max_m = d.range_max_m;
+    msg.clear_to_range = d.bins.empty();
+    msg.num_obstacles = static_cast<int32_t>(d.bins.size());
+    for (size_t i = 0; i < d.bins.size(); ++i) {
+      msg.bins.push_back(static_cast<int16_t>(d.bins[i]));
+      msg.x_m.push_back(d.points[i].x());
+      msg.y_m.push_back(d.points[i].y());
+    }
+    node_.Publish(channels::ForRobot(params_.robot, channels::kSonarDetections), msg);
+    node_.Count("sonar_detections");
+  }
+}
+
 void MapperService::Process(Job& job) {
   switch (job.kind) {
     case Job::Kind::kRevolution:
@@ -435,6 +458,7 @@ void MapperService::Process(Job& job) {
     case Job::Kind::kReading:
       core_.ProcessReading(*job.reading);
       for (const auto& layer : core_.layers()) {
+        if (auto* sonar = dynamic_cast<SonarMapperLayer*>(layer.get())) PublishDetections(sonar);
         for (const std::string& e : layer->TakeEvents()) {
           node_.Event("%s: %s", layer->name().c_str(), e.c_str());
         }

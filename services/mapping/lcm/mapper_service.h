@@ -61,6 +61,8 @@ namespace cairn::mapping {
 /// Looks a profile up by name (the main reads config/profiles); NOT_FOUND when unknown.
 using ProfileResolver = std::function<common::Result<common::RobotProfile>(const std::string&)>;
 
+class SonarMapperLayer;
+
 class MapperService {
  public:
   enum class Mode { kLive, kReplay };
@@ -128,6 +130,8 @@ class MapperService {
   void WorkerLoop();
   void LayerWorkerLoop(LayerWorker* worker);
   void Process(Job& job);
+  /// Each ping's obstacles on <robot>.SONAR_DETECTIONS (lcmt_sonar_detection).
+  void PublishDetections(SonarMapperLayer* layer);
   void ProcessRevolution(PreparedRevolution& job);
   void ProcessControl(const cairn::lcmt_map_control_request& request);
   void AddProfile(const cairn::lcmt_map_control_request& request,

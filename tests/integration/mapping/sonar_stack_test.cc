@@ -18,6 +18,7 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_occupancy_tile.hpp"
+#include "cairn/lcmt_sonar_detection.hpp"
 #include "cairn/lcmt_sonar_ping.hpp"
 
 #include "common/channels.h"
@@ -281,7 +282,9 @@ TEST(SonarStackTest, Seed004Test15CaveProfilePeaksAtTheNearestWallThenShadowToTh
   for (int b = 0; b < peak; ++b) echoes_before += bins[b] > 0 && bins[b] < 110;
   EXPECT_GT(echoes_before, 3);
   for (int b = peak + 2; b < 50; ++b) EXPECT_EQ(bins[b], 0) << "bin " << b << " behind the wall";
-  // The mapper puts the wall on its layer.
+  // The mapper puts the wall on its layer, and says per ping what it found: the first ping's
+  // obstacle on the north wall's face (at the peak bin's near edge, up to a bin in front of it).
+  rig.bus.Keep(ch::ForRobot(kAuv, ch::kSonarDetections));
   const auto map = rig.LayerAfter(20, 60.0);
   ASSERT_TRUE(map.has_value()) << rig.mapper->Log();
   int wall_cells = 0;
@@ -289,6 +292,16 @@ TEST(SonarStackTest, Seed004Test15CaveProfilePeaksAtTheNearestWallThenShadowToTh
     if (c.centre.y() > 5.5 && c.centre.x() > 6.0) wall_cells += c.cells;
   }
   EXPECT_GT(wall_cells, 0) << "the north wall is not on the sonar layer";
+  const auto detection =
+      rig.bus.Last<cairn::lcmt_sonar_detection>(ch::ForRobot(kAuv, ch::kSonarDetections));
+  ASSERT_TRUE(detection.has_value()) << "no per-ping detections on the bus";
+  EXPECT_GE(rig.bus.Count(ch::ForRobot(kAuv, ch::kSonarDetections)), 10);
+  EXPECT_EQ(detection->robot, kAuv);
+  EXPECT_GE(detection->num_obstacles, 1) << "a ping at the cave's wall found nothing";
+  for (int i = 0; i < detection->num_obstacles; ++i) {
+    EXPECT_GT(detection->y_m[i], 7.0 - 1.5) << "obstacle " << i << " off the north wall";
+    EXPECT_LE(detection->y_m[i], 7.0 + 0.01);
+  }
 }
 
 }  // namespace

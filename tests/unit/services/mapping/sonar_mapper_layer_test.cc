@@ -160,6 +160,31 @@ TEST(SonarMapperLayerTest, TheVehiclesOwnWaterIsClearedRoundItsCentre) {
   EXPECT_THROW(params.Validate(), std::invalid_argument);
 }
 
+// Each ping's detection waits for the service to publish it: the peaks' bins and world points,
+// or a clear beam; at most kMaxPendingDetections, the oldest dropped and counted.
+TEST(SonarMapperLayerTest, EachPingsDetectionIsKeptForPublishing) {
+  SonarMapperLayer layer{SonarMapperLayerParams{}};
+  SonarReading wall = Ping(Wall(), 3.0, 4.0, M_PI / 2);
+  wall.utime = 42;
+  layer.OnReading(wall);
+  layer.OnReading(Ping(Seabed()));
+  const std::vector<SonarDetection> d = layer.TakeDetections();
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_EQ(d[0].utime, 42);
+  EXPECT_EQ(d[0].bins, (std::vector<int>{10}));
+  ASSERT_EQ(d[0].points.size(), 1u);
+  EXPECT_NEAR(d[0].points[0].x(), 3.0, 1e-9);
+  EXPECT_NEAR(d[0].points[0].y(), 14.0, 1e-9);
+  EXPECT_NEAR(d[0].beam_yaw_rad, M_PI / 2, 1e-9);
+  EXPECT_TRUE(d[1].bins.empty());
+  EXPECT_TRUE(layer.TakeDetections().empty());
+  for (size_t i = 0; i < SonarMapperLayer::kMaxPendingDetections + 5; ++i) {
+    layer.OnReading(Ping(Seabed()));
+  }
+  EXPECT_EQ(layer.TakeDetections().size(), SonarMapperLayer::kMaxPendingDetections);
+  EXPECT_EQ(layer.dropped_detections(), 5);
+}
+
 TEST(SonarMapperLayerTest, RegisteredAsSonarAndReadFromItsSection) {
   MapperCoreParams core;
   EXPECT_FALSE(core.Has(kSonarLayerName));
