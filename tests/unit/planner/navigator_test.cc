@@ -132,10 +132,15 @@ NavGoal PoseGoal(double x, double y, int64_t id = 1) {
 // Seed 004's explore first: with unknown cells blocking and only the start's surroundings
 // known, the robot holds still (zero commands) and says it waits; once the map shows the way it
 // goes, and says after how long.
+// 20 x 10 m at 0.1 m, unknown but for the known free cells x 0..x1, y 0..y1.
+TestLayer KnownOnly(double x1, double y1) {
+  TestLayer layer(200, 100, 0.1, std::numeric_limits<float>::quiet_NaN());
+  layer.Rect(0.0, 0.0, x1, y1, 0.0f);
+  return layer;
+}
+
 TEST(NavigatorTest, ExploreFirstHoldsStillUntilTheMapShowsAWay) {
-  const float unknown = std::numeric_limits<float>::quiet_NaN();
-  TestLayer start_only(200, 100, 0.1, unknown);
-  start_only.Rect(0.0, 0.0, 4.0, 4.0, 0.0f);
+  const TestLayer start_only = KnownOnly(4.0, 4.0);
   NavigatorParams params;
   params.wait_for_map_s = 60.0;
   NavSim sim(start_only.Build(PioneerFootprint()), params);
@@ -156,9 +161,7 @@ TEST(NavigatorTest, ExploreFirstHoldsStillUntilTheMapShowsAWay) {
 }
 
 TEST(NavigatorTest, ExploreFirstGivesUpAfterItsWait) {
-  const float unknown = std::numeric_limits<float>::quiet_NaN();
-  TestLayer start_only(200, 100, 0.1, unknown);
-  start_only.Rect(0.0, 0.0, 4.0, 4.0, 0.0f);
+  const TestLayer start_only = KnownOnly(4.0, 4.0);
   NavigatorParams params;
   params.wait_for_map_s = 3.0;
   params.recovery.sequence.clear();
@@ -173,9 +176,7 @@ TEST(NavigatorTest, ExploreFirstGivesUpAfterItsWait) {
 // through known cells only to the known pose nearest the goal, and on to the goal once the map
 // shows it.
 TEST(NavigatorTest, ApproachesThroughKnownSpaceThenReachesTheGoal) {
-  const float unknown = std::numeric_limits<float>::quiet_NaN();
-  TestLayer corridor(200, 100, 0.1, unknown);
-  corridor.Rect(0.0, 0.0, 12.0, 4.0, 0.0f);
+  const TestLayer corridor = KnownOnly(12.0, 4.0);
   NavigatorParams params;
   params.wait_for_map_s = 60.0;
   params.approach_through_known = true;
