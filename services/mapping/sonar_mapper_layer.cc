@@ -113,28 +113,30 @@ void SonarMapperLayer::OnReading(const SensorReading& reading) {
   std::vector<PlanarRay> rays =
       SonarPingRays(*ping, params_.peaks, &found, params_.beam_width_deg * M_PI / 180.0,
                     grid_.params().resolution_m);
+  grid_.InsertRays(rays);
   if (params_.vehicle_clear_radius_m > 0.0) {
-    // The vehicle's own water: free rays out of its centre in every direction, cleared first.
+    // The vehicle's own water: the cells round its centre that nothing has observed yet read
+    // free (one miss). Observed cells keep what the beams made of them: a rock seen beside the
+    // hull stays a rock.
     const Eigen::Vector3d beam = ping->sensor_pose.orientation * Eigen::Vector3d::UnitX();
     const double hull_yaw = std::atan2(beam.y(), beam.x()) - ping->pan_rad;
-    const common::Vector2 head = ping->sensor_pose.position_m.head<2>() -
-                                 params_.vehicle_centre_behind_head_m *
-                                     common::Vector2(std::cos(hull_yaw), std::sin(hull_yaw));
-    const double step_m = grid_.params().resolution_m;
-    const int count = std::max(
-        8, static_cast<int>(std::ceil(2.0 * M_PI * params_.vehicle_clear_radius_m / step_m)));
-    std::vector<PlanarRay> disc;
-    disc.reserve(count + rays.size());
-    for (int i = 0; i < count; ++i) {
-      const double a = 2.0 * M_PI * i / count;
-      disc.push_back(
-          {head, head + params_.vehicle_clear_radius_m * common::Vector2(std::cos(a), std::sin(a)),
-           false});
+    const common::Vector2 centre = ping->sensor_pose.position_m.head<2>() -
+                                   params_.vehicle_centre_behind_head_m *
+                                       common::Vector2(std::cos(hull_yaw), std::sin(hull_yaw));
+    // Every cell whose centre lies within the radius.
+    const double r = params_.vehicle_clear_radius_m;
+    const auto lo = grid_.CellAt(centre - common::Vector2(r, r));
+    const auto hi = grid_.CellAt(centre + common::Vector2(r, r));
+    if (lo && hi) {
+      for (int iy = std::min(lo->iy, hi->iy); iy <= std::max(lo->iy, hi->iy); ++iy) {
+        for (int ix = std::min(lo->ix, hi->ix); ix <= std::max(lo->ix, hi->ix); ++ix) {
+          const common::CellIndex cell{ix, iy};
+          if ((grid_.geometry().CenterOf(cell) - centre).norm() > r) continue;
+          if (std::isnan(grid_.LogOdds(cell))) grid_.SetLogOdds(cell, grid_.params().miss_logodds);
+        }
+      }
     }
-    disc.insert(disc.end(), rays.begin(), rays.end());
-    rays.swap(disc);
   }
-  grid_.InsertRays(rays);
   SonarDetection detection;
   detection.utime = ping->utime;
   detection.pan_rad = ping->pan_rad;

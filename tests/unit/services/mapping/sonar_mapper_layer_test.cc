@@ -139,7 +139,8 @@ TEST(SonarMapperLayerTest, ABeamWidthMarksThePeaksArc) {
 }
 
 // The vehicle's own water: a disc round the hull's centre, behind the head along the hull (the
-// head's heading less its pan), cleared with every ping.
+// head's heading less its pan): its unobserved cells read free after every ping; an observed
+// obstacle inside it stays.
 TEST(SonarMapperLayerTest, TheVehiclesOwnWaterIsClearedRoundItsCentre) {
   SonarMapperLayerParams params;
   params.vehicle_centre_behind_head_m = 0.7;
@@ -156,6 +157,14 @@ TEST(SonarMapperLayerTest, TheVehiclesOwnWaterIsClearedRoundItsCentre) {
     EXPECT_LT(At(*map, kSonarLogOdds, p.x(), p.y()), 0.f) << p.transpose();
   }
   EXPECT_TRUE(std::isnan(At(*map, kSonarLogOdds, -1.2, 0.0)));  // beyond the disc, behind
+  // A rock seen 0.6 m beside the hull is not cleared by it.
+  SonarMapperLayer beside{params};
+  beside.OnReading(Ping(Wall(), 0.0, -9.4, M_PI / 2));  // a peak at (0, 0.6): 10 m north of it
+  SonarReading again = Ping(Seabed(), 0.7, 0.0, 0.0);
+  for (int i = 0; i < 5; ++i) beside.OnReading(again);
+  const auto seen = beside.ExportGrids();
+  ASSERT_TRUE(seen.has_value());
+  EXPECT_GT(At(*seen, kSonarLogOdds, 0.0, 0.6), 0.f) << "the rock beside the hull was cleared";
   params.vehicle_clear_radius_m = -1.0;
   EXPECT_THROW(params.Validate(), std::invalid_argument);
 }
