@@ -93,9 +93,10 @@ Run Simulate(bool sonar, int windows = kWindows, bool laser = false) {
   std::printf(
       "  run %s: %.0f s simulated in %.2f s wall (windows %.1fx..%.1fx), "
       "%zu pings, %zu scans\n",
-      laser ? "of the P3-DX's laser" : sonar ? "with the sonar" : "without the sonar",
-      kWindowS * windows, run.wall_s,
-      *std::min_element(run.rtf.begin(), run.rtf.end()),
+      laser   ? "of the P3-DX's laser"
+      : sonar ? "with the sonar"
+              : "without the sonar",
+      kWindowS * windows, run.wall_s, *std::min_element(run.rtf.begin(), run.rtf.end()),
       *std::max_element(run.rtf.begin(), run.rtf.end()), run.pings.size(), run.scans.size());
   return run;
 }
@@ -139,7 +140,7 @@ int main() {
   cairn::mapping::SonarMapperLayerParams params;
   params.beam_width_deg = 3.0;
   params.vehicle_centre_behind_head_m = 0.7;
-  params.vehicle_clear_radius_m = 1.55;
+  params.vehicle_clear_radius_m = 1.8;
   cairn::mapping::SonarMapperLayer layer{params};
   std::vector<double> ping_us;
   for (int pass = 0; pass < 3; ++pass) {

@@ -47,11 +47,11 @@ struct SonarMapperLayerParams {
   OccupancyParams grid = DefaultGrid();
   SonarPeakParams peaks;
   double publish_period_s{1.0};
-  /// > 0: every ping also clears a disc of this radius round the vehicle's centre, which lies
-  /// vehicle_centre_behind_head_m behind the head along the hull (the head's heading less its
-  /// pan): the water the vehicle is in, which a nose-mounted head never sees. Planners that
-  /// treat unknown cells as obstacles then find the vehicle's own cells free. Keep the disc to
-  /// the hull (the Sparus II: 0.7 m behind, 0.9 m round): anything it covers is cleared.
+  /// > 0: after every ping the cells nothing has observed in a disc of this radius round the
+  /// vehicle's centre read free (one miss). The centre lies vehicle_centre_behind_head_m behind
+  /// the head along the hull (the head's heading less its pan). This is the water the vehicle
+  /// is in, which a nose-mounted head never sees: planners that treat unknown cells as obstacles
+  /// then find the vehicle's own cells free. Observed cells keep what the beams made of them.
   double vehicle_clear_radius_m{0.0};
   /// > 0: each peak marks the arc of the beam's horizontal width at its range, not one point
   /// (the thesis's ray fan has no width; a Miniking's beam is 3 deg wide): an echo comes from
