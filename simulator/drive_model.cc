@@ -177,10 +177,16 @@ void ThrusterDrive::Apply(const DriveController& drive, mjData* d, double dt_s) 
 }
 
 StepMotion ThrusterDrive::Measure(const mjData* d, double dt_s) {
-  // A DVL's surge speed and a gyro's yaw rate, as the wheels of a unicycle of radius 1 m.
+  // A DVL's surge and sway speeds and a gyro's yaw rate: surge and yaw as the wheels of a
+  // unicycle of radius 1 m, sway as the sideways travel (a hull slips sideways in a turn).
   const double v = SurgeMps(d);
   const double w = YawRateRadps(d);
-  return StepMotion{dt_s, (v - 0.5 * w * track_m_) * dt_s, (v + 0.5 * w * track_m_) * dt_s};
+  const mjtNum left[3] = {0.0, 1.0, 0.0};
+  mjtNum axis[3];
+  Rotate(d->qpos + qpos_adr_ + 3, left, axis);
+  const double sway_mps = axis[0] * d->qvel[qvel_adr_] + axis[1] * d->qvel[qvel_adr_ + 1];
+  return StepMotion{dt_s, (v - 0.5 * w * track_m_) * dt_s, (v + 0.5 * w * track_m_) * dt_s,
+                    sway_mps * dt_s};
 }
 
 void ThrusterDrive::Reset(const mjData* d) {

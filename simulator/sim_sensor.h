@@ -80,6 +80,9 @@ struct StepMotion {
   double dt_s{0.0};
   double left_wheel_delta_rad{0.0};  ///< mean rotation of the left wheels
   double right_wheel_delta_rad{0.0};
+  /// Sideways travel over the step (m, body frame, left positive): a DVL measures the sway of a
+  /// hull, which a wheel never has (0 for wheels).
+  double lateral_m{0.0};
 };
 
 /// One simulated sensor of one robot.

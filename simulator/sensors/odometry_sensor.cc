@@ -38,7 +38,8 @@ void WheelOdometry::Reset(const common::Pose2& pose) {
   angular_radps_ = 0.0;
 }
 
-void WheelOdometry::Integrate(double left_delta_rad, double right_delta_rad, double dt_s) {
+void WheelOdometry::Integrate(double left_delta_rad, double right_delta_rad, double dt_s,
+                              double lateral_m) {
   double left_m = left_delta_rad * wheel_radius_m_;
   double right_m = right_delta_rad * wheel_radius_m_;
   if (params_.slip_noise_ratio > 0.0) {
@@ -57,6 +58,9 @@ void WheelOdometry::Integrate(double left_delta_rad, double right_delta_rad, dou
     pose_.x_m += ds * std::cos(theta + 0.5 * dtheta);
     pose_.y_m += ds * std::sin(theta + 0.5 * dtheta);
   }
+  // Sideways at the step's mean heading (left of the heading is +90 deg).
+  pose_.x_m -= lateral_m * std::sin(theta + 0.5 * dtheta);
+  pose_.y_m += lateral_m * std::cos(theta + 0.5 * dtheta);
   pose_.yaw_rad = common::WrapAngle(theta + dtheta);
   if (dt_s > 0.0) {
     linear_mps_ = ds / dt_s;
@@ -73,7 +77,8 @@ OdometrySensor::OdometrySensor(const OdometryParams& params, const SensorContext
 }
 
 void OdometrySensor::OnStep(const StepMotion& motion) {
-  odometry_.Integrate(motion.left_wheel_delta_rad, motion.right_wheel_delta_rad, motion.dt_s);
+  odometry_.Integrate(motion.left_wheel_delta_rad, motion.right_wheel_delta_rad, motion.dt_s,
+                      motion.lateral_m);
 }
 
 void OdometrySensor::OnPlaced(const common::Pose2& pose, double z_m) {

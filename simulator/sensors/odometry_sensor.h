@@ -35,8 +35,10 @@ class WheelOdometry {
                 NoiseSource noise);
 
   void Reset(const common::Pose2& pose);
-  /// Adds one step: wheel rotation increments (rad) over dt_s.
-  void Integrate(double left_delta_rad, double right_delta_rad, double dt_s);
+  /// Adds one step: wheel rotation increments (rad) over dt_s, and a sideways travel (m, body
+  /// frame, left positive; an AUV's sway) applied at the step's mean heading.
+  void Integrate(double left_delta_rad, double right_delta_rad, double dt_s,
+                 double lateral_m = 0.0);
 
   const common::Pose2& pose() const { return pose_; }
   double linear_mps() const { return linear_mps_; }
