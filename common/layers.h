@@ -27,6 +27,9 @@ inline constexpr char kFinal[] = "final";                           // max(short
 // terrain there lies below it. Lets the terrain layers tell a gap the sensor saw into (a ditch)
 // from one it never looked at.
 inline constexpr char kGroundBound[] = "ground_bound";
+// The imaging sonar's obstacles (seed 004), 0..100 percent, NaN unknown: the base layer of an
+// AUV's map, scanned in the plane of the vehicle's depth.
+inline constexpr char kSonarOccupancy[] = "sonar/occupancy";
 
 // Geometric layers derived from the elevation (profile independent).
 inline constexpr char kSlope[] = "slope";             // rad, unsigned

@@ -90,7 +90,7 @@ struct Obstacle {
   Vector2 centroid_m{Vector2::Zero()};
   std::vector<Vector2> outline_m;  ///< polygon, world frame
   double slope_rad{0.0};
-  double height_m{0.0};
+  double height_m{0.0};  ///< NaN for a sonar contact: a sonar measures no height
   double width_m{0.0};
   double length_m{0.0};
   double depth_m{0.0};  ///< NaN when the bottom was never seen

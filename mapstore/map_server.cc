@@ -30,8 +30,11 @@ void MapServerParams::Validate() const {
 }
 
 std::vector<std::string> ServedLayers(const std::string& profile) {
-  return {layers::kElevation, layers::DirectedLayer(profile), layers::CostLayer(profile)};
+  return {layers::kElevation, layers::kSonarOccupancy, layers::DirectedLayer(profile),
+          layers::CostLayer(profile)};
 }
+
+bool ServedAsOccupancy(const std::string& layer) { return layer == layers::kSonarOccupancy; }
 
 std::string ServedMapName(const MapRef& ref) { return ref.site + "/" + ref.name; }
 
@@ -45,8 +48,8 @@ common::Result<ServedMap> LoadServedMap(const MapStore& store, const ProfileDeri
   const std::string cost = layers::CostLayer(profile);
   std::vector<std::string> wanted;
   const auto& base = info->layers;
-  if (std::find(base.begin(), base.end(), layers::kElevation) != base.end()) {
-    wanted.push_back(layers::kElevation);
+  for (const char* name : {layers::kElevation, layers::kSonarOccupancy}) {
+    if (std::find(base.begin(), base.end(), name) != base.end()) wanted.push_back(name);
   }
   wanted.push_back(layers::DirectedLayer(profile));
   wanted.push_back(cost);

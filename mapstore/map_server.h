@@ -52,15 +52,22 @@ struct ServedMap {
   double derive_ms{0.0};               ///< time spent deriving (0 on a cache hit)
 };
 
-/// Layers a server publishes for `profile`: "elevation" (when the map has it) and
-/// "cost/<profile>", the layer the navigator plans on.
+/// Layers a server publishes for `profile`, each when the map has it: "elevation" (a terrain
+/// map), "sonar/occupancy" (an AUV's sonar map: what its navigator reads live), and
+/// "directed/<profile>" and "cost/<profile>", the layers the navigator plans on.
 std::vector<std::string> ServedLayers(const std::string& profile);
+
+/// Whether a served layer goes out as occupancy tiles (lcmt_occupancy_tile on
+/// <robot>.MAP.OCCUPANCY, 0..100 and -1 unknown), as a mapper sends it: the sonar occupancy.
+/// Others go out as float tiles on <robot>.MAP.TILES.
+bool ServedAsOccupancy(const std::string& layer);
 
 /// Map name on the bus (lcmt_grid_tile.map_name and friends): "<site>/<map>". A mapper's live
 /// map is named otherwise ("live"), so a receiver can tell a served map from a mapped one.
 std::string ServedMapName(const MapRef& ref);
 
-/// One attempt: the map version `ref` for `profile`, with its elevation (if stored), its cost
+/// One attempt: the map version `ref` for `profile`, with its elevation or sonar occupancy (if
+/// stored), its cost
 /// layer and the obstacles re-labelled for the profile. Read-only. kNotFound when the map, the
 /// version or the profile is not in the store (yet); kUnavailable when `deriver` is null or
 /// invalid (it also keys the derived cache); kInvalidArgument when the map cannot be derived (no

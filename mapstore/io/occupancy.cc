@@ -9,7 +9,8 @@ namespace cairn::mapstore::io {
 
 bool IsOccupancyLayer(const std::string& name) {
   return layers::IsCostLayer(name) || name == layers::kStaticMap || name == layers::kShortTerm ||
-         name == layers::kLongTerm || name == layers::kFinal || name == "occupancy";
+         name == layers::kLongTerm || name == layers::kFinal || name == "occupancy" ||
+         name == layers::kSonarOccupancy;
 }
 
 common::Result<common::Layer> OccupancyPercent(const common::GridMap& map,

@@ -135,11 +135,16 @@ void MapServerService::Serve(ServedMap map) {
   std::map<std::string, cairn::lcmt_grid_manifest> manifests;
   for (const std::string& layer : ServedLayers(params_.profile)) {
     if (!map.layers.HasLayer(layer)) continue;
-    runtime::LayerTiler::Batch batch =
-        tiler_.Update(map.layers, layer, runtime::TileEncoding::kFloat, utime);
+    // As a mapper sends it: a sonar's occupancy in percent on MAP.OCCUPANCY, the rest as floats.
+    const bool occupancy = ServedAsOccupancy(layer);
+    runtime::LayerTiler::Batch batch = tiler_.Update(
+        map.layers, layer,
+        occupancy ? runtime::TileEncoding::kOccupancy : runtime::TileEncoding::kFloat, utime);
     Send(Ch(params_.robot, channels::kMapTiles), batch.tiles);
-    tiles += batch.tiles.size();
-    node_.Count("tiles_sent", static_cast<int64_t>(batch.tiles.size()));
+    Send(Ch(params_.robot, channels::kMapOccupancy), batch.occupancy_tiles);
+    const size_t sent = batch.tiles.size() + batch.occupancy_tiles.size();
+    tiles += sent;
+    node_.Count("tiles_sent", static_cast<int64_t>(sent));
     manifests[layer] = std::move(batch.manifest);
   }
   // A layer the new version lacks is announced once more, empty, so receivers drop it.
@@ -196,7 +201,9 @@ void MapServerService::OnResend(const cairn::lcmt_tile_resend_request& request) 
   node_.Count("resend_requests");
   runtime::LayerTiler::Batch batch = tiler_.Resend(request);
   Send(Ch(params_.robot, channels::kMapTiles), batch.tiles);
-  node_.Count("tiles_resent", static_cast<int64_t>(batch.tiles.size()));
+  Send(Ch(params_.robot, channels::kMapOccupancy), batch.occupancy_tiles);
+  node_.Count("tiles_resent",
+              static_cast<int64_t>(batch.tiles.size() + batch.occupancy_tiles.size()));
   cairn::lcmt_grid_manifest manifest = manifests_.at(request.layer);
   manifest.utime = node_.NowUtime();
   node_.Publish(Ch(params_.robot, channels::kMapManifest), manifest);

@@ -2,6 +2,8 @@
 
 #include "common/check.h"
 #include "common/layers.h"
+#include "services/mapping/sonar_derive.h"
+#include "services/mapping/sonar_mapper_layer.h"
 
 namespace cairn::mapping {
 
@@ -11,9 +13,14 @@ const char kMappingCodeVersion[] = "cairn-terrain-4";
 DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::RobotProfile& profile,
                                   const TraversabilityParams& traversability,
                                   const ObstacleParams& obstacles) {
+  // A sonar map (no elevation: the sonar scans a plane at the vehicle's depth).
+  if (!base.HasLayer(layers::kElevation) && base.HasLayer(kSonarOccupancy)) {
+    return DeriveSonarProfileLayers(base, profile);
+  }
   CAIRN_THROW_UNLESS(
       base.HasLayer(layers::kElevation),
-      "cannot derive profile layers: the map has no '" << layers::kElevation << "' layer");
+      "cannot derive profile layers: the map has neither an '"
+          << layers::kElevation << "' nor a '" << kSonarOccupancy << "' layer");
   profile.Validate();
   // Work on a copy holding only what derivation reads, so the base map is never touched.
   common::GridMap work(base.geometry());

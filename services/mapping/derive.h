@@ -23,8 +23,9 @@ struct DerivedLayers {
 };
 
 /// Derives the profile layers from `base` (which must hold layers::kElevation; its ground bound
-/// and elevation variance are read when present, as the live map reads them). The base map is
-/// not modified. @throws std::invalid_argument if the elevation layer is missing.
+/// and elevation variance are read when present, as the live map reads them). A sonar map (the
+/// sonar occupancy and no elevation) is derived by DeriveSonarProfileLayers (sonar_derive.h).
+/// The base map is not modified. @throws std::invalid_argument if neither layer is there.
 DerivedLayers DeriveProfileLayers(const common::GridMap& base, const common::RobotProfile& profile,
                                   const TraversabilityParams& traversability = {},
                                   const ObstacleParams& obstacles = {});

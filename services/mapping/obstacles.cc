@@ -851,7 +851,11 @@ common::ObstacleVerdict JudgeWithHash(const Obstacle& o, const common::RobotProf
     case ObstacleKind::kTerrace:
       return internal::JudgeTerrace(o, profile, hash);
     case ObstacleKind::kWallOrObject:
-      if (!(o.height_m <= profile.max_step_up_m + kTol)) {
+      if (std::isnan(o.height_m)) {
+        // A sonar contact: seen at the vehicle's depth, its height not measured.
+        v.crossable = false;
+        v.reason = "a contact of unmeasured height (sonar)";
+      } else if (!(o.height_m <= profile.max_step_up_m + kTol)) {
         v.crossable = false;
         v.reason =
             FormatNumbers("wall or object %.2f m high > %.3f m", o.height_m, profile.max_step_up_m);

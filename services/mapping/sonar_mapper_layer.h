@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "common/layers.h"
 #include "services/mapping/mapper_layer.h"
 #include "services/mapping/occupancy_grid.h"
 #include "services/mapping/sonar_detection.h"
@@ -21,7 +22,7 @@
 namespace cairn::mapping {
 
 /// Layer names.
-inline constexpr char kSonarOccupancy[] = "sonar/occupancy";
+inline constexpr const char* kSonarOccupancy = layers::kSonarOccupancy;
 inline constexpr char kSonarLogOdds[] = "sonar/occupancy_logodds";
 
 /// One sonar ping (lcmt_sonar_ping on <robot>.SONAR, checked by its converter).

@@ -141,7 +141,7 @@ struct AuvRig {
                                "    spawn: {x_m: 0.0, y_m: 0.0, yaw_deg: 0.0}\n";
     const std::string config = procs.dir() + "/mapper.yaml";
     std::ofstream(config) << "pose_source: ground_truth\n"
-                             "profiles: [sparus2]\n"
+                             "profiles: [sparus2_msis]\n"
                              "octomap: {enabled: false}\n"
                              "sonar: {enabled: true, publish_period_s: 0.5}\n";
     bus.Keep(ch::ForRobot(kAuv, ch::kSonar));

@@ -63,7 +63,7 @@ TEST(RobotProfileTest, YamlRoundTripAndHash) {
 }
 
 TEST(RobotProfileTest, ShippedProfilesLoad) {
-  for (const char* name : {"pioneer3at", "kobuki", "p3dx", "robauco", "sparus2", "rover"}) {
+  for (const char* name : {"pioneer3at", "kobuki", "p3dx", "robauco", "sparus2_msis", "girona500", "rover"}) {
     const std::string path = std::string(CAIRN_SOURCE_DIR) + "/config/profiles/" + name + ".yaml";
     SCOPED_TRACE(path);
     const RobotProfile p = LoadRobotProfileFile(path);

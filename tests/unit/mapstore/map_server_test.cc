@@ -45,8 +45,12 @@ class MapServerTest : public ::testing::Test {
 
 TEST(MapServerNamesTest, ServesElevationAndTheProfilesCostLayerUnderTheStoredName) {
   EXPECT_EQ(ServedLayers("rover"),
-            (std::vector<std::string>{"elevation", "directed/rover", "cost/rover"}));
+            (std::vector<std::string>{"elevation", "sonar/occupancy", "directed/rover",
+                                      "cost/rover"}));
   EXPECT_EQ(ServedMapName({"tunnel", "lanes", 3}), "tunnel/lanes");
+  EXPECT_TRUE(ServedAsOccupancy("sonar/occupancy"));
+  EXPECT_FALSE(ServedAsOccupancy("cost/rover"));
+  EXPECT_FALSE(ServedAsOccupancy("elevation"));
 }
 
 TEST(MapServerParamsTest, ValidateNamesTheBadField) {

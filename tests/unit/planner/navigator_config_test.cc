@@ -152,8 +152,11 @@ TEST(NavigatorMapConfigTest, LoadsTheShippedUnderwaterFile) {
   const NavigatorConfig c =
       LoadNavigatorConfigFile(std::string(CAIRN_SOURCE_DIR) + "/config/navigator/underwater.yaml");
   EXPECT_EQ(c.command_output, CommandOutput::kBodyVelocity);
+  EXPECT_EQ(c.control_clock, ControlClock::kPose);
+  EXPECT_EQ(NavigatorConfig{}.control_clock, ControlClock::kWall);
+  EXPECT_NE(ConfigError("control_clock: sim\n").find("control clock"), std::string::npos);
   EXPECT_EQ(c.map.encoding, MapEncoding::kOccupancy);
-  EXPECT_EQ(c.map.LayerFor("sparus2"), "sonar/occupancy");
+  EXPECT_EQ(c.map.LayerFor("sparus2_msis"), "sonar/occupancy");
   EXPECT_FALSE(c.cost_map.unknown_is_traversable);
   EXPECT_GT(c.cost_map.footprint_padding_m, 0.0);
   EXPECT_EQ(c.navigator.xy_goal_tolerance_m, 2.0);
