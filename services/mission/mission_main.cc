@@ -38,7 +38,9 @@ int main(int argc, char** argv) {
       "Runs the demo mission against a running graph: sends the robot to a goal, waits until it\n"
       "arrives, has cairn-mapstore save the map the mapper built, shares it with other robot\n"
       "profiles, prints a summary (distance, time, real-time factor, obstacles with each\n"
-      "profile's verdict) and writes PNG renders. Exits 0 only when all of it succeeded.");
+      "profile's verdict) and writes PNG renders, a CSV of planned against driven X(t), Y(t)\n"
+      "and, when the robot has a sonar, the fan of its last sweep. Exits 0 only when all of it\n"
+      "succeeded.");
   flags.AddString("robot", &params.robot, "robot id (channel prefix)");
   flags.AddString("profile", &params.source_profile, "the robot's own profile");
   flags.AddString("share", &share, "comma-separated profiles to share the stored map with");
@@ -46,7 +48,10 @@ int main(int argc, char** argv) {
   flags.AddString("goal", &goal_text, "goal as x,y or x,y,yaw (world frame, m and rad)");
   flags.AddString("site", &params.site, "site name in the map store");
   flags.AddString("map", &params.map_name, "map name in the map store");
-  flags.AddString("out", &params.out_dir, "folder for the PNG renders");
+  flags.AddString("out", &params.out_dir, "folder for the PNG renders and track.csv");
+  flags.AddString("map-layer", &params.map_layer,
+                  "stored base layer rendered with the path and obstacles: elevation, or "
+                  "sonar/occupancy for the AUV");
   flags.AddDouble("timeout", &params.timeout_s, "seconds (wall clock) allowed for the drive");
   flags.AddDouble("ready-timeout", &params.ready_timeout_s, "seconds to wait for the graph");
   flags.AddString("lcm-url", &lcm_url, "LCM URL (default LCM_DEFAULT_URL, else udpm ttl=0)");

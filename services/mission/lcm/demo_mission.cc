@@ -6,13 +6,18 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <optional>
+#include <utility>
 #include <sstream>
 
 #include "cairn/lcmt_goal.hpp"
 #include "cairn/lcmt_mapstore_reply.hpp"
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_nav_status.hpp"
+#include "cairn/lcmt_odometry.hpp"
+#include "cairn/lcmt_path.hpp"
 #include "cairn/lcmt_pose.hpp"
+#include "cairn/lcmt_sonar_ping.hpp"
 
 #include "common/channels.h"
 #include "common/layers.h"
@@ -55,15 +60,23 @@ const char* StateName(int8_t state) {
 }
 
 // The part of a map that holds known cells of `layer`, plus a margin: stored maps grow in
-// large blocks, and a render of mostly unknown space shows nothing.
+// large blocks, and a render of mostly unknown space shows nothing. With a focus (world min and
+// max corners), only known cells inside it count: a sonar sees 50 m round every point of a
+// drive, and the rocks it passed would be specks in a render of all it saw.
 common::GridMap CropToKnown(const common::GridMap& map, const std::string& layer,
-                            int margin_cells) {
+                            int margin_cells,
+                            std::optional<std::pair<common::Vector2, common::Vector2>> focus = {}) {
   if (!map.HasLayer(layer)) return map;
   const common::Layer& values = map.at(layer);
   int min_x = map.size_x(), min_y = map.size_y(), max_x = -1, max_y = -1;
   for (int iy = 0; iy < map.size_y(); ++iy) {
     for (int ix = 0; ix < map.size_x(); ++ix) {
       if (std::isnan(values(ix, iy))) continue;
+      if (focus) {
+        const common::Vector2 c = map.CenterOf({ix, iy});
+        if ((c.array() < focus->first.array()).any() || (c.array() > focus->second.array()).any())
+          continue;
+      }
       min_x = std::min(min_x, ix);
       max_x = std::max(max_x, ix);
       min_y = std::min(min_y, iy);
@@ -157,6 +170,10 @@ struct DemoMission::DriveState {
   int64_t last_utime{0};
   double distance_m{0.0};
   std::vector<common::Vector2>* path{nullptr};
+  TrackLog* track{nullptr};
+  SonarFan* fan{nullptr};
+  SonarFan* first_fan{nullptr};
+  int64_t* bad{nullptr};
   std::optional<NavStatus> status;
   Clock::time_point status_time;
   int64_t goal_id{0};
@@ -178,12 +195,48 @@ struct DemoMission::DriveState {
       path->push_back(p);
     }
     last_utime = m.utime;
+    track->OnTruth(m.utime, p);
+  }
+
+  // The navigator's latest plan (checked: a count that disagrees with its arrays, or over
+  // 100,000 poses, is dropped).
+  void OnPath(const cairn::lcmt_path& m) {
+    const size_t n = static_cast<size_t>(std::max(0, m.num_poses));
+    if (m.num_poses < 0 || m.num_poses > 100000 || m.x_m.size() != n || m.y_m.size() != n) {
+      ++*bad;
+      return;
+    }
+    std::vector<common::Vector2> points;
+    points.reserve(n);
+    for (size_t i = 0; i < n; ++i) points.emplace_back(m.x_m[i], m.y_m[i]);
+    if (!track->OnPath(points).ok()) ++*bad;
+  }
+
+  void OnPing(const cairn::lcmt_sonar_ping& m) {
+    if (m.num_bins < 0 || static_cast<size_t>(m.num_bins) != m.intensities.size()) {
+      ++*bad;
+      return;
+    }
+    FanPing ping;
+    ping.pan_rad = m.pan_rad;
+    ping.range_min_m = m.range_min_m;
+    ping.range_max_m = m.range_max_m;
+    ping.bins.assign(m.intensities.begin(), m.intensities.end());
+    if (!fan->Add(ping).ok()) {
+      ++*bad;
+      return;
+    }
+    if (fan->reversals() < 2) first_fan->Add(ping);
   }
 };
 
 bool DemoMission::Drive(MissionReport* report) {
   DriveState state;
   state.path = &driven_m_;
+  state.track = &track_;
+  state.fan = &fan_;
+  state.first_fan = &first_fan_;
+  state.bad = &bad_messages_;
   state.goal_id = runtime::Node::WallUtime();
   auto pose_sub = node_->lcm().subscribeFunction<DriveState*>(
       channels::ForRobot(params_.robot, channels::kPose),
@@ -201,11 +254,43 @@ bool DemoMission::Drive(MissionReport* report) {
         s->status_time = Clock::now();
       },
       &state);
+  auto path_sub = node_->lcm().subscribeFunction<DriveState*>(
+      channels::ForRobot(params_.robot, channels::kPath),
+      [](const lcm::ReceiveBuffer* rbuf, const std::string&, DriveState* s) {
+        cairn::lcmt_path m;
+        if (m.decode(rbuf->data, 0, rbuf->data_size) < 0) {
+          ++*s->bad;
+          return;
+        }
+        s->OnPath(m);
+      },
+      &state);
+  auto odom_sub = node_->lcm().subscribeFunction<DriveState*>(
+      channels::ForRobot(params_.robot, channels::kOdom),
+      [](const lcm::ReceiveBuffer* rbuf, const std::string&, DriveState* s) {
+        cairn::lcmt_odometry m{};
+        if (m.decode(rbuf->data, 0, rbuf->data_size) < 0) return;
+        s->track->OnOdometry({m.position_m[0], m.position_m[1]});
+      },
+      &state);
+  auto sonar_sub = node_->lcm().subscribeFunction<DriveState*>(
+      channels::ForRobot(params_.robot, channels::kSonar),
+      [](const lcm::ReceiveBuffer* rbuf, const std::string&, DriveState* s) {
+        cairn::lcmt_sonar_ping m;
+        if (m.decode(rbuf->data, 0, rbuf->data_size) < 0) {
+          ++*s->bad;
+          return;
+        }
+        s->OnPing(m);
+      },
+      &state);
   cairn::lcmt_goal goal = MakeGoal(state.goal_id);
   const auto start = Clock::now();
   const bool done = FollowGoal(&goal, &state, report);
-  node_->lcm().unsubscribe(pose_sub);
-  node_->lcm().unsubscribe(status_sub);
+  for (auto* sub : {pose_sub, status_sub, path_sub, odom_sub, sonar_sub}) {
+    node_->lcm().unsubscribe(sub);
+  }
+  if (bad_messages_ > 0) node_->Count("bad_messages", bad_messages_);
   report->wall_time_s = SecondsSince(start);
   report->distance_m = state.distance_m;
   report->sim_time_s = (state.last_utime - state.first_utime) * 1e-6;
@@ -287,8 +372,9 @@ bool DemoMission::StoreAndShare(MissionReport* report) {
   mapstore::MapstoreClient client(node_->lcm(), "cairn-mission", options);
   std::vector<std::string> profiles = {params_.source_profile};
   profiles.insert(profiles.end(), params_.share_profiles.begin(), params_.share_profiles.end());
-  return PutProfiles(&client, profiles, report) && SaveMap(&client, report) &&
-         ShareMap(&client, report) && RenderAndList(&client, profiles, report);
+  return WriteTrackAndSonar(report) && PutProfiles(&client, profiles, report) &&
+         SaveMap(&client, report) && ShareMap(&client, report) &&
+         RenderAndList(&client, profiles, report);
 }
 
 namespace {
@@ -297,6 +383,14 @@ namespace {
 std::string CallError(const common::Result<cairn::lcmt_mapstore_reply>& reply) {
   if (!reply.ok()) return reply.status().ToString();
   return reply->status == cairn::lcmt_mapstore_reply::STATUS_OK ? "" : reply->message;
+}
+
+// "0.30 m", or "unmeasured" (a sonar contact).
+std::string HeightText(double height_m) {
+  if (std::isnan(height_m)) return "unmeasured";
+  char text[32];
+  std::snprintf(text, sizeof(text), "%5.2f m", height_m);
+  return text;
 }
 
 // "crossable", or "one-way (reason)" / "blocked (reason)".
@@ -371,13 +465,62 @@ bool DemoMission::ShareMap(mapstore::MapstoreClient* client, MissionReport* repo
 bool DemoMission::Render(const std::string& name, const common::GridMap& map,
                          const std::string& layer, const mapstore::io::PngOverlay& overlay,
                          MissionReport* report) {
-  auto png = mapstore::io::WritePng(params_.out_dir, name, CropToKnown(map, layers::kElevation, 5),
-                                    layer, overlay);
+  // A map other than a terrain's (a sonar's) is shown round the path and the obstacles.
+  std::optional<std::pair<common::Vector2, common::Vector2>> focus;
+  if (params_.map_layer != layers::kElevation && !driven_m_.empty()) {
+    common::Vector2 lo = driven_m_.front(), hi = driven_m_.front();
+    auto grow = [&](const common::Vector2& p) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    };
+    for (const auto& p : driven_m_) grow(p);
+    for (const auto& o : overlay.obstacles) grow(o.centroid_m);
+    const common::Vector2 margin(8.0, 8.0);
+    focus = std::make_pair(common::Vector2(lo - margin), common::Vector2(hi + margin));
+  }
+  auto png = mapstore::io::WritePng(params_.out_dir, name,
+                                    CropToKnown(map, params_.map_layer, 5, focus), layer, overlay);
   if (!png.ok()) {
     report->error = "rendering " + name + " failed: " + png.status().ToString();
     return false;
   }
   report->renders.push_back(*png);
+  return true;
+}
+
+bool DemoMission::WriteTrackAndSonar(MissionReport* report) {
+  std::error_code ec;
+  std::filesystem::create_directories(params_.out_dir, ec);
+  const std::string csv = params_.out_dir + "/track.csv";
+  const common::Status written = track_.WriteCsv(csv);
+  if (!written.ok()) {
+    report->error = "writing the track failed: " + written.ToString();
+    return false;
+  }
+  report->renders.push_back(std::filesystem::absolute(csv, ec).string());
+  const struct {
+    const SonarFan* fan;
+    const char* stem;
+    const char* which;
+  } fans[] = {{&first_fan_, "sonar_fan_first", "FIRST WHOLE SWEEP"},
+              {&fan_, "sonar_fan_last", "LAST SWEEP"}};
+  for (const auto& f : fans) {
+    if (f.fan->bearings() == 0) continue;
+    mapstore::io::PngOverlay overlay;
+    char caption[160];
+    std::snprintf(caption, sizeof(caption), "%s OF THE SONAR OF %s, %.0f TO %.0f DEG, X FORWARD",
+                  f.which, params_.robot.c_str(), f.fan->min_pan_rad() * 180.0 / M_PI,
+                  f.fan->max_pan_rad() * 180.0 / M_PI);
+    overlay.caption = caption;
+    overlay.markers.push_back({{0.0, 0.0}, "HEAD"});
+    auto png = mapstore::io::WritePng(params_.out_dir, f.stem, f.fan->Image(0.1),
+                                      SonarFan::kIntensityLayer, overlay);
+    if (!png.ok()) {
+      report->error = std::string("rendering the sonar fan failed: ") + png.status().ToString();
+      return false;
+    }
+    report->renders.push_back(*png);
+  }
   return true;
 }
 
@@ -388,10 +531,10 @@ bool DemoMission::RenderAndList(mapstore::MapstoreClient* client,
   std::filesystem::create_directories(params_.out_dir, ec);
   std::map<int, std::map<std::string, std::string>> verdicts;  // obstacle id -> profile -> text
   std::map<int, common::Obstacle> obstacles;
-  bool elevation_done = false;
+  bool base_done = false;
   for (const auto& name : profiles) {
     auto loaded = client->Load(params_.site, params_.map_name, report->map_version, name,
-                               {layers::kElevation, layers::CostLayer(name)});
+                               {params_.map_layer, layers::CostLayer(name)});
     if (!loaded.ok()) {
       report->error = "loading the map for " + name + " failed: " + loaded.status().ToString();
       return false;
@@ -407,13 +550,20 @@ bool DemoMission::RenderAndList(mapstore::MapstoreClient* client,
       const auto* v = o.VerdictFor(name);
       verdicts[o.id][name] = v == nullptr ? "?" : VerdictText(*v);
     }
-    if (!elevation_done && loaded->layers.HasLayer(layers::kElevation)) {
+    if (!base_done && loaded->layers.HasLayer(params_.map_layer)) {
+      // The stored base layer, with the path and the obstacles (a sonar map's contacts).
       mapstore::io::PngOverlay overlay;
       overlay.obstacles = loaded->obstacles.obstacles;
-      overlay.caption = "ELEVATION OF " + params_.site + "/" + params_.map_name + " V" +
+      overlay.verdict_profile = name;
+      if (params_.map_layer != layers::kElevation) overlay.path_m = driven_m_;
+      std::string title = params_.map_layer;
+      std::transform(title.begin(), title.end(), title.begin(), ::toupper);
+      overlay.caption = title + " OF " + params_.site + "/" + params_.map_name + " V" +
                         std::to_string(report->map_version) + " MAPPED BY " + params_.robot;
-      if (!Render("elevation", loaded->layers, layers::kElevation, overlay, report)) return false;
-      elevation_done = true;
+      std::string stem = params_.map_layer;
+      std::replace(stem.begin(), stem.end(), '/', '_');
+      if (!Render(stem, loaded->layers, params_.map_layer, overlay, report)) return false;
+      base_done = true;
     }
     mapstore::io::PngOverlay overlay;
     overlay.path_m = driven_m_;
@@ -427,9 +577,9 @@ bool DemoMission::RenderAndList(mapstore::MapstoreClient* client,
     std::ostringstream line;
     char head[160];
     std::snprintf(head, sizeof(head),
-                  "#%-3d %-14s at (%5.1f, %5.1f)  slope %4.1f deg  height %5.2f m  width %4.2f m",
+                  "#%-3d %-14s at (%5.1f, %5.1f)  slope %4.1f deg  height %s  width %4.2f m",
                   id, common::ObstacleKindName(o.kind), o.centroid_m.x(), o.centroid_m.y(),
-                  o.slope_rad * 180.0 / M_PI, o.height_m, o.width_m);
+                  o.slope_rad * 180.0 / M_PI, HeightText(o.height_m).c_str(), o.width_m);
     line << head;
     for (const auto& name : profiles) line << "  " << name << ": " << verdicts[id][name];
     report->obstacle_lines.push_back(line.str());

@@ -9,6 +9,8 @@
 #include "common/types.h"
 #include "mapstore/lcm/mapstore_client.h"
 #include "mapstore/map_io.h"
+#include "services/mission/sonar_fan.h"
+#include "services/mission/track_log.h"
 #include "services/runtime/node.h"
 
 /// @file
@@ -28,6 +30,9 @@ struct MissionParams {
   std::string site{"tunnel"};
   std::string map_name{"demo"};
   std::string out_dir{"var/demo"};
+  /// The stored base layer rendered with the path and the obstacles, and what the renders are
+  /// cropped to: "elevation" for a terrain map, "sonar/occupancy" for the AUV's sonar map.
+  std::string map_layer{"elevation"};
   double timeout_s{600.0};          ///< wall-clock bound on the drive
   double ready_timeout_s{120.0};    ///< wall-clock bound on waiting for the graph
 };
@@ -43,7 +48,7 @@ struct MissionReport {
   int replans{0};
   int recoveries{0};
   int64_t map_version{0};
-  std::vector<std::string> renders;
+  std::vector<std::string> renders;    ///< PNG files, and the track CSV
   std::vector<std::string> obstacle_lines;  ///< one line per obstacle with each profile's verdict
   std::string error;             ///< the first thing that went wrong (empty on success)
   bool ok() const { return reached && error.empty(); }
@@ -72,10 +77,17 @@ class DemoMission {
                      MissionReport* report);
   bool Render(const std::string& name, const common::GridMap& map, const std::string& layer,
               const mapstore::io::PngOverlay& overlay, MissionReport* report);
+  /// The planned-against-driven CSV, and when a sonar pinged, the fans of its first whole sweep
+  /// (from the start) and of its last.
+  bool WriteTrackAndSonar(MissionReport* report);
 
   runtime::Node* node_;
   MissionParams params_;
   std::vector<common::Vector2> driven_m_;
+  TrackLog track_;
+  SonarFan fan_;        ///< every ping: the last sweep
+  SonarFan first_fan_;  ///< the pings of the head's first pass over its whole sector
+  int64_t bad_messages_{0};  ///< paths, odometry and pings refused while driving
 };
 
 /// The summary printed at the end of the demo.
