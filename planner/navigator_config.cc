@@ -235,6 +235,7 @@ NavigatorConfig LoadNavigatorConfig(YamlMap& root) {
   NavigatorConfig c;
   GetNamed(root, "pose_source", &c.pose_source, PoseSourceFromName);
   GetNamed(root, "command_output", &c.command_output, CommandOutputFromName);
+  GetNamed(root, "control_clock", &c.control_clock, ControlClockFromName);
   root.Get("control_rate_hz", &c.control_rate_hz);
   root.Get("status_rate_hz", &c.status_rate_hz);
   root.Get("map_name", &c.map_name);
@@ -259,6 +260,17 @@ NavigatorConfig LoadNavigatorConfig(YamlMap& root) {
 NavigatorConfig LoadNavigatorConfigFile(const std::string& path) {
   YamlMap root = YamlMap::LoadFile(path);
   return LoadNavigatorConfig(root);
+}
+
+ControlClock ControlClockFromName(const std::string& name) {
+  if (name == "wall") return ControlClock::kWall;
+  if (name == "pose") return ControlClock::kPose;
+  CAIRN_THROW_UNLESS(false, "unknown control clock '" << name << "' (wall, pose)");
+  return ControlClock::kWall;
+}
+
+const char* ControlClockName(ControlClock clock) {
+  return clock == ControlClock::kPose ? "pose" : "wall";
 }
 
 CommandOutput CommandOutputFromName(const std::string& name) {

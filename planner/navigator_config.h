@@ -22,6 +22,13 @@ enum class PoseSource { kPose, kOdom };
 /// frame the profile's name: what an AUV's controller takes). One message per command either way.
 enum class CommandOutput { kVelocity, kBodyVelocity };
 
+/// What paces the control loop: the wall clock (control_rate_hz of wall time), or the pose
+/// stream's stamps (control_rate_hz of the robot's own time: a tick on the first pose a period
+/// after the last). With `pose`, a simulation run faster than real time gets its commands as
+/// often, in its own time, as at real time; while no pose comes the wall clock ticks instead
+/// (a tick and a half late), so stale input still stops the robot.
+enum class ControlClock { kWall, kPose };
+
 /// Which of the mapper's layers the navigator plans on (the `map:` section).
 struct MapLayerConfig {
   /// "" (default): the profile's cost layer "cost/<profile>" with encoding cost; with encoding
@@ -51,6 +58,7 @@ struct MapLayerConfig {
 struct NavigatorConfig {
   PoseSource pose_source{PoseSource::kPose};  ///< <robot>.POSE (lcmt_pose) or <robot>.ODOM
   CommandOutput command_output{CommandOutput::kVelocity};
+  ControlClock control_clock{ControlClock::kWall};
   double control_rate_hz{20.0};
   double status_rate_hz{2.0};
   /// Accept map tiles of this map name only ("" = any).
@@ -82,5 +90,8 @@ const char* PoseSourceName(PoseSource source);
 CommandOutput CommandOutputFromName(const std::string& name);
 /// "pose" or "odom". @throws std::invalid_argument otherwise.
 PoseSource PoseSourceFromName(const std::string& name);
+/// "wall" or "pose". @throws std::invalid_argument otherwise.
+ControlClock ControlClockFromName(const std::string& name);
+const char* ControlClockName(ControlClock clock);
 
 }  // namespace cairn::planner

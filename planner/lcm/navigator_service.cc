@@ -66,18 +66,18 @@ NavigatorService::NavigatorService(runtime::Node& node, NavigatorConfig config,
                                       [this](const cairn::lcmt_pose& m) { OnPose(m); });
   }
   worker_ = std::thread([this] { WorkerLoop(); });
-  node_.AddTimer(1.0 / config_.control_rate_hz, [this] { Tick(); });
+  node_.AddTimer(1.0 / config_.control_rate_hz, [this] { OnControlTimer(); });
   node_.AddTimer(1.0 / config_.status_rate_hz, [this] { PublishStatus(); });
   node_.SetState(runtime::HealthState::kReady, "waiting for a goal");
   node_.Event(
-      "navigating %s as %s on layer %s (%s) with %s (%s), DWA %dx%d over %.1f s at %.0f Hz, pose "
-      "from %s",
+      "navigating %s as %s on layer %s (%s) with %s (%s), DWA %dx%d over %.1f s at %.0f Hz of "
+      "%s time, pose from %s",
       robot_.c_str(), profile_.name.c_str(), config_.map.LayerFor(profile_.name).c_str(),
       MapEncodingName(config_.map.encoding), config_.global_planner.planner.c_str(),
       StateSpaceKindName(config_.global_planner.state_space),
       config_.local_planner.generator.vx_samples, config_.local_planner.generator.vtheta_samples,
       config_.local_planner.generator.sim_time_s, config_.control_rate_hz,
-      ch::ForRobot(robot_, config_.pose_source == PoseSource::kOdom ? ch::kOdom : ch::kPose)
+      ControlClockName(config_.control_clock), ch::ForRobot(robot_, config_.pose_source == PoseSource::kOdom ? ch::kOdom : ch::kPose)
           .c_str());
 }
 
@@ -172,7 +172,18 @@ void NavigatorService::HandlePlanResults(double now_s) {
   }
 }
 
+void NavigatorService::OnControlTimer() {
+  // Paced by the poses: the wall clock ticks only while they do not come.
+  if (config_.control_clock == ControlClock::kPose &&
+      std::chrono::steady_clock::now() - last_tick_wall_ <
+          std::chrono::duration<double>(1.5 / config_.control_rate_hz)) {
+    return;
+  }
+  Tick();
+}
+
 void NavigatorService::Tick() {
+  last_tick_wall_ = std::chrono::steady_clock::now();
   const double now_s = NowS();
   HandlePlanResults(now_s);
   FeedMap();
@@ -384,6 +395,14 @@ void NavigatorService::AcceptPose(const common::Pose3& pose, int64_t utime) {
   // judge (it reports clock skew as stale input).
   const int64_t stamp = utime > 0 ? utime : now;
   navigator_.OnPose(pose.ToPose2(), static_cast<double>(stamp) * 1e-6);
+  if (config_.control_clock != ControlClock::kPose) return;
+  // A tick on the first pose a control period (of the poses' time) after the last; a stamp
+  // that went back (a restarted simulation) starts the count again.
+  const int64_t period_us = static_cast<int64_t>(1e6 / config_.control_rate_hz);
+  if (last_tick_stamp_ == 0 || stamp < last_tick_stamp_ || stamp - last_tick_stamp_ >= period_us) {
+    last_tick_stamp_ = stamp;
+    Tick();
+  }
 }
 
 void NavigatorService::OnPose(const cairn::lcmt_pose& msg) {

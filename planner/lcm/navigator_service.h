@@ -1,6 +1,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <memory>
@@ -50,6 +51,8 @@ class NavigatorService {
 
   /// One control cycle (the control timer calls it).
   void Tick();
+  /// The wall timer: a tick, unless control_clock is pose and the poses ticked lately.
+  void OnControlTimer();
   /// Publishes the navigation status now.
   void PublishStatus();
   /// Blocks until no plan is queued or running (its result waits for the next Tick), or until
@@ -92,6 +95,8 @@ class NavigatorService {
   LcmMapClient map_client_;
   std::shared_ptr<const CostMap> fed_map_;
   int64_t fed_heard_utime_{0};
+  std::chrono::steady_clock::time_point last_tick_wall_{};
+  int64_t last_tick_stamp_{0};  ///< the pose stamp of the last pose-paced tick
   int64_t map_control_requests_{0};
   NavState last_logged_state_{NavState::kIdle};
   NavReason last_logged_reason_{NavReason::kNone};

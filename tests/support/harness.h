@@ -132,6 +132,8 @@ class Bus {
   const std::vector<std::vector<uint8_t>>& Kept(const std::string& channel) {
     return keep_[channel];
   }
+  /// Forgets what was kept on a channel (it stays kept from now on).
+  void ClearKept(const std::string& channel) { keep_[channel].clear(); }
 
  private:
   lcm::LCM lcm_;

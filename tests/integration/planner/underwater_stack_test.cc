@@ -2,8 +2,9 @@
 // (config/sim/rocks_sparus2.yaml), cairn-mapper with the sonar layer alone
 // (config/mapping/underwater.yaml) and cairn-navigator planning on it with unknown water as an
 // obstacle and commanding through the velocity bridge (config/navigator/underwater.yaml), on a
-// private bus. The graph runs at --speed 4: the navigator commands at 20 Hz of wall time, so the
-// AUV gets a command every 0.2 s of its own (planner/README.md, "Explore first"); slow, but true.
+// private bus; for test 18 also cairn-mapstore and cairn-map-server on a SQLite file of the
+// test's own. The graph runs at --speed 4; the navigator's control loop follows the poses' clock
+// (control_clock: pose), so the AUV gets a command every 0.05 s of its own time, as at --speed 1.
 
 #include <algorithm>
 #include <cmath>
@@ -15,11 +16,17 @@
 
 #include "cairn/lcmt_body_velocity_request.hpp"
 #include "cairn/lcmt_goal.hpp"
+#include "cairn/lcmt_mapstore_reply.hpp"
+#include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_nav_status.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
 
 #include "common/channels.h"
+#include "common/layers.h"
+#include "common/robot_profile.h"
+#include "mapstore/lcm/mapstore_client.h"
+#include "services/runtime/conversions.h"
 #include "tests/support/harness.h"
 #include "tests/support/sonar_layer.h"
 
@@ -38,6 +45,8 @@ using testing::WaitFor;
 constexpr char kRobot[] = "auv";
 constexpr int kStateReached = cairn::lcmt_nav_status::STATE_REACHED;
 constexpr int kStateFailed = cairn::lcmt_nav_status::STATE_FAILED;
+using Request = cairn::lcmt_mapstore_request;
+constexpr int8_t kStoreOk = cairn::lcmt_mapstore_reply::STATUS_OK;
 
 // A rock of the rocks world (simulator/worlds/generate_worlds.py, ROCKS): its outline.
 struct Rock {
@@ -46,15 +55,16 @@ struct Rock {
   std::vector<Vector2> outline;  // a convex polygon (a cylinder as a 48-gon)
 };
 
+Rock Cylinder(const std::string& name, Vector2 c, double r) {
+  Rock rock{name, c, {}};
+  for (int i = 0; i < 48; ++i) {
+    const double a = 2.0 * M_PI * i / 48;
+    rock.outline.push_back(c + r * Vector2(std::cos(a), std::sin(a)));
+  }
+  return rock;
+}
+
 std::vector<Rock> RocksWorld() {
-  auto cylinder = [](const std::string& name, Vector2 c, double r) {
-    Rock rock{name, c, {}};
-    for (int i = 0; i < 48; ++i) {
-      const double a = 2.0 * M_PI * i / 48;
-      rock.outline.push_back(c + r * Vector2(std::cos(a), std::sin(a)));
-    }
-    return rock;
-  };
   auto box = [](const std::string& name, Vector2 c, double hx, double hy, double yaw_deg) {
     Rock rock{name, c, {}};
     const double a = yaw_deg * M_PI / 180.0;
@@ -65,8 +75,17 @@ std::vector<Rock> RocksWorld() {
     }
     return rock;
   };
-  return {cylinder("rock_1", {9.0, 1.0}, 1.5), box("rock_2", {15.0, -2.6}, 1.5, 1.8, 30.0),
-          cylinder("rock_3", {21.0, 2.6}, 2.0), box("rock_4", {27.0, -1.2}, 1.2, 1.6, -20.0)};
+  return {Cylinder("rock_1", {9.0, 1.0}, 1.5), box("rock_2", {15.0, -2.6}, 1.5, 1.8, 30.0),
+          Cylinder("rock_3", {21.0, 2.6}, 2.0), box("rock_4", {27.0, -1.2}, 1.2, 1.6, -20.0)};
+}
+
+// The breakwater world's columns: radius 1.5 m at x = 18.
+std::vector<Rock> BreakwaterWorld() {
+  std::vector<Rock> columns;
+  for (double y : {-13.5, -4.5, 4.5, 13.5}) {
+    columns.push_back(Cylinder("column at y " + std::to_string(y), {18.0, y}, 1.5));
+  }
+  return columns;
 }
 
 // Distance from a point to a convex polygon's boundary (0 inside).
@@ -94,12 +113,40 @@ double HullClearance(const Rock& rock, const common::Pose2& pose) {
   return best - 0.115;
 }
 
+// Every pose of a drive (ground truth) keeps the hull off every rock.
+void ExpectNoContact(const std::vector<common::Pose2>& poses, const std::vector<Rock>& rocks) {
+  for (const Rock& rock : rocks) {
+    double closest = 1e300;
+    common::Pose2 where;
+    for (const common::Pose2& p : poses) {
+      const double c = HullClearance(rock, p);
+      if (c < closest) {
+        closest = c;
+        where = p;
+      }
+    }
+    EXPECT_GT(closest, 0.0) << "the hull touched " << rock.name << " at (" << where.x_m << ", "
+                            << where.y_m << ", " << where.yaw_rad << ")";
+  }
+}
+
+// The clusters of the sonar layer, listed for failure messages.
+std::string Listed(const std::vector<Cluster>& clusters) {
+  std::string listed;
+  for (const Cluster& c : clusters) {
+    listed += " (" + std::to_string(c.centre.x()) + ", " + std::to_string(c.centre.y()) +
+              "): " + std::to_string(c.cells);
+  }
+  return listed;
+}
+
 class UnderwaterStackTest : public ::testing::Test {
  protected:
   UnderwaterStackTest()
       : procs_(testing::PrivateLcmUrl()), bus_(procs_.url()), tiles_(bus_.lcm(), kRobot) {
     bus_.Keep(ch::ForRobot(kRobot, ch::kPose));
     bus_.Keep(ch::ForRobot(kRobot, ch::kBodyVelocity));
+    bus_.Keep(ch::ForRobot(kRobot, ch::kNavStatus));
   }
 
   // The stack at --speed `speed` on the shipped rocks scenario, or on a scenario of the AUV at
@@ -117,12 +164,15 @@ class UnderwaterStackTest : public ::testing::Test {
                                  "    model: sparus2\n"
                                  "    spawn: {x_m: 0.0, y_m: 0.0, yaw_deg: 0.0}\n";
     }
-    procs_.Start("cairn-sim", {"--scenario", scenario, "--speed", speed});
+    sim_ = &procs_.Start("cairn-sim", {"--scenario", scenario, "--speed", speed});
     mapper_ = &procs_.Start(
         "cairn-mapper",
         {"--robot", kRobot, "--config", testing::SourcePath("config/mapping/underwater.yaml")});
+    StartNavigator();
+  }
+  void StartNavigator() {
     navigator_ =
-        &procs_.Start("cairn-navigator", {"--robot", kRobot, "--profile", "sparus2", "--config",
+        &procs_.Start("cairn-navigator", {"--robot", kRobot, "--profile", "sparus2_msis", "--config",
                                           testing::SourcePath("config/navigator/underwater.yaml")});
   }
 
@@ -167,8 +217,19 @@ class UnderwaterStackTest : public ::testing::Test {
   ProcessSet procs_;
   Bus bus_;
   SonarTiles tiles_;
+  testing::ChildProcess* sim_{nullptr};
   testing::ChildProcess* mapper_{nullptr};
   testing::ChildProcess* navigator_{nullptr};
+
+  // The sim time (s) of the first status for goal `id`, or -1.
+  double GoalTakenS(int64_t id) {
+    for (const auto& raw : bus_.Kept(ch::ForRobot(kRobot, ch::kNavStatus))) {
+      cairn::lcmt_nav_status st;
+      if (st.decode(raw.data(), 0, static_cast<int>(raw.size())) < 0) continue;
+      if (st.goal_id == id) return st.utime * 1e-6;
+    }
+    return -1.0;
+  }
 
   // Waits for goal `id` to end; true when reached.
   bool WaitEnd(int64_t id, double timeout_s) {
@@ -195,7 +256,12 @@ class UnderwaterStackTest : public ::testing::Test {
 // Test 13: from (0, 0) to (35, 0) past four rocks. The AUV waits for its sonar to show water
 // (explore first), goes only through water it has seen, ends within the 2 m tolerance, never
 // touches a rock, and the sonar layer holds an occupied cluster at every rock.
-TEST_F(UnderwaterStackTest, Seed004Test13RocksToTheGoalWithoutContact) {
+// Test 18 follows on the map of that drive: saved under sparus2_msis, everything restarted, the
+// stored map served to the navigator: the AUV goes at once (no wait for the sonar) and reaches
+// the goal again; shared with another AUV profile, the map keeps its resolution and origin.
+TEST_F(UnderwaterStackTest, Seed004Test13RocksToTheGoalWithoutContactThenTest18FromTheStore) {
+  const std::string db = procs_.dir() + "/auv.db";
+  auto* store = &procs_.Start("cairn-mapstore", {"--db", db});
   Start("4");
   SendGoal(13, 35.0, 0.0);
   const bool ended = WaitFor(
@@ -212,19 +278,7 @@ TEST_F(UnderwaterStackTest, Seed004Test13RocksToTheGoalWithoutContact) {
   ASSERT_GT(poses.size(), 100u);
   EXPECT_LE((poses.back().position() - Vector2(35.0, 0.0)).norm(), 2.0);
   const std::vector<Rock> rocks = RocksWorld();
-  for (const Rock& rock : rocks) {
-    double closest = 1e300;
-    common::Pose2 where;
-    for (const common::Pose2& p : poses) {
-      const double c = HullClearance(rock, p);
-      if (c < closest) {
-        closest = c;
-        where = p;
-      }
-    }
-    EXPECT_GT(closest, 0.0) << "the hull touched " << rock.name << " at (" << where.x_m << ", "
-                            << where.y_m << ", " << where.yaw_rad << ")";
-  }
+  ExpectNoContact(poses, rocks);
   // The drive went through the velocity bridge: body-velocity requests, surge and yaw only.
   const auto& requests = bus_.Kept(ch::ForRobot(kRobot, ch::kBodyVelocity));
   ASSERT_FALSE(requests.empty());
@@ -242,15 +296,130 @@ TEST_F(UnderwaterStackTest, Seed004Test13RocksToTheGoalWithoutContact) {
   const auto map = tiles_.Layer();
   ASSERT_TRUE(map.has_value());
   const std::vector<Cluster> clusters = Clusters(*map);
-  std::string listed;
-  for (const Cluster& c : clusters) {
-    listed += " (" + std::to_string(c.centre.x()) + ", " + std::to_string(c.centre.y()) +
-              "): " + std::to_string(c.cells);
-  }
+  const std::string listed = Listed(clusters);
   for (const Rock& rock : rocks) {
     int near = 0;
     for (const Cluster& c : clusters) near += (c.centre - rock.centre).norm() < 3.5;
     EXPECT_GE(near, 1) << rock.name << " is not on the sonar layer; clusters:" << listed;
+  }
+
+  // ---- Test 18: the store. ----
+  lcm::LCM lcm(procs_.url());
+  mapstore::MapstoreClientOptions client_options;
+  client_options.reply_timeout_s = 2.0;
+  client_options.total_timeout_s = 60.0;
+  mapstore::MapstoreClient client(lcm, "underwater_stack_test", client_options);
+  for (const char* profile : {"sparus2_msis", "girona500"}) {
+    Request put{};
+    put.op = Request::OP_PUT_PROFILE;
+    put.has_profile = true;
+    put.profile_data = runtime::ToLcm(common::LoadRobotProfileFile(
+        testing::SourcePath(std::string("config/profiles/") + profile + ".yaml")));
+    auto reply = client.Call(put);
+    ASSERT_TRUE(reply.ok()) << reply.status().ToString();
+    ASSERT_EQ(reply->status, kStoreOk) << reply->message;
+  }
+  Request save{};
+  save.op = Request::OP_SAVE;
+  save.site = "rocks";
+  save.map_name = "s1";
+  save.robot = kRobot;
+  save.profile = "sparus2_msis";
+  auto saved = client.Call(save);
+  ASSERT_TRUE(saved.ok()) << saved.status().ToString();
+  ASSERT_EQ(saved->status, kStoreOk) << saved->message;
+  const int64_t version = saved->version;
+
+  // Restart everything: the AUV back at its start, its map from the store.
+  for (testing::ChildProcess* p : {navigator_, mapper_, sim_, store}) {
+    EXPECT_EQ(p->Stop(10.0), 0) << p->name() << " did not stop cleanly\n" << p->Log();
+  }
+  for (const char* stream : {ch::kPose, ch::kBodyVelocity, ch::kNavStatus}) {
+    bus_.ClearKept(ch::ForRobot(kRobot, stream));
+  }
+  procs_.Start("cairn-mapstore", {"--db", db});
+  sim_ = &procs_.Start("cairn-sim", {"--scenario", testing::SourcePath("config/sim/rocks_sparus2.yaml"),
+                                     "--speed", "4"});
+  auto& server = procs_.Start("cairn-map-server", {"--db", db, "--site", "rocks", "--map", "s1",
+                                                   "--profile", "sparus2_msis", "--robot", kRobot,
+                                                   "--wait-s", "30"});
+  StartNavigator();
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        auto h = bus_.Health("cairn-map-server", kRobot);
+        return h && h->state == cairn::lcmt_health::STATE_READY;
+      },
+      60.0, [&] { bus_.Pump(20); }))
+      << server.Log();
+  SendGoal(18, 35.0, 0.0);
+  ASSERT_TRUE(WaitEnd(18, 300.0)) << Status()->message << "\n" << navigator_->Log();
+  WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
+  const std::vector<common::Pose2> again = Poses();
+  ASSERT_GT(again.size(), 100u);
+  EXPECT_LE((again.back().position() - Vector2(35.0, 0.0)).norm(), 2.0);
+  // It went at once: surging within 3 s of sim time of taking the goal (on the first drive the
+  // sonar took over 10 s to show a way), and never waited for the map.
+  const double taken_s = GoalTakenS(18), surge_s = FirstSurgeS();
+  ASSERT_GT(taken_s, 0.0);
+  ASSERT_GT(surge_s, 0.0);
+  EXPECT_LT(surge_s - taken_s, 3.0) << "taken at " << taken_s << " s, first surge at " << surge_s;
+  EXPECT_EQ(navigator_->Log().find("explore first: waiting"), std::string::npos)
+      << navigator_->Log();
+
+  // Shared with the Girona 500: the same grid, every contact re-labelled for it.
+  Request share{};
+  share.op = Request::OP_SHARE;
+  share.site = "rocks";
+  share.map_name = "s1";
+  share.version = version;
+  share.profile = "girona500";
+  auto shared = client.Call(share);
+  ASSERT_TRUE(shared.ok()) << shared.status().ToString();
+  ASSERT_EQ(shared->status, kStoreOk) << shared->message;
+  auto own = client.Load("rocks", "s1", version, "sparus2_msis",
+                         {layers::kSonarOccupancy, layers::CostLayer("sparus2_msis")});
+  auto other = client.Load("rocks", "s1", version, "girona500",
+                           {layers::kSonarOccupancy, layers::CostLayer("girona500")});
+  ASSERT_TRUE(own.ok()) << own.status().ToString();
+  ASSERT_TRUE(other.ok()) << other.status().ToString();
+  EXPECT_DOUBLE_EQ(other->layers.resolution_m(), 0.25);
+  EXPECT_EQ(other->layers.geometry(), own->layers.geometry());
+  EXPECT_NEAR(other->layers.geometry().origin.x_m, own->layers.geometry().origin.x_m, 1e-9);
+  EXPECT_NEAR(other->layers.geometry().origin.y_m, own->layers.geometry().origin.y_m, 1e-9);
+  ASSERT_TRUE(other->layers.HasLayer(layers::CostLayer("girona500")));
+  EXPECT_GT((other->layers.at(layers::CostLayer("girona500")).array() == layers::kCostLethal).count(),
+            20);
+  ASSERT_GE(other->obstacles.obstacles.size(), 4u);  // a contact at each rock, or more
+  for (const common::Obstacle& o : other->obstacles.obstacles) {
+    const common::ObstacleVerdict* v = o.VerdictFor("girona500");
+    ASSERT_NE(v, nullptr) << "contact " << o.id << " has no girona500 verdict";
+    EXPECT_FALSE(v->crossable);
+    EXPECT_EQ(o.VerdictFor("sparus2_msis"), nullptr);
+  }
+}
+
+// Test 14, moving: from (0, 0) through the middle gap of the breakwater (6 m between the
+// columns' faces) to (34, 0). No contact, within the 2 m tolerance, and the four columns are four
+// distinct clusters on the sonar layer (9 m apart; partial arcs, and an arc seen in pieces, are
+// allowed: the head sweeps while the hull moves).
+TEST_F(UnderwaterStackTest, Seed004Test14ThroughTheBreakwaterFourClustersNoContact) {
+  Start("4", "breakwater");
+  SendGoal(14, 34.0, 0.0);
+  const bool reached = WaitEnd(14, 400.0);
+  ASSERT_TRUE(reached) << Status()->message << "\n" << navigator_->Log();
+  WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
+  const std::vector<common::Pose2> poses = Poses();
+  ASSERT_GT(poses.size(), 100u);
+  EXPECT_LE((poses.back().position() - Vector2(34.0, 0.0)).norm(), 2.0);
+  const std::vector<Rock> columns = BreakwaterWorld();
+  ExpectNoContact(poses, columns);
+  const auto map = tiles_.Layer();
+  ASSERT_TRUE(map.has_value());
+  const std::vector<Cluster> clusters = Clusters(*map);
+  for (const Rock& column : columns) {
+    int near = 0;
+    for (const Cluster& c : clusters) near += (c.centre - column.centre).norm() < 3.0;
+    EXPECT_GE(near, 1) << column.name << " is not on the sonar layer; clusters:" << Listed(clusters);
   }
 }
 

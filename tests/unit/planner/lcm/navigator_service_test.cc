@@ -72,9 +72,11 @@ class NavigatorServiceTest : public ::testing::Test {
                                                        });
   }
 
-  void Start(std::vector<Place> places = {}, CommandOutput output = CommandOutput::kVelocity) {
+  void Start(std::vector<Place> places = {}, CommandOutput output = CommandOutput::kVelocity,
+             ControlClock clock = ControlClock::kWall) {
     NavigatorConfig config;
     config.command_output = output;
+    config.control_clock = clock;
     // The test drives the clock and waits for every plan (Step), so a plan's wall-clock budget
     // must not decide the outcome on a loaded machine.
     config.global_planner.time_budget_s = 30.0;
@@ -221,6 +223,29 @@ TEST_F(NavigatorServiceTest, TheVelocityBridgeSendsOneBodyVelocityRequestPerComm
                              [](const auto& a, const auto& b) { return a.twist[0] < b.twist[0]; })
                 ->twist[0],
             0.2);
+}
+
+// control_clock pose: the poses' stamps pace the loop, a tick (and a command) per 50 ms of them,
+// however fast they come in wall time; a stamp that goes back (a restarted simulation) ticks.
+TEST_F(NavigatorServiceTest, WithThePoseClockEachFiftyMillisecondsOfPosesIsOneCommand) {
+  Start({}, CommandOutput::kVelocity, ControlClock::kPose);
+  PublishMap(true);
+  for (int k = 0; k < 4; ++k) Step();
+  SendGoal(PoseGoal(12, 10.0, 4.0));
+  ASSERT_TRUE(StepUntil([&] { return LastState() == kStateDriving; }, 100));
+  const size_t before = commands_.size();
+  for (int k = 0; k < 20; ++k) {  // 200 ms of poses, 10 ms apart, with no Tick() of the test's
+    sim_utime_ += 10'000;
+    PublishClock();
+    PublishPose();
+    Pump();
+  }
+  EXPECT_EQ(commands_.size() - before, 4u);
+  sim_utime_ -= 1'000'000;
+  PublishClock();
+  PublishPose();
+  Pump();
+  EXPECT_EQ(commands_.size() - before, 5u);
 }
 
 TEST_F(NavigatorServiceTest, AReSentGoalIdDoesNotRestartTheGoal) {
