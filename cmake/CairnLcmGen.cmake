@@ -11,10 +11,13 @@ function(cairn_lcm_gen)
     get_filename_component(stem ${file} NAME_WE)
     set(src ${CMAKE_CURRENT_SOURCE_DIR}/${file})
     set(hdr ${out_dir}/${ARG_PACKAGE}/${stem}.hpp)
+    # lcm-gen, then every count and string length the decoder reads bounded by the bytes that
+    # remain (cmake/BoundLcmDecode.cmake says why).
     add_custom_command(OUTPUT ${hdr}
       COMMAND ${LCM_GEN} --cpp --cpp-hpath ${out_dir} ${src}
-      DEPENDS ${src}
-      COMMENT "lcm-gen ${file}" VERBATIM)
+      COMMAND ${CMAKE_COMMAND} -DHEADER=${hdr} -P ${PROJECT_SOURCE_DIR}/cmake/BoundLcmDecode.cmake
+      DEPENDS ${src} ${PROJECT_SOURCE_DIR}/cmake/BoundLcmDecode.cmake
+      COMMENT "lcm-gen ${file} (bounded decoder)" VERBATIM)
     list(APPEND headers ${hdr})
     list(APPEND type_names ${stem})
   endforeach()
