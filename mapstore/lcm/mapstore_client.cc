@@ -77,19 +77,41 @@ struct MapstoreClient::Push {
   std::vector<cairn::lcmt_octomap> octomap;
 };
 
+template <typename Msg, void (MapstoreClient::*Handler)(const lcm::ReceiveBuffer*,
+                                                        const std::string&, const Msg*)>
+void MapstoreClient::Guarded(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                             MapstoreClient* self) {
+  try {
+    Msg m;
+    if (m.decode(rbuf->data, 0, static_cast<int>(rbuf->data_size)) < 0) {
+      ++self->dropped_messages_;
+      return;
+    }
+    (self->*Handler)(rbuf, channel, &m);
+  } catch (const std::exception&) {
+    ++self->dropped_messages_;
+  }
+}
+
+template <typename Msg, void (MapstoreClient::*Handler)(const lcm::ReceiveBuffer*,
+                                                        const std::string&, const Msg*)>
+void MapstoreClient::Subscribe(const char* channel) {
+  subscriptions_.push_back(
+      lcm_.subscribeFunction<MapstoreClient*>(channel, &Guarded<Msg, Handler>, this));
+}
+
 MapstoreClient::MapstoreClient(lcm::LCM& lcm, std::string requester, MapstoreClientOptions options)
     : lcm_(lcm), requester_(std::move(requester)), options_(options) {
-  subscriptions_.push_back(
-      lcm_.subscribe(channels::kMapstoreReply, &MapstoreClient::OnReply, this));
-  subscriptions_.push_back(lcm_.subscribe(channels::kMapstoreTiles, &MapstoreClient::OnTile, this));
-  subscriptions_.push_back(
-      lcm_.subscribe(channels::kMapstoreTileBatches, &MapstoreClient::OnTileBatch, this));
-  subscriptions_.push_back(
-      lcm_.subscribe(channels::kMapstoreManifest, &MapstoreClient::OnManifest, this));
-  subscriptions_.push_back(
-      lcm_.subscribe(channels::kMapstoreOctomap, &MapstoreClient::OnOctomap, this));
-  subscriptions_.push_back(
-      lcm_.subscribe(channels::kMapstorePushTileResend, &MapstoreClient::OnPushResend, this));
+  // Through Guarded, not liblcm's typed subscribe: a handler's exception would unwind through
+  // its C dispatch.
+  Subscribe<cairn::lcmt_mapstore_reply, &MapstoreClient::OnReply>(channels::kMapstoreReply);
+  Subscribe<cairn::lcmt_grid_tile, &MapstoreClient::OnTile>(channels::kMapstoreTiles);
+  Subscribe<cairn::lcmt_grid_tile_batch, &MapstoreClient::OnTileBatch>(
+      channels::kMapstoreTileBatches);
+  Subscribe<cairn::lcmt_grid_manifest, &MapstoreClient::OnManifest>(channels::kMapstoreManifest);
+  Subscribe<cairn::lcmt_octomap, &MapstoreClient::OnOctomap>(channels::kMapstoreOctomap);
+  Subscribe<cairn::lcmt_tile_resend_request, &MapstoreClient::OnPushResend>(
+      channels::kMapstorePushTileResend);
   counter_ = ((WallUtimeNow() / 1000000) & 0x7fffff) << 40 |
              (static_cast<int64_t>(getpid()) & 0xfffff) << 20;
 }

@@ -78,8 +78,22 @@ class MapstoreClient {
                               const std::string& profile,
                               const std::vector<std::string>& layers = {});
 
+ /// Messages refused on the client's channels (undecodable, or whose handler failed): none
+  /// of them unwinds through liblcm's C dispatch.
+  int64_t dropped_messages() const { return dropped_messages_; }
+
  private:
   struct Incoming;
+  /// Every subscription's handler: decodes, calls `Handler`, and counts (never throws) a
+  /// message that does not decode or whose handler throws.
+  template <typename Msg, void (MapstoreClient::*Handler)(const lcm::ReceiveBuffer*,
+                                                          const std::string&, const Msg*)>
+  static void Guarded(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                      MapstoreClient* self);
+  template <typename Msg, void (MapstoreClient::*Handler)(const lcm::ReceiveBuffer*,
+                                                          const std::string&, const Msg*)>
+  void Subscribe(const char* channel);
+  int64_t dropped_messages_{0};
   void OnReply(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_mapstore_reply* m);
   void OnTile(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_grid_tile* m);
   void OnTileBatch(const lcm::ReceiveBuffer*, const std::string&,

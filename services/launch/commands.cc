@@ -29,6 +29,17 @@ std::chrono::steady_clock::time_point DeadlineIn(double seconds) {
              std::chrono::duration<double>(seconds));
 }
 
+// Whether a process the launcher's status lists still runs.
+bool OrphansLeft(const std::string& run_dir) {
+  std::string error;
+  auto status = ReadStatusFile(run_dir + "/status.json", &error);
+  if (!status) return false;
+  for (const auto& p : status->processes) {
+    if (ProcessAlive(p.pid)) return true;
+  }
+  return false;
+}
+
 // Kills the processes a dead launcher left (their process groups first).
 void KillOrphans(const std::string& run_dir) {
   std::string error;
@@ -160,6 +171,12 @@ int CmdDown(const std::string& run_dir, double timeout_s) {
     std::fprintf(stderr, "cairn-launch: launcher %d did not stop within %.0f s; killing it\n", pid,
                  timeout_s);
     kill(pid, SIGKILL);
+    // Its children are sent SIGTERM as it dies; any still running after a grace is killed.
+    const auto grace = DeadlineIn(5.0);
+    while (OrphansLeft(run_dir) && SecondsLeft(grace) > 0.0) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    KillOrphans(run_dir);
     return 1;
   }
   std::printf("graph in %s stopped\n", run_dir.c_str());

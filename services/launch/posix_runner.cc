@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -45,6 +46,7 @@ pid_t PosixRunner::Spawn(const ProcessSpec& spec, std::string* error) {
   }
   std::vector<std::string> argv_storage = {spec.executable};
   argv_storage.insert(argv_storage.end(), spec.args.begin(), spec.args.end());
+  const pid_t launcher = getpid();
   const pid_t pid = fork();
   if (pid < 0) {
     close(log_fd);
@@ -55,6 +57,10 @@ pid_t PosixRunner::Spawn(const ProcessSpec& spec, std::string* error) {
   }
   if (pid == 0) {
     setpgid(0, 0);
+    // Dies with the launcher: SIGTERM (a clean stop) when it goes, and at once if it went
+    // between the fork and here.
+    prctl(PR_SET_PDEATHSIG, SIGTERM);
+    if (getppid() != launcher) _exit(1);
     // Children start with default signal dispositions and an empty mask.
     sigset_t all;
     sigemptyset(&all);
@@ -94,6 +100,11 @@ void PosixRunner::Signal(pid_t pid, int sig) {
   if (pid <= 0) return;
   kill(-pid, sig);  // its process group (the process and anything it spawned)
   kill(pid, sig);
+}
+
+pid_t PosixRunner::GroupOf(pid_t pid) {
+  const pid_t group = getpgid(pid);
+  return group < 0 ? -1 : group;
 }
 
 std::optional<int> PosixRunner::Poll(pid_t pid) {

@@ -7,7 +7,9 @@
 
 /// @file
 /// Real processes for the supervisor: fork/exec in a process group of their own, output appended
-/// to <run_dir>/logs/<name>.log, LCM_DEFAULT_URL set to the graph's bus.
+/// to <run_dir>/logs/<name>.log, LCM_DEFAULT_URL set to the graph's bus. A child dies with the
+/// launcher: it is sent SIGTERM when the launcher's thread that started it ends, however the
+/// launcher ended (PR_SET_PDEATHSIG), and never runs on once the launcher is gone.
 
 namespace cairn::launch {
 
@@ -18,6 +20,7 @@ class PosixRunner : public ProcessRunner {
   pid_t Spawn(const ProcessSpec& spec, std::string* error) override;
   void Signal(pid_t pid, int signal) override;
   std::optional<int> Poll(pid_t pid) override;
+  pid_t GroupOf(pid_t pid) override;
 
   std::string LogPath(const std::string& name) const { return log_dir_ + "/" + name + ".log"; }
 

@@ -199,22 +199,25 @@ void Supervisor::Tick(double now_s) {
   }
 }
 
-void Supervisor::OnHeartbeat(pid_t pid, const std::string& process, const std::string& robot,
-                             bool ready) {
-  // A heartbeat names its pid; a process started through a wrapper script has another pid, so
-  // fall back to the executable name and robot when no child has that pid.
+bool Supervisor::OnHeartbeat(pid_t pid, const std::string& /*process*/,
+                             const std::string& /*robot*/, bool ready) {
+  // Only the pid counts (names on the bus are anyone's to send); a process a wrapper script
+  // started runs in the wrapper's process group.
+  if (pid <= 0) return false;
   for (auto& st : statuses_) {
     if (st.pid > 0 && st.pid == pid) {
       st.heartbeat_ready = ready;
-      return;
+      return true;
     }
   }
+  const pid_t group = runner_->GroupOf(pid);
   for (auto& st : statuses_) {
-    if (st.pid <= 0) continue;
-    const ProcessSpec& spec = SpecOf(st.name);
-    const std::string exe_name = spec.executable.substr(spec.executable.find_last_of('/') + 1);
-    if (process == exe_name && robot == spec.robot) st.heartbeat_ready = ready;
+    if (st.pid > 0 && group == st.pid) {
+      st.heartbeat_ready = ready;
+      return true;
+    }
   }
+  return false;
 }
 
 void Supervisor::SetChannelRate(const std::string& channel, double rate_hz) { rates_[channel] = rate_hz; }

@@ -28,6 +28,9 @@ class ProcessRunner {
   virtual void Signal(pid_t pid, int signal) = 0;
   /// Non-blocking: the wait status if the process has exited.
   virtual std::optional<int> Poll(pid_t pid) = 0;
+  /// The process group of a running pid (-1 when unknown or gone). Every spawned process leads
+  /// a group of its own, so a process a wrapper script started is in its wrapper's group.
+  virtual pid_t GroupOf(pid_t /*pid*/) { return -1; }
 };
 
 enum class ProcState {
@@ -61,8 +64,11 @@ class Supervisor {
 
   /// Advances the state machine at time now_s (seconds, monotonic).
   void Tick(double now_s);
-  /// A heartbeat from pid (or from a process whose process name and robot match) in state READY.
-  void OnHeartbeat(pid_t pid, const std::string& process, const std::string& robot, bool ready);
+  /// A heartbeat from `pid` in state READY (or not). It counts for the process the supervisor
+  /// started with that pid, or whose process group holds it (a process started through a
+  /// wrapper script); a heartbeat from any other pid is ignored, whatever names it carries: a
+  /// forged HEALTH cannot mark a process ready. False when it was ignored.
+  bool OnHeartbeat(pid_t pid, const std::string& process, const std::string& robot, bool ready);
   /// Current rate of a channel as measured by the caller.
   void SetChannelRate(const std::string& channel, double rate_hz);
   /// Begins an orderly stop of everything (reverse start order).

@@ -99,6 +99,21 @@ std::vector<std::string> SplitList(const std::string& text) {
   return out;
 }
 
+common::Result<common::RobotProfile> ResolveProfileByName(const std::string& dir,
+                                                          const std::string& name) {
+  if (name.empty() || name.size() > 64) {
+    return common::InvalidArgumentError("a profile name has 1 to 64 characters");
+  }
+  for (char c : name) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-')) {
+      return common::InvalidArgumentError(
+          "bad profile name (letters, digits, '_' and '-' only; profiles are taken from the "
+          "profiles folder by name)");
+    }
+  }
+  return ResolveProfile(dir, name);
+}
+
 common::Result<common::RobotProfile> ResolveProfile(const std::string& dir,
                                                     const std::string& name) {
   const bool is_path = name.find('/') != std::string::npos ||

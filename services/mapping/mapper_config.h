@@ -59,8 +59,15 @@ MapperConfig LoadMapperConfigFile(const std::string& path);
 std::vector<std::string> SplitList(const std::string& text);
 
 /// A profile by name (`<profiles_dir>/<name>.yaml`) or by path (a name holding '/' or ending in
-/// .yaml). NOT_FOUND when no such file; INVALID_ARGUMENT for a bad name or file.
+/// .yaml): for the command line, the operator's own choice. NOT_FOUND when no such file;
+/// INVALID_ARGUMENT for a bad name or file.
 common::Result<common::RobotProfile> ResolveProfile(const std::string& profiles_dir,
                                                     const std::string& name);
+
+/// A profile named on the bus (OP_ADD_PROFILE): only `<profiles_dir>/<name>.yaml`, the name of
+/// letters, digits, '_' and '-' (at most 64), never a path: a peer on the bus cannot make the
+/// process read any other file, nor have its content echoed back in an error.
+common::Result<common::RobotProfile> ResolveProfileByName(const std::string& profiles_dir,
+                                                          const std::string& name);
 
 }  // namespace cairn::mapping

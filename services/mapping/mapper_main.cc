@@ -66,7 +66,8 @@ int ParseFlags(int argc, char** argv, Flags* f) {
       "with --long-term-store: MAPSTORE.REQUEST (load at start, periodic pull "
       "saves), MAPSTORE.REPLY, MAPSTORE.TILES, MAPSTORE.TILE_BATCHES, MAPSTORE.MANIFEST");
   flags.AddHelpSection("Control (<robot>.MAP.CONTROL)",
-                       "OP_ADD_PROFILE (by name or with profile data), OP_REMOVE_PROFILE, "
+                       "OP_ADD_PROFILE (a name in --profiles-dir, never a path, or the profile "
+                       "data itself), OP_REMOVE_PROFILE, "
                        "OP_PUBLISH_ALL, OP_RESET, OP_SNAPSHOT (writes the maps under "
                        "snapshot_dir), OP_CLEAR_SHORT_TERM");
   const int parsed = flags.Parse(argc, argv);
@@ -136,7 +137,10 @@ int Main(int argc, char** argv) {
     options.follow_sim_clock = f.replay.empty();
     runtime::Node node(options);
     const std::string dir = f.profiles_dir;
-    ProfileResolver resolver = [dir](const std::string& name) { return ResolveProfile(dir, name); };
+    // Profiles named on the bus come from the profiles folder, by name only.
+    ProfileResolver resolver = [dir](const std::string& name) {
+      return ResolveProfileByName(dir, name);
+    };
     MapperParams& params = config.params;
     if (!f.replay.empty()) {
       MapperService service(node, params, profiles, resolver, MapperService::Mode::kReplay);

@@ -31,8 +31,22 @@ void LaunchService::OnMessage(const std::string& channel, const void* data, int 
   cairn::lcmt_health h{};
   if (h.decode(data, 0, size) < 0) return;
   if (h.process == "cairn-launch" && h.pid == getpid()) return;
+  // Only heartbeats of the processes it started count, and only theirs are kept: a heartbeat
+  // from any other pid (a peer's, or forged) neither marks anything ready nor grows the table.
+  if (!supervisor_->OnHeartbeat(h.pid, h.process, h.robot,
+                                h.state == cairn::lcmt_health::STATE_READY)) {
+    return;
+  }
   health_by_pid_[h.pid] = h;
-  supervisor_->OnHeartbeat(h.pid, h.process, h.robot, h.state == cairn::lcmt_health::STATE_READY);
+  if (health_by_pid_.size() > 2 * supervisor_->statuses().size()) {
+    // Restarts leave the heartbeats of pids that are gone.
+    std::map<int, cairn::lcmt_health> current;
+    for (const auto& st : supervisor_->statuses()) {
+      auto it = health_by_pid_.find(st.pid);
+      if (it != health_by_pid_.end()) current.insert(*it);
+    }
+    health_by_pid_ = std::move(current);
+  }
 }
 
 void LaunchService::Tick() {

@@ -6,6 +6,7 @@
 
 #include <fstream>
 #include <regex>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -40,6 +41,17 @@ std::string WriteGraph(const std::string& dir, const std::string& url) {
 std::optional<launch::GraphStatus> ReadStatus(const std::string& run_dir) {
   std::string error;
   return launch::ReadStatusFile(run_dir + "/status.json", &error);
+}
+
+// Running: a pid that exists and is not a zombie (an orphan's zombie waits for a reaper that
+// may be slow, or absent, in a container).
+bool Running(int pid) {
+  if (kill(pid, 0) != 0) return false;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string content;
+  std::getline(stat, content);
+  const auto paren = content.rfind(')');
+  return paren == std::string::npos || paren + 2 >= content.size() || content[paren + 2] != 'Z';
 }
 
 const launch::ProcessRow* Row(const launch::GraphStatus& s, const std::string& name) {
@@ -107,6 +119,32 @@ TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
   for (int pid : pids) {
     EXPECT_TRUE(WaitFor([&] { return kill(pid, 0) == -1 && errno == ESRCH; }, 10.0))
         << "process " << pid << " outlived `cairn-launch down`";
+  }
+}
+
+// Issue 20: the launcher killed outright (SIGKILL: no chance to stop anything) takes its
+// children with it; they outlived it before.
+TEST(LaunchIntegrationTest, AKilledLauncherTakesItsChildrenWithIt) {
+  ProcessSet procs(PrivateLcmUrl());
+  const std::string graph = WriteGraph(procs.dir(), procs.url());
+  const std::string run_dir = procs.dir() + "/run";
+  ChildProcess& launcher =
+      procs.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir});
+  std::optional<launch::GraphStatus> status;
+  ASSERT_TRUE(WaitFor([&] {
+    status = ReadStatus(run_dir);
+    return status && status->state == "ready";
+  }, 30.0)) << "graph never became ready";
+  std::vector<int> pids;
+  for (const auto& p : status->processes) {
+    ASSERT_GT(p.pid, 0) << p.name;
+    pids.push_back(p.pid);
+  }
+  launcher.Signal(SIGKILL);
+  ASSERT_TRUE(launcher.WaitExit(10.0).has_value());
+  for (int pid : pids) {
+    EXPECT_TRUE(WaitFor([&] { return !Running(pid); }, 10.0))
+        << "process " << pid << " outlived its launcher";
   }
 }
 

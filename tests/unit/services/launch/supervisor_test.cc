@@ -40,6 +40,10 @@ class FakeRunner : public ProcessRunner {
     alive.erase(pid);
     exited[pid] = by_signal ? code : (code << 8);  // wait status encoding
   }
+  pid_t GroupOf(pid_t pid) override {
+    auto it = groups.find(pid);
+    return it == groups.end() ? -1 : it->second;
+  }
   pid_t PidOf(const std::string& name) const {
     for (const auto& [pid, n] : alive) {
       if (n == name) return pid;
@@ -54,6 +58,7 @@ class FakeRunner : public ProcessRunner {
   std::vector<std::string> spawned;
   std::vector<std::pair<std::string, int>> signals;
   std::set<std::string> fail_spawn;
+  std::map<pid_t, pid_t> groups;  ///< pid -> process group, for pids of grandchildren
 };
 
 GraphSpec TwoProcessGraph(RestartPolicy policy = RestartPolicy::kOnFailure, int max_restarts = 2) {
@@ -106,6 +111,24 @@ TEST_F(SupervisorTest, StartsInDependencyOrderAfterReadiness) {
   dut_->OnHeartbeat(runner_.PidOf("b"), "b", "", true);
   dut_->Tick(1.3);
   EXPECT_TRUE(dut_->AllReady());
+}
+
+// Issue 20: a heartbeat counts only from the pid the supervisor started (or a process in its
+// group, started by a wrapper script). One forged with the process's name and robot and
+// another pid marked it ready before.
+TEST_F(SupervisorTest, AForgedHeartbeatCannotMarkAProcessReady) {
+  Make(TwoProcessGraph());
+  dut_->Tick(0.0);
+  EXPECT_FALSE(dut_->OnHeartbeat(4242, "a", "", true));
+  EXPECT_FALSE(dut_->OnHeartbeat(0, "a", "", true));
+  dut_->Tick(0.5);
+  EXPECT_EQ(St("a").state, ProcState::kStarting);
+  EXPECT_EQ(runner_.spawned.size(), 1u);
+  // The wrapper's child, in the group of the pid started: it counts.
+  runner_.groups[4343] = runner_.PidOf("a");
+  EXPECT_TRUE(dut_->OnHeartbeat(4343, "real-a", "", true));
+  dut_->Tick(0.6);
+  EXPECT_EQ(St("a").state, ProcState::kReady);
 }
 
 TEST_F(SupervisorTest, NotReadyHeartbeatDoesNotCount) {

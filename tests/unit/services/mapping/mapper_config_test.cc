@@ -121,6 +121,16 @@ TEST(MapperConfigTest, ProfilesByNameOrPath) {
   EXPECT_EQ(ResolveProfile(dir, "warthog").status().code(), common::StatusCode::kNotFound);
   EXPECT_EQ(ResolveProfile(dir, "../etc").status().code(), common::StatusCode::kNotFound);
   EXPECT_EQ(ResolveProfile(dir, "bad name").status().code(), common::StatusCode::kInvalidArgument);
+  // Issue 20: a name from the bus is a name in the profiles folder, never a path (the mapper
+  // runs as root in the demo: it read any file and echoed its parse error back).
+  EXPECT_TRUE(ResolveProfileByName(dir, "rover").ok());
+  for (const std::string& bad : {dir + "/kobuki.yaml", std::string("/etc/passwd"),
+                                 std::string("../profiles/rover"), std::string("rover.yaml"),
+                                 std::string(""), std::string(65, 'a')}) {
+    const auto r = ResolveProfileByName(dir, bad);
+    EXPECT_EQ(r.status().code(), common::StatusCode::kInvalidArgument) << bad;
+    EXPECT_EQ(r.status().message().find("root:"), std::string::npos) << bad;
+  }
   EXPECT_EQ(SplitList(" a, b ,,c "), (std::vector<std::string>{"a", "b", "c"}));
 }
 
