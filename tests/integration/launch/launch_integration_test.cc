@@ -4,12 +4,16 @@
 #include <signal.h>
 #include <sys/wait.h>
 
+#include <chrono>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "cairn/lcmt_health.hpp"
 
 #include "services/launch/status.h"
 #include "tests/support/harness.h"
@@ -146,6 +150,71 @@ TEST(LaunchIntegrationTest, AKilledLauncherTakesItsChildrenWithIt) {
     EXPECT_TRUE(WaitFor([&] { return !Running(pid); }, 10.0))
         << "process " << pid << " outlived its launcher";
   }
+}
+
+// Resident memory of a process (MB), from /proc; -1 when gone.
+double RssMb(int pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return -1.0;
+}
+
+// Issue 20's finding: one 84-byte heartbeat whose num_channels says 67 million made the
+// launcher grow by 220 MB a second and stop answering. Now a hundred of them change nothing:
+// the launcher and the two spies (which decode every type) stay within 50 MB of what they
+// held, the launcher keeps writing its status, and `status` answers within 1 s.
+TEST(LaunchIntegrationTest, AHeartbeatBombAndForgedHeartbeatsChangeNothing) {
+  ProcessSet procs(PrivateLcmUrl());
+  const std::string graph = WriteGraph(procs.dir(), procs.url());
+  const std::string run_dir = procs.dir() + "/run";
+  ChildProcess& launcher =
+      procs.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir});
+  std::optional<launch::GraphStatus> status;
+  ASSERT_TRUE(WaitFor([&] {
+    status = ReadStatus(run_dir);
+    return status && status->state == "ready";
+  }, 30.0)) << "graph never became ready";
+  std::vector<int> pids = {launcher.pid()};
+  for (const auto& p : status->processes) pids.push_back(p.pid);
+  std::vector<double> rss_before;
+  for (int pid : pids) rss_before.push_back(RssMb(pid));
+
+  lcm::LCM bus(procs.url());
+  ASSERT_TRUE(bus.good());
+  cairn::lcmt_health h{};
+  std::vector<uint8_t> bomb(h.getEncodedSize());
+  ASSERT_EQ(h.encode(bomb.data(), 0, static_cast<int>(bomb.size())), 84);
+  const size_t num_channels_at = 8 + 8 + 8 + 5 + 5 + 4 + 1 + 8 + 8 + 8 + 8 + 5;
+  bomb[num_channels_at] = 0x04;  // 0x04000000 = 67,108,864
+  for (int k = 0; k < 100; ++k) {
+    bus.publish("HEALTH", bomb.data(), static_cast<unsigned>(bomb.size()));
+  }
+  WaitFor([] { return false; }, 2.0);
+  for (size_t i = 0; i < pids.size(); ++i) {
+    const double rss = RssMb(pids[i]);
+    ASSERT_GT(rss, 0.0) << "process " << pids[i] << " died";
+    EXPECT_LT(rss - rss_before[i], 50.0) << "process " << pids[i] << " grew from "
+                                         << rss_before[i] << " MB to " << rss << " MB";
+  }
+  // The launcher's loop still runs: it rewrites its status file.
+  namespace fs = std::filesystem;
+  const auto written = fs::last_write_time(run_dir + "/status.json");
+  EXPECT_TRUE(WaitFor([&] {
+    std::error_code ec;
+    return fs::last_write_time(run_dir + "/status.json", ec) != written;
+  }, 3.0)) << "the launcher stopped writing its status";
+  const auto asked = std::chrono::steady_clock::now();
+  ChildProcess& status_cmd =
+      procs.StartRaw("status", {BinPath("cairn-launch"), "status", "--run-dir", run_dir});
+  auto exit = status_cmd.WaitExit(5.0);
+  ASSERT_TRUE(exit.has_value());
+  EXPECT_EQ(*exit, 0);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count(), 1.0);
+  ChildProcess& down = procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
+  ASSERT_TRUE(down.WaitExit(30.0).has_value());
 }
 
 TEST(LaunchIntegrationTest, RequiredProcessFailingForGoodStopsTheGraph) {
