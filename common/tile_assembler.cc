@@ -1,10 +1,19 @@
 #include "common/tile_assembler.h"
 
 #include <algorithm>
+#include <cmath>
+#include <set>
 
 namespace cairn::common {
 
 namespace {
+
+// A grid a layer may have: finite, a positive resolution, within the cell cap.
+bool UsableGrid(const GridGeometry& g) {
+  return std::isfinite(g.resolution_m) && g.resolution_m > 0 && std::isfinite(g.origin.x_m) &&
+         std::isfinite(g.origin.y_m) && std::isfinite(g.origin.yaw_rad) && g.size_x >= 0 &&
+         g.size_y >= 0 && int64_t{g.size_x} * g.size_y <= TileAssembler::kMaxLayerCells;
+}
 
 // A tile header that fits a tile and a usable grid.
 bool Admissible(const TileHeader& h) {
@@ -12,9 +21,7 @@ bool Admissible(const TileHeader& h) {
       h.cells_y > h.tile_size) {
     return false;
   }
-  const GridGeometry& g = h.geometry;
-  return g.resolution_m > 0 && g.size_x >= 0 && g.size_y >= 0 &&
-         int64_t{g.size_x} * g.size_y <= TileAssembler::kMaxLayerCells;
+  return h.tile_size <= TileAssembler::kMaxTileSize && UsableGrid(h.geometry);
 }
 
 // A tile whose header and cells agree, in a usable grid.
@@ -23,6 +30,25 @@ bool Admissible(const CheckedTile& tile) {
   return Admissible(h) &&
          tile.num_cells == static_cast<size_t>(h.cells_x) * static_cast<size_t>(h.cells_y) &&
          (tile.num_cells == 0 || tile.cells != nullptr);
+}
+
+// A manifest a sender could have made: a usable grid, each tile in it and listed once.
+bool Admissible(const TileManifest& m) {
+  if (!UsableGrid(m.geometry) || m.tile_size <= 0 || m.tile_size > TileAssembler::kMaxTileSize ||
+      m.layer_version < 0) {
+    return false;
+  }
+  const int64_t nx = (int64_t{m.geometry.size_x} + m.tile_size - 1) / m.tile_size;
+  const int64_t ny = (int64_t{m.geometry.size_y} + m.tile_size - 1) / m.tile_size;
+  if (static_cast<int64_t>(m.tiles.size()) > nx * ny) return false;
+  std::set<std::pair<int, int>> seen;
+  for (const TileManifest::Entry& e : m.tiles) {
+    if (e.tile_ix < 0 || e.tile_iy < 0 || e.tile_ix >= nx || e.tile_iy >= ny ||
+        e.tile_version < 0 || !seen.insert({e.tile_ix, e.tile_iy}).second) {
+      return false;
+    }
+  }
+  return true;
 }
 
 }  // namespace
@@ -121,9 +147,13 @@ void TileAssembler::EndTile(const TileHeader& h, bool decoded) {
   Hold(&it->second, h);
 }
 
-void TileAssembler::OnManifest(const TileManifest& m) {
+bool TileAssembler::OnManifest(const TileManifest& m) {
+  if (!Admissible(m)) {
+    ++refused_manifests_;
+    return false;
+  }
   LayerState& state = StateFor(m.layer, m.geometry, m.tile_size);
-  if (state.has_manifest && m.layer_version < state.manifest_version) return;
+  if (state.has_manifest && m.layer_version < state.manifest_version) return true;
   state.has_manifest = true;
   state.manifest_version = m.layer_version;
   state.robot = m.robot;
@@ -138,6 +168,7 @@ void TileAssembler::OnManifest(const TileManifest& m) {
       ++it;
     }
   }
+  return true;
 }
 
 std::vector<std::string> TileAssembler::layers() const {

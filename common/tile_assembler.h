@@ -111,8 +111,11 @@ class TileAssembler {
   /// and no tile is held there.
   void EndTile(const TileHeader& header, bool decoded);
   /// Takes a manifest unless an older one than the layer's newest; tiles it no longer lists
-  /// become unknown.
-  void OnManifest(const TileManifest& manifest);
+  /// become unknown. False (counted, and nothing held changes) for a manifest that cannot be a
+  /// sender's: a grid that is not usable or holds more than kMaxLayerCells, a tile size not in
+  /// [1, kMaxTileSize], a negative version, or a tile listed twice or outside the grid.
+  bool OnManifest(const TileManifest& manifest);
+  static constexpr int kMaxTileSize = 4096;
 
   /// Layers seen so far (from tiles or manifests), sorted.
   std::vector<std::string> layers() const;
@@ -137,6 +140,8 @@ class TileAssembler {
 
   /// Tiles refused so far.
   int64_t refused_tiles() const { return refused_tiles_; }
+  /// Manifests refused so far.
+  int64_t refused_manifests() const { return refused_manifests_; }
 
  private:
   struct Held {
@@ -175,6 +180,7 @@ class TileAssembler {
 
   std::map<std::string, LayerState> layers_;
   int64_t refused_tiles_{0};
+  int64_t refused_manifests_{0};
 };
 
 }  // namespace cairn::common

@@ -75,7 +75,13 @@ void LcmMapClient::OnManifest(const cairn::lcmt_grid_manifest& manifest) {
     node_.Warn("map_manifest", "malformed manifest for " + manifest.layer + " refused");
     return;
   }
-  assembler_.OnManifest(manifest);
+  // A refused manifest (a grid over the cell cap, tiles outside it) changes nothing, not even
+  // when the layer was last heard of.
+  if (!assembler_.OnManifest(manifest)) {
+    node_.CountDropped("bad_map_manifests");
+    node_.Warn("map_manifest", "manifest for " + manifest.layer + " refused: not a usable grid");
+    return;
+  }
   if (manifest.layer == params_.layer) tile_size_ = manifest.tile_size;
   Heard();
 }

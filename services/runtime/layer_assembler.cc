@@ -38,9 +38,9 @@ void LayerAssembler::EndTile(const cairn::lcmt_grid_tile& tile, bool decoded) {
   core_.EndTile(HeaderOf(tile), decoded);
 }
 
-void LayerAssembler::OnManifest(const cairn::lcmt_grid_manifest& manifest) {
+bool LayerAssembler::OnManifest(const cairn::lcmt_grid_manifest& manifest) {
   auto core = FromLcm(manifest);
-  if (core.ok()) core_.OnManifest(*core);  // arrays that disagree with num_tiles: dropped
+  return core.ok() && core_.OnManifest(*core);
 }
 
 std::vector<std::string> LayerAssembler::layers() const { return core_.layers(); }

@@ -50,7 +50,9 @@ class LayerAssembler {
   /// verified them against the sender's checksum (as for OnDecodedTile), and the tile is held.
   /// Otherwise its place becomes unknown and no tile is held there.
   void EndTile(const cairn::lcmt_grid_tile& tile, bool decoded);
-  void OnManifest(const cairn::lcmt_grid_manifest& manifest);
+  /// False when refused: arrays that disagree with num_tiles, or a manifest the core refuses
+  /// (TileAssembler::OnManifest). A refused manifest changes nothing.
+  bool OnManifest(const cairn::lcmt_grid_manifest& manifest);
 
   /// Layers seen so far (from tiles or manifests).
   std::vector<std::string> layers() const;

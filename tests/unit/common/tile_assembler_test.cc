@@ -1,5 +1,8 @@
 #include "common/tile_assembler.h"
 
+#include <cmath>
+#include <vector>
+
 #include <gtest/gtest.h>
 
 #include "tests/unit/mapstore/core_tiles.h"
@@ -90,6 +93,51 @@ TEST_F(TileAssemblerTest, ANewerManifestDropsTilesItNoLongerListsAndAnOlderOneIs
   dut_.OnManifest(cut_.manifest);  // version 1 < 2: ignored
   EXPECT_EQ(dut_.version(layers::kElevation), 2);
   EXPECT_TRUE(dut_.Complete(layers::kElevation));
+}
+
+// Issue 20: a manifest's grid was never capped (the cell cap applied to tiles only), and any
+// manifest of another grid restarted its layer, erasing what was held. A manifest no sender
+// could have made is refused, counted, and changes nothing.
+TEST_F(TileAssemblerTest, AManifestNoSenderCouldHaveMadeIsRefusedAndChangesNothing) {
+  ASSERT_TRUE(dut_.OnManifest(cut_.manifest));
+  for (const auto& t : cut_.tiles) ASSERT_TRUE(dut_.OnTile(t.As()));
+  ASSERT_TRUE(dut_.Complete(layers::kElevation));
+  std::vector<TileManifest> bad;
+  TileManifest m = cut_.manifest;
+  m.layer_version = 5;
+  m.geometry.size_x = 100000;  // 10^10 cells
+  m.geometry.size_y = 100000;
+  bad.push_back(m);
+  m = cut_.manifest;
+  m.layer_version = 5;
+  m.geometry.resolution_m = std::nan("");
+  bad.push_back(m);
+  m = cut_.manifest;
+  m.layer_version = 5;
+  m.tile_size = 0;
+  bad.push_back(m);
+  m = cut_.manifest;
+  m.layer_version = 5;
+  m.tile_size = 100000;
+  bad.push_back(m);
+  m = cut_.manifest;
+  m.layer_version = -1;
+  bad.push_back(m);
+  m = cut_.manifest;
+  m.layer_version = 5;
+  m.tiles.push_back(m.tiles.front());  // listed twice
+  bad.push_back(m);
+  m = cut_.manifest;
+  m.layer_version = 5;
+  m.tiles.back().tile_ix = 4;  // 37 cells in tiles of 10: ix 0..3
+  bad.push_back(m);
+  for (const TileManifest& b : bad) EXPECT_FALSE(dut_.OnManifest(b));
+  EXPECT_EQ(dut_.refused_manifests(), static_cast<int64_t>(bad.size()));
+  EXPECT_EQ(dut_.version(layers::kElevation), 1);
+  EXPECT_TRUE(dut_.Complete(layers::kElevation));
+  auto copy = dut_.Layer(layers::kElevation);
+  ASSERT_TRUE(copy.has_value());
+  EXPECT_TRUE(SameLayer(copy->at(layers::kElevation), map_.at(layers::kElevation)));
 }
 
 TEST_F(TileAssemblerTest, ATileOfAnotherGridRestartsItsLayer) {
