@@ -62,19 +62,33 @@ const launch::ProcessRow* Row(const launch::GraphStatus& s, const std::string& n
   return launch::FindProcess(s, name);
 }
 
+// The pair graph under `cairn-launch up` on the test's bus, and its status once ready.
+struct PairGraph {
+  ChildProcess* launcher{nullptr};
+  std::string run_dir;
+  std::optional<launch::GraphStatus> status;
+};
+
+// Starts the pair graph and waits (30 s at most) until both processes are ready.
+bool StartPairGraph(ProcessSet& procs, PairGraph* g) {
+  const std::string graph = WriteGraph(procs.dir(), procs.url());
+  g->run_dir = procs.dir() + "/run";
+  g->launcher = &procs.StartRaw("cairn-launch",
+                                {BinPath("cairn-launch"), "up", graph, "--run-dir", g->run_dir});
+  return WaitFor([&] {
+    g->status = ReadStatus(g->run_dir);
+    return g->status && g->status->state == "ready";
+  }, 30.0);
+}
+
 TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
   ProcessSet procs(PrivateLcmUrl());
-  const std::string graph = WriteGraph(procs.dir(), procs.url());
-  const std::string run_dir = procs.dir() + "/run";
-  ChildProcess& launcher =
-      procs.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir});
-
   // Ready means both processes sent READY heartbeats.
-  std::optional<launch::GraphStatus> status;
-  ASSERT_TRUE(WaitFor([&] {
-    status = ReadStatus(run_dir);
-    return status && status->state == "ready";
-  }, 30.0)) << "graph never became ready";
+  PairGraph g;
+  ASSERT_TRUE(StartPairGraph(procs, &g)) << "graph never became ready";
+  ChildProcess& launcher = *g.launcher;
+  const std::string& run_dir = g.run_dir;
+  std::optional<launch::GraphStatus> status = g.status;
   const launch::ProcessRow* follower = Row(*status, "follower");
   ASSERT_NE(follower, nullptr);
   const int old_pid = follower->pid;
@@ -130,17 +144,11 @@ TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
 // children with it; they outlived it before.
 TEST(LaunchIntegrationTest, AKilledLauncherTakesItsChildrenWithIt) {
   ProcessSet procs(PrivateLcmUrl());
-  const std::string graph = WriteGraph(procs.dir(), procs.url());
-  const std::string run_dir = procs.dir() + "/run";
-  ChildProcess& launcher =
-      procs.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir});
-  std::optional<launch::GraphStatus> status;
-  ASSERT_TRUE(WaitFor([&] {
-    status = ReadStatus(run_dir);
-    return status && status->state == "ready";
-  }, 30.0)) << "graph never became ready";
+  PairGraph g;
+  ASSERT_TRUE(StartPairGraph(procs, &g)) << "graph never became ready";
+  ChildProcess& launcher = *g.launcher;
   std::vector<int> pids;
-  for (const auto& p : status->processes) {
+  for (const auto& p : g.status->processes) {
     ASSERT_GT(p.pid, 0) << p.name;
     pids.push_back(p.pid);
   }
@@ -168,15 +176,11 @@ double RssMb(int pid) {
 // held, the launcher keeps writing its status, and `status` answers within 1 s.
 TEST(LaunchIntegrationTest, AHeartbeatBombChangesNothing) {
   ProcessSet procs(PrivateLcmUrl());
-  const std::string graph = WriteGraph(procs.dir(), procs.url());
-  const std::string run_dir = procs.dir() + "/run";
-  ChildProcess& launcher =
-      procs.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir});
-  std::optional<launch::GraphStatus> status;
-  ASSERT_TRUE(WaitFor([&] {
-    status = ReadStatus(run_dir);
-    return status && status->state == "ready";
-  }, 30.0)) << "graph never became ready";
+  PairGraph g;
+  ASSERT_TRUE(StartPairGraph(procs, &g)) << "graph never became ready";
+  ChildProcess& launcher = *g.launcher;
+  const std::string& run_dir = g.run_dir;
+  std::optional<launch::GraphStatus> status = g.status;
   std::vector<int> pids = {launcher.pid()};
   for (const auto& p : status->processes) pids.push_back(p.pid);
   std::vector<double> rss_before;
