@@ -363,4 +363,15 @@ void MeasureShape(const GridMap& map, const std::vector<int64_t>& cells, const O
   }
 }
 
+void NumberByCentroid(common::ObstacleRegistry* registry) {
+  std::stable_sort(registry->obstacles.begin(), registry->obstacles.end(),
+                   [](const common::Obstacle& a, const common::Obstacle& b) {
+                     if (a.centroid_m.y() != b.centroid_m.y())
+                       return a.centroid_m.y() < b.centroid_m.y();
+                     return a.centroid_m.x() < b.centroid_m.x();
+                   });
+  int32_t id = 1;
+  for (auto& o : registry->obstacles) o.id = id++;
+}
+
 }  // namespace cairn::mapping::internal

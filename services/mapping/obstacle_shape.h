@@ -41,6 +41,9 @@ double DownhillHeading(const common::GridMap& map, const std::vector<int64_t>& c
 /// whose faces were seen apart): the convex hull around all of them.
 std::vector<common::Vector2> TraceOutline(const std::vector<int64_t>& cells, int sx, double tol);
 
+/// Sorts the obstacles by centroid (y, then x) and numbers them from 1.
+void NumberByCentroid(common::ObstacleRegistry* registry);
+
 /// Measurements shared by every kind: centroid, outline, extents along the principal axes
 /// (length, width), area and cell count.
 void MeasureShape(const common::GridMap& map, const std::vector<int64_t>& cells,

@@ -660,16 +660,6 @@ void AddSeenDitches(const GridMap& map, const ObstacleParams& params, std::vecto
 }
 
 // Numbered by centroid (y, then x): the same map always gives the same ids.
-void NumberByCentroid(common::ObstacleRegistry* registry) {
-  std::stable_sort(registry->obstacles.begin(), registry->obstacles.end(),
-                   [](const Obstacle& a, const Obstacle& b) {
-                     if (a.centroid_m.y() != b.centroid_m.y())
-                       return a.centroid_m.y() < b.centroid_m.y();
-                     return a.centroid_m.x() < b.centroid_m.x();
-                   });
-  int32_t id = 1;
-  for (auto& o : registry->obstacles) o.id = id++;
-}
 
 using internal::FormatNumbers;
 
@@ -770,7 +760,7 @@ common::ObstacleRegistry AssembleObstacles(const GridMap& map, const ObstaclePar
   internal::JoinTerraces(map, label, params, &measured);
   common::ObstacleRegistry registry;
   for (auto& m : measured) registry.obstacles.push_back(std::move(m.obstacle));
-  NumberByCentroid(&registry);
+  internal::NumberByCentroid(&registry);
   return registry;
 }
 

@@ -89,14 +89,7 @@ common::ObstacleRegistry ExtractSonarContacts(const common::GridMap& map, const 
       registry.obstacles.push_back(std::move(o));
     }
   }
-  std::stable_sort(registry.obstacles.begin(), registry.obstacles.end(),
-                   [](const common::Obstacle& a, const common::Obstacle& b) {
-                     if (a.centroid_m.y() != b.centroid_m.y())
-                       return a.centroid_m.y() < b.centroid_m.y();
-                     return a.centroid_m.x() < b.centroid_m.x();
-                   });
-  int32_t id = 1;
-  for (auto& o : registry.obstacles) o.id = id++;
+  internal::NumberByCentroid(&registry);
   return registry;
 }
 
