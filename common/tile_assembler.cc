@@ -1,6 +1,7 @@
 #include "common/tile_assembler.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <set>
 
@@ -53,6 +54,16 @@ bool Admissible(const TileManifest& m) {
 
 }  // namespace
 
+int64_t TileAssembler::WallClockMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+bool TileAssembler::FromTheFuture(int64_t version, int64_t now_ms) const {
+  return version > now_ms && version - now_ms > kVersionLeadMs;
+}
+
 TileAssembler::LayerState& TileAssembler::StateFor(const std::string& layer,
                                                    const GridGeometry& geometry, int tile_size) {
   LayerState& state = layers_[layer];
@@ -85,7 +96,9 @@ TileAssembler::LayerState* TileAssembler::Admit(const TileHeader& h, bool* older
   state.robot = h.robot;
   state.map_name = h.map_name;
   auto held = state.tiles.find({h.tile_ix, h.tile_iy});
-  *older = held != state.tiles.end() && h.tile_version < held->second.tile_version;
+  // A held version ahead of the clock outranks nothing (see Versions).
+  *older = held != state.tiles.end() && h.tile_version < held->second.tile_version &&
+           held->second.tile_version <= clock_();
   if (state.cells.size() == 0 && h.geometry.size_x > 0 && h.geometry.size_y > 0) {
     // Not filled: every cell is written by its tile, or made unknown by Layer / TakeLayer.
     state.cells.resize(h.geometry.size_x, h.geometry.size_y);
@@ -102,7 +115,8 @@ void TileAssembler::Hold(LayerState* state, const TileHeader& h) {
 }
 
 bool TileAssembler::OnTile(const CheckedTile& tile) {
-  if (!Admissible(tile)) {
+  if (!Admissible(tile) || tile.header.tile_version < 0 ||
+      FromTheFuture(tile.header.tile_version, clock_())) {
     ++refused_tiles_;
     return false;
   }
@@ -116,7 +130,7 @@ bool TileAssembler::OnTile(const CheckedTile& tile) {
 }
 
 std::optional<TileAssembler::TileSlot> TileAssembler::BeginTile(const TileHeader& h) {
-  if (!Admissible(h)) {
+  if (!Admissible(h) || h.tile_version < 0 || FromTheFuture(h.tile_version, clock_())) {
     ++refused_tiles_;
     return std::nullopt;
   }
@@ -148,12 +162,19 @@ void TileAssembler::EndTile(const TileHeader& h, bool decoded) {
 }
 
 bool TileAssembler::OnManifest(const TileManifest& m) {
-  if (!Admissible(m)) {
+  const int64_t now_ms = clock_();
+  bool future = FromTheFuture(m.layer_version, now_ms);
+  for (const TileManifest::Entry& e : m.tiles) future = future || FromTheFuture(e.tile_version, now_ms);
+  if (!Admissible(m) || future) {
     ++refused_manifests_;
     return false;
   }
   LayerState& state = StateFor(m.layer, m.geometry, m.tile_size);
-  if (state.has_manifest && m.layer_version < state.manifest_version) return true;
+  // Older than the newest is ignored, unless the newest is ahead of the clock (see Versions).
+  if (state.has_manifest && m.layer_version < state.manifest_version &&
+      state.manifest_version <= now_ms) {
+    return true;
+  }
   state.has_manifest = true;
   state.manifest_version = m.layer_version;
   state.robot = m.robot;
@@ -162,7 +183,8 @@ bool TileAssembler::OnManifest(const TileManifest& m) {
   for (const TileManifest::Entry& e : m.tiles) state.expected[{e.tile_ix, e.tile_iy}] = e.checksum;
   // Tiles no longer in the manifest became all unknown.
   for (auto it = state.tiles.begin(); it != state.tiles.end();) {
-    if (state.expected.count(it->first) == 0 && it->second.tile_version <= m.layer_version) {
+    if (state.expected.count(it->first) == 0 &&
+        (it->second.tile_version <= m.layer_version || it->second.tile_version > now_ms)) {
       it = state.tiles.erase(it);
     } else {
       ++it;

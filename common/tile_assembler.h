@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -76,9 +77,27 @@ struct TileRequest {
 };
 
 /// Rebuilds layers from checked tiles and manifests. Not thread-safe.
+///
+/// Versions. A sender numbers a layer's versions from its wall clock at start, in milliseconds
+/// since the epoch, plus one per update (runtime::LayerTiler::StartVersionBase), so an honest
+/// version never runs ahead of the sender's clock, and a restarted sender outranks its
+/// predecessor. A tile or manifest numbered more than kVersionLeadMs ahead of this receiver's
+/// clock is refused: numbered INT64_MAX, it would outrank everything its sender sends later and
+/// freeze its layer. A held version ahead of the clock (one let in within the lead) outranks
+/// nothing: the next tile at its place, or the next manifest, replaces it whatever its version.
 class TileAssembler {
  public:
+  /// Milliseconds since the epoch, as senders number versions.
+  using VersionClock = std::function<int64_t()>;
+  /// The wall clock.
+  static int64_t WallClockMs();
+  /// How far ahead of the receiver's clock a version may be: the clock skew between hosts that
+  /// share a bus.
+  static constexpr int64_t kVersionLeadMs = 60'000;
+
   TileAssembler() = default;
+  /// An assembler that reads `clock` for the version bound (tests; the default is WallClockMs).
+  explicit TileAssembler(VersionClock clock) : clock_(std::move(clock)) {}
   TileAssembler(const TileAssembler&) = default;
   TileAssembler& operator=(const TileAssembler&) = default;
   TileAssembler(TileAssembler&&) = default;
@@ -88,7 +107,7 @@ class TileAssembler {
   static constexpr int64_t kMaxLayerCells = 64'000'000;
 
   /// Pastes a tile into its layer. False (and counted as refused) when its size disagrees with
-  /// its header or its grid is unusable. A tile older than the one held at its place is ignored
+  /// its header, its grid is unusable, or its version is negative or from the future. A tile older than the one held at its place is ignored
   /// (true); a tile of another grid than its layer's restarts the layer.
   bool OnTile(const CheckedTile& tile);
   /// Where a tile's cells go in its layer, for a receiver that decodes a compressed tile
@@ -113,7 +132,8 @@ class TileAssembler {
   /// Takes a manifest unless an older one than the layer's newest; tiles it no longer lists
   /// become unknown. False (counted, and nothing held changes) for a manifest that cannot be a
   /// sender's: a grid that is not usable or holds more than kMaxLayerCells, a tile size not in
-  /// [1, kMaxTileSize], a negative version, or a tile listed twice or outside the grid.
+  /// [1, kMaxTileSize], a negative version or one from the future (see Versions above), or a
+  /// tile listed twice or outside the grid.
   bool OnManifest(const TileManifest& manifest);
   static constexpr int kMaxTileSize = 4096;
 
@@ -178,6 +198,10 @@ class TileAssembler {
   static common::GridMap AsMap(const std::string& layer, const LayerState& state,
                                common::Layer cells);
 
+  /// Whether a version read from the bus is beyond any honest sender's (see Versions).
+  bool FromTheFuture(int64_t version, int64_t now_ms) const;
+
+  VersionClock clock_{&TileAssembler::WallClockMs};
   std::map<std::string, LayerState> layers_;
   int64_t refused_tiles_{0};
   int64_t refused_manifests_{0};

@@ -79,7 +79,8 @@ void LcmMapClient::OnManifest(const cairn::lcmt_grid_manifest& manifest) {
   // when the layer was last heard of.
   if (!assembler_.OnManifest(manifest)) {
     node_.CountDropped("bad_map_manifests");
-    node_.Warn("map_manifest", "manifest for " + manifest.layer + " refused: not a usable grid");
+    node_.Warn("map_manifest", "manifest for " + manifest.layer +
+                                   " refused: a grid or version no sender could have");
     return;
   }
   if (manifest.layer == params_.layer) tile_size_ = manifest.tile_size;

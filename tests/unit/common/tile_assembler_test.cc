@@ -1,6 +1,8 @@
 #include "common/tile_assembler.h"
 
 #include <cmath>
+#include <cstdint>
+#include <limits>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -181,6 +183,72 @@ TEST_F(TileAssemblerTest, TilesWrittenInPlaceAreHeldAndFailedOnesStayUnknown) {
   bad.cells_x = bad.tile_size + 1;
   EXPECT_FALSE(dut_.BeginTile(bad).has_value());
   EXPECT_EQ(dut_.refused_tiles(), 1);
+}
+
+// Issue 20: a manifest with no tiles numbered INT64_MAX erased the layer and froze it at all
+// unknown (every later manifest was "older"); a tile numbered so stuck at its place. Versions
+// beyond the receiver's clock plus the lead are refused, and change nothing.
+TEST_F(TileAssemblerTest, AVersionBeyondTheClockIsRefusedAndChangesNothing) {
+  const int64_t now_ms = 1'800'000'000'000;
+  TileAssembler dut([&] { return now_ms; });
+  ASSERT_TRUE(dut.OnManifest(cut_.manifest));
+  for (const auto& t : cut_.tiles) ASSERT_TRUE(dut.OnTile(t.As()));
+  ASSERT_TRUE(dut.Complete(layers::kElevation));
+
+  for (int64_t version : {std::numeric_limits<int64_t>::max(),
+                          now_ms + TileAssembler::kVersionLeadMs + 1}) {
+    TileManifest erase = cut_.manifest;
+    erase.layer_version = version;
+    erase.tiles.clear();
+    EXPECT_FALSE(dut.OnManifest(erase)) << version;
+    TileManifest sticky = cut_.manifest;
+    sticky.layer_version = 2;
+    sticky.tiles.front().tile_version = version;
+    EXPECT_FALSE(dut.OnManifest(sticky)) << version;
+    testing::OwnedTile tile = cut_.tiles.front();
+    tile.header.tile_version = version;
+    for (float& c : tile.cells) c = 9.f;
+    EXPECT_FALSE(dut.OnTile(tile.As())) << version;
+    EXPECT_FALSE(dut.BeginTile(tile.header).has_value()) << version;
+  }
+  EXPECT_EQ(dut.refused_manifests(), 4);
+  EXPECT_EQ(dut.refused_tiles(), 4);
+  EXPECT_EQ(dut.version(layers::kElevation), 1);
+  EXPECT_TRUE(dut.Complete(layers::kElevation));
+  EXPECT_TRUE(SameLayer(dut.Layer(layers::kElevation)->at(layers::kElevation),
+                        map_.at(layers::kElevation)));
+}
+
+// A version within the lead (a host whose clock runs ahead, or a forgery) is taken, but outranks
+// nothing: the sender's next manifest and tiles, however numbered, replace it.
+TEST_F(TileAssemblerTest, AVersionAheadOfTheClockOutranksNothing) {
+  int64_t now_ms = 1'800'000'000'000;
+  TileAssembler dut([&] { return now_ms; });
+  ASSERT_TRUE(dut.OnManifest(cut_.manifest));
+  for (const auto& t : cut_.tiles) ASSERT_TRUE(dut.OnTile(t.As()));
+
+  TileManifest erase = cut_.manifest;
+  erase.layer_version = now_ms + TileAssembler::kVersionLeadMs;
+  erase.tiles.clear();
+  ASSERT_TRUE(dut.OnManifest(erase));
+  EXPECT_TRUE(std::isnan(dut.Layer(layers::kElevation)->at(layers::kElevation)(0, 0)));
+  testing::OwnedTile ahead = cut_.tiles.front();
+  ahead.header.tile_version = now_ms + 1000;
+  for (float& c : ahead.cells) c = 9.f;
+  ASSERT_TRUE(dut.OnTile(ahead.As()));
+
+  now_ms += 10;  // the honest sender's next manifest, numbered far below
+  TileManifest next = cut_.manifest;
+  next.layer_version = 2;
+  ASSERT_TRUE(dut.OnManifest(next));
+  EXPECT_EQ(dut.version(layers::kElevation), 2);
+  for (const auto& t : cut_.tiles) ASSERT_TRUE(dut.OnTile(t.As()));
+  EXPECT_TRUE(dut.Complete(layers::kElevation));
+  EXPECT_TRUE(SameLayer(dut.Layer(layers::kElevation)->at(layers::kElevation),
+                        map_.at(layers::kElevation)));
+  // Once the layer's newest is behind the clock, an older manifest is ignored again.
+  EXPECT_TRUE(dut.OnManifest(cut_.manifest));
+  EXPECT_EQ(dut.version(layers::kElevation), 2);
 }
 
 }  // namespace
