@@ -97,7 +97,7 @@ int RunReceiver(const std::string& url, const std::string& out_path) {
     const int64_t converted = WallUtime();
     log += "M " + std::to_string(m.revolution) + " " + std::to_string(m.slice_index) + " " +
            std::to_string(converted - m.utime) + "\n";
-    for (const auto& rev : assembler.OnSlice(std::move(*slice))) {
+    for (const auto& rev : assembler.OnSlice(std::move(*slice), converted)) {
       const int64_t now = WallUtime();
       int64_t newest = 0;
       for (const auto& s : rev.slices) newest = std::max(newest, s.utime);

@@ -273,6 +273,12 @@ int64_t Node::WallUtime() {
   return static_cast<int64_t>(tv.tv_sec) * 1000000 + tv.tv_usec;
 }
 
+int64_t Node::SteadyUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
 int64_t Node::NowUtime() const {
   const int64_t sim = sim_utime_;
   return sim > 0 ? sim : WallUtime();

@@ -131,6 +131,8 @@ class Node {
   /// Sim time when a simulator runs, else wall time, microseconds.
   int64_t NowUtime() const;
   static int64_t WallUtime();
+  /// Microseconds of a monotonic clock (for timeouts that must not follow a clock on the bus).
+  static int64_t SteadyUtime();
   double uptime_s() const;
 
   /// Builds (and publishes, from the heartbeat timer) the health message.

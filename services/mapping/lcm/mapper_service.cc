@@ -247,9 +247,19 @@ void MapperService::OnSlice(const cairn::lcmt_point_cloud_slice& msg) {
     node_.Warn("foreign_slice", "dropped a lidar slice of robot '" + slice->robot + "'");
     return;
   }
-  for (auto& revolution : assembler_.OnSlice(std::move(slice.value()))) {
-    OnRevolution(std::move(revolution));
+  const int64_t refused = assembler_.refused_slices();
+  const int64_t expired = assembler_.expired_revolutions();
+  auto revolutions = assembler_.OnSlice(std::move(slice.value()), runtime::Node::SteadyUtime());
+  if (assembler_.refused_slices() > refused) {
+    node_.CountDropped("refused_slices");
+    node_.Warn("refused_slice",
+               "refused a lidar slice: a count beyond the assembler's limits, or one that "
+               "disagrees with its revolution's other slices");
   }
+  if (assembler_.expired_revolutions() > expired) {
+    node_.Count("expired_revolutions", assembler_.expired_revolutions() - expired);
+  }
+  for (auto& revolution : revolutions) OnRevolution(std::move(revolution));
 }
 
 void MapperService::OnRevolution(common::LidarRevolution revolution) {

@@ -94,7 +94,8 @@ class OutdoorTerrainTest : public ::testing::Test {
           inputs.AddGroundTruth(pose.utime, pose.pose);
         }
         for (auto& slice : out.Mutable<common::LidarSlice>(sim::LidarSensor::kName)) {
-          for (auto& revolution : assembler.OnSlice(std::move(slice))) {
+          const int64_t arrival_us = slice.utime;  // sim time: the test's only clock
+          for (auto& revolution : assembler.OnSlice(std::move(slice), arrival_us)) {
             mapping::RevolutionDrops drops;
             auto prepared = inputs.PrepareRevolution(std::move(revolution), &drops);
             if (!prepared) continue;
