@@ -24,7 +24,8 @@ SaveAssemblerParams MapstoreServiceParams::save() const {
   p.resend_interval_s = resend_interval_s;
   p.staging_timeout_s = staging_timeout_s;
   p.pull_settle_s = pull_settle_s;
-  p.max_staged_cells = max_staged_cells;
+  p.max_staged_bytes = max_staged_bytes;
+  p.max_pushes = max_pushes;
   return p;
 }
 
@@ -44,7 +45,8 @@ void LoadService(YamlMap s, MapstoreServiceParams* p) {
   s.Get("pull_settle_s", &p->pull_settle_s);
   s.Get("reply_cache_size", &p->reply_cache_size);
   s.Get("max_kept_reply_cells", &p->max_kept_reply_cells);
-  s.Get("max_staged_cells", &p->max_staged_cells);
+  s.Get("max_staged_bytes", &p->max_staged_bytes);
+  s.Get("max_pushes", &p->max_pushes);
   s.Get("reply_tile_size", &p->reply_tile_size);
   s.Get("max_reply_obstacles", &p->max_reply_obstacles);
   s.Get("tiles_per_burst", &p->tiles_per_burst);

@@ -23,7 +23,8 @@ struct MapstoreServiceParams {
   double pull_settle_s{0.5};       ///< a pull without named layers waits this long for more
   int reply_cache_size{512};       ///< replies kept for replays
   int64_t max_kept_reply_cells{64'000'000};  ///< reply tiles kept for resends (cells)
-  int64_t max_staged_cells{128'000'000};     ///< pushed tiles held at once (cells)
+  int64_t max_staged_bytes{512LL << 20};     ///< pushed data held at once (SaveAssemblerParams)
+  int max_pushes{64};                        ///< push names staged at once
   int reply_tile_size{100};                  ///< cells per side of reply tiles
   int max_reply_obstacles{1500};             ///< obstacles carried in one reply (bus size limit)
   /// Compressed reply tiles go out several to a message (MAPSTORE.TILE_BATCHES) of at most

@@ -32,12 +32,21 @@ std::vector<OctomapChunk> SplitOctomap(const OctomapData& octomap, size_t chunk_
 }
 
 bool OctomapAssembler::Add(const OctomapChunk& c) {
-  if (c.chunk_count <= 0 || c.chunk_index < 0 || c.chunk_index >= c.chunk_count ||
-      c.total_bytes < 0 || c.total_bytes > kMaxTotalBytes || (c.size > 0 && c.data == nullptr)) {
+  if (c.chunk_count <= 0 || c.chunk_count > kMaxChunks || c.chunk_index < 0 ||
+      c.chunk_index >= c.chunk_count || c.total_bytes < 0 || c.total_bytes > kMaxTotalBytes ||
+      static_cast<int64_t>(c.size) > c.total_bytes || (c.size > 0 && c.data == nullptr)) {
     return false;
   }
-  if (chunks_.empty() || c.version != version_ || c.chunk_count != chunk_count_) {
+  const bool same_tree = !chunks_.empty() && c.version == version_ && c.chunk_count == chunk_count_;
+  if (same_tree && (c.total_bytes != total_bytes_ || c.checksum != checksum_)) return false;
+  if (same_tree) {
+    auto held = chunks_.find(c.chunk_index);
+    const int64_t replaced = held == chunks_.end() ? 0 : static_cast<int64_t>(held->second.size());
+    if (held_bytes_ - replaced + static_cast<int64_t>(c.size) > total_bytes_) return false;
+    held_bytes_ -= replaced;
+  } else {
     chunks_.clear();
+    held_bytes_ = 0;
     version_ = c.version;
     chunk_count_ = c.chunk_count;
     total_bytes_ = c.total_bytes;
@@ -46,6 +55,7 @@ bool OctomapAssembler::Add(const OctomapChunk& c) {
     resolution_m_ = c.resolution_m;
   }
   chunks_[c.chunk_index].assign(c.data, c.size);
+  held_bytes_ += static_cast<int64_t>(c.size);
   complete_ = Assemble();
   return true;
 }

@@ -39,16 +39,27 @@ std::vector<OctomapChunk> SplitOctomap(const OctomapData& octomap,
                                        size_t chunk_bytes = kOctomapChunkBytes);
 
 /// Reassembles the chunks of one tree; a chunk of another version or count starts over.
+/// Chunks come from the bus: what they make it hold is bounded by the tree size they declare,
+/// itself at most kMaxTotalBytes.
 class OctomapAssembler {
  public:
-  /// Largest tree taken.
-  static constexpr int64_t kMaxTotalBytes = int64_t{1} << 31;
+  /// Largest tree taken (a site's binary tree at 5 cm is tens of MB).
+  static constexpr int64_t kMaxTotalBytes = int64_t{512} << 20;
+  /// Most chunks a tree may come in (a store's chunks are 192 KB: 2,731 for the largest tree).
+  static constexpr int32_t kMaxChunks = 65536;
 
-  /// Keeps a chunk (copying its bytes); false for an inconsistent one. The tree is put
+  /// Keeps a chunk (copying its bytes). False, and nothing held changes, for one that cannot be
+  /// a sender's: an index outside its count, a count or size beyond the limits, a size that
+  /// disagrees with the tree's (its bytes and those held would exceed the declared total), or a
+  /// total or checksum that disagrees with the other chunks of its version. The tree is put
   /// together (and checked) when its last chunk arrives.
   bool Add(const OctomapChunk& chunk);
   /// The whole tree once every chunk arrived and the checksum holds.
   const std::optional<OctomapData>& complete() const { return complete_; }
+  /// Bytes held: the chunks, and the whole tree once complete.
+  int64_t held_bytes() const {
+    return held_bytes_ + (complete_ ? static_cast<int64_t>(complete_->bytes.size()) : 0);
+  }
 
  private:
   /// The tree of the chunks held when they are all there and hold together.
@@ -61,6 +72,7 @@ class OctomapAssembler {
   bool binary_{true};
   double resolution_m_{0.0};
   std::map<int32_t, std::string> chunks_;
+  int64_t held_bytes_{0};  // of chunks_
   std::optional<OctomapData> complete_;
 };
 

@@ -106,7 +106,8 @@ void SaveAssemblerParams::Validate() const {
   CAIRN_THROW_UNLESS(resend_interval_s > 0, "resend_interval_s must be positive");
   CAIRN_THROW_UNLESS(staging_timeout_s > 0, "staging_timeout_s must be positive");
   CAIRN_THROW_UNLESS(pull_settle_s >= 0, "pull_settle_s must not be negative");
-  CAIRN_THROW_UNLESS(max_staged_cells > 0, "max_staged_cells must be positive");
+  CAIRN_THROW_UNLESS(max_staged_bytes > 0, "max_staged_bytes must be positive");
+  CAIRN_THROW_UNLESS(max_pushes > 0, "max_pushes must be positive");
 }
 
 std::string SaveKey(const SaveRequest& request) {
@@ -133,8 +134,42 @@ struct SaveAssembler::Staging {
   OctomapAssembler octomap;
   std::string robot;
   Clock::time_point last;
-  int64_t cells{0};
+  int64_t encoded_bytes{0};   // of `encoded`
+  int64_t manifest_bytes{0};  // of the manifests staged (the newest of each layer)
+  int64_t obstacle_bytes{0};
+
+  // What the staging holds, as max_staged_bytes counts it.
+  int64_t Bytes() const {
+    constexpr int64_t kOverhead = 1024;
+    int64_t canvas = 0;
+    for (const std::string& layer : assembler.layers()) {
+      if (auto g = assembler.Geometry(layer)) canvas += g->num_cells() * int64_t{sizeof(float)};
+    }
+    return kOverhead + canvas + encoded_bytes + manifest_bytes + obstacle_bytes +
+           octomap.held_bytes();
+  }
 };
+
+namespace {
+
+// Roughly what a registry takes in memory.
+int64_t ApproxBytes(const common::ObstacleRegistry& registry) {
+  int64_t bytes = 0;
+  for (const common::Obstacle& o : registry.obstacles) {
+    bytes += int64_t{sizeof(common::Obstacle)} +
+             static_cast<int64_t>(o.outline_m.size() * sizeof(common::Vector2)) +
+             static_cast<int64_t>(o.verdicts.size() * (sizeof(common::ObstacleVerdict) + 64)) +
+             static_cast<int64_t>(o.parts.size() * sizeof(common::ObstaclePart));
+  }
+  return bytes;
+}
+
+// Bytes a staged manifest takes.
+int64_t ManifestBytes(const TileManifest& manifest) {
+  return 256 + static_cast<int64_t>(manifest.tiles.size() * sizeof(TileManifest::Entry));
+}
+
+}  // namespace
 
 struct SaveAssembler::PendingSave {
   SaveRequest request;  // site filled in
@@ -182,20 +217,26 @@ bool SaveAssembler::IsPending(const std::string& key) const { return pending_.co
 
 int64_t SaveAssembler::pending_saves() const { return static_cast<int64_t>(pending_.size()); }
 
-int64_t SaveAssembler::staged_cells() const {
+int64_t SaveAssembler::staged_bytes() const {
   int64_t total = 0;
-  for (const auto& [name, staging] : staging_) total += staging->cells;
+  for (const auto& [name, staging] : staging_) total += staging->Bytes();
   return total;
+}
+
+bool SaveAssembler::Fits(int64_t more) const {
+  return staged_bytes() + more <= params_.max_staged_bytes;
 }
 
 SaveAssembler::Staging* SaveAssembler::StagingFor(const std::string& map_name,
                                                   Clock::time_point now) {
-  std::unique_ptr<Staging>& staging = staging_[map_name];
-  if (!staging) {
-    staging = std::make_unique<Staging>();
-    staging->last = now;
-  }
-  return staging.get();
+  auto it = staging_.find(map_name);
+  if (it != staging_.end()) return it->second.get();
+  if (static_cast<int>(staging_.size()) >= params_.max_pushes) return nullptr;
+  auto staging = std::make_unique<Staging>();
+  staging->last = now;
+  Staging* made = staging.get();
+  staging_[map_name] = std::move(staging);
+  return made;
 }
 
 SaveAssembler::LiveMirror* SaveAssembler::MirrorOf(const std::string& robot) {
@@ -207,33 +248,46 @@ SaveAssembler::Intake SaveAssembler::StageTile(const CheckedTile& tile, std::opt
                                                std::string bytes, Clock::time_point now) {
   const TileHeader& h = tile.header;
   if (!IsPushName(h.map_name)) return Intake::kRefused;
-  const int64_t cells = static_cast<int64_t>(tile.num_cells);
-  if (staged_cells() + cells > params_.max_staged_cells) return Intake::kStagingFull;
-  Staging& staging = *StagingFor(h.map_name, now);
-  if (!staging.assembler.OnTile(tile)) return Intake::kRefused;
-  Staging::EncodedLayer& encoded = staging.encoded[h.layer];
+  // A tile's first in its layer (or grid) allocates the whole layer's canvas.
+  auto it = staging_.find(h.map_name);
+  int64_t more = static_cast<int64_t>(bytes.size());
+  if (it == staging_.end() || it->second->assembler.Geometry(h.layer) != h.geometry) {
+    more += h.geometry.num_cells() * int64_t{sizeof(float)};
+  }
+  if (!Fits(more)) return Intake::kStagingFull;
+  Staging* staging = StagingFor(h.map_name, now);
+  if (staging == nullptr) return Intake::kStagingFull;
+  if (!staging->assembler.OnTile(tile)) return Intake::kRefused;
+  Staging::EncodedLayer& encoded = staging->encoded[h.layer];
   const std::pair<int, int> key{h.tile_ix, h.tile_iy};
+  auto old = encoded.tiles.find(key);
+  if (old != encoded.tiles.end()) {
+    staging->encoded_bytes -= static_cast<int64_t>(old->second.data.size());
+    encoded.tiles.erase(old);
+  }
   if (codec && (encoded.tiles.empty() || encoded.tile_size == h.tile_size)) {
     encoded.tile_size = h.tile_size;
+    staging->encoded_bytes += static_cast<int64_t>(bytes.size());
     encoded.tiles[key] =
         StoredTile{h.tile_ix, h.tile_iy,  h.cells_x,        h.cells_y,
                    *codec,    h.checksum, std::move(bytes), /*stored_crc32=*/std::nullopt};
-  } else {
-    encoded.tiles.erase(key);  // a newer copy came as floats: it is compressed when stored
-  }
-  staging.robot = h.robot;
-  staging.cells += cells;
-  staging.last = now;
+  }  // else a newer copy came as floats: it is compressed when stored
+  staging->robot = h.robot;
+  staging->last = now;
   return Intake::kHeld;
 }
 
 SaveAssembler::Intake SaveAssembler::StageManifest(const TileManifest& manifest,
                                                    Clock::time_point now) {
   if (!IsPushName(manifest.map_name)) return Intake::kRefused;
-  Staging& staging = *StagingFor(manifest.map_name, now);
-  staging.assembler.OnManifest(manifest);
-  staging.manifests.insert(manifest.layer);
-  staging.last = now;
+  if (!Fits(ManifestBytes(manifest))) return Intake::kStagingFull;
+  Staging* staging = StagingFor(manifest.map_name, now);
+  if (staging == nullptr) return Intake::kStagingFull;
+  if (!staging->assembler.OnManifest(manifest)) return Intake::kRefused;
+  if (staging->manifests.insert(manifest.layer).second) {
+    staging->manifest_bytes += ManifestBytes(manifest);
+  }
+  staging->last = now;
   return Intake::kHeld;
 }
 
@@ -241,13 +295,17 @@ SaveAssembler::Intake SaveAssembler::StageObstacles(
     const std::string& map_name, common::Result<common::ObstacleRegistry> registry,
     Clock::time_point now) {
   if (!IsPushName(map_name)) return Intake::kRefused;
-  Staging& staging = *StagingFor(map_name, now);
+  Staging* staging = StagingFor(map_name, now);
+  if (staging == nullptr) return Intake::kStagingFull;
   if (!registry.ok()) {
-    staging.invalid = "pushed obstacles: " + registry.status().message();
+    staging->invalid = "pushed obstacles: " + registry.status().message();
     return Intake::kRefused;
   }
-  staging.obstacles = std::move(registry).value();
-  staging.last = now;
+  const int64_t bytes = ApproxBytes(*registry);
+  if (!Fits(bytes - staging->obstacle_bytes)) return Intake::kStagingFull;
+  staging->obstacles = std::move(registry).value();
+  staging->obstacle_bytes = bytes;
+  staging->last = now;
   return Intake::kHeld;
 }
 
@@ -255,9 +313,12 @@ SaveAssembler::Intake SaveAssembler::StageOctomapChunk(const std::string& map_na
                                                        const OctomapChunk& chunk,
                                                        Clock::time_point now) {
   if (!IsPushName(map_name)) return Intake::kRefused;
-  Staging& staging = *StagingFor(map_name, now);
-  const bool held = staging.octomap.Add(chunk);
-  staging.last = now;
+  // The chunk, and the whole tree once its last chunk completes it.
+  if (!Fits(2 * static_cast<int64_t>(chunk.size))) return Intake::kStagingFull;
+  Staging* staging = StagingFor(map_name, now);
+  if (staging == nullptr) return Intake::kStagingFull;
+  const bool held = staging->octomap.Add(chunk);
+  staging->last = now;
   return held ? Intake::kHeld : Intake::kRefused;
 }
 

@@ -36,8 +36,11 @@
 ///
 /// Missing pieces are asked for again every resend_interval_s (SaveProgress::resends); a save
 /// still incomplete after save_timeout_s fails with kUnavailable naming what is missing. Staged
-/// data nobody asks to save are dropped after staging_timeout_s; staged cells are bounded by
-/// max_staged_cells. Time is passed in (`now`), so tests need no clock.
+/// data nobody asks to save are dropped after staging_timeout_s. What pushes make the store hold
+/// is bounded by max_staged_bytes, every push together: each layer's canvas (its whole grid, as
+/// its first tile allocates it), the compressed tiles kept as they came, manifests, obstacles
+/// and OctoMap chunks; and by max_pushes names staged at once. Time is passed in (`now`), so
+/// tests need no clock.
 ///
 /// Not thread-safe: one caller at a time.
 
@@ -58,7 +61,8 @@ struct SaveAssemblerParams {
   double resend_interval_s{0.05};         ///< asks again for missing data this often
   double staging_timeout_s{30.0};         ///< pushed data no save asked for are dropped after this
   double pull_settle_s{0.5};              ///< a pull without named layers waits this long for more
-  int64_t max_staged_cells{128'000'000};  ///< pushed cells held at once, every push together
+  int64_t max_staged_bytes{512LL << 20};  ///< pushed data held at once, every push together
+  int max_pushes{64};                      ///< push names staged at once
 
   /// @throws std::invalid_argument naming the first bad field.
   void Validate() const;
@@ -131,7 +135,7 @@ class SaveAssembler {
   enum class Intake {
     kHeld,         ///< kept
     kRefused,      ///< bad data (or a name without '/'): count it as a dropped input
-    kStagingFull,  ///< the staged cells would exceed max_staged_cells: dropped
+    kStagingFull,  ///< beyond max_staged_bytes or max_pushes: dropped
   };
   /// A pushed tile. `codec` and `bytes`: a compressed tile's codec (mapstore::Codec) and bytes
   /// as they came; the store keeps them instead of compressing the cells again.
@@ -167,8 +171,8 @@ class SaveAssembler {
   /// Whether a save with this key (SaveKey) is waiting for data.
   bool IsPending(const std::string& key) const;
   int64_t pending_saves() const;
-  /// Cells staged by every push together.
-  int64_t staged_cells() const;
+  /// Bytes staged by every push together (as max_staged_bytes counts them).
+  int64_t staged_bytes() const;
 
  private:
   struct Staging;
@@ -201,7 +205,10 @@ class SaveAssembler {
   /// Ends a save: its staging goes, its outcome is appended.
   void End(const std::string& key, SaveOutcome outcome, SaveProgress* progress);
   SaveOutcome OutcomeOf(const PendingSave& save) const;
+  /// The staging of a push name, made if new; null when a new one would exceed max_pushes.
   Staging* StagingFor(const std::string& map_name, Clock::time_point now);
+  /// Whether `more` bytes fit the staging budget.
+  bool Fits(int64_t more) const;
   LiveMirror* MirrorOf(const std::string& robot);
   void DropAbandoned(Clock::time_point now, SaveProgress* progress);
 

@@ -241,10 +241,22 @@ void DecodeTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::str
                  int threads, std::vector<std::vector<float>>* cells, std::vector<char>* ok) {
   const size_t n = tiles.size();
   if (cells->size() < n) cells->resize(n);
+  for (std::vector<float>& buffer : *cells) {
+    if (buffer.capacity() > kKeptBufferCells) std::vector<float>().swap(buffer);
+  }
+  // Which tiles the batch's budget of decoded cells admits, in order.
+  std::vector<char> admitted(n, 0);
+  int64_t budget = kMaxBatchDecodedCells;
+  for (size_t i = 0; i < n; ++i) {
+    const int64_t claimed = int64_t{std::max(0, tiles[i].cells_x)} * std::max(0, tiles[i].cells_y);
+    if (claimed > budget) continue;
+    budget -= claimed;
+    admitted[i] = 1;
+  }
   ok->assign(n, 0);
   ParallelFor(n, DecodeWorkers(n, threads), [&](size_t i) {
     const cairn::lcmt_grid_tile& tile = tiles[i];
-    (*ok)[i] = tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
+    (*ok)[i] = admitted[i] && tile.encoding != cairn::lcmt_grid_tile::ENCODING_FLOAT32 &&
                tile.map_name == map_name && DecodeTileCells(tile, &(*cells)[i]).ok();
   });
 }

@@ -52,7 +52,12 @@ common::Status DecompressTile(cairn::lcmt_grid_tile* tile, bool verify_checksum 
 
 /// Decodes the compressed tiles of `tiles` that carry `map_name`, on up to `threads` threads
 /// (one per 4 tiles at the most), into (*cells)[i], buffers kept between calls; (*ok)[i] says
-/// tile i decoded. Float tiles and tiles of another map are left alone (ok false).
+/// tile i decoded. Float tiles and tiles of another map are left alone (ok false). A batch
+/// decodes at most kMaxBatchDecodedCells cells (a few bytes of zstd can claim 4096² cells each):
+/// the tiles beyond are refused (ok false), and buffers over kKeptBufferCells are released
+/// before the batch, so what a batch makes the receiver hold stays bounded.
+inline constexpr int64_t kMaxBatchDecodedCells = int64_t{4096} * 4096;
+inline constexpr size_t kKeptBufferCells = size_t{1} << 20;
 void DecodeTiles(const std::vector<cairn::lcmt_grid_tile>& tiles, const std::string& map_name,
                  int threads, std::vector<std::vector<float>>* cells, std::vector<char>* ok);
 

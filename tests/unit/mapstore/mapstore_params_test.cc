@@ -22,7 +22,7 @@ TEST(MapstoreParamsTest, DefaultsHoldWithoutAFileAndEveryKeyIsRead) {
       "service:\n"
       "  files_root: /srv/maps\n"
       "  save_timeout_s: 7.5\n"
-      "  max_staged_cells: 1000\n"
+      "  max_staged_bytes: 1000\n"
       "  batch_bytes: 0\n"
       "  compress_reply_tiles: false\n"
       "database:\n"
@@ -30,14 +30,14 @@ TEST(MapstoreParamsTest, DefaultsHoldWithoutAFileAndEveryKeyIsRead) {
       "  synchronous_full: true\n");
   EXPECT_EQ(p.service.files_root, "/srv/maps");
   EXPECT_EQ(p.service.save_timeout_s, 7.5);
-  EXPECT_EQ(p.service.max_staged_cells, 1000);
+  EXPECT_EQ(p.service.max_staged_bytes, 1000);
   EXPECT_EQ(p.service.batch_bytes, 0);
   EXPECT_FALSE(p.service.compress_reply_tiles);
   EXPECT_EQ(p.database.tile_size_cells, 50);
   EXPECT_TRUE(p.database.synchronous_full);
   const SaveAssemblerParams save = p.service.save();
   EXPECT_EQ(save.save_timeout_s, 7.5);
-  EXPECT_EQ(save.max_staged_cells, 1000);
+  EXPECT_EQ(save.max_staged_bytes, 1000);
 }
 
 TEST(MapstoreParamsTest, TheShippedFileLoads) {

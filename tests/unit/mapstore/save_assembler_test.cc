@@ -112,7 +112,7 @@ TEST_F(SaveAssemblerTest, APushSaveFinishesTheMomentItsLastTileArrives) {
   ASSERT_EQ(outcome.events.size(), 1u);
   EXPECT_NE(outcome.events[0].find("saved lab/corridor v1 from a push"), std::string::npos);
   EXPECT_FALSE(dut.IsPending("unit#11"));
-  EXPECT_EQ(dut.staged_cells(), 0);  // the staging went with the save
+  EXPECT_EQ(dut.staged_bytes(), 0);  // the staging went with the save
 
   auto stored = store_.LoadLayers({"lab", "corridor", 1}, {});
   ASSERT_TRUE(stored.ok());
@@ -196,7 +196,7 @@ TEST_F(SaveAssemblerTest, BadRequestsAndBadObstaclesFailAsInvalid) {
   ASSERT_EQ(refused.finished.size(), 1u);
   EXPECT_EQ(refused.finished[0].status.code(), common::StatusCode::kInvalidArgument);
   EXPECT_EQ(refused.finished[0].status.message(), "pushed obstacles: kind 9");
-  EXPECT_EQ(dut.staged_cells(), 0);
+  EXPECT_EQ(dut.staged_bytes(), 0);
   // Data without a push name ("<request_id>/<map>") are refused.
   EXPECT_EQ(
       dut.StageManifest(CutLayer(snapshot_.base, layers::kElevation, 10, "live").manifest, T(0.0)),
@@ -219,8 +219,8 @@ TEST_F(SaveAssemblerTest, ASaveReplayedAfterARestartAnswersWithTheVersionItMade)
 
 TEST_F(SaveAssemblerTest, StagedCellsAreBoundedAndAbandonedPushesDropped) {
   SaveAssemblerParams params = Params();
-  const int64_t layer_cells = snapshot_.base.geometry().num_cells();
-  params.max_staged_cells = layer_cells + 50;  // one layer and a bit
+  const int64_t layer_bytes = snapshot_.base.geometry().num_cells() * 4;
+  params.max_staged_bytes = layer_bytes + 2048;  // one layer's canvas and a bit
   SaveAssembler dut(store_, params);
   const auto elevation = CutLayer(snapshot_.base, layers::kElevation, 10, "11/corridor");
   int full = 0;
@@ -230,12 +230,57 @@ TEST_F(SaveAssemblerTest, StagedCellsAreBoundedAndAbandonedPushesDropped) {
     }
   }
   EXPECT_GT(full, 0);
-  EXPECT_LE(dut.staged_cells(), params.max_staged_cells);
+  EXPECT_LE(dut.staged_bytes(), params.max_staged_bytes);
   // Nobody asks to save it: dropped after staging_timeout_s without news.
   EXPECT_EQ(dut.Poll(T(4.9)).abandoned_pushes, 0);
   EXPECT_EQ(dut.Poll(T(5.1)).abandoned_pushes, 1);
-  EXPECT_EQ(dut.staged_cells(), 0);
+  EXPECT_EQ(dut.staged_bytes(), 0);
   EXPECT_EQ(StageTile(dut, elevation.tiles[0], false, 5.2), Intake::kHeld);  // room again
+}
+
+// Issue 20: the staging cap counted the cells of tiles only. A small tile of a layer whose grid
+// is 1000 x 1000 allocated the whole layer (4 MB here; 256 MB at the layer cap), and manifests,
+// obstacles, OctoMaps and push names were not counted at all.
+TEST_F(SaveAssemblerTest, StagingCountsCanvasesManifestsOctomapsAndPushNames) {
+  SaveAssemblerParams params = Params();
+  params.max_staged_bytes = 18'000'000;
+  params.max_pushes = 8;
+  SaveAssembler dut(store_, params);
+  common::GridMap wide = testing::SampleSnapshot("corridor", 1000, 1000).base;
+  const auto cut = CutLayer(wide, layers::kElevation, 10, "1/corridor");
+  int held = 0, full = 0;
+  for (int push = 1; push <= 8; ++push) {
+    testing::OwnedTile t = cut.tiles.front();
+    t.header.map_name = std::to_string(push) + "/corridor";
+    const Intake intake = StageTile(dut, t, false, 0.0);
+    held += intake == Intake::kHeld ? 1 : 0;
+    full += intake == Intake::kStagingFull ? 1 : 0;
+  }
+  EXPECT_EQ(held, 4);  // four 4 MB canvases fit in 18 MB, the fifth does not
+  EXPECT_EQ(full, 4);
+  EXPECT_LE(dut.staged_bytes(), params.max_staged_bytes);
+  // Push names beyond max_pushes are refused whatever they carry.
+  int names_full = 0;
+  for (int push = 100; push < 120; ++push) {
+    TileManifest m = CutLayer(snapshot_.base, layers::kElevation, 10,
+                              std::to_string(push) + "/corridor")
+                         .manifest;
+    names_full += dut.StageManifest(m, T(0.0)) == Intake::kStagingFull ? 1 : 0;
+  }
+  EXPECT_EQ(names_full, 16);  // 4 names held tiles, 4 more take manifests
+  // An OctoMap chunk counts as its bytes: a tree that does not fit is refused.
+  const std::string bytes(6 << 20, 'z');
+  OctomapChunk chunk;
+  chunk.chunk_count = 1;
+  chunk.total_bytes = static_cast<int64_t>(bytes.size());
+  chunk.data = bytes.data();
+  chunk.size = bytes.size();
+  EXPECT_EQ(dut.StageOctomapChunk("1/corridor", chunk, T(0.0)), Intake::kStagingFull);
+  EXPECT_LE(dut.staged_bytes(), params.max_staged_bytes);
+  // Everything goes after the staging timeout, and room comes back.
+  dut.Poll(T(6.0));
+  EXPECT_EQ(dut.staged_bytes(), 0);
+  EXPECT_EQ(StageTile(dut, cut.tiles.front(), false, 6.1), Intake::kHeld);
 }
 
 TEST_F(SaveAssemblerTest, APushWaitsForItsOctomapAndObstacles) {

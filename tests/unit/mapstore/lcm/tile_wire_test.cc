@@ -1,10 +1,12 @@
 #include "mapstore/lcm/tile_wire.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "common/crc32.h"
 #include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
 
@@ -83,6 +85,38 @@ TEST(TileWireTest, ABatchAssemblesStraightIntoItsLayers) {
       EXPECT_EQ(std::memcmp(have.data(), want.data(), sizeof(float) * want.size()), 0) << layer;
     }
   }
+}
+
+// Issue 20: a batch of small compressed tiles each claiming 4096 x 4096 cells zero-filled 64 MB
+// per tile in the map store, and kept the buffers between batches. A batch decodes at most
+// kMaxBatchDecodedCells, and large buffers are released before the next batch.
+TEST(TileWireTest, ABatchOfTilesClaimingHugeGridsDecodesWithinItsBudget) {
+  cairn::lcmt_grid_tile tile{};
+  tile.map_name = "7/site";
+  tile.layer = "elevation";
+  tile.cells_x = 4096;
+  tile.cells_y = 4096;
+  tile.tile_size = 4096;
+  tile.encoding = cairn::lcmt_grid_tile::ENCODING_FLOAT32;
+  tile.data.assign(size_t{4096} * 4096, 0.f);
+  tile.num_cells = static_cast<int32_t>(tile.data.size());
+  tile.checksum = static_cast<int32_t>(
+      common::Crc32(tile.data.data(), tile.data.size() * sizeof(float)));
+  ASSERT_TRUE(CompressTile(&tile));
+  EXPECT_LT(tile.bytes.size(), 100'000u);  // a few KB claim 64 MB
+  const std::vector<cairn::lcmt_grid_tile> batch(8, tile);
+  std::vector<std::vector<float>> cells;
+  std::vector<char> ok;
+  DecodeTiles(batch, "7/site", 2, &cells, &ok);
+  EXPECT_EQ(std::count(ok.begin(), ok.end(), 1), 1);  // one 4096² tile fills the budget
+  size_t held = 0;
+  for (const auto& b : cells) held += b.capacity();
+  EXPECT_LE(static_cast<int64_t>(held), kMaxBatchDecodedCells);
+  // The next batch starts without the large buffer.
+  DecodeTiles({}, "7/site", 2, &cells, &ok);
+  held = 0;
+  for (const auto& b : cells) held += b.capacity();
+  EXPECT_LE(held, cells.size() * kKeptBufferCells);
 }
 
 }  // namespace
