@@ -24,7 +24,8 @@ void GetAngle(YamlMap& map, const std::string& stem, double* out_rad) {
   double value = 0.0;
   const bool has_rad = map.Has(stem + "_rad");
   const bool has_deg = map.Has(stem + "_deg");
-  if (has_rad && has_deg) map.Fail(map.Raw(stem + "_deg"), "give " + stem + " in rad or deg, not both");
+  if (has_rad && has_deg)
+    map.Fail(map.Raw(stem + "_deg"), "give " + stem + " in rad or deg, not both");
   if (has_rad) {
     map.Get(stem + "_rad", out_rad);
   } else if (has_deg) {
@@ -44,9 +45,12 @@ double DistancePointSegment(const Vector2& p, const Vector2& a, const Vector2& b
 
 const char* DriveKindName(DriveKind kind) {
   switch (kind) {
-    case DriveKind::kDifferential: return "differential";
-    case DriveKind::kSkidSteer: return "skid_steer";
-    case DriveKind::kAuv: return "auv";
+    case DriveKind::kDifferential:
+      return "differential";
+    case DriveKind::kSkidSteer:
+      return "skid_steer";
+    case DriveKind::kAuv:
+      return "auv";
   }
   return "?";
 }
@@ -162,10 +166,12 @@ RobotProfile LoadRobotProfile(YamlMap& map) {
     if (!fp.IsSequence()) map.Fail(fp, "footprint_m must be a list of [x, y]");
     for (const auto& v : fp) {
       if (!v.IsSequence() || v.size() != 2) map.Fail(v, "footprint vertex must be [x, y]");
-      p.footprint_m.emplace_back(v[0].as<double>(), v[1].as<double>());
+      p.footprint_m.emplace_back(map.As<double>(v[0], "a number"),
+                                 map.As<double>(v[1], "a number"));
     }
   } else if (map.Has("length_m") || map.Has("width_m")) {
-    p.footprint_m = RectangleFootprint(map.Require<double>("length_m"), map.Require<double>("width_m"));
+    p.footprint_m =
+        RectangleFootprint(map.Require<double>("length_m"), map.Require<double>("width_m"));
   } else {
     map.Fail(map.Raw("name"), "profile '" + p.name + "' needs footprint_m or length_m/width_m");
   }

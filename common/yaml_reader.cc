@@ -61,7 +61,7 @@ YamlMap YamlMap::Child(const std::string& key) {
 std::vector<std::string> YamlMap::Keys() {
   std::vector<std::string> keys;
   for (const auto& kv : node_) {
-    keys.push_back(kv.first.as<std::string>());
+    keys.push_back(As<std::string>(kv.first, "a key that is a name"));
     used_.insert(keys.back());
   }
   return keys;
@@ -75,7 +75,7 @@ YamlMap YamlMap::Wrap(const YAML::Node& node, const std::string& context) const 
 
 void YamlMap::Finish() const {
   for (const auto& kv : node_) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = As<std::string>(kv.first, "a key that is a name");
     if (used_.count(key) == 0) {
       Fail(kv.first, "unknown key '" + (context_.empty() ? key : context_ + "." + key) + "'");
     }

@@ -38,6 +38,10 @@ class YamlMap {
   bool Get(const std::string& key, T* out);
   template <typename T>
   T Require(const std::string& key);
+  /// A node's value (an element of a sequence, a key), converted.
+  /// @throws ConfigError naming its line when it is not a `what`.
+  template <typename T>
+  T As(const YAML::Node& node, const std::string& what) const;
   /// A nested map.
   YamlMap Child(const std::string& key);
   /// Keys of this map in file order (marks them read).
@@ -75,6 +79,15 @@ bool YamlMap::Get(const std::string& key, T* out) {
     Fail(value, "bad value for '" + (context_.empty() ? key : context_ + "." + key) + "'");
   }
   return true;
+}
+
+template <typename T>
+T YamlMap::As(const YAML::Node& node, const std::string& what) const {
+  try {
+    return node.as<T>();
+  } catch (const YAML::Exception&) {
+    Fail(node, "expected " + what);
+  }
 }
 
 template <typename T>

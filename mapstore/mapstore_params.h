@@ -22,6 +22,10 @@ struct MapstoreServiceParams {
   double staging_timeout_s{30.0};  ///< pushed data without a request are dropped after this
   double pull_settle_s{0.5};       ///< a pull without named layers waits this long for more
   int reply_cache_size{512};       ///< replies kept for replays
+  /// OP_DELETE from the bus (a soft delete, in the audit log); off, it is refused (FORBIDDEN)
+  /// with an audit line. `cairn-map delete` on the file is not affected.
+  bool allow_delete{false};
+  int max_queued_jobs{64};  ///< loads, shares, exports, imports waiting; more are refused (BUSY)
   int64_t max_kept_reply_cells{64'000'000};  ///< reply tiles kept for resends (cells)
   int64_t max_staged_bytes{512LL << 20};     ///< pushed data held at once (SaveAssemblerParams)
   int max_pushes{64};                        ///< push names staged at once

@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
+#include <set>
 #include <thread>
 
 #include <sqlite3.h>
 
+#include "common/check.h"
 #include "mapstore/names.h"
 #include "mapstore/schema.h"
 #include "mapstore/sqlite_store_rows.h"
@@ -119,8 +122,59 @@ Status SqliteMapStore::Initialise() {
         ", newer than this build's " + std::to_string(schema::kCurrentVersion) +
         "; use a newer cairn");
   }
-  return options_.read_only ? InitialiseReadOnly(header.empty(), header.user_version)
-                            : InitialiseWritable(header.empty(), header.user_version);
+  s = options_.read_only ? InitialiseReadOnly(header.empty(), header.user_version)
+                         : InitialiseWritable(header.empty(), header.user_version);
+  return s.ok() ? VerifySchema() : s;
+}
+
+namespace {
+
+// The columns of every table of the current schema, as schema::Create makes them.
+const std::map<std::string, std::set<std::string>>& ExpectedColumns() {
+  static const std::map<std::string, std::set<std::string>> columns = [] {
+    std::map<std::string, std::set<std::string>> out;
+    auto db = sqlite::Database::Open(":memory:", false, true);
+    CAIRN_DEMAND(db.ok() && schema::Create(db->get()).ok());
+    std::vector<std::string> tables;
+    auto list = (*db)->Prepare("SELECT name FROM sqlite_master WHERE type = 'table'");
+    while (list.Step()) tables.push_back(list.Text(0));
+    for (const std::string& table : tables) {
+      auto info = (*db)->Prepare("SELECT name FROM pragma_table_info(?1)");
+      info.Bind(1, table);
+      while (info.Step()) out[table].insert(info.Text(0));
+    }
+    return out;
+  }();
+  return columns;
+}
+
+}  // namespace
+
+// A file whose header says it is a cairn database of this schema, but whose tables are not the
+// schema's (a damaged or hand-made file), would fail later in every query: refuse it now.
+Status SqliteMapStore::VerifySchema() {
+  try {
+    for (const auto& [table, expected] : ExpectedColumns()) {
+      std::set<std::string> found;
+      auto info = db_->Prepare("SELECT name FROM pragma_table_info(?1)");
+      info.Bind(1, table);
+      while (info.Step()) found.insert(info.Text(0));
+      if (!info.status().ok()) return info.status();
+      if (found.empty()) {
+        return common::CorruptError("'" + path_ +
+                                    "' is not a usable cairn map database: no table " + table);
+      }
+      for (const std::string& column : expected) {
+        if (found.count(column) == 0) {
+          return common::CorruptError("'" + path_ + "' is not a usable cairn map database: table " +
+                                      table + " has no column " + column);
+        }
+      }
+    }
+  } catch (const std::exception& e) {
+    return common::CorruptError("'" + path_ + "' is not a usable cairn map database: " + e.what());
+  }
+  return Status::Ok();
 }
 
 Status SqliteMapStore::InitialiseReadOnly(bool empty, int64_t version) {

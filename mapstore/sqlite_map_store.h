@@ -122,6 +122,8 @@ class SqliteMapStore final : public MapStore {
   // ---- Opening (sqlite_map_store.cc) ----
   common::Status Initialise();
   common::Status InitialiseReadOnly(bool empty, int64_t version);
+  /// kCorrupt naming the first table or column of the current schema the file lacks.
+  common::Status VerifySchema();
   common::Status InitialiseWritable(bool empty, int64_t version);
   /// Runs `body` inside BEGIN IMMEDIATE ... COMMIT, retrying while the database is busy.
   common::Status WriteTransaction(const std::function<common::Status()>& body);

@@ -135,7 +135,7 @@ void LoadRecovery(YamlMap map, RecoveryParams* p) {
     p->sequence.clear();
     for (const auto& item : seq) {
       try {
-        p->sequence.push_back(RecoveryKindFromName(item.as<std::string>()));
+        p->sequence.push_back(RecoveryKindFromName(map.As<std::string>(item, "a recovery name")));
       } catch (const std::invalid_argument& e) {
         map.Fail(item, e.what());
       } catch (const YAML::Exception&) {

@@ -32,7 +32,8 @@ std::vector<Place> LoadPlaces(common::YamlMap& map) {
     }
     for (const auto& vertex : polygon) {
       if (!vertex.IsSequence() || vertex.size() != 2) entry.Fail(vertex, "a vertex is [x, y]");
-      place.polygon_m.emplace_back(vertex[0].as<double>(), vertex[1].as<double>());
+      place.polygon_m.emplace_back(entry.As<double>(vertex[0], "a number"),
+                                   entry.As<double>(vertex[1], "a number"));
     }
     entry.Finish();
     places.push_back(std::move(place));

@@ -56,7 +56,7 @@ std::vector<std::string> GetStringList(common::YamlMap& map, const std::string& 
   if (!map.Has(key)) return out;
   YAML::Node node = map.Raw(key);
   if (!node.IsSequence()) map.Fail(node, "'" + key + "' must be a list of names");
-  for (const auto& item : node) out.push_back(item.as<std::string>());
+  for (const auto& item : node) out.push_back(map.As<std::string>(item, "a name"));
   return out;
 }
 

@@ -54,6 +54,8 @@ Status StatusOfReply(const cairn::lcmt_mapstore_reply& reply) {
       return common::UnavailableError(reply.message);
     case R::STATUS_CONFLICT:
       return common::AlreadyExistsError(reply.message);
+    case R::STATUS_FORBIDDEN:
+      return common::PermissionDeniedError(reply.message);
     default:
       return common::InternalError(reply.message);
   }

@@ -43,6 +43,8 @@ int8_t ReplyStatus(const Status& status) {
       return Reply::STATUS_BUSY;
     case common::StatusCode::kAlreadyExists:
       return Reply::STATUS_CONFLICT;
+    case common::StatusCode::kPermissionDenied:
+      return Reply::STATUS_FORBIDDEN;
     default:
       return Reply::STATUS_ERROR;
   }
@@ -217,6 +219,15 @@ bool MapstoreService::QueueJob(const Request& request, Reply* reply) {
     SetStatus(common::InvalidArgumentError("layers disagree with num_layers"), reply);
     return true;
   }
+  if (static_cast<int>(queue_.size()) >= params_.max_queued_jobs) {
+    node_.CountDropped("queue_full");
+    node_.Warn("queue_full", "request refused: " + std::to_string(queue_.size()) +
+                                 " loads, shares, exports and imports already wait");
+    SetStatus(common::UnavailableError("the store is busy: " + std::to_string(queue_.size()) +
+                                       " requests wait (service.max_queued_jobs); ask again later"),
+              reply);
+    return true;
+  }
   auto job = std::make_unique<Job>();
   job->request = request;
   job->started = Clock::now();
@@ -271,6 +282,17 @@ void MapstoreService::HandlePutProfile(const Request& request, Reply* reply) {
 void MapstoreService::HandleDelete(const Request& request, Reply* reply) {
   const std::string site = SiteOf(request);
   const WriteContext ctx = ContextOf(request);
+  const std::string what = site + "/" + request.map_name +
+                           (request.version == 0 ? "" : " v" + std::to_string(request.version));
+  if (!params_.allow_delete) {
+    // The audit line of a refused destructive request.
+    node_.Event("refused OP_DELETE of %s for %s (request %lld): allow_delete is off", what.c_str(),
+                ctx.actor.c_str(), static_cast<long long>(request.request_id));
+    node_.CountDropped("forbidden_requests");
+    return SetStatus(common::PermissionDeniedError(
+                         "OP_DELETE is off in this store's configuration (service.allow_delete)"),
+                     reply);
+  }
   const Status s = store_.DeleteMap({site, request.map_name, request.version}, ctx);
   SetStatus(s, reply);
   if (!s.ok()) return;

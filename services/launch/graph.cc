@@ -1,14 +1,14 @@
 #include "services/launch/graph.h"
 
-#include <signal.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <set>
 #include <sstream>
+
+#include <signal.h>
+#include <unistd.h>
 
 namespace cairn::launch {
 namespace fs = std::filesystem;
@@ -17,16 +17,19 @@ using common::YamlMap;
 
 const char* RestartPolicyName(RestartPolicy policy) {
   switch (policy) {
-    case RestartPolicy::kNever: return "never";
-    case RestartPolicy::kOnFailure: return "on-failure";
-    case RestartPolicy::kAlways: return "always";
+    case RestartPolicy::kNever:
+      return "never";
+    case RestartPolicy::kOnFailure:
+      return "on-failure";
+    case RestartPolicy::kAlways:
+      return "always";
   }
   return "?";
 }
 
 int ParseSignal(const std::string& text) {
   static const std::map<std::string, int> kSignals = {
-      {"TERM", SIGTERM}, {"INT", SIGINT}, {"KILL", SIGKILL}, {"HUP", SIGHUP},
+      {"TERM", SIGTERM}, {"INT", SIGINT},   {"KILL", SIGKILL}, {"HUP", SIGHUP},
       {"QUIT", SIGQUIT}, {"USR1", SIGUSR1}, {"USR2", SIGUSR2}};
   std::string name = text;
   if (name.rfind("SIG", 0) == 0) name = name.substr(3);
@@ -138,7 +141,8 @@ ProcessSpec LoadProcess(YamlMap& map, const std::string& name, const std::string
     if (!p.ready.channel.empty()) {
       if (!ready.Has("heartbeat")) p.ready.heartbeat = false;
       if (p.ready.min_rate_hz <= 0.0) {
-        ready.Fail(ready.Raw("channel"), "process '" + name + "': ready.channel needs min_rate_hz > 0");
+        ready.Fail(ready.Raw("channel"),
+                   "process '" + name + "': ready.channel needs min_rate_hz > 0");
       }
     }
     ready.Finish();
@@ -152,7 +156,8 @@ ProcessSpec LoadProcess(YamlMap& map, const std::string& name, const std::string
   } else if (restart == "always") {
     p.restart = RestartPolicy::kAlways;
   } else {
-    map.Fail(map.Raw("restart"), "process '" + name + "': restart must be never, on-failure or always");
+    map.Fail(map.Raw("restart"),
+             "process '" + name + "': restart must be never, on-failure or always");
   }
   map.Get("backoff_s", &p.backoff_s);
   map.Get("max_backoff_s", &p.max_backoff_s);
@@ -173,7 +178,8 @@ ProcessSpec LoadProcess(YamlMap& map, const std::string& name, const std::string
   }
   map.Finish();
   if (p.backoff_s < 0 || p.max_backoff_s < p.backoff_s || p.max_restarts < 0 || p.grace_s < 0) {
-    map.Fail(where, "process '" + name + "': backoff_s, max_backoff_s, max_restarts and grace_s must be >= 0");
+    map.Fail(where, "process '" + name +
+                        "': backoff_s, max_backoff_s, max_restarts and grace_s must be >= 0");
   }
   const auto exe = require_executables ? ResolveExecutable(p.command, graph_dir, bin_dirs)
                                        : std::optional<std::string>(p.command);
@@ -186,14 +192,15 @@ ProcessSpec LoadProcess(YamlMap& map, const std::string& name, const std::string
   return p;
 }
 
-GraphSpec LoadFromMap(YamlMap root, const std::string& file, const std::vector<std::string>& bin_dirs,
-                      bool require_executables) {
+GraphSpec LoadFromMap(YamlMap root, const std::string& file,
+                      const std::vector<std::string>& bin_dirs, bool require_executables) {
   GraphSpec graph;
   graph.file = file;
   const std::string graph_dir = fs::path(file).parent_path().string();
   graph.name = fs::path(file).stem().string();
   root.Get("name", &graph.name);
-  if (!ValidName(graph.name)) root.Fail(root.Raw("name"), "graph name '" + graph.name + "' is not a valid name");
+  if (!ValidName(graph.name))
+    root.Fail(root.Raw("name"), "graph name '" + graph.name + "' is not a valid name");
   root.Get("lcm_url", &graph.lcm_url);
   root.Get("run_dir", &graph.run_dir);
   if (graph.run_dir.empty()) graph.run_dir = "var/run/" + graph.name;
@@ -201,7 +208,7 @@ GraphSpec LoadFromMap(YamlMap root, const std::string& file, const std::vector<s
   YAML::Node processes = root.Raw("processes");
   if (!processes.IsMap()) root.Fail(processes, "'processes' must be a map of name -> process");
   for (const auto& kv : processes) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = root.As<std::string>(kv.first, "a process name");
     if (!ValidName(name)) root.Fail(kv.first, "process name '" + name + "' is not a valid name");
     YamlMap pm = root.Wrap(kv.second, "processes." + name);
     graph.processes.push_back(LoadProcess(pm, name, graph_dir, bin_dirs, require_executables));

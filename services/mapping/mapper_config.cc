@@ -68,6 +68,8 @@ MapperConfig LoadMapperConfig(common::YamlMap& m) {
   m.Get("tiles_per_burst", &p.tiles_per_burst);
   m.Get("burst_pause_ms", &p.burst_pause_ms);
   m.Get("snapshot_dir", &p.snapshot_dir);
+  m.Get("allow_reset", &p.allow_reset);
+  m.Get("allow_snapshot", &p.allow_snapshot);
   for (const std::string& layer : RegisteredLayers()) {
     if (!m.Has(layer)) continue;
     common::YamlMap section = m.Child(layer);

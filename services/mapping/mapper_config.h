@@ -27,6 +27,10 @@ struct MapperParams {
   int tiles_per_burst{8};          ///< tiles sent back to back before a short pause
   double burst_pause_ms{1.0};
   std::string snapshot_dir{"var/mapper-snapshots"};  ///< OP_SNAPSHOT writes below it
+  /// Destructive requests from the bus: OP_RESET (forgets every map) and OP_SNAPSHOT (writes
+  /// files). Off, they are refused (STATUS_FORBIDDEN) with an audit line.
+  bool allow_reset{false};
+  bool allow_snapshot{false};
   /// "SITE/MAP" in cairn-mapstore where the long-term layer is remembered across runs
   /// ("" = nowhere). Needs the dynamic layer.
   std::string long_term_store;

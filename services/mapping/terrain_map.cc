@@ -324,7 +324,8 @@ IntegrateStats TerrainMap::Integrate(const std::vector<common::LidarPoint>& poin
         range <= params_.ray_bound_max_range_m) {
       // Neighbouring rays of one ring end in the same cell many times over (a dozen per cell
       // at 5 m): the first of a run records the bound for all of them.
-      const int64_t end_key = (cx << 32) ^ (cy & 0xffffffff);
+      const auto end_key = static_cast<int64_t>((static_cast<uint64_t>(cx) << 32) ^
+                                                (static_cast<uint64_t>(cy) & 0xffffffffu));
       const size_t ring = static_cast<size_t>(p.ring) & 0xff;
       if (last_end[ring] != end_key) {
         last_end[ring] = end_key;

@@ -193,8 +193,9 @@ class TerrainMap {
   using Key = std::pair<int, int>;
   struct KeyHash {
     size_t operator()(const Key& k) const {
-      return std::hash<int64_t>()((static_cast<int64_t>(k.first) << 32) ^
-                                  static_cast<uint32_t>(k.second));
+      // Unsigned: shifting a negative index is undefined behaviour.
+      return std::hash<uint64_t>()((uint64_t{static_cast<uint32_t>(k.first)} << 32) ^
+                                   static_cast<uint32_t>(k.second));
     }
   };
 

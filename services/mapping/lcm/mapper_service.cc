@@ -546,10 +546,14 @@ void MapperService::ProcessControl(const lcmt_map_control_request& request) {
       ClearShortTerm(request, &reply);
       break;
     case lcmt_map_control_request::OP_RESET:
-      ResetMaps(request, &reply);
+      if (Allowed(request, "OP_RESET", "allow_reset", params_.allow_reset, &reply)) {
+        ResetMaps(request, &reply);
+      }
       break;
     case lcmt_map_control_request::OP_SNAPSHOT:
-      Snapshot(&reply);
+      if (Allowed(request, "OP_SNAPSHOT", "allow_snapshot", params_.allow_snapshot, &reply)) {
+        Snapshot(&reply);
+      }
       break;
     default:
       reply.status = lcmt_map_control_reply::STATUS_INVALID;
@@ -565,6 +569,19 @@ void MapperService::ProcessControl(const lcmt_map_control_request& request) {
     reply_order_.pop_front();
   }
   node_.Publish(Ch(params_.robot, channels::kMapControlReply), reply);
+}
+
+bool MapperService::Allowed(const lcmt_map_control_request& request, const char* op,
+                            const char* key, bool allowed, lcmt_map_control_reply* reply) {
+  // The audit line of a destructive request, done or refused.
+  node_.Event("%s from %s (request %lld): %s", op, request.requester.c_str(),
+              static_cast<long long>(request.request_id),
+              allowed ? "allowed" : (std::string("refused, ") + key + " is off").c_str());
+  if (allowed) return true;
+  reply->status = lcmt_map_control_reply::STATUS_FORBIDDEN;
+  reply->message = std::string(op) + " is off in this mapper's configuration (" + key + ")";
+  node_.CountDropped("forbidden_requests");
+  return false;
 }
 
 void MapperService::AddProfile(const lcmt_map_control_request& request,

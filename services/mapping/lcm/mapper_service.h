@@ -133,6 +133,10 @@ class MapperService {
   /// Each ping's obstacles on <robot>.SONAR_DETECTIONS (lcmt_sonar_detection).
   void PublishDetections(SonarMapperLayer* layer);
   void ProcessRevolution(PreparedRevolution& job);
+  /// Whether a destructive request is allowed by `allowed` (the config key `key`); logs the
+  /// audit line, and fills the FORBIDDEN reply when it is not.
+  bool Allowed(const cairn::lcmt_map_control_request& request, const char* op, const char* key,
+               bool allowed, cairn::lcmt_map_control_reply* reply);
   void ProcessControl(const cairn::lcmt_map_control_request& request);
   void AddProfile(const cairn::lcmt_map_control_request& request,
                   cairn::lcmt_map_control_reply* reply);

@@ -142,7 +142,7 @@ class ExploreRig {
       // The shipped arena mapper configuration, with the snapshots in the test's folder.
       std::ifstream in(testing::SourcePath("config/mapping/arena.yaml"));
       std::ofstream out(dir + "/mapper.yaml");
-      out << in.rdbuf() << "\nsnapshot_dir: " << dir << "/snapshots\n";
+      out << in.rdbuf() << "\nsnapshot_dir: " << dir << "/snapshots\nallow_snapshot: true\n";
     }
     for (const char* c : {ch::kScan, ch::kPose, ch::kCmdVel}) bus_.Keep(ch::ForRobot(kRobot, c));
     procs_.Start("cairn-sim", {"--scenario", testing::SourcePath("config/sim/arena_p3dx.yaml"),
@@ -445,7 +445,7 @@ class OccupancyRig {
     EXPECT_NE(at, std::string::npos) << "arena.yaml no longer sets the seed003 preset";
     if (at != std::string::npos) yaml.insert(at + preset.size(), occupancy_keys);
     std::ofstream(procs_.dir() + "/mapper.yaml")
-        << yaml << "\nsnapshot_dir: " << procs_.dir() << "/snapshots\n";
+        << yaml << "\nsnapshot_dir: " << procs_.dir() << "/snapshots\nallow_snapshot: true\n";
     bus_.Keep(ch::ForRobot(kRobot, ch::kMapManifest));
     procs_.Start("cairn-sim", {"--scenario", testing::SourcePath(scenario), "--speed", kSpeed});
     procs_.Start("cairn-mapper", {"--robot", kRobot, "--config", procs_.dir() + "/mapper.yaml"});

@@ -60,11 +60,24 @@ class MapstoreServiceTest : public ::testing::Test {
         lcm_(procs_.url()),
         client_(lcm_, "test-client", TestClientOptions()) {}
 
-  ChildProcess& StartStore() {
+  // The store on the shipped configuration (OP_DELETE off), or on a copy that allows deletes.
+  ChildProcess& StartStore(bool allow_delete = false) {
     db_ = procs_.dir() + "/site.db";
-    ChildProcess& p = procs_.Start(
-        "cairn-mapstore", {"--db", db_, "--config", SourcePath("config/mapstore/mapstore.yaml"),
-                           "--files-root", procs_.dir() + "/files"});
+    std::string config = SourcePath("config/mapstore/mapstore.yaml");
+    if (allow_delete) {
+      std::ifstream in(config);
+      std::stringstream text;
+      text << in.rdbuf();
+      std::string yaml = text.str();
+      const std::string off = "allow_delete: false";
+      EXPECT_NE(yaml.find(off), std::string::npos) << "the shipped store no longer says " << off;
+      if (yaml.find(off) != std::string::npos)
+        yaml.replace(yaml.find(off), off.size(), "allow_delete: true");
+      config = procs_.dir() + "/mapstore.yaml";
+      std::ofstream(config) << yaml;
+    }
+    ChildProcess& p = procs_.Start("cairn-mapstore", {"--db", db_, "--config", config,
+                                                      "--files-root", procs_.dir() + "/files"});
     EXPECT_TRUE(WaitForStore(client_)) << "cairn-mapstore did not answer";
     return p;
   }
@@ -126,7 +139,7 @@ TEST_F(MapstoreServiceTest, PushSaveThenLoadGivesBackEverything) {
 }
 
 TEST_F(MapstoreServiceTest, UnknownThingsAreNotFoundAndBadNamesInvalid) {
-  StartStore();
+  ChildProcess& store = StartStore();
   ASSERT_EQ(client_.Save(TerrainSnapshot("lab", "corridor", 40, 30, 0.f))->status, kStatusOk);
   auto no_map = client_.Load("lab", "attic", 0, "");
   EXPECT_EQ(no_map.status().code(), common::StatusCode::kNotFound);
@@ -146,7 +159,20 @@ TEST_F(MapstoreServiceTest, UnknownThingsAreNotFoundAndBadNamesInvalid) {
   ASSERT_TRUE(bad.ok());
   EXPECT_EQ(bad->status, kStatusInvalid);
   EXPECT_NE(bad->message.find("map name"), std::string::npos);
+  // Issue 20: OP_DELETE is off in the shipped configuration: refused, with an audit line, and
+  // the map is kept. A store configured to allow it deletes.
   Request del = MakeRequest(Request::OP_DELETE, "lab", "corridor");
+  auto refused = client_.Call(del);
+  ASSERT_TRUE(refused.ok());
+  EXPECT_EQ(refused->status, +Reply::STATUS_FORBIDDEN);
+  EXPECT_NE(refused->message.find("allow_delete"), std::string::npos) << refused->message;
+  EXPECT_TRUE(client_.Load("lab", "corridor", 0, "").ok());
+  EXPECT_TRUE(
+      WaitFor([&] { return store.Log().find("refused OP_DELETE") != std::string::npos; }, 5.0))
+      << store.Log();
+  store.Stop();
+  StartStore(/*allow_delete=*/true);
+  del.request_id += 1000;
   EXPECT_EQ(client_.Call(del)->status, kStatusOk);
   auto deleted = client_.Load("lab", "corridor", 0, "");
   EXPECT_EQ(deleted.status().code(), common::StatusCode::kNotFound);

@@ -49,6 +49,16 @@ TEST(RobotProfileTest, InvalidValuesAreRefused) {
   EXPECT_THROW(LoadRobotProfileString("name: 'a b'\nlength_m: 1\nwidth_m: 1\n"), ConfigError);
   EXPECT_THROW(LoadRobotProfileString("name: x\nlength_m: 1\nwidth_m: 1\ndrive: hover\n"),
                ConfigError);
+  // Issue 20 (found by fuzz_yaml_loaders): a footprint vertex that is not two numbers, or a key
+  // that is not a name, escaped as yaml-cpp's BadConversion, without the file's name.
+  try {
+    LoadRobotProfileString("name: x\nfootprint_m: [[0, 0], [1, {a: 1}], [1, 1]]\n", "f.yaml");
+    FAIL() << "expected an error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("f.yaml:2"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(LoadRobotProfileString("name: x\nlength_m: 1\nwidth_m: 1\n[a, b]: 1\n"),
+               ConfigError);
 }
 
 TEST(RobotProfileTest, YamlRoundTripAndHash) {
@@ -63,13 +73,15 @@ TEST(RobotProfileTest, YamlRoundTripAndHash) {
 }
 
 TEST(RobotProfileTest, ShippedProfilesLoad) {
-  for (const char* name : {"pioneer3at", "kobuki", "p3dx", "robauco", "sparus2_msis", "girona500", "rover"}) {
+  for (const char* name :
+       {"pioneer3at", "kobuki", "p3dx", "robauco", "sparus2_msis", "girona500", "rover"}) {
     const std::string path = std::string(CAIRN_SOURCE_DIR) + "/config/profiles/" + name + ".yaml";
     SCOPED_TRACE(path);
     const RobotProfile p = LoadRobotProfileFile(path);
     EXPECT_EQ(p.name, name);
   }
-  const RobotProfile p3at = LoadRobotProfileFile(std::string(CAIRN_SOURCE_DIR) + "/config/profiles/pioneer3at.yaml");
+  const RobotProfile p3at =
+      LoadRobotProfileFile(std::string(CAIRN_SOURCE_DIR) + "/config/profiles/pioneer3at.yaml");
   EXPECT_NEAR(p3at.max_slope_up_rad * 180.0 / M_PI, 8.0, 1e-9);
   EXPECT_DOUBLE_EQ(p3at.max_step_up_m, 0.03);
   EXPECT_DOUBLE_EQ(p3at.max_step_down_m, 0.10);

@@ -166,6 +166,18 @@ TEST(SqliteMapStoreTest, RefusesFilesThatAreNotCairnDatabases) {
   auto missing = SqliteMapStore::Open(dir + "/absent.db", ReadOnly());
   EXPECT_EQ(missing.status().code(), StatusCode::kNotFound);
   EXPECT_FALSE(fs::exists(dir + "/absent.db"));
+
+  // Issue 20 (found by fuzz_sqlite_open): a file with the header of this schema but not its
+  // tables made the first query throw "bad SQL ... no such column" (a bug's abort). It is refused
+  // at Open, naming what it lacks.
+  const std::string damaged = dir + "/damaged.db";
+  { ASSERT_TRUE(OpenOrDie(damaged)); }
+  RawExec(damaged, "ALTER TABLE map_versions DROP COLUMN code_version;");
+  auto lacking = SqliteMapStore::Open(damaged);
+  EXPECT_EQ(lacking.status().code(), StatusCode::kCorrupt);
+  EXPECT_NE(lacking.status().message().find("map_versions has no column code_version"),
+            std::string::npos)
+      << lacking.status().message();
 }
 
 TEST(SqliteMapStoreTest, CorruptBlobIsRefusedAndReportedByCheck) {

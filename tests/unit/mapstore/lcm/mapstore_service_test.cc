@@ -10,16 +10,16 @@
 #include "cairn/lcmt_grid_tile_batch.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 
-#include "common/crc32.h"
 #include "common/channels.h"
+#include "common/crc32.h"
 #include "mapstore/in_memory_map_store.h"
 #include "mapstore/lcm/mapstore_conversions.h"
 #include "mapstore/lcm/tile_wire.h"
 #include "services/runtime/conversions.h"
 #include "services/runtime/layer_assembler.h"
 #include "services/runtime/tiler.h"
-#include "tests/unit/mapstore/fake_deriver.h"
 #include "tests/support/memq_node.h"
+#include "tests/unit/mapstore/fake_deriver.h"
 
 namespace cairn::mapstore {
 namespace {
@@ -31,9 +31,7 @@ constexpr int8_t kNotFound = Reply::STATUS_NOT_FOUND;
 constexpr int8_t kInvalid = Reply::STATUS_INVALID;
 constexpr int8_t kBusy = Reply::STATUS_BUSY;
 
-runtime::NodeOptions MemqOptions() {
-  return cairn::testing::MemqNodeOptions("cairn-mapstore");
-}
+runtime::NodeOptions MemqOptions() { return cairn::testing::MemqNodeOptions("cairn-mapstore"); }
 
 Request MakeRequest(int8_t op, const std::string& map = "") {
   Request r{};
@@ -452,6 +450,24 @@ TEST(TileWireTest, FastEncodingEqualsTheGeneratedOne) {
     t.encode(generated.data(), 0, static_cast<int>(generated.size()));
     EXPECT_EQ(fast, generated) << n << " cells";
   }
+}
+
+// Issue 20: OP_DELETE needed no permission. It is off unless the store's configuration allows
+// it: refused FORBIDDEN, the map kept, the refusal counted (and logged as an audit line).
+TEST_F(MapstoreServiceUnitTest, DeleteIsForbiddenUnlessTheConfigurationAllowsIt) {
+  ASSERT_EQ(Push(testing::SampleSnapshot("corridor", 37, 23)).status, kOk);
+  const Reply refused = Call(MakeRequest(Request::OP_DELETE, "corridor"));
+  EXPECT_EQ(refused.status, +Reply::STATUS_FORBIDDEN);
+  EXPECT_NE(refused.message.find("allow_delete"), std::string::npos) << refused.message;
+  EXPECT_TRUE(store_.GetMapInfo({"lab", "corridor", 0}).ok());
+  EXPECT_EQ(node_.counter("forbidden_requests"), 1);
+
+  MapstoreServiceParams params;
+  params.allow_delete = true;
+  dut_.reset();
+  dut_ = std::make_unique<MapstoreService>(node_, store_, testing::FakeDeriver(), params);
+  EXPECT_EQ(Call(MakeRequest(Request::OP_DELETE, "corridor")).status, kOk);
+  EXPECT_FALSE(store_.GetMapInfo({"lab", "corridor", 0}).ok());
 }
 
 }  // namespace

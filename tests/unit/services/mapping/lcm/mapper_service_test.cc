@@ -13,6 +13,8 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_map_control_reply.hpp"
+#include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_mapstore_reply.hpp"
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
@@ -21,25 +23,25 @@
 #include "common/channels.h"
 #include "common/layers.h"
 #include "services/runtime/conversions.h"
-#include "services/runtime/revolution_assembler.h"
 #include "services/runtime/layer_assembler.h"
+#include "services/runtime/revolution_assembler.h"
 #include "services/runtime/tiler.h"
+#include "tests/support/memq_node.h"
 #include "tests/unit/services/mapping/synthetic_scan.h"
 #include "tests/unit/services/mapping/terrain_fixtures.h"
-#include "tests/support/memq_node.h"
 
 namespace cairn::mapping {
 namespace {
 
+using cairn::lcmt_map_control_reply;
+using cairn::lcmt_map_control_request;
 using testing::SensorAt;
 using testing::ShippedProfile;
 using testing::SyntheticLidar;
 using testing::SyntheticRevolution;
 
 // The mapper's node on memq:// (no network, no signal handlers, no simulator clock).
-runtime::NodeOptions MemqOptions() {
-  return cairn::testing::MemqNodeOptions("cairn-mapper", "r1");
-}
+runtime::NodeOptions MemqOptions() { return cairn::testing::MemqNodeOptions("cairn-mapper", "r1"); }
 
 // MapperService over memq: slices and poses in, tiles, manifests and the registry out.
 TEST(MapperServiceTest, MapsSlicesOverMemq) {
@@ -307,6 +309,49 @@ TEST(MapperServiceTest, RefusesABadLongTermStore) {
   params.Validate();
   params.core.SetListed(kDynamicLayerName, false);
   EXPECT_THROW(params.Validate(), std::invalid_argument);
+}
+
+// Issue 20: OP_RESET (forgets every map) and OP_SNAPSHOT (writes files) needed no permission.
+// They are off unless the mapper's configuration allows them: refused FORBIDDEN, counted.
+TEST(MapperServiceTest, ResetAndSnapshotAreForbiddenUnlessTheConfigurationAllowsThem) {
+  for (const bool allowed : {false, true}) {
+    runtime::Node node(MemqOptions());
+    MapperParams params;
+    params.robot = "r1";
+    params.core.SetListed(kOctomapLayerName, false);
+    params.snapshot_dir = ::testing::TempDir() + "/mapper-snapshots";
+    params.allow_reset = allowed;
+    params.allow_snapshot = allowed;
+    std::map<int64_t, lcmt_map_control_reply> replies;
+    node.Subscribe<lcmt_map_control_reply>(
+        "r1.MAP.CONTROL_REPLY",
+        [&](const lcmt_map_control_reply& r) { replies[r.request_id] = r; });
+    MapperService service(node, params, {ShippedProfile("pioneer3at")}, nullptr);
+    for (const int8_t op :
+         {lcmt_map_control_request::OP_RESET, lcmt_map_control_request::OP_SNAPSHOT}) {
+      lcmt_map_control_request request{};
+      request.requester = "unit";
+      request.request_id = op;
+      request.op = op;
+      node.Publish("r1.MAP.CONTROL", request);
+    }
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (replies.size() < 2 && std::chrono::steady_clock::now() < deadline) node.SpinOnce(10);
+    service.Stop();
+    ASSERT_EQ(replies.size(), 2u);
+    for (const auto& [id, reply] : replies) {
+      if (allowed) {
+        EXPECT_EQ(reply.status, +lcmt_map_control_reply::STATUS_OK) << reply.message;
+      } else {
+        EXPECT_EQ(reply.status, +lcmt_map_control_reply::STATUS_FORBIDDEN);
+        EXPECT_NE(reply.message.find(id == lcmt_map_control_request::OP_RESET ? "allow_reset"
+                                                                              : "allow_snapshot"),
+                  std::string::npos)
+            << reply.message;
+      }
+    }
+    EXPECT_EQ(node.counter("forbidden_requests"), allowed ? 0 : 2);
+  }
 }
 
 }  // namespace

@@ -1,0 +1,60 @@
+// cairn-mapstore's inputs: MapstoreService on a real SQLite file (in a temporary folder), with
+// the mapping deriver, on memq://. Requests, pushed tiles, batches, manifests, obstacles and
+// OctoMap chunks, and a followed robot's live map go through the node's decode and the
+// service's real handlers.
+
+#include <cstdlib>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "mapstore/lcm/mapstore_service.h"
+#include "mapstore/mapping_deriver.h"
+#include "mapstore/sqlite_map_store.h"
+#include "tests/fuzz/bus_channels.h"
+#include "tests/fuzz/bus_feed.h"
+
+namespace {
+
+struct Harness {
+  Harness() : node(Options()) {
+    dir = std::filesystem::temp_directory_path() /
+          ("cairn-fuzz-mapstore-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir / "files");
+    static const std::string made = dir.string();
+    std::atexit([] { std::filesystem::remove_all(made); });
+    auto opened = cairn::mapstore::SqliteMapStore::Open((dir / "site.db").string());
+    if (!opened.ok()) std::abort();
+    store = std::move(opened).value();
+    cairn::mapstore::MapstoreServiceParams params;
+    params.files_root = (dir / "files").string();
+    params.save_timeout_s = 0.5;
+    params.staging_timeout_s = 1.0;
+    service = std::make_unique<cairn::mapstore::MapstoreService>(
+        node, *store, cairn::mapstore::MappingDeriver(), params);
+  }
+  static cairn::runtime::NodeOptions Options() {
+    cairn::runtime::NodeOptions o;
+    o.process_name = "cairn-mapstore";
+    o.lcm_url = "memq://";
+    o.install_signal_handlers = false;
+    o.follow_sim_clock = false;
+    return o;
+  }
+  std::filesystem::path dir;
+  cairn::runtime::Node node;
+  std::unique_ptr<cairn::mapstore::SqliteMapStore> store;
+  std::unique_ptr<cairn::mapstore::MapstoreService> service;
+};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  static Harness* h = new Harness();
+  static const std::vector<std::string> channels = cairn::fuzz::MapstoreChannels();
+  cairn::fuzz::FeedBus(h->node, channels, data, size);
+  return 0;
+}

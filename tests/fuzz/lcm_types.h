@@ -1,0 +1,77 @@
+#pragma once
+
+#include "cairn/lcmt_body_velocity_request.hpp"
+#include "cairn/lcmt_channel_stats.hpp"
+#include "cairn/lcmt_explore_status.hpp"
+#include "cairn/lcmt_goal.hpp"
+#include "cairn/lcmt_grid_manifest.hpp"
+#include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_grid_tile_batch.hpp"
+#include "cairn/lcmt_health.hpp"
+#include "cairn/lcmt_imu.hpp"
+#include "cairn/lcmt_laser_scan.hpp"
+#include "cairn/lcmt_map_control_reply.hpp"
+#include "cairn/lcmt_map_control_request.hpp"
+#include "cairn/lcmt_map_info.hpp"
+#include "cairn/lcmt_mapstore_reply.hpp"
+#include "cairn/lcmt_mapstore_request.hpp"
+#include "cairn/lcmt_nav_status.hpp"
+#include "cairn/lcmt_obstacle.hpp"
+#include "cairn/lcmt_obstacle_part.hpp"
+#include "cairn/lcmt_obstacle_registry.hpp"
+#include "cairn/lcmt_obstacle_verdict.hpp"
+#include "cairn/lcmt_occupancy_tile.hpp"
+#include "cairn/lcmt_octomap.hpp"
+#include "cairn/lcmt_odometry.hpp"
+#include "cairn/lcmt_path.hpp"
+#include "cairn/lcmt_place.hpp"
+#include "cairn/lcmt_point_cloud_slice.hpp"
+#include "cairn/lcmt_pose.hpp"
+#include "cairn/lcmt_robot_profile.hpp"
+#include "cairn/lcmt_sim_clock.hpp"
+#include "cairn/lcmt_sim_control_reply.hpp"
+#include "cairn/lcmt_sim_control_request.hpp"
+#include "cairn/lcmt_sonar_detection.hpp"
+#include "cairn/lcmt_sonar_ping.hpp"
+#include "cairn/lcmt_tile_resend_request.hpp"
+#include "cairn/lcmt_velocity_command.hpp"
+
+/// @file
+/// Every lcmt_* type, in one list: the decode fuzz target picks a type by its index here (a
+/// seed's first byte), and the corpus tool finds a recorded message's index by its fingerprint.
+#define CAIRN_FUZZ_LCM_TYPES(X) \
+  X(lcmt_body_velocity_request) \
+  X(lcmt_channel_stats)         \
+  X(lcmt_explore_status)        \
+  X(lcmt_goal)                  \
+  X(lcmt_grid_manifest)         \
+  X(lcmt_grid_tile)             \
+  X(lcmt_grid_tile_batch)       \
+  X(lcmt_health)                \
+  X(lcmt_imu)                   \
+  X(lcmt_laser_scan)            \
+  X(lcmt_map_control_reply)     \
+  X(lcmt_map_control_request)   \
+  X(lcmt_map_info)              \
+  X(lcmt_mapstore_reply)        \
+  X(lcmt_mapstore_request)      \
+  X(lcmt_nav_status)            \
+  X(lcmt_obstacle)              \
+  X(lcmt_obstacle_part)         \
+  X(lcmt_obstacle_registry)     \
+  X(lcmt_obstacle_verdict)      \
+  X(lcmt_occupancy_tile)        \
+  X(lcmt_octomap)               \
+  X(lcmt_odometry)              \
+  X(lcmt_path)                  \
+  X(lcmt_place)                 \
+  X(lcmt_point_cloud_slice)     \
+  X(lcmt_pose)                  \
+  X(lcmt_robot_profile)         \
+  X(lcmt_sim_clock)             \
+  X(lcmt_sim_control_reply)     \
+  X(lcmt_sim_control_request)   \
+  X(lcmt_sonar_detection)       \
+  X(lcmt_sonar_ping)            \
+  X(lcmt_tile_resend_request)   \
+  X(lcmt_velocity_command)
