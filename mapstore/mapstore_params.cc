@@ -13,6 +13,7 @@ void MapstoreServiceParams::Validate() const {
                      "service.batch_bytes must be in 0..200000 (bus messages stay under 256 KB)");
   CAIRN_THROW_UNLESS(decode_threads >= 1, "service.decode_threads must be >= 1");
   CAIRN_THROW_UNLESS(max_queued_jobs >= 1, "service.max_queued_jobs must be >= 1");
+  resend_limits.Validate();
   CAIRN_THROW_UNLESS(tiles_per_burst >= 1, "service.tiles_per_burst must be >= 1");
   CAIRN_THROW_UNLESS(reply_tile_size > 0 && reply_tile_size <= 250,
                      "service.reply_tile_size must be in 1..250");
@@ -47,6 +48,10 @@ void LoadService(YamlMap s, MapstoreServiceParams* p) {
   s.Get("reply_cache_size", &p->reply_cache_size);
   s.Get("allow_delete", &p->allow_delete);
   s.Get("max_queued_jobs", &p->max_queued_jobs);
+  s.Get("resend_tiles_per_s", &p->resend_limits.rate_per_s);
+  s.Get("resend_burst_tiles", &p->resend_limits.burst);
+  s.Get("resend_total_tiles_per_s", &p->resend_limits.total_rate_per_s);
+  s.Get("resend_total_burst_tiles", &p->resend_limits.total_burst);
   s.Get("max_kept_reply_cells", &p->max_kept_reply_cells);
   s.Get("max_staged_bytes", &p->max_staged_bytes);
   s.Get("max_pushes", &p->max_pushes);

@@ -3,6 +3,7 @@
 #include <cstdint>
 #include <string>
 
+#include "common/token_buckets.h"
 #include "common/yaml_reader.h"
 #include "mapstore/save_assembler.h"
 #include "mapstore/sqlite_map_store.h"
@@ -26,6 +27,9 @@ struct MapstoreServiceParams {
   /// with an audit line. `cairn-map delete` on the file is not affected.
   bool allow_delete{false};
   int max_queued_jobs{64};  ///< loads, shares, exports, imports waiting; more are refused (BUSY)
+  /// Reply tiles resent on request, per requester and for every requester together; a request
+  /// beyond is dropped (resend_rate_limited). A request for a whole layer counts as 200 tiles.
+  common::TokenBucketsParams resend_limits;
   int64_t max_kept_reply_cells{64'000'000};  ///< reply tiles kept for resends (cells)
   int64_t max_staged_bytes{512LL << 20};     ///< pushed data held at once (SaveAssemblerParams)
   int max_pushes{64};                        ///< push names staged at once

@@ -241,6 +241,7 @@ NavigatorConfig LoadNavigatorConfig(YamlMap& root) {
   root.Get("map_name", &c.map_name);
   root.Get("resend_interval_s", &c.resend_interval_s);
   root.Get("incomplete_map_timeout_s", &c.incomplete_map_timeout_s);
+  root.Get("map_thread", &c.map_thread);
   LoadMapLayer(root.Child("map"), &c.map);
   LoadCostMap(root.Child("cost_map"), &c.cost_map);
   LoadGlobal(root.Child("global_planner"), &c.global_planner);

@@ -70,6 +70,9 @@ struct NavigatorConfig {
   /// After waiting this long for missing tiles, take the layer with them lethal; the navigator
   /// holds the robot until they come (it asks for them every resend_interval_s).
   double incomplete_map_timeout_s{1.0};
+  /// Map tiles are assembled and cost maps built on a thread of their own, so the control loop
+  /// (commands, the stale-input stop) never waits for a layer (LcmMapClientParams::own_thread).
+  bool map_thread{true};
   CostMapParams cost_map;
   GlobalPlannerParams global_planner;
   DwaParams local_planner;

@@ -57,7 +57,8 @@ MapstoreService::MapstoreService(runtime::Node& node, MapStore& store, ProfileDe
       deriver_(std::move(deriver)),
       params_(std::move(params)),
       payloads_(node, PayloadParamsOf(params_)),
-      saves_(store, params_.save()) {
+      saves_(store, params_.save()),
+      resend_limits_(params_.resend_limits) {
   params_.Validate();
   node_.Subscribe<Request>(channels::kMapstoreRequest, [this](const Request& r) { OnRequest(r); });
   node_.Subscribe<cairn::lcmt_tile_resend_request>(
@@ -321,6 +322,13 @@ void MapstoreService::HandlePutPlaces(const Request& request, Reply* reply) {
 void MapstoreService::OnResend(const cairn::lcmt_tile_resend_request& request) {
   std::shared_ptr<ReplyPayloads::Payload> payload = payloads_.Find(request.map_name);
   if (!payload) return;  // not ours, or forgotten
+  const double tiles = request.num_tiles > 0 ? request.num_tiles : 200.0;
+  if (!resend_limits_.Allow(request.requester, tiles, runtime::Node::SteadyUtime() * 1e-6)) {
+    node_.CountDropped("resend_rate_limited");
+    node_.Warn("resend_rate", "dropped a resend request of '" + request.requester +
+                                  "': beyond the resend rate (service.resend_tiles_per_s)");
+    return;
+  }
   node_.Count("tile_resend_requests");
   payloads_.Send(*payload, &request);
 }

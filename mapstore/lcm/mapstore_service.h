@@ -165,6 +165,7 @@ class MapstoreService {
   std::map<std::string, Reply> replies_;
   std::deque<std::string> reply_order_;
   SaveAssembler saves_;
+  common::TokenBuckets resend_limits_;  // OnResend (the node's thread) only
   // Heavy requests waiting for a worker, and the keys of those queued or running.
   std::deque<std::unique_ptr<Job>> queue_;
   std::set<std::string> busy_keys_;

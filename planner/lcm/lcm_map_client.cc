@@ -1,6 +1,8 @@
 #include "planner/lcm/lcm_map_client.h"
 
+#include <algorithm>
 #include <cmath>
+#include <type_traits>
 
 #include "common/channels.h"
 
@@ -9,17 +11,78 @@ namespace cairn::planner {
 LcmMapClient::LcmMapClient(runtime::Node& node, LcmMapClientParams params,
                            std::vector<common::Vector2> footprint_m)
     : node_(node), params_(std::move(params)), policy_(params_.snapshot, std::move(footprint_m)) {
+  if (params_.own_thread) thread_ = std::thread([this] { ThreadLoop(); });
   if (params_.snapshot.encoding == MapEncoding::kOccupancy) {
     node_.Subscribe<cairn::lcmt_occupancy_tile>(
         channels::ForRobot(params_.robot, channels::kMapOccupancy),
-        [this](const cairn::lcmt_occupancy_tile& t) { OnTile(t); });
+        [this](const cairn::lcmt_occupancy_tile& t) { Deliver(t); });
   } else {
     node_.Subscribe<cairn::lcmt_grid_tile>(channels::ForRobot(params_.robot, channels::kMapTiles),
-                                           [this](const cairn::lcmt_grid_tile& t) { OnTile(t); });
+                                           [this](const cairn::lcmt_grid_tile& t) { Deliver(t); });
   }
   node_.Subscribe<cairn::lcmt_grid_manifest>(
       channels::ForRobot(params_.robot, channels::kMapManifest),
-      [this](const cairn::lcmt_grid_manifest& m) { OnManifest(m); });
+      [this](const cairn::lcmt_grid_manifest& m) { Deliver(m); });
+}
+
+LcmMapClient::~LcmMapClient() {
+  if (!thread_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    stop_ = true;
+  }
+  queue_cv_.notify_one();
+  thread_.join();
+}
+
+void LcmMapClient::Deliver(Message message) {
+  if (!params_.own_thread) return Handle(message);
+  bool dropped = false;
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (queue_.size() >= std::max<size_t>(1, params_.max_queued_messages)) {
+      queue_.pop_front();
+      dropped = true;
+    }
+    queue_.push_back(std::move(message));
+  }
+  queue_cv_.notify_one();
+  if (dropped) {
+    node_.Count("map_queue_drops");
+    node_.Warn("map_queue",
+               "map messages arrive faster than they are assembled: dropped the "
+               "oldest (missing tiles are asked for again)");
+  }
+}
+
+void LcmMapClient::Handle(const Message& message) {
+  std::visit(
+      [this](const auto& m) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(m)>, cairn::lcmt_grid_manifest>) {
+          OnManifest(m);
+        } else {
+          OnTile(m);
+        }
+      },
+      message);
+}
+
+void LcmMapClient::ThreadLoop() {
+  std::deque<Message> batch;
+  for (;;) {
+    bool poll = false;
+    {
+      std::unique_lock<std::mutex> lock(queue_mutex_);
+      queue_cv_.wait(lock, [this] { return stop_ || poll_requested_ || !queue_.empty(); });
+      if (stop_) return;
+      batch.swap(queue_);
+      poll = poll_requested_;
+      poll_requested_ = false;
+    }
+    for (const Message& m : batch) Handle(m);
+    batch.clear();
+    if (poll) PollNow();
+  }
 }
 
 std::shared_ptr<const CostMap> LcmMapClient::Latest() const {
@@ -109,6 +172,15 @@ bool LcmMapClient::PairComplete() const {
 }
 
 void LcmMapClient::Poll() {
+  if (!params_.own_thread) return PollNow();
+  {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    poll_requested_ = true;
+  }
+  queue_cv_.notify_one();
+}
+
+void LcmMapClient::PollNow() {
   const int64_t now = node_.NowUtime();
   const int64_t version = assembler_.version(params_.layer);
   const bool complete = assembler_.Complete(params_.layer);

@@ -1,9 +1,14 @@
 #pragma once
 
+#include <atomic>
+#include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <string>
+#include <thread>
+#include <variant>
 #include <vector>
 
 #include "cairn/lcmt_grid_manifest.hpp"
@@ -48,6 +53,14 @@ struct LcmMapClientParams {
   double resend_interval_s{0.5};
   /// The map policy; its `encoding` also says which tiles to read (float or occupancy).
   MapSnapshotParams snapshot;
+  /// Tiles and manifests from the bus are assembled, and snapshots built, on the client's own
+  /// thread: the node's thread (which runs the navigator's control loop) only queues them, so
+  /// no layer, however large, delays a command or the stale-input stop. Off: on the node's
+  /// thread, as the handlers are called (tests that drive the handlers).
+  bool own_thread{false};
+  /// Messages waiting for the client's thread; beyond, the oldest goes (counted as
+  /// map_queue_drops; a lost tile is asked for again).
+  size_t max_queued_messages{4096};
 };
 
 class LcmMapClient : public MapSource {
@@ -56,6 +69,7 @@ class LcmMapClient : public MapSource {
   /// @throws std::invalid_argument for an invalid footprint or snapshot params.
   LcmMapClient(runtime::Node& node, LcmMapClientParams params,
                std::vector<common::Vector2> footprint_m);
+  ~LcmMapClient() override;
   LcmMapClient(const LcmMapClient&) = delete;
   LcmMapClient& operator=(const LcmMapClient&) = delete;
 
@@ -66,10 +80,11 @@ class LcmMapClient : public MapSource {
   void OnTile(const cairn::lcmt_grid_tile& tile);
   void OnTile(const cairn::lcmt_occupancy_tile& tile);
   void OnManifest(const cairn::lcmt_grid_manifest& manifest);
-  /// Sends resend requests and builds overdue incomplete snapshots; call periodically.
+  /// Sends resend requests and builds overdue incomplete snapshots; call periodically. With
+  /// own_thread it only asks the client's thread to do so.
   void Poll();
 
-  int64_t snapshots() const { return snapshots_; }
+  int64_t snapshots() const { return snapshots_.load(); }
 
  private:
   bool Accepts(const std::string& robot, const std::string& map_name,
@@ -85,6 +100,13 @@ class LcmMapClient : public MapSource {
   // The cost version complete, and the directed version beside it too.
   bool PairComplete() const;
   void AskForMissing(const std::string& layer, int64_t now);
+  void PollNow();
+  /// A message from the bus: handled now, or queued for the client's thread.
+  using Message =
+      std::variant<cairn::lcmt_grid_tile, cairn::lcmt_occupancy_tile, cairn::lcmt_grid_manifest>;
+  void Deliver(Message message);
+  void Handle(const Message& message);
+  void ThreadLoop();
 
   runtime::Node& node_;
   LcmMapClientParams params_;
@@ -94,11 +116,19 @@ class LcmMapClient : public MapSource {
   std::shared_ptr<const CostMap> latest_;
   int64_t heard_utime_{0};
   int64_t last_resend_utime_{0};
-  int64_t snapshots_{0};
+  std::atomic<int64_t> snapshots_{0};
   int tile_size_{0};  // of the newest manifest
   // The directed layer in the snapshot in use: its version (-1: none) and whether it was whole.
   int64_t built_directed_version_{-1};
   bool built_directed_complete_{false};
+
+  // own_thread: what waits for the client's thread.
+  std::mutex queue_mutex_;
+  std::condition_variable queue_cv_;
+  std::deque<Message> queue_;
+  bool poll_requested_{false};
+  bool stop_{false};
+  std::thread thread_;
 };
 
 }  // namespace cairn::planner

@@ -37,6 +37,7 @@ LcmMapClientParams MapClientParams(const std::string& robot, const common::Robot
   p.snapshot.cost = config.cost_map;
   p.snapshot.incomplete_timeout_s = config.incomplete_map_timeout_s;
   p.snapshot.look_at_unseen_drops = config.map.look_at_unseen_drops;
+  p.own_thread = config.map_thread;
   return p;
 }
 
@@ -77,7 +78,8 @@ NavigatorService::NavigatorService(runtime::Node& node, NavigatorConfig config,
       StateSpaceKindName(config_.global_planner.state_space),
       config_.local_planner.generator.vx_samples, config_.local_planner.generator.vtheta_samples,
       config_.local_planner.generator.sim_time_s, config_.control_rate_hz,
-      ControlClockName(config_.control_clock), ch::ForRobot(robot_, config_.pose_source == PoseSource::kOdom ? ch::kOdom : ch::kPose)
+      ControlClockName(config_.control_clock),
+      ch::ForRobot(robot_, config_.pose_source == PoseSource::kOdom ? ch::kOdom : ch::kPose)
           .c_str());
 }
 

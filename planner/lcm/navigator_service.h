@@ -59,6 +59,8 @@ class NavigatorService {
   /// `timeout_s` of wall time passed; returns whether the planner is idle. For tests that drive
   /// the service's clock themselves: plans run in wall time on the worker thread.
   bool WaitForPlanner(double timeout_s);
+  /// The newest cost map the map client built (tests).
+  std::shared_ptr<const CostMap> latest_map() const { return map_client_.Latest(); }
 
   const Navigator& navigator() const { return navigator_; }
   const LcmMapClient& map_client() const { return map_client_; }

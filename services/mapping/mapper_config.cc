@@ -17,6 +17,8 @@ void MapperParams::Validate() const {
   CAIRN_THROW_UNLESS(max_pending_revolutions >= 1, "max_pending_revolutions must be >= 1");
   CAIRN_THROW_UNLESS(tiles_per_burst >= 1, "tiles_per_burst must be >= 1");
   CAIRN_THROW_UNLESS(burst_pause_ms >= 0, "burst_pause_ms must be >= 0");
+  CAIRN_THROW_UNLESS(max_queued_jobs >= 1, "max_queued_jobs must be >= 1");
+  resend_limits.Validate();
   if (!long_term_store.empty()) {
     const auto slash = long_term_store.find('/');
     CAIRN_THROW_UNLESS(slash != std::string::npos && slash > 0 &&
@@ -70,6 +72,11 @@ MapperConfig LoadMapperConfig(common::YamlMap& m) {
   m.Get("snapshot_dir", &p.snapshot_dir);
   m.Get("allow_reset", &p.allow_reset);
   m.Get("allow_snapshot", &p.allow_snapshot);
+  m.Get("max_queued_jobs", &p.max_queued_jobs);
+  m.Get("resend_tiles_per_s", &p.resend_limits.rate_per_s);
+  m.Get("resend_burst_tiles", &p.resend_limits.burst);
+  m.Get("resend_total_tiles_per_s", &p.resend_limits.total_rate_per_s);
+  m.Get("resend_total_burst_tiles", &p.resend_limits.total_burst);
   for (const std::string& layer : RegisteredLayers()) {
     if (!m.Has(layer)) continue;
     common::YamlMap section = m.Child(layer);

@@ -5,6 +5,7 @@
 
 #include "common/robot_profile.h"
 #include "common/status.h"
+#include "common/token_buckets.h"
 #include "services/mapping/mapper_core.h"
 #include "services/mapping/mapper_inputs.h"
 
@@ -19,6 +20,9 @@ class YamlMap;
 namespace cairn::mapping {
 
 /// Everything one robot's mapper process needs besides its profiles.
+/// What a resend request naming no tiles (the whole layer) counts against the resend limits.
+inline constexpr int kWholeLayerResendTiles = 200;
+
 struct MapperParams {
   std::string robot;
   std::string map_name{"live"};
@@ -31,6 +35,14 @@ struct MapperParams {
   /// files). Off, they are refused (STATUS_FORBIDDEN) with an audit line.
   bool allow_reset{false};
   bool allow_snapshot{false};
+  /// Jobs waiting for the worker other than revolutions (scans, readings, control and resend
+  /// requests); beyond, the oldest of the new job's kind goes, else the new one (counted as
+  /// queue_drops).
+  int max_queued_jobs{256};
+  /// Tiles resent on request, per requester and for every requester together; a request
+  /// beyond is dropped (resend_rate_limited). A request for every tile of a layer counts as
+  /// kWholeLayerResendTiles.
+  common::TokenBucketsParams resend_limits;
   /// "SITE/MAP" in cairn-mapstore where the long-term layer is remembered across runs
   /// ("" = nowhere). Needs the dynamic layer.
   std::string long_term_store;

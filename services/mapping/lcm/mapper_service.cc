@@ -46,6 +46,7 @@ MapperService::MapperService(runtime::Node& node, MapperParams params,
       core_(params_.core),
       inputs_(params_.inputs) {
   params_.core.dynamic.long_term_restore.reset();  // the core took it; do not keep a copy
+  resend_limits_ = common::TokenBuckets(params_.resend_limits);
   for (auto& layer : extra_layers) core_.AddLayer(std::move(layer));
   // The converters of the sensor streams the layers take.
   for (const std::string& stream : core_.ReadingStreams()) {
@@ -354,6 +355,13 @@ void MapperService::OnMapstoreReply(const cairn::lcmt_mapstore_reply& msg) {
 
 void MapperService::OnResend(const cairn::lcmt_tile_resend_request& msg) {
   if (msg.robot != params_.robot || msg.map_name != params_.map_name) return;
+  const double tiles = msg.num_tiles > 0 ? msg.num_tiles : kWholeLayerResendTiles;
+  if (!resend_limits_.Allow(msg.requester, tiles, runtime::Node::SteadyUtime() * 1e-6)) {
+    node_.CountDropped("resend_rate_limited");
+    node_.Warn("resend_rate", "dropped a resend request of '" + msg.requester +
+                                  "': beyond the resend rate (resend_tiles_per_s)");
+    return;
+  }
   Job j;
   j.kind = Job::Kind::kResend;
   j.resend = msg;
@@ -379,6 +387,14 @@ void MapperService::Enqueue(Job job) {
         node_.Warn("behind", "mapping falls behind the lidar: skipped a revolution");
       }
       ++pending_revolutions_;
+    } else if (static_cast<int>(queue_.size() - pending_revolutions_) >= params_.max_queued_jobs) {
+      // Full: the oldest job of this kind makes room, else the new one is dropped.
+      auto it = std::find_if(queue_.begin(), queue_.end(),
+                             [&](const Job& q) { return q.kind == job.kind; });
+      node_.Count("queue_drops");
+      node_.Warn("queue_full", "the mapper's worker falls behind its inputs: dropped a job");
+      if (it == queue_.end()) return;
+      queue_.erase(it);
     }
     queue_.push_back(std::move(job));
   }

@@ -170,6 +170,7 @@ class MapperService {
   std::mutex queue_mutex_;
   std::condition_variable queue_cv_;
   std::deque<Job> queue_;
+  common::TokenBuckets resend_limits_{common::TokenBucketsParams{}};  // LCM thread only
   int pending_revolutions_{0};
   std::atomic<bool> stop_{false};
   std::thread worker_;

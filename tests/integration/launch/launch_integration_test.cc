@@ -1,20 +1,25 @@
 // cairn-launch against real processes on a private bus.
 
-#include <errno.h>
-#include <signal.h>
-#include <sys/wait.h>
-
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <regex>
+#include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
+#include <errno.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
 
 #include "cairn/lcmt_health.hpp"
 
+#include "cairn/lcmtypes_registry.hpp"
 #include "services/launch/status.h"
 #include "tests/support/harness.h"
 
@@ -25,15 +30,21 @@ std::string WriteGraph(const std::string& dir, const std::string& url) {
   const std::string path = dir + "/pair.yaml";
   std::ofstream out(path);
   out << "name: pair\n"
-         "lcm_url: " << url << "\n"
+         "lcm_url: "
+      << url
+      << "\n"
          "processes:\n"
          "  watcher:\n"
-         "    command: " << BinPath("cairn-spy") << "\n"
+         "    command: "
+      << BinPath("cairn-spy")
+      << "\n"
          "    args: [--refresh, '10']\n"
          "    restart: always\n"
          "    backoff_s: 0.2\n"
          "  follower:\n"
-         "    command: " << BinPath("cairn-spy") << "\n"
+         "    command: "
+      << BinPath("cairn-spy")
+      << "\n"
          "    args: [--refresh, '10']\n"
          "    depends_on: [watcher]\n"
          "    restart: on-failure\n"
@@ -75,10 +86,12 @@ bool StartPairGraph(ProcessSet& procs, PairGraph* g) {
   g->run_dir = procs.dir() + "/run";
   g->launcher = &procs.StartRaw("cairn-launch",
                                 {BinPath("cairn-launch"), "up", graph, "--run-dir", g->run_dir});
-  return WaitFor([&] {
-    g->status = ReadStatus(g->run_dir);
-    return g->status && g->status->state == "ready";
-  }, 30.0);
+  return WaitFor(
+      [&] {
+        g->status = ReadStatus(g->run_dir);
+        return g->status && g->status->state == "ready";
+      },
+      30.0);
 }
 
 TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
@@ -97,12 +110,16 @@ TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
 
   // SIGKILL one process: the launcher restarts it.
   ASSERT_EQ(kill(old_pid, SIGKILL), 0);
-  ASSERT_TRUE(WaitFor([&] {
-    status = ReadStatus(run_dir);
-    if (!status) return false;
-    const auto* row = Row(*status, "follower");
-    return row && row->restarts == 1 && row->pid > 0 && row->pid != old_pid && row->state == "ready";
-  }, 30.0)) << "follower was not restarted";
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        status = ReadStatus(run_dir);
+        if (!status) return false;
+        const auto* row = Row(*status, "follower");
+        return row && row->restarts == 1 && row->pid > 0 && row->pid != old_pid &&
+               row->state == "ready";
+      },
+      30.0))
+      << "follower was not restarted";
   EXPECT_EQ(Row(*status, "follower")->last_exit, "killed by SIGKILL");
 
   // `cairn-launch status` prints the table with the restart count.
@@ -125,7 +142,8 @@ TEST(LaunchIntegrationTest, RestartsAKilledProcessAndReportsStatus) {
     pids.push_back(p.pid);
   }
   ASSERT_EQ(pids.size(), 2u);
-  ChildProcess& down = procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
+  ChildProcess& down =
+      procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
   ASSERT_TRUE(down.WaitExit(30.0).has_value());
   auto launcher_exit = launcher.WaitExit(30.0);
   ASSERT_TRUE(launcher_exit.has_value());
@@ -200,16 +218,19 @@ TEST(LaunchIntegrationTest, AHeartbeatBombChangesNothing) {
   for (size_t i = 0; i < pids.size(); ++i) {
     const double rss = RssMb(pids[i]);
     ASSERT_GT(rss, 0.0) << "process " << pids[i] << " died";
-    EXPECT_LT(rss - rss_before[i], 50.0) << "process " << pids[i] << " grew from "
-                                         << rss_before[i] << " MB to " << rss << " MB";
+    EXPECT_LT(rss - rss_before[i], 50.0)
+        << "process " << pids[i] << " grew from " << rss_before[i] << " MB to " << rss << " MB";
   }
   // The launcher's loop still runs: it rewrites its status file.
   namespace fs = std::filesystem;
   const auto written = fs::last_write_time(run_dir + "/status.json");
-  EXPECT_TRUE(WaitFor([&] {
-    std::error_code ec;
-    return fs::last_write_time(run_dir + "/status.json", ec) != written;
-  }, 3.0)) << "the launcher stopped writing its status";
+  EXPECT_TRUE(WaitFor(
+      [&] {
+        std::error_code ec;
+        return fs::last_write_time(run_dir + "/status.json", ec) != written;
+      },
+      3.0))
+      << "the launcher stopped writing its status";
   const auto asked = std::chrono::steady_clock::now();
   ChildProcess& status_cmd =
       procs.StartRaw("status", {BinPath("cairn-launch"), "status", "--run-dir", run_dir});
@@ -217,8 +238,174 @@ TEST(LaunchIntegrationTest, AHeartbeatBombChangesNothing) {
   ASSERT_TRUE(exit.has_value());
   EXPECT_EQ(*exit, 0);
   EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count(), 1.0);
-  ChildProcess& down = procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
+  ChildProcess& down =
+      procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
   ASSERT_TRUE(down.WaitExit(30.0).has_value());
+}
+
+// Every message of every variable-size type whose count or length word claims 67 million:
+// the type's empty encoding with one 4-byte word after the fingerprint set so, for each word
+// that makes the bounded decoder refuse it (a count or a length; others decode as a value).
+std::vector<std::vector<uint8_t>> BombsOfEveryType() {
+  std::vector<std::vector<uint8_t>> bombs;
+  for (const cairn::LcmTypeInfo& type : cairn::AllLcmTypes()) {
+    const std::vector<uint8_t> sample = type.sample();
+    for (size_t at = 8; at + 4 <= sample.size(); ++at) {
+      std::vector<uint8_t> bytes = sample;
+      bytes[at] = 0x04;  // 0x04000000 = 67,108,864
+      bytes[at + 1] = bytes[at + 2] = bytes[at + 3] = 0;
+      if (type.decode(bytes.data(), static_cast<int>(bytes.size())) < 0) bombs.push_back(bytes);
+    }
+  }
+  return bombs;
+}
+
+// Messages a second on a channel, counted by a listener on its own thread.
+class RateMeter {
+ public:
+  explicit RateMeter(const std::string& url) : lcm_(url) {
+    lcm_.subscribe(".*", &RateMeter::On, this);
+    thread_ = std::thread([this] {
+      while (!stop_) lcm_.handleTimeout(50);
+    });
+  }
+  ~RateMeter() {
+    stop_ = true;
+    thread_.join();
+  }
+  std::map<std::string, double> Measure(double seconds) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      counts_.clear();
+    }
+    WaitFor([] { return false; }, seconds);
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::map<std::string, double> rates;
+    for (const auto& [channel, n] : counts_) rates[channel] = n / seconds;
+    return rates;
+  }
+
+ private:
+  void On(const lcm::ReceiveBuffer*, const std::string& channel) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++counts_[channel];
+  }
+  lcm::LCM lcm_;
+  std::mutex mutex_;
+  std::map<std::string, int64_t> counts_;
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
+// Issue 20's acceptance: the demo graph (simulator, mapper, navigator, map store under
+// cairn-launch) takes the 67-million-count bomb of every variable-size type on every channel
+// its processes read. Every process stays within 50 MB of what it held and keeps its rates, and
+// `cairn-launch status` answers within 1 s.
+TEST(LaunchIntegrationTest, TheDemoGraphTakesABombOfEveryTypeOnEveryChannel) {
+  ProcessSet procs(PrivateLcmUrl());
+  std::string yaml;
+  {
+    std::ifstream in(SourcePath("config/graphs/demo.yaml"));
+    std::stringstream text;
+    text << in.rdbuf();
+    yaml = text.str();
+  }
+  yaml = std::regex_replace(yaml, std::regex("var/cairn\\.db"), procs.dir() + "/cairn.db");
+  yaml = std::regex_replace(yaml, std::regex("\\bconfig/"), SourcePath("config") + "/");
+  yaml = "lcm_url: " + procs.url() + "\n" + yaml;
+  const std::string graph = procs.dir() + "/demo.yaml";
+  std::ofstream(graph) << yaml;
+  const std::string run_dir = procs.dir() + "/run";
+  procs.StartRaw("cairn-launch", {BinPath("cairn-launch"), "up", graph, "--run-dir", run_dir});
+  std::optional<launch::GraphStatus> status;
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        status = ReadStatus(run_dir);
+        return status && status->state == "ready";
+      },
+      90.0))
+      << "the demo graph never became ready";
+  std::vector<int> pids;
+  std::vector<std::string> names;
+  for (const auto& p : status->processes) {
+    pids.push_back(p.pid);
+    names.push_back(p.name);
+  }
+  RateMeter meter(procs.url());
+  WaitFor([] { return false; }, 3.0);  // the mapper's first maps
+  std::vector<double> rss_before;
+  for (int pid : pids) rss_before.push_back(RssMb(pid));
+  const std::map<std::string, double> before = meter.Measure(3.0);
+
+  const std::vector<std::vector<uint8_t>> bombs = BombsOfEveryType();
+  ASSERT_GT(bombs.size(), 30u);
+  const std::vector<std::string> channels = {"HEALTH",
+                                             "SIM.CONTROL",
+                                             "MAPSTORE.REQUEST",
+                                             "MAPSTORE.REPLY",
+                                             "MAPSTORE.TILE_RESEND",
+                                             "MAPSTORE.PUSH.TILES",
+                                             "MAPSTORE.PUSH.TILE_BATCHES",
+                                             "MAPSTORE.PUSH.MANIFEST",
+                                             "MAPSTORE.PUSH.OBSTACLES",
+                                             "MAPSTORE.PUSH.OCTOMAP",
+                                             "p3at.CMD_VEL",
+                                             "p3at.GOAL",
+                                             "p3at.LIDAR",
+                                             "p3at.SCAN",
+                                             "p3at.ODOM",
+                                             "p3at.POSE",
+                                             "p3at.IMU",
+                                             "p3at.MAP.CONTROL",
+                                             "p3at.MAP.TILE_RESEND",
+                                             "p3at.MAP.TILES",
+                                             "p3at.MAP.MANIFEST",
+                                             "p3at.MAP.OCCUPANCY",
+                                             "p3at.MAP.OBSTACLES",
+                                             "p3at.MAP.OCTOMAP"};
+  lcm::LCM bus(procs.url());
+  ASSERT_TRUE(bus.good());
+  int sent = 0;
+  for (const std::string& channel : channels) {
+    for (const auto& bomb : bombs) {
+      bus.publish(channel, bomb.data(), static_cast<unsigned>(bomb.size()));
+      // Paced: the bombs must reach the processes, not overflow their sockets.
+      if (++sent % 50 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+  }
+  const std::map<std::string, double> after = meter.Measure(3.0);
+  for (size_t i = 0; i < pids.size(); ++i) {
+    const double rss = RssMb(pids[i]);
+    ASSERT_GT(rss, 0.0) << names[i] << " died";
+    EXPECT_LT(rss - rss_before[i], 50.0)
+        << names[i] << " grew from " << rss_before[i] << " MB to " << rss << " MB";
+  }
+  // The rates each process keeps (the sim's sensors, the mapper's maps, the navigator's status,
+  // every heartbeat): at least 70 % of what they were.
+  for (const char* channel :
+       {"p3at.LIDAR", "p3at.POSE", "p3at.MAP.MANIFEST", "p3at.NAV_STATUS", "HEALTH"}) {
+    const double was = before.count(channel) ? before.at(channel) : 0.0;
+    const double is = after.count(channel) ? after.at(channel) : 0.0;
+    EXPECT_GT(was, 0.0) << channel << " was silent before the bombs";
+    EXPECT_GE(is, 0.7 * was) << channel << ": " << was << " Hz before the bombs, " << is
+                             << " Hz after";
+  }
+  std::printf("%d bombs (%zu per channel) sent; rates before -> after:", sent, bombs.size());
+  for (const auto& [channel, rate] : before) {
+    std::printf(" %s %.1f->%.1f", channel.c_str(), rate,
+                after.count(channel) ? after.at(channel) : 0.0);
+  }
+  std::printf("\n");
+  const auto asked = std::chrono::steady_clock::now();
+  ChildProcess& status_cmd =
+      procs.StartRaw("status", {BinPath("cairn-launch"), "status", "--run-dir", run_dir});
+  auto exit = status_cmd.WaitExit(5.0);
+  ASSERT_TRUE(exit.has_value());
+  EXPECT_EQ(*exit, 0);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count(), 1.0);
+  ChildProcess& down =
+      procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
+  ASSERT_TRUE(down.WaitExit(40.0).has_value());
 }
 
 TEST(LaunchIntegrationTest, RequiredProcessFailingForGoodStopsTheGraph) {
@@ -237,8 +424,9 @@ TEST(LaunchIntegrationTest, RequiredProcessFailingForGoodStopsTheGraph) {
   ASSERT_TRUE(exit.has_value()) << "the launcher did not stop";
   EXPECT_TRUE(WIFEXITED(*exit));
   EXPECT_EQ(WEXITSTATUS(*exit), 1);
-  EXPECT_NE(launcher.Log().find("required process 'broken' failed for good: exited 1 after 2 restarts"),
-            std::string::npos)
+  EXPECT_NE(
+      launcher.Log().find("required process 'broken' failed for good: exited 1 after 2 restarts"),
+      std::string::npos)
       << launcher.Log();
 }
 
@@ -255,7 +443,8 @@ TEST(LaunchIntegrationTest, InvalidGraphIsRefusedBeforeAnythingStarts) {
   auto exit = launcher.WaitExit(20.0);
   ASSERT_TRUE(exit.has_value());
   EXPECT_EQ(WEXITSTATUS(*exit), 2);
-  EXPECT_NE(launcher.Log().find("bad.yaml:5: dependency cycle: a -> b -> a"), std::string::npos) << launcher.Log();
+  EXPECT_NE(launcher.Log().find("bad.yaml:5: dependency cycle: a -> b -> a"), std::string::npos)
+      << launcher.Log();
   EXPECT_FALSE(std::ifstream(procs.dir() + "/run/status.json").good());
 }
 

@@ -19,6 +19,7 @@
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
 #include "cairn/lcmt_occupancy_tile.hpp"
+#include "cairn/lcmt_tile_resend_request.hpp"
 
 #include "common/channels.h"
 #include "common/layers.h"
@@ -352,6 +353,33 @@ TEST(MapperServiceTest, ResetAndSnapshotAreForbiddenUnlessTheConfigurationAllows
     }
     EXPECT_EQ(node.counter("forbidden_requests"), allowed ? 0 : 2);
   }
+}
+
+// Issue 20: resend requests were not rate-limited: a peer asking for every tile of every layer
+// as fast as it could made the mapper send without limit. A requester gets its burst, then its
+// rate; the rest are dropped and counted.
+TEST(MapperServiceTest, ResendRequestsBeyondTheRateAreDropped) {
+  runtime::Node node(MemqOptions());
+  MapperParams params;
+  params.robot = "r1";
+  params.core.SetListed(kOctomapLayerName, false);
+  params.resend_limits.rate_per_s = 1.0;  // a test's whole run gains almost nothing
+  params.resend_limits.burst = 10 * kWholeLayerResendTiles;
+  MapperService service(node, params, {ShippedProfile("pioneer3at")}, nullptr);
+  for (int i = 0; i < 100; ++i) {
+    cairn::lcmt_tile_resend_request request{};
+    request.requester = "flood";
+    request.robot = "r1";
+    request.map_name = "live";
+    request.layer = "elevation";
+    node.Publish("r1.MAP.TILE_RESEND", request);
+  }
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (node.counter("resend_rate_limited") < 90 && std::chrono::steady_clock::now() < deadline) {
+    node.SpinOnce(10);
+  }
+  service.Stop();
+  EXPECT_EQ(node.counter("resend_rate_limited"), 90);
 }
 
 }  // namespace
