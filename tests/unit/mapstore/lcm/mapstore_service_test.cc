@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <map>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -47,9 +48,11 @@ Request MakeRequest(int8_t op, const std::string& map = "") {
 
 class MapstoreServiceUnitTest : public ::testing::Test {
  protected:
-  explicit MapstoreServiceUnitTest(double poll_period_s = 0.05) : node_(MemqOptions()) {
+  explicit MapstoreServiceUnitTest(double poll_period_s = 0.05, bool allow_delete = false)
+      : node_(MemqOptions()) {
     MapstoreServiceParams params;
     params.poll_period_s = poll_period_s;
+    params.allow_delete = allow_delete;
     params.save_timeout_s = 1.0;
     params.resend_interval_s = 0.05;
     params.pull_settle_s = 0.1;
@@ -284,7 +287,9 @@ TEST_F(MapstoreServiceUnitTest, AWholeNumberLayerTravelsAsBytesSeveralTilesToAMe
   EXPECT_EQ(byte_tiles_, 6);
   EXPECT_EQ(batches_, 1);
   EXPECT_LT(compressed_bytes_, 237 * 123);
-  const common::Layer& got = assembler_.Layer("cost/test")->at("cost/test");
+  const std::optional<common::GridMap> assembled = assembler_.Layer("cost/test");
+  ASSERT_TRUE(assembled.has_value());
+  const common::Layer& got = assembled->at("cost/test");
   for (Eigen::Index i = 0; i < got.size(); ++i) {
     ASSERT_TRUE((std::isnan(got.data()[i]) && std::isnan(cost.data()[i])) ||
                 got.data()[i] == cost.data()[i])
@@ -461,11 +466,15 @@ TEST_F(MapstoreServiceUnitTest, DeleteIsForbiddenUnlessTheConfigurationAllowsIt)
   EXPECT_NE(refused.message.find("allow_delete"), std::string::npos) << refused.message;
   EXPECT_TRUE(store_.GetMapInfo({"lab", "corridor", 0}).ok());
   EXPECT_EQ(node_.counter("forbidden_requests"), 1);
+}
 
-  MapstoreServiceParams params;
-  params.allow_delete = true;
-  dut_.reset();
-  dut_ = std::make_unique<MapstoreService>(node_, store_, testing::FakeDeriver(), params);
+class MapstoreServiceDeleteAllowedTest : public MapstoreServiceUnitTest {
+ protected:
+  MapstoreServiceDeleteAllowedTest() : MapstoreServiceUnitTest(0.05, /*allow_delete=*/true) {}
+};
+
+TEST_F(MapstoreServiceDeleteAllowedTest, DeleteWorksWhenTheConfigurationAllowsIt) {
+  ASSERT_EQ(Push(testing::SampleSnapshot("corridor", 37, 23)).status, kOk);
   EXPECT_EQ(Call(MakeRequest(Request::OP_DELETE, "corridor")).status, kOk);
   EXPECT_FALSE(store_.GetMapInfo({"lab", "corridor", 0}).ok());
 }
