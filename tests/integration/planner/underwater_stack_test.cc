@@ -474,16 +474,17 @@ TEST_F(UnderwaterStackTest, Seed004Test19ACrossCurrentStillEndsWithinTolerance) 
     return;
   }
   // Where it ended: the pose the navigator judged when it said it had arrived (the current
-  // carries an idle hull on afterwards). That pose is among those of the quarter second before
-  // its status (the pose it held then, not necessarily the last stamped before it: a hull
-  // drifting at the tolerance's edge is a millimetre further 20 ms later).
+  // carries an idle hull on afterwards). That pose is among those stamped from a quarter second
+  // before its status to a tenth after: the status carries the navigator's clock (the newest
+  // SIM.CLOCK it heard), which lags the pose it judged by up to a clock period, and a hull
+  // drifting at the tolerance's edge is a millimetre further 20 ms later.
   WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
   const int64_t reached_utime = ReachedUtime(19);
   ASSERT_GT(reached_utime, 0);
   const std::vector<common::Pose2> poses = Poses(reached_utime);
   ASSERT_GT(poses.size(), 100u);
   double ended_m = 1e300;
-  for (const common::Pose2& p : Poses(reached_utime, reached_utime - 250'000)) {
+  for (const common::Pose2& p : Poses(reached_utime + 100'000, reached_utime - 250'000)) {
     ended_m = std::min(ended_m, (p.position() - Vector2(25.0, 0.0)).norm());
   }
   EXPECT_LE(ended_m, 2.0);
