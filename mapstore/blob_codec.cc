@@ -311,7 +311,7 @@ common::Status DecodeBlobTo(Codec codec, const char* data, size_t size, int64_t 
         return common::CorruptError("blob holds " + std::to_string(size) + " bytes, expected " +
                                     std::to_string(raw_size));
       }
-      std::memcpy(out, data, size);
+      if (size > 0) std::memcpy(out, data, size);  // null pointers when empty
       break;
     case Codec::kZstd:
     case Codec::kZstdShuffle4:

@@ -80,11 +80,17 @@ void LoadGlobal(YamlMap map, GlobalPlannerParams* p) {
 
 // One critic's own key: a number, or a boolean (1 or 0).
 double CriticValue(const YamlMap& entry, const YAML::Node& value, const std::string& key) {
-  double number = 0.0;
-  if (YAML::convert<double>::decode(value, number)) return number;
-  bool flag = false;
-  if (YAML::convert<bool>::decode(value, flag)) return flag ? 1.0 : 0.0;
-  entry.Fail(value, "critic key '" + key + "' must be a number or true/false");
+  try {
+    double number = 0.0;
+    if (YAML::convert<double>::decode(value, number)) return number;
+    bool flag = false;
+    if (YAML::convert<bool>::decode(value, flag)) return flag ? 1.0 : 0.0;
+  } catch (const YAML::Exception&) {
+  }
+  // A key yaml-cpp cannot look up again (a null key) gives an invalid node, whose place is
+  // unknown (found by fuzz_yaml_loaders: it escaped as YAML::InvalidNode).
+  entry.Fail(value.IsDefined() ? value : YAML::Node(),
+             "critic key '" + key + "' must be a number or true/false");
 }
 
 // local_planner.critics: a list of {name, scale, <the critic's own keys>...} in scoring order,

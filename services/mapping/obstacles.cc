@@ -54,7 +54,7 @@ struct Cells {
   const float* h{nullptr};     // elevation (NaN: unknown)
   int64_t Index(int x, int y) const { return x + static_cast<int64_t>(y) * sx; }
   bool Inside(int x, int y) const { return x >= 0 && y >= 0 && x < sx && y < sy; }
-  uint8_t Class(int64_t i) const { return static_cast<uint8_t>(cls[i]); }
+  uint8_t Class(int64_t i) const { return internal::ClassOf(cls[i]); }
 };
 
 // 8-connected components over the cells whose class is in `classes`, skipping labelled cells.
@@ -644,7 +644,7 @@ void AddSeenDitches(const GridMap& map, const ObstacleParams& params, std::vecto
   for (int y = 0; y < view.sy; ++y) {
     for (int x = 0; x < view.sx; ++x) {
       const int64_t i = x + static_cast<int64_t>(y) * view.sx;
-      const auto k = static_cast<uint8_t>((*cls)[i]);
+      const auto k = internal::ClassOf((*cls)[i]);
       if (std::isnan(view.h[i]) || !std::isnan((*ddepth)[i]) ||
           !(k == internal::kNone || k == kStep || k == kRamp)) {
         continue;

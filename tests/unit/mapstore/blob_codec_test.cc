@@ -316,5 +316,13 @@ TEST(NamesTest, RulesForNames) {
   EXPECT_FALSE(ValidatePlaceName("room;drop").ok());
 }
 
+// Issue 20 (found by fuzz_codecs under UBSan): an empty raw blob was copied with memcpy from and
+// to null pointers (undefined behaviour even for 0 bytes). It decodes to nothing.
+TEST(BlobCodecTest, AnEmptyRawBlobDecodesToNothing) {
+  EXPECT_TRUE(DecodeBlobTo(Codec::kRaw, nullptr, 0, 0, 0, nullptr).ok());
+  FloatRows rows;  // no place at all
+  EXPECT_TRUE(DecodeFloatBlobRows(Codec::kRaw, nullptr, 0, 0, 0, 0, rows).ok());
+}
+
 }  // namespace
 }  // namespace cairn::mapstore

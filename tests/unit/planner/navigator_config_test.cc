@@ -93,6 +93,10 @@ TEST(NavigatorConfigTest, CriticListsAreCheckedAtTheirLine) {
                         "inflation_m: wide}\n")
                 .find("inflation_m"),
             std::string::npos);
+  // Issue 20 (found by fuzz_yaml_loaders): a null key escaped as yaml-cpp's InvalidNode.
+  EXPECT_NE(ConfigError("local_planner:\n  critics:\n    - {name: clearance, scale: 1, ~: 2}\n")
+                .find("must be a number"),
+            std::string::npos);
   EXPECT_NE(ConfigError("local_planner:\n  critics:\n    - {name: speed, scale: 1}\n"
                         "    - {name: speed, scale: 2}\n")
                 .find("listed twice"),

@@ -623,5 +623,17 @@ TEST(JudgeObstacleTest, LabelReplacesOnlyTheGivenProfiles) {
   EXPECT_FALSE(r.obstacles[0].VerdictFor("kobuki")->crossable);  // kept as it was
 }
 
+// Issue 20 (found by fuzz_bus_mapper under UBSan): the registry cast the class layer's floats
+// to integers, NaN included (a cell never classified): undefined behaviour. ClassOf reads NaN,
+// and any value that is no class, as kNone.
+TEST(ObstaclesTest, AClassLayerValueThatIsNoClassReadsAsNone) {
+  EXPECT_EQ(internal::ClassOf(std::numeric_limits<float>::quiet_NaN()), internal::kNone);
+  EXPECT_EQ(internal::ClassOf(-3.f), internal::kNone);
+  EXPECT_EQ(internal::ClassOf(1e9f), internal::kNone);
+  EXPECT_EQ(internal::ClassOf(0.f), internal::kNone);
+  EXPECT_EQ(internal::ClassOf(static_cast<float>(internal::kStep)), internal::kStep);
+  EXPECT_EQ(internal::ClassOf(static_cast<float>(internal::kRamp)), internal::kRamp);
+}
+
 }  // namespace
 }  // namespace cairn::mapping
