@@ -377,6 +377,7 @@ common::Status DecodeFloatBlobRows(Codec codec, const char* data, size_t size, i
   const common::Status s = DecodeBlobTo(codec, data, size, raw_size, raw_crc32,
                                         reinterpret_cast<uint8_t*>(whole.data()), verify_crc);
   if (!s.ok()) return s;
+  if (out.cells_per_row <= 0) return common::Status::Ok();  // nothing to copy (no null memcpy)
   for (int y = 0; y < out.rows; ++y) {
     std::memcpy(out.first + y * out.row_stride,
                 whole.data() + static_cast<size_t>(y) * source_cells_x,

@@ -322,6 +322,16 @@ TEST(BlobCodecTest, AnEmptyRawBlobDecodesToNothing) {
   EXPECT_TRUE(DecodeBlobTo(Codec::kRaw, nullptr, 0, 0, 0, nullptr).ok());
   FloatRows rows;  // no place at all
   EXPECT_TRUE(DecodeFloatBlobRows(Codec::kRaw, nullptr, 0, 0, 0, 0, rows).ok());
+  // Rows of no cells, of a blob of no cells (zstd, decoded whole into an empty buffer).
+  const EncodedBlob empty = EncodeBlob(nullptr, 0, Codec::kZstd);
+  float place = 1.f;
+  rows.first = &place;
+  rows.rows = 1;
+  rows.cells_per_row = 0;
+  EXPECT_TRUE(DecodeFloatBlobRows(Codec::kZstd, empty.data.data(), empty.data.size(), 0, 1,
+                                  empty.raw_crc32, rows)
+                  .ok());
+  EXPECT_EQ(place, 1.f);
 }
 
 }  // namespace
