@@ -42,9 +42,12 @@ struct Harness {
 
 }  // namespace
 
+// A service per input: inputs stay independent (a finding reproduces from its input alone), and
+// the workers stop before the process exits (a worker left running meets destroyed statics).
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static Harness* h = new Harness();
   static const std::vector<std::string> channels = cairn::fuzz::MapperChannels();
-  cairn::fuzz::FeedBus(h->node, channels, data, size);
+  Harness h;
+  cairn::fuzz::FeedBus(h.node, channels, data, size);
+  h.service->Stop();
   return 0;
 }

@@ -23,9 +23,13 @@ struct Harness {
   Harness() : node(Options()) {
     dir = std::filesystem::temp_directory_path() /
           ("cairn-fuzz-mapstore-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);  // the previous input's database
     std::filesystem::create_directories(dir / "files");
-    static const std::string made = dir.string();
-    std::atexit([] { std::filesystem::remove_all(made); });
+    static const bool cleanup = [this] {
+      static const std::string made = dir.string();
+      return std::atexit([] { std::filesystem::remove_all(made); }) == 0;
+    }();
+    (void)cleanup;
     auto opened = cairn::mapstore::SqliteMapStore::Open((dir / "site.db").string());
     if (!opened.ok()) std::abort();
     store = std::move(opened).value();
@@ -52,9 +56,13 @@ struct Harness {
 
 }  // namespace
 
+// A service and a database per input: inputs stay independent (a finding reproduces from its
+// input alone), and the workers stop before the process exits.
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  static Harness* h = new Harness();
   static const std::vector<std::string> channels = cairn::fuzz::MapstoreChannels();
-  cairn::fuzz::FeedBus(h->node, channels, data, size);
+  {
+    Harness h;
+    cairn::fuzz::FeedBus(h.node, channels, data, size);
+  }
   return 0;
 }
