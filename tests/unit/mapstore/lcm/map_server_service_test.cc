@@ -5,6 +5,7 @@
 
 #include "mapstore/lcm/map_server_service.h"
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <thread>
@@ -95,7 +96,7 @@ class MapServerServiceTest : public ::testing::Test {
   std::optional<cairn::lcmt_obstacle_registry> registry_;
   int tiles_{0};
   int drop_tiles_{0};
-  int opens_{0};
+  std::atomic<int> opens_{0};  // the opener runs on the service's thread
 };
 
 TEST_F(MapServerServiceTest, PublishesTheCostLayerAsAMapperWouldAndReannouncesIt) {
