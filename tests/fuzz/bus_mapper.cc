@@ -10,11 +10,12 @@
 #include "services/mapping/lcm/mapper_service.h"
 #include "tests/fuzz/bus_channels.h"
 #include "tests/fuzz/bus_feed.h"
+#include "tests/support/memq_node.h"
 
 namespace {
 
 struct Harness {
-  Harness() : node(Options()) {
+  Harness() : node(cairn::testing::MemqNodeOptions("cairn-mapper", cairn::fuzz::kRobot)) {
     cairn::mapping::MapperParams params;
     params.robot = cairn::fuzz::kRobot;
     params.core.terrain.publish_period_s = 0.01;
@@ -26,15 +27,6 @@ struct Harness {
         [](const std::string& name) -> cairn::common::Result<cairn::common::RobotProfile> {
           return cairn::common::NotFoundError("no profile " + name);
         });
-  }
-  static cairn::runtime::NodeOptions Options() {
-    cairn::runtime::NodeOptions o;
-    o.process_name = "cairn-mapper";
-    o.robot = cairn::fuzz::kRobot;
-    o.lcm_url = "memq://";
-    o.install_signal_handlers = false;
-    o.follow_sim_clock = false;
-    return o;
   }
   cairn::runtime::Node node;
   std::unique_ptr<cairn::mapping::MapperService> service;

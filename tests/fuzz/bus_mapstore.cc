@@ -16,11 +16,12 @@
 #include "mapstore/sqlite_map_store.h"
 #include "tests/fuzz/bus_channels.h"
 #include "tests/fuzz/bus_feed.h"
+#include "tests/support/memq_node.h"
 
 namespace {
 
 struct Harness {
-  Harness() : node(Options()) {
+  Harness() : node(cairn::testing::MemqNodeOptions("cairn-mapstore")) {
     dir = std::filesystem::temp_directory_path() /
           ("cairn-fuzz-mapstore-" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);  // the previous input's database
@@ -39,14 +40,6 @@ struct Harness {
     params.staging_timeout_s = 1.0;
     service = std::make_unique<cairn::mapstore::MapstoreService>(
         node, *store, cairn::mapstore::MappingDeriver(), params);
-  }
-  static cairn::runtime::NodeOptions Options() {
-    cairn::runtime::NodeOptions o;
-    o.process_name = "cairn-mapstore";
-    o.lcm_url = "memq://";
-    o.install_signal_handlers = false;
-    o.follow_sim_clock = false;
-    return o;
   }
   std::filesystem::path dir;
   cairn::runtime::Node node;

@@ -10,11 +10,12 @@
 #include "planner/lcm/lcm_map_client.h"
 #include "tests/fuzz/bus_channels.h"
 #include "tests/fuzz/bus_feed.h"
+#include "tests/support/memq_node.h"
 
 namespace {
 
 struct Harness {
-  Harness() : node(Options()) {
+  Harness() : node(cairn::testing::MemqNodeOptions("cairn-navigator", cairn::fuzz::kRobot)) {
     const auto profile = cairn::common::LoadRobotProfileFile(std::string(CAIRN_SOURCE_DIR) +
                                                              "/config/profiles/pioneer3at.yaml");
     cairn::planner::LcmMapClientParams cost;
@@ -30,15 +31,6 @@ struct Harness {
     occupancy.snapshot.encoding = cairn::planner::MapEncoding::kOccupancy;
     occupancy_client =
         std::make_unique<cairn::planner::LcmMapClient>(node, occupancy, profile.footprint_m);
-  }
-  static cairn::runtime::NodeOptions Options() {
-    cairn::runtime::NodeOptions o;
-    o.process_name = "cairn-navigator";
-    o.robot = cairn::fuzz::kRobot;
-    o.lcm_url = "memq://";
-    o.install_signal_handlers = false;
-    o.follow_sim_clock = false;
-    return o;
   }
   cairn::runtime::Node node;
   std::unique_ptr<cairn::planner::LcmMapClient> cost_client;

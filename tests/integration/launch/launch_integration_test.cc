@@ -188,6 +188,20 @@ double RssMb(int pid) {
   return -1.0;
 }
 
+// `cairn-launch status` answers (exit 0) within a second; then `down` stops the graph.
+void ExpectStatusWithinASecondThenDown(ProcessSet& procs, const std::string& run_dir) {
+  const auto asked = std::chrono::steady_clock::now();
+  ChildProcess& status_cmd =
+      procs.StartRaw("status", {BinPath("cairn-launch"), "status", "--run-dir", run_dir});
+  auto exit = status_cmd.WaitExit(5.0);
+  ASSERT_TRUE(exit.has_value());
+  EXPECT_EQ(*exit, 0);
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count(), 1.0);
+  ChildProcess& down =
+      procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
+  ASSERT_TRUE(down.WaitExit(40.0).has_value());
+}
+
 // Issue 20's finding: one 84-byte heartbeat whose num_channels says 67 million made the
 // launcher grow by 220 MB a second and stop answering. Now a hundred of them change nothing:
 // the launcher and the two spies (which decode every type) stay within 50 MB of what they
@@ -231,16 +245,7 @@ TEST(LaunchIntegrationTest, AHeartbeatBombChangesNothing) {
       },
       3.0))
       << "the launcher stopped writing its status";
-  const auto asked = std::chrono::steady_clock::now();
-  ChildProcess& status_cmd =
-      procs.StartRaw("status", {BinPath("cairn-launch"), "status", "--run-dir", run_dir});
-  auto exit = status_cmd.WaitExit(5.0);
-  ASSERT_TRUE(exit.has_value());
-  EXPECT_EQ(*exit, 0);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count(), 1.0);
-  ChildProcess& down =
-      procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
-  ASSERT_TRUE(down.WaitExit(30.0).has_value());
+  ExpectStatusWithinASecondThenDown(procs, run_dir);
 }
 
 // Every message of every variable-size type whose count or length word claims 67 million:
@@ -396,16 +401,7 @@ TEST(LaunchIntegrationTest, TheDemoGraphTakesABombOfEveryTypeOnEveryChannel) {
                 after.count(channel) ? after.at(channel) : 0.0);
   }
   std::printf("\n");
-  const auto asked = std::chrono::steady_clock::now();
-  ChildProcess& status_cmd =
-      procs.StartRaw("status", {BinPath("cairn-launch"), "status", "--run-dir", run_dir});
-  auto exit = status_cmd.WaitExit(5.0);
-  ASSERT_TRUE(exit.has_value());
-  EXPECT_EQ(*exit, 0);
-  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count(), 1.0);
-  ChildProcess& down =
-      procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
-  ASSERT_TRUE(down.WaitExit(40.0).has_value());
+  ExpectStatusWithinASecondThenDown(procs, run_dir);
 }
 
 TEST(LaunchIntegrationTest, RequiredProcessFailingForGoodStopsTheGraph) {
