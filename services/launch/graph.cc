@@ -172,6 +172,8 @@ ProcessSpec LoadProcess(YamlMap& map, const std::string& name, const std::string
   }
   map.Get("grace_s", &p.grace_s);
   map.Get("required", &p.required);
+  map.Get("liveness_timeout_s", &p.liveness_timeout_s);
+  map.Get("reset_restarts_after_s", &p.reset_restarts_after_s);
   if (map.Has("expected_rates_hz")) {
     YamlMap rates = map.Child("expected_rates_hz");
     for (const auto& key : rates.Keys()) p.expected_rates_hz[key] = rates.Require<double>(key);
@@ -180,6 +182,10 @@ ProcessSpec LoadProcess(YamlMap& map, const std::string& name, const std::string
   if (p.backoff_s < 0 || p.max_backoff_s < p.backoff_s || p.max_restarts < 0 || p.grace_s < 0) {
     map.Fail(where, "process '" + name +
                         "': backoff_s, max_backoff_s, max_restarts and grace_s must be >= 0");
+  }
+  if (!(p.liveness_timeout_s >= 0) || !(p.reset_restarts_after_s >= 0)) {
+    map.Fail(where, "process '" + name +
+                        "': liveness_timeout_s and reset_restarts_after_s must be >= 0 (0 = off)");
   }
   const auto exe = require_executables ? ResolveExecutable(p.command, graph_dir, bin_dirs)
                                        : std::optional<std::string>(p.command);
@@ -204,6 +210,12 @@ GraphSpec LoadFromMap(YamlMap root, const std::string& file,
   root.Get("lcm_url", &graph.lcm_url);
   root.Get("run_dir", &graph.run_dir);
   if (graph.run_dir.empty()) graph.run_dir = "var/run/" + graph.name;
+  root.Get("log_max_mb", &graph.log_max_mb);
+  root.Get("log_keep", &graph.log_keep);
+  if (!(graph.log_max_mb >= 0) || graph.log_keep < 1 || graph.log_keep > 100) {
+    root.Fail(root.Raw(root.Has("log_keep") ? "log_keep" : "log_max_mb"),
+              "log_max_mb must be >= 0 (0 = no rotation) and log_keep between 1 and 100");
+  }
   if (!root.Has("processes")) root.Fail(YAML::Node(), "graph has no 'processes'");
   YAML::Node processes = root.Raw("processes");
   if (!processes.IsMap()) root.Fail(processes, "'processes' must be a map of name -> process");

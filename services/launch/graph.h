@@ -44,6 +44,13 @@ struct ProcessSpec {
   int stop_signal{15};         ///< SIGTERM
   double grace_s{5.0};         ///< then SIGKILL
   bool required{true};         ///< failing for good stops the graph
+  /// Liveness after ready: a process whose readiness is its heartbeat and that sends none for
+  /// this long (or whose ready channel stays below min_rate_hz this long) is hung: it is sent
+  /// stop_signal, SIGKILL after grace_s, and restarted per its policy. 0 turns it off.
+  double liveness_timeout_s{10.0};
+  /// A process ready this long since its last start has its back-off and its count towards
+  /// max_restarts reset (the status still counts every restart). 0: never reset.
+  double reset_restarts_after_s{60.0};
   /// Expected publishing rates of channels this process owns (for cairn-spy and status).
   std::map<std::string, double> expected_rates_hz;
   int line{0};                 ///< line in the graph file, for messages
@@ -54,6 +61,11 @@ struct GraphSpec {
   std::string file;
   std::string lcm_url;  ///< empty: inherit LCM_DEFAULT_URL / --lcm-url
   std::string run_dir;  ///< default var/run/<name>
+  /// Each process's log is rotated when it passes this size: <name>.log is copied to
+  /// <name>.log.1 (older copies shift up to <name>.log.<log_keep>, the oldest dropped) and
+  /// truncated in place, so the process keeps writing to the same file. 0: no rotation.
+  double log_max_mb{16.0};
+  int log_keep{3};
   std::vector<ProcessSpec> processes;  ///< in file order
 
   const ProcessSpec* Find(const std::string& name) const;

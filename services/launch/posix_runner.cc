@@ -118,6 +118,34 @@ std::optional<int> PosixRunner::Poll(pid_t pid) {
   return std::nullopt;
 }
 
+std::optional<std::uintmax_t> RotateLog(const std::string& path, std::uintmax_t max_bytes,
+                                        int keep, std::string* error) {
+  namespace fs = std::filesystem;
+  error->clear();
+  std::error_code ec;
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec || size <= max_bytes || keep < 1) return std::nullopt;
+  auto numbered = [&](int i) { return path + "." + std::to_string(i); };
+  for (int i = keep - 1; i >= 1; --i) {
+    if (!fs::exists(numbered(i), ec)) continue;
+    fs::rename(numbered(i), numbered(i + 1), ec);
+    if (ec) {
+      *error = "rename " + numbered(i) + ": " + ec.message();
+      return std::nullopt;
+    }
+  }
+  fs::copy_file(path, numbered(1), fs::copy_options::overwrite_existing, ec);
+  if (ec) {
+    *error = "copy to " + numbered(1) + ": " + ec.message();
+    return std::nullopt;
+  }
+  if (truncate(path.c_str(), 0) != 0) {
+    *error = "truncate: " + std::string(std::strerror(errno));
+    return std::nullopt;
+  }
+  return size;
+}
+
 ProcSample ProcSampler::Sample(pid_t pid, double now_s) {
   ProcSample s;
   if (pid <= 0) return s;

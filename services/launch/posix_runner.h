@@ -1,6 +1,8 @@
 #pragma once
 
+#include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "services/launch/supervisor.h"
@@ -28,6 +30,15 @@ class PosixRunner : public ProcessRunner {
   std::string log_dir_;
   std::string lcm_url_;
 };
+
+/// Rotates `path` when it is larger than max_bytes: path.<keep-1> moves to path.<keep> (the
+/// oldest is dropped), ..., path.1 to path.2, then path is copied to path.1 and truncated in
+/// place. The process writing it (O_APPEND) goes on writing at the start of the same file;
+/// what it writes between the end of the copy and the truncation (microseconds) is lost, as
+/// with logrotate's copytruncate. Returns the size rotated, nullopt when the file is missing or
+/// small enough, or when it failed (*error says why, and the log is left as it was).
+std::optional<std::uintmax_t> RotateLog(const std::string& path, std::uintmax_t max_bytes,
+                                        int keep, std::string* error);
 
 /// CPU use and resident memory of a pid, from /proc.
 struct ProcSample {

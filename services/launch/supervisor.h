@@ -49,12 +49,16 @@ struct ProcStatus {
   std::string robot;
   ProcState state{ProcState::kPending};
   pid_t pid{-1};
-  int restarts{0};
+  int restarts{0};         ///< every restart since launch (what status shows)
+  int recent_restarts{0};  ///< restarts since it was last stable: the back-off and max_restarts
   int last_exit_status{-1};  ///< raw wait status
   std::string last_exit;     ///< "exited 3", "killed by SIGKILL"
   double state_since_s{0.0};
   double next_start_s{0.0};
   bool heartbeat_ready{false};
+  double last_alive_s{0.0};  ///< its last heartbeat (or ready-channel rate) after it started
+  bool hung{false};          ///< stopped for sending no heartbeat; restarted per policy
+  double hung_since_s{0.0};
 };
 
 class Supervisor {
@@ -64,11 +68,13 @@ class Supervisor {
 
   /// Advances the state machine at time now_s (seconds, monotonic).
   void Tick(double now_s);
-  /// A heartbeat from `pid` in state READY (or not). It counts for the process the supervisor
-  /// started with that pid, or whose process group holds it (a process started through a
-  /// wrapper script); a heartbeat from any other pid is ignored, whatever names it carries: a
-  /// forged HEALTH cannot mark a process ready. False when it was ignored.
-  bool OnHeartbeat(pid_t pid, const std::string& process, const std::string& robot, bool ready);
+  /// A heartbeat from `pid` in state READY (or not) at now_s. It counts for the process the
+  /// supervisor started with that pid, or whose process group holds it (a process started
+  /// through a wrapper script); a heartbeat from any other pid is ignored, whatever names it
+  /// carries: a forged HEALTH cannot mark a process ready or keep a hung one alive. False when
+  /// it was ignored.
+  bool OnHeartbeat(pid_t pid, const std::string& process, const std::string& robot, bool ready,
+                   double now_s);
   /// Current rate of a channel as measured by the caller.
   void SetChannelRate(const std::string& channel, double rate_hz);
   /// Begins an orderly stop of everything (reverse start order).
@@ -92,6 +98,8 @@ class Supervisor {
   void Start(ProcStatus& st, const ProcessSpec& spec, double now_s);
   void HandleExit(ProcStatus& st, const ProcessSpec& spec, int status, double now_s);
   void SetState(ProcStatus& st, ProcState state, double now_s);
+  void CheckReady(ProcStatus& st, const ProcessSpec& spec, double now_s);
+  void CheckLiveness(ProcStatus& st, const ProcessSpec& spec, double now_s);
 
   GraphSpec graph_;
   ProcessRunner* runner_;

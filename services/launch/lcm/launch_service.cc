@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include <chrono>
+#include <cstdint>
 
 #include <sys/time.h>
 #include <unistd.h>
@@ -18,7 +19,10 @@ LaunchService::LaunchService(runtime::Node* node, Supervisor* supervisor, PosixR
   node_->SubscribeRaw(".*", [this](const std::string& channel, const void* data, int size,
                                    int64_t) { OnMessage(channel, data, size); });
   node_->AddTimer(0.1, [this] { Tick(); });
-  node_->AddTimer(1.0, [this] { WriteStatusFile(status_path_, MakeStatus(Now())); });
+  node_->AddTimer(1.0, [this] {
+    WriteStatusFile(status_path_, MakeStatus(Now()));
+    RotateLogs();
+  });
 }
 
 double LaunchService::Now() const {
@@ -34,7 +38,7 @@ void LaunchService::OnMessage(const std::string& channel, const void* data, int 
   // Only heartbeats of the processes it started count, and only theirs are kept: a heartbeat
   // from any other pid (a peer's, or forged) neither marks anything ready nor grows the table.
   if (!supervisor_->OnHeartbeat(h.pid, h.process, h.robot,
-                                h.state == cairn::lcmt_health::STATE_READY)) {
+                                h.state == cairn::lcmt_health::STATE_READY, Now())) {
     return;
   }
   health_by_pid_[h.pid] = h;
@@ -69,6 +73,26 @@ void LaunchService::Tick() {
     node_->SetState(runtime::HealthState::kReady, "graph ready");
     node_->Event("graph '%s' is ready", supervisor_->graph().name.c_str());
     WriteStatusFile(status_path_, MakeStatus(now));
+  }
+}
+
+void LaunchService::RotateLogs() {
+  const GraphSpec& graph = supervisor_->graph();
+  if (graph.log_max_mb <= 0) return;
+  const auto max_bytes = static_cast<std::uintmax_t>(graph.log_max_mb * 1024.0 * 1024.0);
+  for (const auto& p : graph.processes) {
+    std::string error;
+    const auto rotated = RotateLog(runner_->LogPath(p.name), max_bytes, graph.log_keep, &error);
+    if (!error.empty()) {
+      // Once per process: a log that cannot be rotated would otherwise say so every second.
+      if (rotate_failed_.insert(p.name).second) {
+        CAIRN_LOG_ERROR("cannot rotate the log of '%s': %s", p.name.c_str(), error.c_str());
+      }
+    } else if (rotated) {
+      rotate_failed_.erase(p.name);
+      node_->Event("rotated the log of '%s' at %.0f KB (keeping %d)", p.name.c_str(),
+                   static_cast<double>(*rotated) / 1024.0, graph.log_keep);
+    }
   }
 }
 

@@ -1,6 +1,7 @@
 #pragma once
 
 #include <map>
+#include <set>
 #include <string>
 
 #include "cairn/lcmt_health.hpp"
@@ -13,7 +14,7 @@
 
 /// @file
 /// The LCM side of cairn-launch: feeds heartbeats and measured channel rates into the
-/// supervisor, ticks it, and writes <run_dir>/status.json.
+/// supervisor, ticks it, writes <run_dir>/status.json and rotates the processes' logs.
 
 namespace cairn::launch {
 
@@ -29,6 +30,7 @@ class LaunchService {
  private:
   void OnMessage(const std::string& channel, const void* data, int size);
   void Tick();
+  void RotateLogs();
   double Now() const;
 
   runtime::Node* node_;
@@ -40,6 +42,7 @@ class LaunchService {
   std::map<int, cairn::lcmt_health> health_by_pid_;
   std::string message_;
   bool announced_ready_{false};
+  std::set<std::string> rotate_failed_;
 };
 
 /// Runs `graph` in the foreground on `lcm_url` until it is down (a signal, or a required process

@@ -26,19 +26,29 @@
 namespace cairn::testing {
 namespace {
 
-std::string WriteGraph(const std::string& dir, const std::string& url) {
+// Keys added to the pair graph: at its top, to the watcher, to the follower (YAML lines).
+struct PairExtras {
+  std::string top;
+  std::string watcher_refresh_s{"10"};
+  std::string follower;
+};
+
+std::string WriteGraph(const std::string& dir, const std::string& url,
+                       const PairExtras& extras = {}) {
   const std::string path = dir + "/pair.yaml";
   std::ofstream out(path);
   out << "name: pair\n"
          "lcm_url: "
-      << url
-      << "\n"
-         "processes:\n"
+      << url << "\n"
+      << extras.top
+      << "processes:\n"
          "  watcher:\n"
          "    command: "
       << BinPath("cairn-spy")
       << "\n"
-         "    args: [--refresh, '10']\n"
+         "    args: [--refresh, '"
+      << extras.watcher_refresh_s
+      << "']\n"
          "    restart: always\n"
          "    backoff_s: 0.2\n"
          "  follower:\n"
@@ -49,7 +59,8 @@ std::string WriteGraph(const std::string& dir, const std::string& url) {
          "    depends_on: [watcher]\n"
          "    restart: on-failure\n"
          "    backoff_s: 0.2\n"
-         "    expected_rates_hz: {HEALTH: 2.0}\n";
+         "    expected_rates_hz: {HEALTH: 2.0}\n"
+      << extras.follower;
   return path;
 }
 
@@ -81,8 +92,8 @@ struct PairGraph {
 };
 
 // Starts the pair graph and waits (30 s at most) until both processes are ready.
-bool StartPairGraph(ProcessSet& procs, PairGraph* g) {
-  const std::string graph = WriteGraph(procs.dir(), procs.url());
+bool StartPairGraph(ProcessSet& procs, PairGraph* g, const PairExtras& extras = {}) {
+  const std::string graph = WriteGraph(procs.dir(), procs.url(), extras);
   g->run_dir = procs.dir() + "/run";
   g->launcher = &procs.StartRaw("cairn-launch",
                                 {BinPath("cairn-launch"), "up", graph, "--run-dir", g->run_dir});
@@ -200,6 +211,112 @@ void ExpectStatusWithinASecondThenDown(ProcessSet& procs, const std::string& run
   ChildProcess& down =
       procs.StartRaw("down", {BinPath("cairn-launch"), "down", "--run-dir", run_dir});
   ASSERT_TRUE(down.WaitExit(40.0).has_value());
+}
+
+// Issue 20: a process that stopped heartbeating after it was ready (here: stopped with
+// SIGSTOP, as a deadlock or a wait on a dead peer would leave it) was left alone for ever, and
+// the restart count never reset. Now the hung process is stopped (SIGTERM, SIGKILL after its
+// grace period) and restarted; once it has been ready for reset_restarts_after_s its count
+// towards max_restarts is reset, so a second failure (max_restarts: 1) is restarted too.
+TEST(LaunchIntegrationTest, AHungProcessIsRestartedAndAStableOneEarnsItsRestartsBack) {
+  ProcessSet procs(PrivateLcmUrl());
+  PairExtras extras;
+  extras.follower =
+      "    liveness_timeout_s: 2\n"
+      "    grace_s: 1\n"
+      "    max_restarts: 1\n"
+      "    reset_restarts_after_s: 2\n";
+  PairGraph g;
+  ASSERT_TRUE(StartPairGraph(procs, &g, extras)) << "graph never became ready";
+  const int hung_pid = Row(*g.status, "follower")->pid;
+  ASSERT_GT(hung_pid, 0);
+  ASSERT_EQ(kill(hung_pid, SIGSTOP), 0);
+  std::optional<launch::GraphStatus> status;
+  int restarted_pid = -1;
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        status = ReadStatus(g.run_dir);
+        const auto* row = status ? Row(*status, "follower") : nullptr;
+        if (!row || row->restarts != 1 || row->state != "ready" || row->pid == hung_pid) {
+          return false;
+        }
+        restarted_pid = row->pid;
+        return true;
+      },
+      30.0))
+      << "the hung follower was not restarted\n"
+      << g.launcher->Log();
+  EXPECT_NE(Row(*status, "follower")->last_exit.find("hung (no heartbeat for 2 s)"),
+            std::string::npos)
+      << Row(*status, "follower")->last_exit;
+  EXPECT_TRUE(WaitFor([&] { return !Running(hung_pid); }, 10.0)) << "the hung process lives on";
+  EXPECT_EQ(Row(*status, "watcher")->restarts, 0);  // the other process was left alone
+
+  // Stable for 2 s: the count towards max_restarts is reset (the launcher says so).
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        return g.launcher->Log().find("'follower' ready for 2 s; its back-off and restart count") !=
+               std::string::npos;
+      },
+      20.0))
+      << g.launcher->Log();
+  ASSERT_EQ(kill(restarted_pid, SIGKILL), 0);
+  ASSERT_TRUE(WaitFor(
+      [&] {
+        status = ReadStatus(g.run_dir);
+        const auto* row = status ? Row(*status, "follower") : nullptr;
+        return row && row->restarts == 2 && row->state == "ready" && row->pid != restarted_pid;
+      },
+      30.0))
+      << "a second failure after a stable period was not restarted\n"
+      << g.launcher->Log();
+  EXPECT_EQ(status->state, "ready");
+  ExpectStatusWithinASecondThenDown(procs, g.run_dir);
+}
+
+// Issue 20: the processes' logs grew without limit. With log_max_mb 0.01 and log_keep 2, a
+// process writing about 20 KB a second has its log rotated every second or so: two copies kept,
+// none older, each near the limit, and the process (not restarted) keeps writing to its log.
+TEST(LaunchIntegrationTest, LogsRotateAtTheirSizeLimit) {
+  ProcessSet procs(PrivateLcmUrl());
+  PairExtras extras;
+  extras.top = "log_max_mb: 0.01\nlog_keep: 2\n";
+  extras.watcher_refresh_s = "0.02";  // a table 50 times a second
+  PairGraph g;
+  ASSERT_TRUE(StartPairGraph(procs, &g, extras)) << "graph never became ready";
+  const int watcher_pid = Row(*g.status, "watcher")->pid;
+  const std::string log = g.run_dir + "/logs/watcher.log";
+  auto rotations = [&] {
+    const std::string text = g.launcher->Log();
+    int n = 0;
+    for (auto at = text.find("rotated the log of 'watcher'"); at != std::string::npos;
+         at = text.find("rotated the log of 'watcher'", at + 1)) {
+      ++n;
+    }
+    return n;
+  };
+  ASSERT_TRUE(WaitFor([&] { return rotations() >= 3; }, 30.0)) << g.launcher->Log();
+  namespace fs = std::filesystem;
+  EXPECT_TRUE(fs::exists(log + ".1"));
+  EXPECT_TRUE(fs::exists(log + ".2"));
+  EXPECT_FALSE(fs::exists(log + ".3"));
+  // A copy holds what passed the limit in the second between checks: far below unbounded.
+  EXPECT_GT(fs::file_size(log + ".1"), 10u * 1024u);
+  EXPECT_LT(fs::file_size(log + ".1"), 200u * 1024u);
+  std::ifstream copy(log + ".1");
+  std::stringstream copied;
+  copied << copy.rdbuf();
+  EXPECT_NE(copied.str().find("cairn-spy on"), std::string::npos);  // the process's own output
+  const auto size_before = fs::file_size(log);
+  EXPECT_TRUE(WaitFor([&] { return fs::file_size(log) != size_before; }, 10.0))
+      << "the process stopped writing to its log";
+  const auto status = ReadStatus(g.run_dir);
+  ASSERT_TRUE(status.has_value());
+  EXPECT_EQ(Row(*status, "watcher")->pid, watcher_pid);
+  EXPECT_EQ(Row(*status, "watcher")->restarts, 0);
+  EXPECT_TRUE(fs::exists(g.run_dir + "/logs/follower.log"));
+  EXPECT_FALSE(fs::exists(g.run_dir + "/logs/follower.log.1"));  // small: never rotated
+  ExpectStatusWithinASecondThenDown(procs, g.run_dir);
 }
 
 // Issue 20's finding: one 84-byte heartbeat whose num_channels says 67 million made the

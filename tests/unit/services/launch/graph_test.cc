@@ -43,6 +43,22 @@ TEST(GraphTest, LoadsAndOrders) {
   EXPECT_DOUBLE_EQ(g.ExpectedRates().at("rover1.POSE"), 50.0);
 }
 
+TEST(GraphTest, LivenessRestartResetAndLogRotationKeys) {
+  const GraphSpec defaults = LoadGraphString(kGood, "g.yaml", {"/bin"});
+  EXPECT_DOUBLE_EQ(defaults.log_max_mb, 16.0);
+  EXPECT_EQ(defaults.log_keep, 3);
+  EXPECT_DOUBLE_EQ(defaults.Find("first")->liveness_timeout_s, 10.0);
+  EXPECT_DOUBLE_EQ(defaults.Find("first")->reset_restarts_after_s, 60.0);
+  const GraphSpec g = LoadGraphString(
+      "log_max_mb: 0.5\nlog_keep: 5\nprocesses:\n  a:\n    command: /bin/true\n"
+      "    liveness_timeout_s: 0\n    reset_restarts_after_s: 30\n",
+      "g.yaml", {});
+  EXPECT_DOUBLE_EQ(g.log_max_mb, 0.5);
+  EXPECT_EQ(g.log_keep, 5);
+  EXPECT_DOUBLE_EQ(g.processes[0].liveness_timeout_s, 0.0);
+  EXPECT_DOUBLE_EQ(g.processes[0].reset_restarts_after_s, 30.0);
+}
+
 void ExpectError(const std::string& yaml, const std::string& fragment) {
   try {
     LoadGraphString(yaml, "bad.yaml", {});
@@ -69,6 +85,12 @@ TEST(GraphTest, RefusesMissingExecutableAndUnknownDependency) {
   ExpectError("processes:\n  a:\n    command: /bin/true\n    restart: sometimes\n", "restart must be");
   ExpectError("processes:\n  a:\n    command: /bin/true\n    stop_signal: SIGFOO\n", "unknown signal");
   ExpectError("processes: {}\n", "no processes");
+  ExpectError("processes:\n  a:\n    command: /bin/true\n    liveness_timeout_s: -1\n",
+              "liveness_timeout_s and reset_restarts_after_s must be >= 0");
+  ExpectError("processes:\n  a:\n    command: /bin/true\n    reset_restarts_after_s: .nan\n",
+              "liveness_timeout_s and reset_restarts_after_s must be >= 0");
+  ExpectError("log_keep: 0\nprocesses:\n  a:\n    command: /bin/true\n", "bad.yaml:1: log_max_mb");
+  ExpectError("log_max_mb: -2\nprocesses:\n  a:\n    command: /bin/true\n", "bad.yaml:1: log_max_mb");
   // Without executable checks (cairn-spy reading expected rates) a missing program is fine.
   EXPECT_NO_THROW(LoadGraphString("processes:\n  a:\n    command: no-such-program-xyz\n", "x", {}, false));
 }

@@ -103,12 +103,12 @@ TEST_F(SupervisorTest, StartsInDependencyOrderAfterReadiness) {
   EXPECT_EQ(St("a").state, ProcState::kStarting);
   dut_->Tick(1.0);
   EXPECT_EQ(runner_.spawned.size(), 1u);  // b waits for a to be ready
-  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true);
+  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true, 1.0);
   dut_->Tick(1.1);
   EXPECT_EQ(St("a").state, ProcState::kReady);
   dut_->Tick(1.2);
   EXPECT_EQ(runner_.spawned, (std::vector<std::string>{"a", "b"}));
-  dut_->OnHeartbeat(runner_.PidOf("b"), "b", "", true);
+  dut_->OnHeartbeat(runner_.PidOf("b"), "b", "", true, 1.2);
   dut_->Tick(1.3);
   EXPECT_TRUE(dut_->AllReady());
 }
@@ -119,14 +119,14 @@ TEST_F(SupervisorTest, StartsInDependencyOrderAfterReadiness) {
 TEST_F(SupervisorTest, AForgedHeartbeatCannotMarkAProcessReady) {
   Make(TwoProcessGraph());
   dut_->Tick(0.0);
-  EXPECT_FALSE(dut_->OnHeartbeat(4242, "a", "", true));
-  EXPECT_FALSE(dut_->OnHeartbeat(0, "a", "", true));
+  EXPECT_FALSE(dut_->OnHeartbeat(4242, "a", "", true, 0.0));
+  EXPECT_FALSE(dut_->OnHeartbeat(0, "a", "", true, 0.0));
   dut_->Tick(0.5);
   EXPECT_EQ(St("a").state, ProcState::kStarting);
   EXPECT_EQ(runner_.spawned.size(), 1u);
   // The wrapper's child, in the group of the pid started: it counts.
   runner_.groups[4343] = runner_.PidOf("a");
-  EXPECT_TRUE(dut_->OnHeartbeat(4343, "real-a", "", true));
+  EXPECT_TRUE(dut_->OnHeartbeat(4343, "real-a", "", true, 0.0));
   dut_->Tick(0.6);
   EXPECT_EQ(St("a").state, ProcState::kReady);
 }
@@ -134,7 +134,7 @@ TEST_F(SupervisorTest, AForgedHeartbeatCannotMarkAProcessReady) {
 TEST_F(SupervisorTest, NotReadyHeartbeatDoesNotCount) {
   Make(TwoProcessGraph());
   dut_->Tick(0.0);
-  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", false);
+  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", false, 0.0);
   dut_->Tick(0.5);
   EXPECT_EQ(St("a").state, ProcState::kStarting);
 }
@@ -222,7 +222,7 @@ TEST_F(SupervisorTest, ReadinessTimeoutKillsTheProcess) {
 TEST_F(SupervisorTest, StopsInReverseOrderAndEscalates) {
   Make(TwoProcessGraph());
   dut_->Tick(0.0);
-  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true);
+  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true, 0.0);
   dut_->Tick(0.1);
   dut_->Tick(0.2);
   ASSERT_EQ(runner_.spawned.size(), 2u);
@@ -239,6 +239,135 @@ TEST_F(SupervisorTest, StopsInReverseOrderAndEscalates) {
   dut_->Tick(7.2);
   EXPECT_TRUE(dut_->AllDown());
   EXPECT_FALSE(dut_->FatalFailure().has_value());
+}
+
+// Starts the two-process graph and makes both ready (a at 0.1, b at 0.3).
+void StartBothReady(Supervisor& dut, FakeRunner& runner) {
+  dut.Tick(0.0);
+  dut.OnHeartbeat(runner.PidOf("a"), "a", "", true, 0.05);
+  dut.Tick(0.1);
+  dut.Tick(0.2);
+  dut.OnHeartbeat(runner.PidOf("b"), "b", "", true, 0.25);
+  dut.Tick(0.3);
+  ASSERT_TRUE(dut.AllReady());
+}
+
+// Issue 20: a process that stops heartbeating after it was ready (hung, stopped) was left alone
+// for ever. Now it is sent its stop signal after liveness_timeout_s, SIGKILL after its grace
+// period, and restarted; heartbeats from another pid, forged with its name, do not keep it alive.
+TEST_F(SupervisorTest, AProcessThatStopsHeartbeatingAfterReadyIsRestarted) {
+  GraphSpec g = TwoProcessGraph();
+  g.processes[1].liveness_timeout_s = 3.0;
+  g.processes[1].grace_s = 1.0;
+  Make(g);
+  StartBothReady(*dut_, runner_);
+  const pid_t b = runner_.PidOf("b");
+  runner_.exit_on_signal = false;  // hung: it ignores SIGTERM too
+  for (double t = 0.5; t <= 3.0; t += 0.5) {
+    dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true, t);
+    EXPECT_FALSE(dut_->OnHeartbeat(9999, "b", "", true, t));  // forged
+    dut_->Tick(t);
+  }
+  EXPECT_EQ(St("b").state, ProcState::kReady);  // 2.75 s of silence: within the timeout
+  EXPECT_TRUE(runner_.signals.empty());
+  dut_->Tick(3.4);
+  EXPECT_EQ(St("b").state, ProcState::kStopping);
+  ASSERT_EQ(runner_.signals.size(), 1u);
+  EXPECT_EQ(runner_.signals[0], std::make_pair(std::string("b"), SIGTERM));
+  EXPECT_EQ(St("a").state, ProcState::kReady);  // a kept heartbeating
+  dut_->Tick(4.0);
+  EXPECT_EQ(runner_.signals.size(), 1u);
+  runner_.exit_on_signal = true;
+  dut_->Tick(4.5);  // grace 1 s over: SIGKILL, and the exit is collected next tick
+  EXPECT_EQ(runner_.signals.back(), std::make_pair(std::string("b"), SIGKILL));
+  dut_->Tick(4.6);
+  EXPECT_EQ(St("b").state, ProcState::kBackoff);
+  EXPECT_NE(St("b").last_exit.find("hung (no heartbeat for 3 s)"), std::string::npos)
+      << St("b").last_exit;
+  dut_->Tick(5.7);
+  EXPECT_EQ(St("b").state, ProcState::kStarting);
+  EXPECT_NE(runner_.PidOf("b"), b);
+  EXPECT_EQ(St("b").restarts, 1);
+  EXPECT_FALSE(dut_->FatalFailure().has_value());
+}
+
+TEST_F(SupervisorTest, AHungProcessUnderRestartNeverFailsTheGraph) {
+  GraphSpec g = TwoProcessGraph(RestartPolicy::kNever);
+  g.processes[1].liveness_timeout_s = 2.0;
+  Make(g);
+  StartBothReady(*dut_, runner_);
+  for (double t = 0.5; t <= 2.5; t += 0.5) {
+    dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true, t);
+    dut_->Tick(t);
+  }
+  dut_->Tick(2.6);  // stopped at 2.5 (the fake exits on SIGTERM); the exit is collected here
+  dut_->Tick(2.7);
+  EXPECT_EQ(St("b").state, ProcState::kFailed);
+  ASSERT_TRUE(dut_->FatalFailure().has_value());
+  EXPECT_NE(dut_->FatalFailure()->find("hung"), std::string::npos) << *dut_->FatalFailure();
+}
+
+TEST_F(SupervisorTest, LivenessOfAChannelReadinessIsItsRate) {
+  GraphSpec g = TwoProcessGraph();
+  g.processes[0].ready.heartbeat = false;
+  g.processes[0].ready.channel = "r.POSE";
+  g.processes[0].ready.min_rate_hz = 10.0;
+  g.processes[0].liveness_timeout_s = 2.0;
+  g.processes[1].liveness_timeout_s = 0.0;  // off: b never heartbeats after ready
+  Make(g);
+  dut_->Tick(0.0);
+  dut_->SetChannelRate("r.POSE", 50.0);
+  dut_->Tick(0.1);
+  ASSERT_EQ(St("a").state, ProcState::kReady);
+  dut_->OnHeartbeat(runner_.PidOf("b"), "b", "", true, 0.15);
+  dut_->Tick(0.2);
+  dut_->Tick(1.0);
+  dut_->SetChannelRate("r.POSE", 3.0);  // too slow from 1.0 on
+  dut_->Tick(2.0);
+  dut_->Tick(3.0);
+  EXPECT_EQ(St("a").state, ProcState::kReady);
+  dut_->Tick(3.1);
+  EXPECT_EQ(St("a").state, ProcState::kStopping);
+  EXPECT_EQ(St("b").state, ProcState::kReady);  // 20 s without a heartbeat, liveness off
+  dut_->Tick(20.0);
+  EXPECT_EQ(St("b").state, ProcState::kReady);
+}
+
+// Issue 20: the restart counter never reset, so a process that failed max_restarts times over
+// days failed the graph for good. After reset_restarts_after_s of being ready, the back-off
+// starts again from backoff_s and max_restarts counts afresh; status still counts every restart.
+TEST_F(SupervisorTest, TheRestartCountResetsAfterAStablePeriod) {
+  GraphSpec g = TwoProcessGraph(RestartPolicy::kOnFailure, /*max_restarts=*/1);
+  g.processes[0].reset_restarts_after_s = 10.0;
+  g.processes[0].liveness_timeout_s = 0.0;
+  g.processes[1].liveness_timeout_s = 0.0;
+  Make(g);
+  StartBothReady(*dut_, runner_);
+  runner_.Exit(runner_.PidOf("a"), 3);
+  dut_->Tick(1.0);
+  dut_->Tick(2.0);  // back-off 1 s
+  ASSERT_EQ(St("a").restarts, 1);
+  dut_->OnHeartbeat(runner_.PidOf("a"), "a", "", true, 2.05);
+  dut_->Tick(2.1);
+  ASSERT_EQ(St("a").state, ProcState::kReady);
+  dut_->Tick(12.0);  // ready 9.9 s: not yet
+  EXPECT_EQ(St("a").recent_restarts, 1);
+  dut_->Tick(12.2);
+  EXPECT_EQ(St("a").recent_restarts, 0);
+  EXPECT_NE(events_.back().find("reset"), std::string::npos) << events_.back();
+  // Failing again restarts it after backoff_s (not 2 s), and does not exceed max_restarts.
+  runner_.Exit(runner_.PidOf("a"), 3);
+  dut_->Tick(13.0);
+  EXPECT_EQ(St("a").state, ProcState::kBackoff);
+  dut_->Tick(14.0);
+  EXPECT_EQ(St("a").state, ProcState::kStarting);
+  EXPECT_EQ(St("a").restarts, 2);
+  EXPECT_FALSE(dut_->FatalFailure().has_value());
+  // Without a stable period in between, the next failure is one too many.
+  runner_.Exit(runner_.PidOf("a"), 3);
+  dut_->Tick(14.5);
+  EXPECT_EQ(St("a").state, ProcState::kFailed);
+  EXPECT_TRUE(dut_->FatalFailure().has_value());
 }
 
 }  // namespace
