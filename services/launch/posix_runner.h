@@ -24,7 +24,9 @@ class PosixRunner : public ProcessRunner {
   std::optional<int> Poll(pid_t pid) override;
   pid_t GroupOf(pid_t pid) override;
 
-  std::string LogPath(const std::string& name) const { return log_dir_ + "/" + name + ".log"; }
+  std::string LogPath(const std::string& name) const override {
+    return log_dir_ + "/" + name + ".log";
+  }
 
  private:
   std::string log_dir_;

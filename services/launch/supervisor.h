@@ -31,6 +31,8 @@ class ProcessRunner {
   /// The process group of a running pid (-1 when unknown or gone). Every spawned process leads
   /// a group of its own, so a process a wrapper script started is in its wrapper's group.
   virtual pid_t GroupOf(pid_t /*pid*/) { return -1; }
+  /// Where the process's output goes (empty: nowhere the launcher rotates).
+  virtual std::string LogPath(const std::string& /*name*/) const { return {}; }
 };
 
 enum class ProcState {

@@ -9,7 +9,16 @@ void ChannelMeter::Trim(Entry& e, double now_s) const {
 }
 
 void ChannelMeter::Record(const std::string& channel, int bytes, double now_s) {
-  Entry& e = channels_[channel];
+  auto it = channels_.find(channel);
+  if (it == channels_.end()) {
+    if (channels_.size() >= max_channels_) {
+      ++overflow_messages_;
+      it = channels_.try_emplace(kOtherChannels).first;
+    } else {
+      it = channels_.try_emplace(channel).first;
+    }
+  }
+  Entry& e = it->second;
   if (e.messages == 0) e.first_s = now_s;
   ++e.messages;
   e.bytes += bytes;

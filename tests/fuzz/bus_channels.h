@@ -43,11 +43,39 @@ inline std::vector<std::string> MapstoreChannels() {
           ch::ForRobot(kRobot, ch::kMapOctomap)};
 }
 
+/// cairn-launch reads HEALTH and meters every channel (readiness by rate).
+inline std::vector<std::string> LauncherChannels() {
+  namespace ch = channels;
+  return {ch::kHealth, ch::ForRobot(kRobot, ch::kPose), ch::ForRobot(kRobot, ch::kLidar),
+          ch::kSimClock};
+}
+
+/// cairn-explorer in every mode: reactive (scans, poses), frontier (the occupancy layer, the
+/// navigator's status), next-best-view (turret lines, the simulator's control replies).
+inline std::vector<std::string> ExplorerChannels() {
+  namespace ch = channels;
+  return {ch::ForRobot(kRobot, ch::kScan),         ch::ForRobot(kRobot, ch::kPose),
+          ch::ForRobot(kRobot, ch::kNavStatus),    ch::ForRobot(kRobot, ch::kTurretScan),
+          ch::kSimControlReply,                    ch::ForRobot(kRobot, ch::kMapOccupancy),
+          ch::ForRobot(kRobot, ch::kMapManifest),  ch::kSimClock};
+}
+
+/// The map store's client (cairn-mission, cairn-explorer's save, cairn-map): replies, reply
+/// layers (tiles, batches, manifests, OctoMap chunks) and the store's resend requests of a push.
+inline std::vector<std::string> MapstoreClientChannels() {
+  namespace ch = channels;
+  return {ch::kMapstoreReply,    ch::kMapstoreTiles,   ch::kMapstoreTileBatches,
+          ch::kMapstoreManifest, ch::kMapstoreOctomap, ch::kMapstorePushTileResend};
+}
+
 /// The channel list of a bus target by name; empty for another target.
 inline std::vector<std::string> BusChannels(const std::string& target) {
   if (target == "bus_navigator_map") return NavigatorMapChannels();
   if (target == "bus_mapper") return MapperChannels();
   if (target == "bus_mapstore") return MapstoreChannels();
+  if (target == "bus_launcher") return LauncherChannels();
+  if (target == "bus_explorer") return ExplorerChannels();
+  if (target == "bus_mapstore_client") return MapstoreClientChannels();
   return {};
 }
 

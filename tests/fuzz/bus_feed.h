@@ -2,6 +2,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -16,9 +17,11 @@ namespace cairn::fuzz {
 
 /// A fuzz input as bus traffic: repeated frames of [channel index: 1 byte][size: 4 bytes, little
 /// endian][payload]; the index picks from `channels` (modulo). Each message is published on the
-/// node's memq:// bus and handled before the next, with the node's timers run between.
+/// node's memq:// bus and handled before the next, with the node's timers (and `after_each`,
+/// when given) run between.
 inline void FeedBus(runtime::Node& node, const std::vector<std::string>& channels,
-                    const uint8_t* data, size_t size) {
+                    const uint8_t* data, size_t size,
+                    const std::function<void()>& after_each = {}) {
   ByteReader in(data, size);
   while (!in.empty()) {
     const std::string& channel = channels[in.Read<uint8_t>() % channels.size()];
@@ -31,6 +34,7 @@ inline void FeedBus(runtime::Node& node, const std::vector<std::string>& channel
     for (int i = 0; i < 64 && node.lcm().handleTimeout(0) > 0; ++i) {
     }
     node.SpinOnce(0);
+    if (after_each) after_each();
   }
 }
 

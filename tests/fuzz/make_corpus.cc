@@ -102,8 +102,18 @@ void BusSeeds(const std::vector<Message>& log, const std::string& target, const 
   constexpr size_t kSeeds = 8, kFrames = 8;
   std::vector<size_t> starts;
   for (size_t k = 0; k < kSeeds && !on.empty(); ++k) starts.push_back(k * on.size() / kSeeds);
-  for (size_t j = 0; j < on.size(); ++j) {  // every store request starts a seed
-    if (log[on[j].first].channel == cairn::channels::kMapstoreRequest) starts.push_back(j);
+  std::vector<bool> channel_started(channels.size(), false);
+  for (size_t j = 0; j < on.size(); ++j) {  // the first message of every channel starts one
+    if (!channel_started[on[j].second]) starts.push_back(j);
+    channel_started[on[j].second] = true;
+  }
+  for (size_t j = 0; j < on.size(); ++j) {  // every store request, reply and manifest starts one
+    const std::string& channel = log[on[j].first].channel;
+    if (channel == cairn::channels::kMapstoreRequest ||
+        (target == "bus_mapstore_client" && (channel == cairn::channels::kMapstoreReply ||
+                                             channel == cairn::channels::kMapstoreManifest))) {
+      starts.push_back(j);
+    }
   }
   int written = 0;
   for (size_t s : starts) {
@@ -237,7 +247,8 @@ int main(int argc, char** argv) {
   const fs::path root(out_root);
   const std::vector<Message> log = ReadLog(log_path);
   LcmDecodeSeeds(log, root / "lcm_decode");
-  for (const char* target : {"bus_navigator_map", "bus_mapper", "bus_mapstore"}) {
+  for (const char* target : {"bus_navigator_map", "bus_mapper", "bus_mapstore", "bus_launcher",
+                             "bus_explorer", "bus_mapstore_client"}) {
     BusSeeds(log, target, root / target);
   }
   CodecSeeds(log, root / "codecs");

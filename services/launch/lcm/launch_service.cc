@@ -13,7 +13,7 @@
 
 namespace cairn::launch {
 
-LaunchService::LaunchService(runtime::Node* node, Supervisor* supervisor, PosixRunner* runner,
+LaunchService::LaunchService(runtime::Node* node, Supervisor* supervisor, ProcessRunner* runner,
                              std::string status_path)
     : node_(node), supervisor_(supervisor), runner_(runner), status_path_(std::move(status_path)) {
   node_->SubscribeRaw(".*", [this](const std::string& channel, const void* data, int size,
@@ -81,8 +81,10 @@ void LaunchService::RotateLogs() {
   if (graph.log_max_mb <= 0) return;
   const auto max_bytes = static_cast<std::uintmax_t>(graph.log_max_mb * 1024.0 * 1024.0);
   for (const auto& p : graph.processes) {
+    const std::string path = runner_->LogPath(p.name);
+    if (path.empty()) continue;
     std::string error;
-    const auto rotated = RotateLog(runner_->LogPath(p.name), max_bytes, graph.log_keep, &error);
+    const auto rotated = RotateLog(path, max_bytes, graph.log_keep, &error);
     if (!error.empty()) {
       // Once per process: a log that cannot be rotated would otherwise say so every second.
       if (rotate_failed_.insert(p.name).second) {

@@ -20,7 +20,7 @@ namespace cairn::launch {
 
 class LaunchService {
  public:
-  LaunchService(runtime::Node* node, Supervisor* supervisor, PosixRunner* runner,
+  LaunchService(runtime::Node* node, Supervisor* supervisor, ProcessRunner* runner,
                 std::string status_path);
   /// Runs until the graph is down. Returns the process exit code: 0, or 1 when a required
   /// process failed for good.
@@ -35,7 +35,7 @@ class LaunchService {
 
   runtime::Node* node_;
   Supervisor* supervisor_;
-  PosixRunner* runner_;
+  ProcessRunner* runner_;
   std::string status_path_;
   runtime::ChannelMeter meter_;
   ProcSampler sampler_;
