@@ -68,6 +68,13 @@ inline std::vector<std::string> MapstoreClientChannels() {
           ch::kMapstoreManifest, ch::kMapstoreOctomap, ch::kMapstorePushTileResend};
 }
 
+/// cairn-sim: the robot's velocity commands and body-velocity requests, SIM.CONTROL.
+inline std::vector<std::string> SimChannels() {
+  namespace ch = channels;
+  return {ch::ForRobot(kRobot, ch::kCmdVel), ch::ForRobot(kRobot, ch::kBodyVelocity),
+          ch::kSimControl};
+}
+
 /// The channel list of a bus target by name; empty for another target.
 inline std::vector<std::string> BusChannels(const std::string& target) {
   if (target == "bus_navigator_map") return NavigatorMapChannels();
@@ -76,6 +83,7 @@ inline std::vector<std::string> BusChannels(const std::string& target) {
   if (target == "bus_launcher") return LauncherChannels();
   if (target == "bus_explorer") return ExplorerChannels();
   if (target == "bus_mapstore_client") return MapstoreClientChannels();
+  if (target == "bus_sim") return SimChannels();
   return {};
 }
 

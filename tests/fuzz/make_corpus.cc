@@ -24,6 +24,8 @@
 #include <lcm/lcm-cpp.hpp>
 #include <unistd.h>
 
+#include "cairn/lcmt_sim_control_request.hpp"
+#include "cairn/lcmt_velocity_command.hpp"
 #include "mapstore/blob_codec.h"
 #include "mapstore/lcm/tile_wire.h"
 #include "mapstore/registry_codec.h"
@@ -169,6 +171,48 @@ void CodecSeeds(const std::vector<Message>& log, const fs::path& out) {
   std::printf("codecs: %d tiles, %d registries\n", tiles, registries);
 }
 
+// SIM.CONTROL has no traffic in the demo's log: one request of every op, each after a
+// velocity command, framed for bus_sim (its channel 0 is CMD_VEL, 2 is SIM.CONTROL).
+void SimControlSeeds(const fs::path& out) {
+  using Request = cairn::lcmt_sim_control_request;
+  const std::vector<std::pair<int8_t, std::string>> ops = {
+      {Request::OP_SPAWN, "box1"},         {Request::OP_MOVE, "box1"},
+      {Request::OP_REMOVE, "box1"},        {Request::OP_OPEN_DOOR, "door1"},
+      {Request::OP_CLOSE_DOOR, "door1"},   {Request::OP_RESET_ROBOT, "p3at"},
+      {Request::OP_PAUSE, ""},             {Request::OP_RESUME, ""},
+      {Request::OP_SET_SPEED, ""},         {Request::OP_LIST, ""},
+      {Request::OP_TRIGGER_SENSOR, "p3at/lidar"}};
+  cairn::lcmt_velocity_command cmd{};
+  cmd.robot = cairn::fuzz::kRobot;
+  cmd.linear_mps = 0.3;
+  cmd.angular_radps = 0.1;
+  cmd.source = "fuzz";
+  std::string cmd_bytes(static_cast<size_t>(cmd.getEncodedSize()), '\0');
+  cmd.encode(cmd_bytes.data(), 0, static_cast<int>(cmd_bytes.size()));
+  int written = 0;
+  for (const auto& [op, name] : ops) {
+    Request r{};
+    r.utime = 1000000;
+    r.request_id = 100 + op;
+    r.requester = "fuzz";
+    r.op = op;
+    r.name = name;
+    r.shape = Request::SHAPE_BOX;
+    r.size_m[0] = r.size_m[1] = r.size_m[2] = 0.5;
+    r.position_m[0] = 6.0;
+    r.position_m[1] = 38.0;
+    r.position_m[2] = 0.5;
+    r.speed = 2.0;
+    std::string bytes(static_cast<size_t>(r.getEncodedSize()), '\0');
+    r.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    std::string seed;
+    cairn::fuzz::AppendFrame(0, cmd_bytes.data(), cmd_bytes.size(), &seed);
+    cairn::fuzz::AppendFrame(2, bytes.data(), bytes.size(), &seed);
+    Write(out, "control-" + std::to_string(written++), seed);
+  }
+  std::printf("bus_sim: %d SIM.CONTROL seeds\n", written);
+}
+
 void AssemblerSeeds(const fs::path& out) {
   std::mt19937 rng(20261206);
   for (int i = 0; i < 12; ++i) {
@@ -248,9 +292,10 @@ int main(int argc, char** argv) {
   const std::vector<Message> log = ReadLog(log_path);
   LcmDecodeSeeds(log, root / "lcm_decode");
   for (const char* target : {"bus_navigator_map", "bus_mapper", "bus_mapstore", "bus_launcher",
-                             "bus_explorer", "bus_mapstore_client"}) {
+                             "bus_explorer", "bus_mapstore_client", "bus_sim"}) {
     BusSeeds(log, target, root / target);
   }
+  SimControlSeeds(root / "bus_sim");
   CodecSeeds(log, root / "codecs");
   AssemblerSeeds(root / "assemblers");
   if (!config.empty()) YamlSeeds(config, root / "yaml_loaders");
