@@ -130,12 +130,17 @@ NetnsLab::NetnsLab(int mtu) : mtu_(mtu) {
   switch_ns_ = prefix_ + "switch";
   Check({ip, "netns", "add", switch_ns_});
   namespaces_.push_back(switch_ns_);
-  Check({ip, "-n", switch_ns_, "link", "set", "lo", "up"});
-  // Snooping off: the bridge floods multicast to every port, like a plain switch; which host
-  // listens is LCM's business (every process joins the group).
-  Check({ip, "-n", switch_ns_, "link", "add", "br0", "mtu", std::to_string(mtu_), "type", "bridge",
-         "mcast_snooping", "0"});
-  Check({ip, "-n", switch_ns_, "link", "set", "br0", "up"});
+  try {
+    Check({ip, "-n", switch_ns_, "link", "set", "lo", "up"});
+    // Snooping off: the bridge floods multicast to every port, like a plain switch; which host
+    // listens is LCM's business (every process joins the group).
+    Check({ip, "-n", switch_ns_, "link", "add", "br0", "mtu", std::to_string(mtu_), "type",
+           "bridge", "mcast_snooping", "0"});
+    Check({ip, "-n", switch_ns_, "link", "set", "br0", "up"});
+  } catch (...) {
+    RunCommand({ip, "netns", "delete", switch_ns_});  // no destructor runs for a failed constructor
+    throw;
+  }
 }
 
 NetnsLab::~NetnsLab() {
