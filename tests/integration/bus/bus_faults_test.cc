@@ -33,7 +33,6 @@
 // (empty: the shipped 100) and CAIRN_BUS_PARK=0 change these for the figures ("[figures] ...").
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
