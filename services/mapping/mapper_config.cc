@@ -63,6 +63,7 @@ MapperConfig LoadMapperConfig(common::YamlMap& m) {
   m.Get("publish_period_s", &p.core.terrain.publish_period_s);
   m.Get("slow_publish_period_s", &p.core.terrain.slow_publish_period_s);
   m.Get("registry_period_s", &p.core.terrain.registry_period_s);
+  m.Get("max_announce_without_data_s", &p.core.terrain.max_announce_without_data_s);
   double occupancy_period_s = p.core.occupancy.publish_period_s;
   m.Get("occupancy_period_s", &occupancy_period_s);
   p.core.occupancy.publish_period_s = p.core.dynamic.publish_period_s = occupancy_period_s;

@@ -70,6 +70,9 @@ void TerrainMapperLayerParams::Validate() const {
   for (double p : {publish_period_s, slow_publish_period_s, registry_period_s}) {
     CAIRN_THROW_UNLESS(p > 0, "terrain publish periods must be positive, got " << p);
   }
+  CAIRN_THROW_UNLESS(max_announce_without_data_s > 0,
+                     "max_announce_without_data_s must be positive, got "
+                         << max_announce_without_data_s);
 }
 
 TerrainMapperLayerParams LoadTerrainMapperLayerParams(common::YamlMap& map) {

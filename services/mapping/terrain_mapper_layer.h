@@ -19,6 +19,12 @@ struct TerrainMapperLayerParams {
   double publish_period_s{0.2};       ///< elevation, slope, step, roughness, cost/<profile>
   double slow_publish_period_s{5.0};  ///< the base statistics, ditches; every manifest again
   double registry_period_s{1.0};      ///< the obstacle registry (when it changed)
+  /// The fast layers' manifests say "this layer is current" every period (a navigator's
+  /// stale-map stop reads them so). They say it only while revolutions come in: with none
+  /// integrated for this long (wall seconds; a lidar gone quiet, or lost on a lossy link), they
+  /// stop until the next one, and the navigator's map goes stale. Forced publications (a pull
+  /// save's OP_PUBLISH_ALL) still go out.
+  double max_announce_without_data_s{1.0};
 
   /// @throws std::invalid_argument naming a bad field.
   void Validate() const;

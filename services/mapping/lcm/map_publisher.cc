@@ -60,10 +60,27 @@ void MapPublisher::PublishDue(bool force, int64_t map_version) {
       const TerrainMapperLayerParams& p = terrain_->params();
       const bool slow = force || now >= next_slow_;
       if (slow) next_slow_ = now + Period(p.slow_publish_period_s);
-      if (force || slow || now >= state.next) {
+      if (map_version != last_data_version_) {
+        last_data_version_ = map_version;
+        last_data_ = now;
+      }
+      // Manifests of the fast layers go out every period, changed or not: they tell receivers
+      // (the navigator's staleness check) that the layer is current. That holds only while
+      // data comes in: a mapper starved of revolutions stops saying it.
+      const bool data_flows = now - last_data_ <= Period(p.max_announce_without_data_s);
+      if (data_flows != announcing_ && map_version > 0) {
+        announcing_ = data_flows;
+        if (data_flows) {
+          node_.Event("revolutions again: the terrain layers are announced as current");
+        } else {
+          node_.Event(
+              "no lidar revolution integrated for %.1f s: the terrain layers are no longer "
+              "announced as current (a navigator's map goes stale)",
+              p.max_announce_without_data_s);
+        }
+      }
+      if (force || ((slow || now >= state.next) && data_flows)) {
         state.next = now + Period(p.publish_period_s);
-        // Manifests of the fast layers go out every period, changed or not: they tell
-        // receivers (the navigator's staleness check) that the layer is current.
         PublishTerrain(FastLayers(), force);
       }
       if (slow) PublishTerrain(SlowLayers(), force);

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 
@@ -104,6 +105,76 @@ TEST(MapperServiceTest, MapsSlicesOverMemq) {
   ASSERT_EQ(step->num_verdicts, 1);
   EXPECT_FALSE(step->verdicts[0].crossable);
   EXPECT_EQ(node.counter("bad_points"), 0);
+}
+
+// Issue 20 (found by the bus-fault test): a mapper starved of lidar (fragments lost on a lossy
+// link) kept announcing its cost layer as current every period, so the navigator's stale-map
+// stop never fired and the robot drove on a map frozen since its first seconds. The fast
+// layers' manifests now stop once no revolution has been integrated for
+// max_announce_without_data_s, and resume with the next one; a forced publication (a pull
+// save's OP_PUBLISH_ALL) still goes out.
+TEST(MapperServiceTest, ACostLayerIsAnnouncedAsCurrentOnlyWhileRevolutionsComeIn) {
+  runtime::Node node(MemqOptions());
+  MapperParams params;
+  params.robot = "r1";
+  params.core.terrain.publish_period_s = 0.02;
+  params.core.terrain.max_announce_without_data_s = 0.2;
+  params.core.SetListed(kOctomapLayerName, false);
+  params.core.SetListed(kOccupancyLayerName, false);
+  const std::string cost = layers::CostLayer("pioneer3at");
+  int cost_manifests = 0;
+  node.Subscribe<cairn::lcmt_grid_manifest>("r1.MAP.MANIFEST",
+                                            [&](const cairn::lcmt_grid_manifest& m) {
+                                              if (m.layer == cost) ++cost_manifests;
+                                            });
+  MapperService service(node, params, {ShippedProfile("pioneer3at")},
+                        [](const std::string& name) -> common::Result<common::RobotProfile> {
+                          return common::NotFoundError("no profile " + name);
+                        });
+  SyntheticLidar lidar;
+  lidar.rings = 8;
+  lidar.azimuths = 180;
+  lidar.max_range_m = 8.0;
+  auto flat = [](double, double) { return 0.0; };
+  int sent = 0;
+  auto send_revolution = [&] {
+    const int64_t utime = 1'000'000 + sent * 100'000;
+    common::LidarSlice slice = SyntheticRevolution(SensorAt(1.0, 0.0, 0.5), flat, lidar, sent);
+    slice.utime = utime;
+    slice.robot = "r1";
+    node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(1.0, 0.0, 0.0), utime, "r1", "world"));
+    for (const auto& part : runtime::SplitSlice(slice, 60000)) {
+      node.Publish("r1.LIDAR", runtime::ToLcm(part));
+    }
+    ++sent;
+  };
+  auto spin_until = [&](const std::function<bool()>& done, double bound_s) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
+    while (!done() && std::chrono::steady_clock::now() < deadline) node.SpinOnce(5);
+    return done();
+  };
+  auto spin_for = [&](double s) { spin_until([] { return false; }, s); };
+  // Revolutions coming in: announced every period.
+  for (int i = 0; i < 3; ++i) send_revolution();
+  ASSERT_TRUE(spin_until([&] { return service.revolutions() == 3 && cost_manifests >= 3; }, 20.0));
+  // The lidar goes quiet: within 0.2 s (and a period) the announcements stop...
+  spin_for(0.4);
+  const int when_quiet = cost_manifests;
+  spin_for(0.5);
+  EXPECT_EQ(cost_manifests, when_quiet) << "a starved mapper still says its layer is current";
+  // ...a forced publication still goes out...
+  lcmt_map_control_request publish_all{};
+  publish_all.request_id = 7;
+  publish_all.requester = "store";
+  publish_all.op = lcmt_map_control_request::OP_PUBLISH_ALL;
+  node.Publish("r1.MAP.CONTROL", publish_all);
+  EXPECT_TRUE(spin_until([&] { return cost_manifests > when_quiet; }, 10.0));
+  // ...and the next revolution brings them back.
+  const int before = cost_manifests;
+  send_revolution();
+  EXPECT_TRUE(spin_until([&] { return cost_manifests >= before + 3; }, 10.0));
+  service.Stop();
 }
 
 // A reading of a stream the mapper has no fixed input for: here made from lcmt_pose messages
