@@ -13,6 +13,11 @@
 namespace cairn::layers {
 
 // Robot-agnostic base layers (stored once per site).
+/// Pseudo layer names a resend request may carry (they cannot be layer names): a mapper or a
+/// push client asked for "#obstacles" sends its obstacle registry again, "#octomap" its OctoMap.
+inline constexpr char kResendObstacles[] = "#obstacles";
+inline constexpr char kResendOctomap[] = "#octomap";
+
 inline constexpr char kElevation[] = "elevation";                   // m, world z
 inline constexpr char kElevationVariance[] = "elevation_variance";  // m^2
 inline constexpr char kObservationCount[] = "observation_count";    // fused measurements

@@ -531,10 +531,21 @@ SaveAssembler::Gathered SaveAssembler::GatherPull(PendingSave& save, Clock::time
     r->map_name = mirror.map_name;
     g.resends.push_back({request.robot, std::move(*r)});
   }
-  // Obstacles published after the request, or (a mapper without any) none after a while.
+  // Obstacles published after the request. The registry travels as one message, lost whole on a
+  // lossy link, so it is asked for again ("#obstacles") every round until a fresh one arrives.
+  // A mapper known to keep one (a registry arrived before the request) is waited for until the
+  // save times out: saving without it would lose its obstacles without a word. A mapper never
+  // heard to have one (no terrain layer) gets 4 x pull_settle_s.
   const bool obstacles_fresh = mirror.obstacles && mirror.obstacles_time >= save.started;
-  if (!obstacles_fresh && SecondsBetween(save.started, now) < 4 * params_.pull_settle_s) {
+  const bool keeps_registry = mirror.obstacles.has_value();
+  if (!obstacles_fresh &&
+      (keeps_registry || SecondsBetween(save.started, now) < 4 * params_.pull_settle_s)) {
     g.missing.push_back("obstacles");
+    TileRequest r;
+    r.layer = kResendObstacles;
+    r.robot = request.robot;
+    r.map_name = mirror.map_name;
+    g.resends.push_back({request.robot, std::move(r)});
   }
   if (mirror.obstacles) g.obstacles = &*mirror.obstacles;
   if (mirror.complete_octomap) g.octomap = &*mirror.complete_octomap;

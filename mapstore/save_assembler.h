@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "common/layers.h"
 #include "common/obstacle.h"
 #include "common/status.h"
 #include "mapstore/map_store.h"
@@ -52,9 +53,9 @@ using common::TileHeader;
 using common::TileManifest;
 using common::TileRequest;
 
-/// Pseudo layer names a push client is asked to send again (they cannot be layer names).
-inline constexpr char kResendObstacles[] = "#obstacles";
-inline constexpr char kResendOctomap[] = "#octomap";
+/// Pseudo layer names a push client (or, for obstacles, a mapper) is asked to send again.
+using layers::kResendObstacles;
+using layers::kResendOctomap;
 
 struct SaveAssemblerParams {
   double save_timeout_s{20.0};            ///< a save gives up waiting for its data after this

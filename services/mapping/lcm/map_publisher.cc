@@ -55,6 +55,7 @@ void MapPublisher::Send(const std::string& stream, const std::vector<Msg>& messa
 
 void MapPublisher::PublishDue(bool force, int64_t map_version) {
   const auto now = Clock::now();
+  last_map_version_ = map_version;
   for (LayerState& state : layers_) {
     if (state.layer == terrain_) {
       const TerrainMapperLayerParams& p = terrain_->params();
@@ -218,6 +219,11 @@ void MapPublisher::PublishOctomap(LayerState* state, bool force) {
 }
 
 void MapPublisher::Resend(const cairn::lcmt_tile_resend_request& request) {
+  if (request.layer == layers::kResendObstacles) {
+    // A pull save that missed the registry (one message, lost whole on a lossy link).
+    if (terrain_ != nullptr) PublishRegistry(/*force=*/true, last_map_version_);
+    return;
+  }
   if (terrain_publisher_.Has(request.layer)) {
     const auto batch = terrain_publisher_.Resend(request);
     Send(channels::kMapTiles, batch.tiles);

@@ -78,6 +78,7 @@ class MapPublisher {
 
   runtime::Node& node_;
   MapperCore& core_;
+  int64_t last_map_version_{0};    ///< map_version of the last PublishDue
   int64_t last_data_version_{-1};  ///< map_version (revolutions) at the last check
   Clock::time_point last_data_;    ///< when map_version last changed
   bool announcing_{true};

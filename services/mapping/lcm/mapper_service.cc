@@ -355,7 +355,10 @@ void MapperService::OnMapstoreReply(const cairn::lcmt_mapstore_reply& msg) {
 
 void MapperService::OnResend(const cairn::lcmt_tile_resend_request& msg) {
   if (msg.robot != params_.robot || msg.map_name != params_.map_name) return;
-  const double tiles = msg.num_tiles > 0 ? msg.num_tiles : kWholeLayerResendTiles;
+  // The registry ("#obstacles") is one message: it counts as one tile.
+  const double tiles = msg.layer == layers::kResendObstacles ? 1.0
+                       : msg.num_tiles > 0                  ? msg.num_tiles
+                                                            : kWholeLayerResendTiles;
   if (!resend_limits_.Allow(msg.requester, tiles, runtime::Node::SteadyUtime() * 1e-6)) {
     node_.CountDropped("resend_rate_limited");
     node_.Warn("resend_rate", "dropped a resend request of '" + msg.requester +

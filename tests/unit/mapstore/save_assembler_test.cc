@@ -383,6 +383,76 @@ TEST_F(SaveAssemblerTest, APullSaveOnlyTakesManifestsNewerThanItsRequest) {
   EXPECT_EQ(done.finished[0].version, 2);
 }
 
+// Issue 20 (found by the bus-fault test): the registry travels as one message. Lost on a
+// lossy link, a pull save waited 4 x pull_settle_s and then saved the map without its
+// obstacles, replying OK. Now it asks the mapper for the registry again ("#obstacles") every
+// round, and a mapper known to keep one is waited for: the save stores the obstacles when they
+// come, or fails naming them when they never do.
+TEST_F(SaveAssemblerTest, APullSaveAsksForALostRegistryAndNeverSavesWithoutIt) {
+  SaveAssembler dut(store_, Params());
+  SaveRequest request = PullRequest(41, "tunnel", "rover1");
+  request.layers = {layers::kElevation};
+  const auto cut = CutLayer(snapshot_.base, layers::kElevation, 10, "live");
+  auto send_layer = [&](double t) {
+    dut.MirrorManifest("rover1", cut.manifest, T(t));
+    for (const auto& tile : cut.tiles) dut.MirrorTile("rover1", tile.As());
+  };
+  dut.Start(request, T(0.0));
+  send_layer(0.1);
+  dut.MirrorObstacles("rover1", snapshot_.obstacles, T(0.1));
+  ASSERT_EQ(dut.Poll(T(0.2)).finished.size(), 1u);  // the mapper keeps a registry
+  // A second pull whose registry is lost: the layer arrives, the obstacles do not.
+  request.request_id = 42;
+  dut.Start(request, T(1.0));
+  send_layer(1.1);
+  bool asked = false;
+  for (double t = 1.2; t < 2.9; t += 0.1) {
+    SaveProgress p = dut.Poll(T(t));
+    EXPECT_TRUE(p.finished.empty()) << "saved at " << t << " s without its obstacles";
+    for (const ResendAsk& ask : p.resends) {
+      if (ask.tiles.layer == kResendObstacles) {
+        asked = true;
+        EXPECT_EQ(ask.pull_robot, "rover1");
+        EXPECT_EQ(ask.tiles.map_name, "live");
+      }
+    }
+  }
+  EXPECT_TRUE(asked) << "the registry was never asked for again";
+  dut.MirrorObstacles("rover1", snapshot_.obstacles, T(2.9));
+  SaveProgress done = dut.Poll(T(2.95));
+  ASSERT_EQ(done.finished.size(), 1u);
+  ASSERT_TRUE(done.finished[0].status.ok()) << done.finished[0].status.ToString();
+  EXPECT_EQ(store_.LoadObstacles({"lab", "tunnel", 2}).value().obstacles.size(), 2u);
+  // A third whose registry never comes: it fails, naming what it waited for.
+  request.request_id = 43;
+  dut.Start(request, T(5.0));
+  send_layer(5.1);
+  SaveProgress failed = dut.Poll(T(7.5));
+  ASSERT_EQ(failed.finished.size(), 1u);
+  EXPECT_FALSE(failed.finished[0].status.ok());
+  EXPECT_NE(failed.finished[0].status.message().find("obstacles"), std::string::npos)
+      << failed.finished[0].status.message();
+  EXPECT_FALSE(store_.GetMapInfo({"lab", "tunnel", 3}).ok());
+}
+
+// A mapper never heard to keep a registry (no terrain layer): asked, then saved without one.
+TEST_F(SaveAssemblerTest, APullFromAMapperWithoutARegistrySavesAfterAWhile) {
+  SaveAssembler dut(store_, Params());
+  SaveRequest request = PullRequest(51, "sonar", "auv");
+  request.layers = {layers::kElevation};
+  dut.Start(request, T(0.0));
+  const auto cut = CutLayer(snapshot_.base, layers::kElevation, 10, "live");
+  dut.MirrorManifest("auv", cut.manifest, T(0.1));
+  for (const auto& tile : cut.tiles) dut.MirrorTile("auv", tile.As());
+  SaveProgress waiting = dut.Poll(T(0.6));
+  EXPECT_TRUE(waiting.finished.empty());
+  ASSERT_FALSE(waiting.resends.empty());
+  EXPECT_EQ(waiting.resends.back().tiles.layer, kResendObstacles);
+  SaveProgress done = dut.Poll(T(2.1));  // past 4 x pull_settle_s
+  ASSERT_EQ(done.finished.size(), 1u);
+  EXPECT_TRUE(done.finished[0].status.ok());
+}
+
 TEST_F(SaveAssemblerTest, APullFromARobotWithoutAMapperTimesOut) {
   SaveAssembler dut(store_, Params());
   dut.Start(PullRequest(31, "nothing", "ghost"), T(0.0));

@@ -177,6 +177,60 @@ TEST(MapperServiceTest, ACostLayerIsAnnouncedAsCurrentOnlyWhileRevolutionsComeIn
   service.Stop();
 }
 
+// Issue 20 (found by the bus-fault test): the registry is one message, lost whole on a lossy
+// link, and could not be asked for again. A resend request for "#obstacles" publishes it again
+// (and counts as one tile against the resend rate).
+TEST(MapperServiceTest, AResendRequestForObstaclesPublishesTheRegistryAgain) {
+  runtime::Node node(MemqOptions());
+  MapperParams params;
+  params.robot = "r1";
+  params.core.terrain.publish_period_s = 0.02;
+  params.core.terrain.registry_period_s = 0.02;
+  params.core.SetListed(kOctomapLayerName, false);
+  params.core.SetListed(kOccupancyLayerName, false);
+  int registries = 0;
+  node.Subscribe<cairn::lcmt_obstacle_registry>(
+      "r1.MAP.OBSTACLES", [&](const cairn::lcmt_obstacle_registry&) { ++registries; });
+  MapperService service(node, params, {ShippedProfile("pioneer3at")},
+                        [](const std::string& name) -> common::Result<common::RobotProfile> {
+                          return common::NotFoundError("no profile " + name);
+                        });
+  SyntheticLidar lidar;
+  lidar.rings = 8;
+  lidar.azimuths = 180;
+  lidar.max_range_m = 8.0;
+  common::LidarSlice slice =
+      SyntheticRevolution(SensorAt(1.0, 0.0, 0.5), [](double, double) { return 0.0; }, lidar, 0);
+  slice.utime = 1'000'000;
+  slice.robot = "r1";
+  node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(1.0, 0.0, 0.0), slice.utime, "r1", "world"));
+  for (const auto& part : runtime::SplitSlice(slice, 60000)) {
+    node.Publish("r1.LIDAR", runtime::ToLcm(part));
+  }
+  auto spin_until = [&](const std::function<bool()>& done, double bound_s) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
+    while (!done() && std::chrono::steady_clock::now() < deadline) node.SpinOnce(5);
+    return done();
+  };
+  ASSERT_TRUE(spin_until([&] { return registries >= 1; }, 20.0));
+  // Unchanged: not published again on its own.
+  spin_until([] { return false; }, 0.3);
+  const int before = registries;
+  for (int i = 0; i < 20; ++i) {  // far beyond a whole layer's budget, were it counted as one
+    cairn::lcmt_tile_resend_request ask{};
+    ask.requester = "store";
+    ask.robot = "r1";
+    ask.map_name = params.map_name;
+    ask.layer = layers::kResendObstacles;
+    node.Publish("r1.MAP.TILE_RESEND", ask);
+  }
+  EXPECT_TRUE(spin_until([&] { return registries >= before + 20; }, 10.0))
+      << registries - before << " of 20 asked for";
+  EXPECT_EQ(node.counter("resend_rate_limited"), 0);
+  service.Stop();
+}
+
 // A reading of a stream the mapper has no fixed input for: here made from lcmt_pose messages
 // on r1.TEST_MARK (its x is what the layer keeps).
 struct MarkReading : SensorReading {
