@@ -12,7 +12,8 @@ namespace cairn::mapstore::sqlite {
 
 common::Status StatusFromCode(int rc, const std::string& what, sqlite3* db) {
   const int primary = rc & 0xff;
-  std::string message = what + ": " + sqlite3_errstr(rc);
+  const std::string text = sqlite3_errstr(rc);
+  std::string message = what == text ? what : what + ": " + text;
   if (db != nullptr) {
     const char* detail = sqlite3_errmsg(db);
     if (detail != nullptr && message.find(detail) == std::string::npos) {
