@@ -396,8 +396,8 @@ Status SqliteMapStore::CheckBlobs(CheckReport* report, const ProgressFn& progres
     return out + ")";
   };
   const int64_t n = static_cast<int64_t>(ids.size());
-  sqlite::Statement st = db_->Prepare(
-      "SELECT codec, raw_size, raw_crc32, data, stored_crc32 FROM blobs WHERE id = ?");
+  sqlite::Statement st =
+      db_->Prepare("SELECT codec, raw_size, raw_crc32, data, stored_crc32 FROM blobs WHERE id = ?");
   for (const int64_t id : ids) {
     st.Reset();
     st.Bind(1, id);

@@ -21,9 +21,9 @@ common::Status StatusFromCode(int rc, const std::string& what, sqlite3* db) {
     }
     // What the operating system said (ENOSPC, EROFS, EACCES, EIO), when SQLite kept it.
     const int errno_value = sqlite3_system_errno(db);
-    if (errno_value != 0 && (primary == SQLITE_IOERR || primary == SQLITE_FULL ||
-                             primary == SQLITE_CANTOPEN || primary == SQLITE_READONLY ||
-                             primary == SQLITE_PERM)) {
+    if (errno_value != 0 &&
+        (primary == SQLITE_IOERR || primary == SQLITE_FULL || primary == SQLITE_CANTOPEN ||
+         primary == SQLITE_READONLY || primary == SQLITE_PERM)) {
       message += std::string(" [") + std::strerror(errno_value) + "]";
     }
   }

@@ -92,19 +92,19 @@ std::optional<Synchronous> ParseSynchronous(const std::string& text) {
 
 Status SqliteMapStore::WriteError(const Status& s, const std::string& what) const {
   if (s.code() == common::StatusCode::kResourceExhausted) {
-    const std::string quota =
-        options_.max_page_count > 0
-            ? " (or the database quota of " + std::to_string(options_.max_page_count) +
-                  " pages is reached)"
-            : "";
+    const std::string quota = options_.max_page_count > 0
+                                  ? " (or the database quota of " +
+                                        std::to_string(options_.max_page_count) +
+                                        " pages is reached)"
+                                  : "";
     return common::ResourceExhaustedError(
         what + ": disk full: '" + path_ + "' cannot grow, the disk holding it is full" + quota +
         "; nothing of this change was written and everything committed before is intact (" +
         s.message() + ")");
   }
   if (s.code() == common::StatusCode::kUnavailable) {
-    return common::UnavailableError(what + ": '" + path_ +
-                                    "' stayed locked by another writer (" + s.message() + ")");
+    return common::UnavailableError(what + ": '" + path_ + "' stayed locked by another writer (" +
+                                    s.message() + ")");
   }
   if (s.message().find(path_) != std::string::npos) {
     return Status(s.code(), what + ": " + s.message());
@@ -169,8 +169,8 @@ Result<std::unique_ptr<SqliteMapStore>> SqliteMapStore::Open(const std::string& 
     }
   }
   const bool immutable = !memory && effective.read_only && fs::exists(path) && NeedsImmutable(path);
-  auto db = sqlite::Database::Open(path, effective.read_only, effective.create_if_missing,
-                                   immutable);
+  auto db =
+      sqlite::Database::Open(path, effective.read_only, effective.create_if_missing, immutable);
   if (!db.ok()) return db.status();
   std::unique_ptr<SqliteMapStore> store(new SqliteMapStore(path, effective, std::move(db).value()));
   store->write_refusal_ = refusal;
@@ -297,8 +297,8 @@ Status SqliteMapStore::InitialiseWritable(bool empty, int64_t version) {
     }
   }
   Status s = db_->Exec(std::string("PRAGMA foreign_keys = ON; PRAGMA synchronous = ") +
-                       (options_.synchronous == Synchronous::kFull ? "FULL" : "NORMAL") + "; PRAGMA cache_size = -" +
-                       std::to_string(options_.cache_size_kib));
+                       (options_.synchronous == Synchronous::kFull ? "FULL" : "NORMAL") +
+                       "; PRAGMA cache_size = -" + std::to_string(options_.cache_size_kib));
   if (s.ok() && !memory) {
     s = db_->Exec("PRAGMA wal_autocheckpoint = " +
                   std::to_string(options_.wal_autocheckpoint_pages));

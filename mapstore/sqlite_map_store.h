@@ -51,12 +51,12 @@ struct SqliteOptions {
   /// - kFull: the WAL is synced at every commit, so an acknowledged save survives a power cut
   ///   too, at the price of one fsync per save.
   Synchronous synchronous{Synchronous::kNormal};
-  int tile_size_cells{100};      ///< tile side of newly saved layers
-  int zstd_level{1};             ///< compression level of new blobs
-  int compression_threads{2};    ///< threads compressing/decompressing tiles
-  int cache_size_kib{32768};     ///< SQLite page cache
-  int64_t max_page_count{0};     ///< size quota in pages (0 = none); beyond it writes fail
-                                 ///< with kResourceExhausted like a full disk
+  int tile_size_cells{100};    ///< tile side of newly saved layers
+  int zstd_level{1};           ///< compression level of new blobs
+  int compression_threads{2};  ///< threads compressing/decompressing tiles
+  int cache_size_kib{32768};   ///< SQLite page cache
+  int64_t max_page_count{0};   ///< size quota in pages (0 = none); beyond it writes fail
+                               ///< with kResourceExhausted like a full disk
   /// WAL pages after which a commit also checkpoints (SQLite's default is 1000). A long-running
   /// writer sets it high and calls CheckpointIfIdle() so saves do not pay for checkpoints.
   int wal_autocheckpoint_pages{1000};
@@ -70,8 +70,9 @@ class SqliteMapStore final : public MapStore {
   /// with kPermissionDenied naming the file and the reason (write_refusal()). A read-only open
   /// of a file whose folder this process cannot write either (a read-only mount, mode 0555),
   /// with no WAL beside it, reads the file as immutable (SQLite takes no lock and needs no -shm
-  /// file): a change another process makes to it meanwhile is not seen. Errors: kCorrupt (not a cairn database), kInvalidArgument (schema newer than this build, or
-  /// an older schema opened read-only), kUnavailable/kNotFound (cannot open the file).
+  /// file): a change another process makes to it meanwhile is not seen. Errors: kCorrupt (not a
+  /// cairn database), kInvalidArgument (schema newer than this build, or an older schema opened
+  /// read-only), kUnavailable/kNotFound (cannot open the file).
   static common::Result<std::unique_ptr<SqliteMapStore>> Open(const std::string& path,
                                                               const SqliteOptions& options = {});
   ~SqliteMapStore() override;

@@ -106,15 +106,14 @@ void ExpectServedReadOnly(ChildProcess& store, const std::string& url, const std
   MapstoreClient client(lcm, "read-only-test", TestClientOptions());
   ASSERT_TRUE(WaitForStore(client)) << "the service did not start on a read-only database";
   const std::string before = ReadAll(db);
-  EXPECT_TRUE(LogHas(store, "serving read-only, saves will fail: '" + db + "'"))
-      << store.Log();
+  EXPECT_TRUE(LogHas(store, "serving read-only, saves will fail: '" + db + "'")) << store.Log();
   ExpectLoads(client, "north", 1, TerrainSnapshot("lab", "north", 260, 240, 1.f));
 
   auto saved = client.Save(TerrainSnapshot("lab", "north", 260, 240, 3.f));
   ASSERT_TRUE(saved.ok()) << saved.status().ToString();
   EXPECT_EQ(saved->status, kStatusForbidden) << saved->message;
-  for (const std::string& part : {"'" + db + "'", std::string("read-only"), reason,
-                                  std::string("nothing was written")}) {
+  for (const std::string& part :
+       {"'" + db + "'", std::string("read-only"), reason, std::string("nothing was written")}) {
     EXPECT_NE(saved->message.find(part), std::string::npos) << part << " in: " << saved->message;
   }
   std::printf("[ info ] save refused: %s\n", saved->message.c_str());
@@ -147,8 +146,9 @@ TEST(MapstoreFaultsTest, ReadOnlyFileIsServedAndSavesFailSayingWhy) {
   // User nobody must reach the file: every folder above it must be searchable by others.
   for (fs::path p = fs::path(procs.dir()); p != p.root_path(); p = p.parent_path()) {
     if ((fs::status(p).permissions() & fs::perms::others_exec) == fs::perms::none) {
-      GTEST_SKIP() << p << " is not searchable by other users, so user nobody cannot reach the "
-                         "test's database";
+      GTEST_SKIP() << p
+                   << " is not searchable by other users, so user nobody cannot reach the "
+                      "test's database";
     }
   }
   const std::string dir = procs.dir() + "/ro";
@@ -158,8 +158,8 @@ TEST(MapstoreFaultsTest, ReadOnlyFileIsServedAndSavesFailSayingWhy) {
   ASSERT_EQ(chmod(db.c_str(), 0444), 0);
   ASSERT_EQ(chmod(dir.c_str(), 0555), 0);
   std::vector<std::string> argv = as_user;
-  for (const std::string& a :
-       {BinPath("cairn-mapstore"), std::string("--db"), db, std::string("--lcm-url"), procs.url()}) {
+  for (const std::string& a : {BinPath("cairn-mapstore"), std::string("--db"), db,
+                               std::string("--lcm-url"), procs.url()}) {
     argv.push_back(a);
   }
   ChildProcess& store = procs.StartRaw("cairn-mapstore", argv);

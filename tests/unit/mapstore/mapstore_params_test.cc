@@ -71,8 +71,7 @@ TEST(MapstoreParamsTest, UnknownKeysAndBadValuesNameTheirLine) {
   // old boolean key.
   EXPECT_THROW(Load("database:\n  synchronous: extra\n"), ConfigError);
   EXPECT_THROW(Load("database:\n  synchronous_full: true\n"), ConfigError);
-  EXPECT_EQ(Load("database:\n  synchronous: normal\n").database.synchronous,
-            Synchronous::kNormal);
+  EXPECT_EQ(Load("database:\n  synchronous: normal\n").database.synchronous, Synchronous::kNormal);
   EXPECT_THROW(Load("services: {}\n"), ConfigError);
 }
 

@@ -325,8 +325,7 @@ TEST(SqliteMapStoreTest, AFileWithoutWriteAccessOpensReadOnlyAndSaysWhy) {
   }
   fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
   fs::permissions(dir, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
-                           fs::perms::group_exec | fs::perms::others_read |
-                           fs::perms::others_exec);
+                           fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
   const std::string before = ReadFile(path);
   {
     auto dut = OpenOrDie(path);
@@ -575,8 +574,7 @@ TEST(SqliteMapStoreTest, FullDiskGivesAClearErrorAndLosesNothing) {
   auto r = dut->SaveMap(big, kCtx);
   ASSERT_EQ(r.status().code(), StatusCode::kResourceExhausted) << r.status().ToString();
   EXPECT_NE(r.status().message().find("disk full"), std::string::npos) << r.status().message();
-  EXPECT_NE(r.status().message().find("'" + path + "'"), std::string::npos)
-      << r.status().message();
+  EXPECT_NE(r.status().message().find("'" + path + "'"), std::string::npos) << r.status().message();
   EXPECT_NE(r.status().message().find("quota of"), std::string::npos) << r.status().message();
   EXPECT_NE(r.status().message().find("intact"), std::string::npos);
   // Nothing of the failed save exists; the earlier map loads and the file checks clean.
