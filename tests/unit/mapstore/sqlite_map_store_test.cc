@@ -288,6 +288,22 @@ TEST(SqliteMapStoreTest, ADamagedTablePageIsNamedWithTheMapsItHits) {
       << map.status().message();
 }
 
+// SQLite's codes become statuses a caller can act on: a write the file refuses is not a bad
+// request (kPermissionDenied, not kInvalidArgument), a full disk is kResourceExhausted.
+TEST(SqliteMapStoreTest, SqliteCodesBecomeStatusesThatSayWhatWasWrong) {
+  const std::string path = TempDir() + "/site.db";
+  { ASSERT_TRUE(OpenOrDie(path)); }
+  auto db = sqlite::Database::Open(path, /*read_only=*/true, /*create=*/false);
+  ASSERT_TRUE(db.ok()) << db.status().ToString();
+  const common::Status s = (*db)->Exec("INSERT INTO sites(name, created_utime) VALUES('x', 0)");
+  EXPECT_EQ(s.code(), StatusCode::kPermissionDenied) << s.ToString();
+  EXPECT_NE(s.message().find("readonly"), std::string::npos) << s.message();
+  EXPECT_EQ(sqlite::StatusFromCode(SQLITE_FULL, "saving").code(), StatusCode::kResourceExhausted);
+  EXPECT_EQ(sqlite::StatusFromCode(SQLITE_FULL, "saving").message(),
+            "saving: database or disk is full");
+  EXPECT_EQ(sqlite::StatusFromCode(SQLITE_CORRUPT, "x").code(), StatusCode::kCorrupt);
+}
+
 TEST(SqliteMapStoreTest, SynchronousIsNormalUnlessFullIsAskedFor) {
   const std::string path = TempDir() + "/site.db";
   {
