@@ -34,8 +34,13 @@ int Serve(const std::string& db, ms::SqliteMapStore& store, const ms::MapstorePa
   // Saves do not pay for checkpoints: the WAL is copied into the file when the store is idle.
   node.AddTimer(1.0, [&store] { store.CheckpointIfIdle(2.0); });
   node.SetState(cairn::runtime::HealthState::kReady);
-  node.Event("serving %s (schema %d) on %s", db.c_str(), store.schema_version(),
-             node.url().c_str());
+  node.Event("serving %s (schema %d, synchronous %s) on %s", db.c_str(), store.schema_version(),
+             ms::SynchronousName(params.database.synchronous), node.url().c_str());
+  if (!store.write_refusal().empty()) {
+    // Loads go on; every save, share or profile put is refused, naming the file and the reason.
+    CAIRN_LOG_ERROR("serving read-only, saves will fail: %s", store.write_refusal().c_str());
+    node.Count("read_only");
+  }
   node.Spin();
   node.SetState(cairn::runtime::HealthState::kStopping);
   if (service.running_jobs() > 0 || service.pending_saves() > 0) {

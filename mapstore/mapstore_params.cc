@@ -69,7 +69,15 @@ void LoadService(YamlMap s, MapstoreServiceParams* p) {
 void LoadDatabase(YamlMap d, SqliteOptions* o) {
   d.Get("busy_timeout_ms", &o->busy_timeout_ms);
   d.Get("write_attempts", &o->write_attempts);
-  d.Get("synchronous_full", &o->synchronous_full);
+  std::string synchronous;
+  if (d.Get("synchronous", &synchronous)) {
+    const auto mode = ParseSynchronous(synchronous);
+    if (!mode) {
+      d.Fail(d.Raw("synchronous"),
+             "synchronous must be 'normal' or 'full', not '" + synchronous + "'");
+    }
+    o->synchronous = *mode;
+  }
   d.Get("tile_size_cells", &o->tile_size_cells);
   d.Get("zstd_level", &o->zstd_level);
   d.Get("compression_threads", &o->compression_threads);

@@ -2,6 +2,8 @@
 // integrity check of the whole file.
 
 #include <algorithm>
+#include <regex>
+#include <set>
 
 #include "mapstore/names.h"
 #include "mapstore/schema.h"
@@ -221,20 +223,38 @@ Status SqliteMapStore::CheckPragmas(CheckReport* report, bool* go_on) const {
   sqlite::Statement integrity = db_->Prepare("PRAGMA integrity_check");
   while (integrity.Step()) {
     const std::string line = integrity.Text(0);
-    if (line != "ok") AddProblem(report, "integrity_check: " + line);
+    if (line == "ok") continue;
+    // SQLite names pages ("Tree 7 page 312 cell 0: ...", "Page 312: ..."): say whose they are,
+    // by the tree's root page (sqlite_master) or else by the page itself (dbstat).
+    static const std::regex kTree("Tree ([0-9]+)");
+    static const std::regex kPage("[Pp]age ([0-9]+)");
+    std::smatch m;
+    std::string owner;
+    if (std::regex_search(line, m, kTree)) owner = RootOwner(std::stoll(m[1].str()));
+    if (owner.empty() && std::regex_search(line, m, kPage)) {
+      owner = PageOwner(std::stoll(m[1].str()));
+    }
+    AddProblem(report, "integrity_check: " + line + (owner.empty() ? "" : " [" + owner + "]"));
   }
   if (!integrity.status().ok()) {
     if (integrity.status().code() != common::StatusCode::kCorrupt) return integrity.status();
     AddProblem(report, "integrity_check: " + integrity.status().message());
-    *go_on = false;
-    return Status::Ok();
+    // The integrity check stops at a page it cannot read; the blobs are still worth reading one
+    // by one (each one that fails is named with its maps) unless not even the schema reads.
+    if (!db_->QueryInt("SELECT count(*) FROM sqlite_master").ok()) {
+      *go_on = false;
+      return Status::Ok();
+    }
   }
   sqlite::Statement keys = db_->Prepare("PRAGMA foreign_key_check");
   while (keys.Step()) {
     AddProblem(report, "foreign key: row " + std::to_string(keys.Int(1)) + " of table " +
                            keys.Text(0) + " refers to a missing row of " + keys.Text(2));
   }
-  if (!keys.status().ok()) return keys.status();
+  if (!keys.status().ok()) {
+    if (keys.status().code() != common::StatusCode::kCorrupt) return keys.status();
+    AddProblem(report, "foreign_key_check: " + keys.status().message());
+  }
   auto app = db_->QueryInt("PRAGMA application_id");
   auto version = db_->QueryInt("PRAGMA user_version");
   if (!app.ok() || *app != schema::kApplicationId) {
@@ -276,34 +296,141 @@ Status SqliteMapStore::CheckTilePlaces(CheckReport* report) const {
   return Status::Ok();
 }
 
+std::string SqliteMapStore::RootOwner(int64_t root_page) const {
+  try {
+    sqlite::Statement st =
+        db_->Prepare("SELECT type, name, tbl_name FROM sqlite_master WHERE rootpage = ?");
+    st.Bind(1, root_page);
+    if (!st.Step()) return "";
+    if (st.Text(0) == "index") return "index " + st.Text(1) + " of table " + st.Text(2);
+    return "table " + st.Text(1);
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
+std::string SqliteMapStore::PageOwner(int64_t page) const {
+  // dbstat reads the b-trees itself, so on a damaged file it may fail: then nothing is said.
+  try {
+    sqlite::Statement st = db_->Prepare(
+        "SELECT d.name, coalesce(m.type, 'table'), coalesce(m.tbl_name, d.name) FROM dbstat d "
+        "LEFT JOIN sqlite_master m ON m.name = d.name WHERE d.pageno = ? LIMIT 1");
+    st.Bind(1, page);
+    if (!st.Step()) return "";
+    const std::string type = st.Text(1);
+    const std::string what =
+        type == "index" ? "index " + st.Text(0) + " of table " + st.Text(2) : "table " + st.Text(0);
+    return "page " + std::to_string(page) + " belongs to " + what;
+  } catch (const std::exception&) {
+    return "";
+  }
+}
+
+std::vector<std::string> SqliteMapStore::BlobUsers(int64_t blob_id) const {
+  std::vector<std::string> users;
+  const auto version_of = [](const sqlite::Statement& st, int first) {
+    return "map " + st.Text(first) + "/" + st.Text(first + 1) + " v" +
+           std::to_string(st.Int(first + 2));
+  };
+  sqlite::Statement base = db_->Prepare(
+      "SELECT s.name, m.name, v.version, l.name, t.tile_ix, t.tile_iy FROM layer_tiles t "
+      "JOIN layers l ON l.id = t.layer_id JOIN map_versions v ON v.id = l.map_version_id JOIN "
+      "maps m ON m.id = v.map_id JOIN sites s ON s.id = m.site_id WHERE t.blob_id = ? "
+      "ORDER BY s.name, m.name, v.version, l.name");
+  base.Bind(1, blob_id);
+  while (base.Step()) {
+    users.push_back(version_of(base, 0) + " layer " + base.Text(3) + " tile (" +
+                    std::to_string(base.Int(4)) + ", " + std::to_string(base.Int(5)) + ")");
+  }
+  sqlite::Statement derived = db_->Prepare(
+      "SELECT s.name, m.name, v.version, d.profile_name, t.layer, t.tile_ix, t.tile_iy FROM "
+      "derived_tiles t JOIN derived d ON d.id = t.derived_id JOIN map_versions v ON v.id = "
+      "d.map_version_id JOIN maps m ON m.id = v.map_id JOIN sites s ON s.id = m.site_id WHERE "
+      "t.blob_id = ?");
+  derived.Bind(1, blob_id);
+  while (derived.Step()) {
+    users.push_back(version_of(derived, 0) + " profile " + derived.Text(3) + " cached layer " +
+                    derived.Text(4) + " tile (" + std::to_string(derived.Int(5)) + ", " +
+                    std::to_string(derived.Int(6)) + ")");
+  }
+  sqlite::Statement registry = db_->Prepare(
+      "SELECT s.name, m.name, v.version, d.profile_name FROM derived d JOIN map_versions v ON "
+      "v.id = d.map_version_id JOIN maps m ON m.id = v.map_id JOIN sites s ON s.id = m.site_id "
+      "WHERE d.registry_blob_id = ?");
+  registry.Bind(1, blob_id);
+  while (registry.Step()) {
+    users.push_back(version_of(registry, 0) + " profile " + registry.Text(3) +
+                    " cached obstacle verdicts");
+  }
+  sqlite::Statement octomap = db_->Prepare(
+      "SELECT s.name, m.name, v.version FROM octomaps o JOIN map_versions v ON v.id = "
+      "o.map_version_id JOIN maps m ON m.id = v.map_id JOIN sites s ON s.id = m.site_id WHERE "
+      "o.blob_id = ?");
+  octomap.Bind(1, blob_id);
+  while (octomap.Step()) users.push_back(version_of(octomap, 0) + " OctoMap");
+  return users;
+}
+
 Status SqliteMapStore::CheckBlobs(CheckReport* report, const ProgressFn& progress) const {
-  // Every blob decodes to its size and checksum.
-  auto total = db_->QueryInt("SELECT count(*) FROM blobs");
-  const int64_t n = total.ok() ? *total : 0;
+  // Every blob decodes to its size and checksum. Each is read by its id (found in the blobs
+  // table and in every table that refers to one), so a damaged page costs only the blobs on it,
+  // and each bad one is named with the maps, layers and tiles it holds.
+  std::set<int64_t> ids;
+  for (const char* sql :
+       {"SELECT id FROM blobs", "SELECT blob_id FROM layer_tiles", "SELECT blob_id FROM octomaps",
+        "SELECT blob_id FROM derived_tiles", "SELECT registry_blob_id FROM derived"}) {
+    sqlite::Statement st = db_->Prepare(sql);
+    while (st.Step()) ids.insert(st.Int(0));
+    if (!st.status().ok()) {
+      if (st.status().code() != common::StatusCode::kCorrupt) return st.status();
+      AddProblem(report, std::string("listing blobs (") + sql + "): " + st.status().message());
+    }
+  }
+  const auto named = [&](int64_t id) {
+    std::vector<std::string> users = BlobUsers(id);
+    std::string out = "blob " + std::to_string(id);
+    if (users.empty()) return out + " (unreferenced)";
+    out += " (";
+    for (size_t i = 0; i < users.size() && i < 4; ++i) out += (i > 0 ? "; " : "") + users[i];
+    if (users.size() > 4) out += "; and " + std::to_string(users.size() - 4) + " more";
+    return out + ")";
+  };
+  const int64_t n = static_cast<int64_t>(ids.size());
   sqlite::Statement st =
-      db_->Prepare("SELECT id, codec, raw_size, raw_crc32, data, stored_crc32 FROM blobs");
-  while (st.Step()) {
-    const std::string data = st.Blob(4);
-    const uint32_t raw_crc32 = static_cast<uint32_t>(st.Int(3));
-    auto decoded = DecodeBlob(static_cast<Codec>(st.Int(1)), data, st.Int(2), raw_crc32,
-                              /*verify_crc=*/true);
-    if (!decoded.ok()) {
-      AddProblem(report, "blob " + std::to_string(st.Int(0)) + ": " + decoded.status().message());
-    } else if (!st.IsNull(5) &&
-               StoredBlobCrc32(static_cast<int>(st.Int(1)), st.Int(2), raw_crc32, data.data(),
-                               data.size()) != static_cast<uint32_t>(st.Int(5))) {
-      AddProblem(report, "blob " + std::to_string(st.Int(0)) +
-                             ": decodes, but its bytes or header differ from what was stored "
-                             "(stored_crc32)");
+      db_->Prepare("SELECT codec, raw_size, raw_crc32, data, stored_crc32 FROM blobs WHERE id = ?");
+  for (const int64_t id : ids) {
+    st.Reset();
+    st.Bind(1, id);
+    if (!st.Step()) {
+      if (!st.status().ok()) {
+        if (st.status().code() != common::StatusCode::kCorrupt &&
+            st.status().code() != common::StatusCode::kInternal) {
+          return st.status();
+        }
+        AddProblem(report, named(id) + ": cannot be read: " + st.status().message());
+      } else {
+        AddProblem(report, named(id) + ": is referred to but missing");
+      }
+    } else {
+      const std::string data = st.Blob(3);
+      const uint32_t raw_crc32 = static_cast<uint32_t>(st.Int(2));
+      auto decoded = DecodeBlob(static_cast<Codec>(st.Int(0)), data, st.Int(1), raw_crc32,
+                                /*verify_crc=*/true);
+      if (!decoded.ok()) {
+        AddProblem(report, named(id) + ": " + decoded.status().message());
+      } else if (!st.IsNull(4) &&
+                 StoredBlobCrc32(static_cast<int>(st.Int(0)), st.Int(1), raw_crc32, data.data(),
+                                 data.size()) != static_cast<uint32_t>(st.Int(4))) {
+        AddProblem(report, named(id) +
+                               ": decodes, but its bytes or header differ from what was stored "
+                               "(stored_crc32)");
+      }
     }
     ++report->blobs_checked;
     if (progress && (report->blobs_checked % 64 == 0)) {
       progress(n > 0 ? static_cast<double>(report->blobs_checked) / n : 1.0, "blobs");
     }
   }
-  if (st.status().ok()) return Status::Ok();
-  if (st.status().code() != common::StatusCode::kCorrupt) return st.status();
-  AddProblem(report, st.status().message());
   return Status::Ok();
 }
 
@@ -315,7 +442,11 @@ Result<CheckReport> SqliteMapStore::Check(const ProgressFn& progress) const {
   Status s = CheckPragmas(&report, &go_on);
   if (!s.ok()) return s;
   if (!go_on) return report;
-  if (!(s = CheckTilePlaces(&report)).ok()) return s;
+  // A damaged page makes a query fail part-way: say so and go on to the blobs.
+  if (!(s = CheckTilePlaces(&report)).ok()) {
+    if (s.code() != common::StatusCode::kCorrupt) return s;
+    AddProblem(&report, "tile places: " + s.message());
+  }
   if (!(s = CheckBlobs(&report, progress)).ok()) return s;
   if (progress) progress(1.0, "done");
   return report;

@@ -1,6 +1,8 @@
 #include "mapstore/sqlite_db.h"
 
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -10,11 +12,19 @@ namespace cairn::mapstore::sqlite {
 
 common::Status StatusFromCode(int rc, const std::string& what, sqlite3* db) {
   const int primary = rc & 0xff;
-  std::string message = what + ": " + sqlite3_errstr(rc);
+  const std::string text = sqlite3_errstr(rc);
+  std::string message = what == text ? what : what + ": " + text;
   if (db != nullptr) {
     const char* detail = sqlite3_errmsg(db);
     if (detail != nullptr && message.find(detail) == std::string::npos) {
       message += std::string(" (") + detail + ")";
+    }
+    // What the operating system said (ENOSPC, EROFS, EACCES, EIO), when SQLite kept it.
+    const int errno_value = sqlite3_system_errno(db);
+    if (errno_value != 0 &&
+        (primary == SQLITE_IOERR || primary == SQLITE_FULL || primary == SQLITE_CANTOPEN ||
+         primary == SQLITE_READONLY || primary == SQLITE_PERM)) {
+      message += std::string(" [") + std::strerror(errno_value) + "]";
     }
   }
   switch (primary) {
@@ -36,6 +46,9 @@ common::Status StatusFromCode(int rc, const std::string& what, sqlite3* db) {
       return common::NotFoundError(message);
     case SQLITE_READONLY:
     case SQLITE_PERM:
+      // The file, its folder or its file system does not let this process write: nothing the
+      // caller can change by asking again.
+      return common::PermissionDeniedError(message);
     case SQLITE_AUTH:
       return common::InvalidArgumentError(message);
     default:
@@ -122,13 +135,37 @@ bool Statement::IsNull(int column) const {
   return sqlite3_column_type(stmt_, column) == SQLITE_NULL;
 }
 
+namespace {
+
+// A file: URI of a path (RFC 3986 escapes for what a URI gives meaning to).
+std::string FileUri(const std::string& path) {
+  std::string out = "file:";
+  for (unsigned char c : path) {
+    if (c == '%' || c == '?' || c == '#' || c < 0x20 || c >= 0x7f) {
+      char buf[4];
+      std::snprintf(buf, sizeof(buf), "%%%02X", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 common::Result<std::unique_ptr<Database>> Database::Open(const std::string& path, bool read_only,
-                                                         bool create) {
+                                                         bool create, bool immutable) {
   sqlite3* db = nullptr;
   int flags = read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
   if (create && !read_only) flags |= SQLITE_OPEN_CREATE;
   flags |= SQLITE_OPEN_NOMUTEX;  // one connection per store, guarded by the store
-  const int rc = sqlite3_open_v2(path.c_str(), &db, flags, nullptr);
+  std::string name = path;
+  if (immutable && read_only) {
+    name = FileUri(path) + "?mode=ro&immutable=1";
+    flags |= SQLITE_OPEN_URI;
+  }
+  const int rc = sqlite3_open_v2(name.c_str(), &db, flags, nullptr);
   if (rc != SQLITE_OK) {
     common::Status s = StatusFromCode(rc, "cannot open database '" + path + "'", db);
     sqlite3_close(db);

@@ -20,8 +20,9 @@ struct sqlite3_stmt;
 namespace cairn::mapstore::sqlite {
 
 /// Maps an SQLite result code to a status: BUSY/LOCKED -> kUnavailable (worth retrying),
-/// FULL -> kResourceExhausted, CORRUPT/NOTADB -> kCorrupt, CONSTRAINT/READONLY/PERM ->
-/// kInvalidArgument, CANTOPEN -> kNotFound, others -> kInternal.
+/// FULL -> kResourceExhausted, CORRUPT/NOTADB -> kCorrupt, READONLY/PERM -> kPermissionDenied,
+/// CONSTRAINT/AUTH -> kInvalidArgument, CANTOPEN -> kNotFound, others -> kInternal. The message
+/// carries SQLite's text and, for I/O errors, the system's (strerror of the errno SQLite saw).
 common::Status StatusFromCode(int rc, const std::string& what, sqlite3* db = nullptr);
 
 class Database;
@@ -73,9 +74,11 @@ class Statement {
 /// One connection.
 class Database {
  public:
-  /// Opens (creating it when `create`) or fails with a status naming the file.
+  /// Opens (creating it when `create`) or fails with a status naming the file. `immutable`
+  /// (read-only only) tells SQLite that nobody changes the file while it is open, so it needs
+  /// no lock and no shared-memory file beside it: a WAL database in a folder nobody may write.
   static common::Result<std::unique_ptr<Database>> Open(const std::string& path, bool read_only,
-                                                        bool create);
+                                                        bool create, bool immutable = false);
   ~Database();
   Database(const Database&) = delete;
   Database& operator=(const Database&) = delete;

@@ -38,7 +38,7 @@ Result<std::optional<SqliteMapStore::DerivedHeader>> SqliteMapStore::FindDerived
       "WHERE d.map_version_id = ? AND d.profile_hash = ? AND d.code_version = ?");
   st.Bind(1, row.id).Bind(2, profile_hash).Bind(3, code_version);
   if (!st.Step()) {
-    if (!st.status().ok()) return st.status();
+    if (!st.status().ok()) return Located(st.status());
     return std::optional<DerivedHeader>();
   }
   DerivedHeader out;
@@ -51,12 +51,12 @@ Result<std::optional<SqliteMapStore::DerivedHeader>> SqliteMapStore::FindDerived
     return common::CorruptError("derived registry: " + registry_bytes.status().message());
   }
   auto registry = ParseRegistry(*registry_bytes);
-  if (!registry.ok()) return registry.status();
+  if (!registry.ok()) return Located(registry.status());
   out.registry = std::move(registry).value();
   sqlite::Statement ln = db_->Prepare("SELECT name FROM derived_layers WHERE derived_id = ?");
   ln.Bind(1, out.id);
   while (ln.Step()) out.layers.insert(ln.Text(0));
-  if (!ln.status().ok()) return ln.status();
+  if (!ln.status().ok()) return Located(ln.status());
   return std::optional<DerivedHeader>(std::move(out));
 }
 
@@ -65,9 +65,9 @@ SqliteMapStore::ResolveDerived(const MapRef& ref, const std::string& profile_has
                                const std::string& code_version) const {
   using Found = std::optional<std::pair<VersionRow, DerivedHeader>>;
   auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+  if (!row.ok()) return Located(row.status());
   auto header = FindDerivedHeader(*row, profile_hash, code_version);
-  if (!header.ok()) return header.status();
+  if (!header.ok()) return Located(header.status());
   std::optional<DerivedHeader> found = std::move(header).value();
   if (!found) return Found();
   return Found(std::make_pair(std::move(row).value(), std::move(*found)));
@@ -79,7 +79,7 @@ Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& 
                                                                   const LayerQuery& query) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto resolved = ResolveDerived(ref, profile_hash, code_version);
-  if (!resolved.ok()) return resolved.status();
+  if (!resolved.ok()) return Located(resolved.status());
   auto found = std::move(resolved).value();
   if (!found) return std::optional<DerivedProfile>();
   const VersionRow* row = &found->first;
@@ -91,7 +91,7 @@ Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& 
   out.created_utime = h.created_utime;
   out.registry = std::move(h.registry);
   auto wanted = CachedLayersWanted(h.layers, query.layers, out.profile_name);
-  if (!wanted.ok()) return wanted.status();
+  if (!wanted.ok()) return Located(wanted.status());
   const CellBox box = query.region ? ClipBox(*query.region, row->geometry)
                                    : CellBox{0, 0, row->geometry.size_x, row->geometry.size_y};
   if (box.empty()) return common::InvalidArgumentError("the region does not overlap the map");
@@ -107,7 +107,7 @@ Result<std::optional<DerivedProfile>> SqliteMapStore::FindDerived(const MapRef& 
     tiles.Bind(5, box.min_ix / ts).Bind(6, (box.max_ix - 1) / ts);
     Status read = ReadTiles(&tiles, "derived layer '" + name + "'", ts, row->geometry, box,
                             &out.layers.AddLayer(name));
-    if (!read.ok()) return read;
+    if (!read.ok()) return Located(read);
   }
   return std::optional<DerivedProfile>(std::move(out));
 }
@@ -117,7 +117,7 @@ Result<std::optional<StoredDerived>> SqliteMapStore::FindDerivedTiles(
     const std::vector<std::string>& layers, int /*tile_size*/) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto resolved = ResolveDerived(ref, profile_hash, code_version);
-  if (!resolved.ok()) return resolved.status();
+  if (!resolved.ok()) return Located(resolved.status());
   auto found = std::move(resolved).value();
   if (!found) return std::optional<StoredDerived>();
   const VersionRow* row = &found->first;
@@ -126,7 +126,7 @@ Result<std::optional<StoredDerived>> SqliteMapStore::FindDerivedTiles(
   out.profile_name = h.profile_name;
   out.registry = std::move(h.registry);
   auto wanted = CachedLayersWanted(h.layers, layers, out.profile_name);
-  if (!wanted.ok()) return wanted.status();
+  if (!wanted.ok()) return Located(wanted.status());
   const std::string label = "the cache of profile '" + out.profile_name + "' for map '" +
                             row->site + "/" + row->name + "' version " +
                             std::to_string(row->version);
@@ -140,18 +140,18 @@ Result<std::optional<StoredDerived>> SqliteMapStore::FindDerivedTiles(
     tiles.Reset();
     tiles.Bind(1, h.id).Bind(2, name);
     Status read = ReadStoredTiles(&tiles, "derived layer '" + name + "' of " + label, *row, &layer);
-    if (!read.ok()) return read;
+    if (!read.ok()) return Located(read);
     out.layers.push_back(std::move(layer));
   }
   Status checked = CheckStoredLayers(out.layers, label);
-  if (!checked.ok()) return checked;
+  if (!checked.ok()) return Located(checked);
   return std::optional<StoredDerived>(std::move(out));
 }
 
 Result<std::vector<DerivedInfo>> SqliteMapStore::ListDerived(const MapRef& ref) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+  if (!row.ok()) return Located(row.status());
   sqlite::Statement st = db_->Prepare(
       "SELECT d.id, d.profile_name, d.profile_hash, d.code_version, d.created_utime FROM derived d "
       "WHERE d.map_version_id = ? ORDER BY d.profile_name, d.id");
@@ -167,7 +167,7 @@ Result<std::vector<DerivedInfo>> SqliteMapStore::ListDerived(const MapRef& ref) 
     d.created_utime = st.Int(4);
     out.push_back(std::move(d));
   }
-  if (!st.status().ok()) return st.status();
+  if (!st.status().ok()) return Located(st.status());
   sqlite::Statement ln =
       db_->Prepare("SELECT name FROM derived_layers WHERE derived_id = ? ORDER BY name");
   for (size_t i = 0; i < out.size(); ++i) {
@@ -222,7 +222,7 @@ Status SqliteMapStore::PutDerived(const MapRef& ref, const DerivedProfile& deriv
   {
     std::lock_guard<std::mutex> lock(mutex_);
     auto r = Resolve(ref);
-    if (!r.ok()) return r.status();
+    if (!r.ok()) return Located(r.status());
     row = *r;
   }
   if (derived.layers.geometry() != row.geometry) {

@@ -30,7 +30,9 @@ Status SqliteMapStore::ReadTiles(sqlite::Statement* stmt, const std::string& lab
                                  common::Layer* layer) const {
   std::vector<TileRow> raw;
   while (stmt->Step()) raw.push_back(ReadTileRow(*stmt));
-  if (!stmt->status().ok()) return stmt->status();
+  if (!stmt->status().ok()) {
+    return Located(Status(stmt->status().code(), label + ": " + stmt->status().message()));
+  }
   const int tiles_x = (full.size_x + tile_size - 1) / tile_size;
   const int tiles_y = (full.size_y + tile_size - 1) / tile_size;
   std::vector<Status> errors(raw.size());
@@ -68,7 +70,7 @@ Status SqliteMapStore::ReadTiles(sqlite::Statement* stmt, const std::string& lab
     PasteTile(spec, cells.data(), box.min_ix, box.min_iy, layer);
   });
   for (const Status& e : errors) {
-    if (!e.ok()) return e;
+    if (!e.ok()) return Located(e);
   }
   return Status::Ok();
 }
@@ -79,7 +81,7 @@ Result<std::map<std::string, int64_t>> SqliteMapStore::LayerIds(
   sqlite::Statement st = db_->Prepare("SELECT name, id FROM layers WHERE map_version_id = ?");
   st.Bind(1, row.id);
   while (st.Step()) layer_ids[st.Text(0)] = st.Int(1);
-  if (!st.status().ok()) return st.status();
+  if (!st.status().ok()) return Located(st.status());
   if (wanted->empty()) {
     for (const auto& [name, id] : layer_ids) wanted->push_back(name);
   }
@@ -95,10 +97,10 @@ Result<common::GridMap> SqliteMapStore::LoadLayers(const MapRef& ref,
                                                    const LayerQuery& query) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+  if (!row.ok()) return Located(row.status());
   std::vector<std::string> wanted = query.layers;
   auto ids = LayerIds(ref, *row, &wanted);
-  if (!ids.ok()) return ids.status();
+  if (!ids.ok()) return Located(ids.status());
   const std::map<std::string, int64_t>& layer_ids = *ids;
   const CellBox box = query.region ? ClipBox(*query.region, row->geometry)
                                    : CellBox{0, 0, row->geometry.size_x, row->geometry.size_y};
@@ -117,7 +119,7 @@ Result<common::GridMap> SqliteMapStore::LoadLayers(const MapRef& ref,
                             "layer '" + name + "' of map '" + row->site + "/" + row->name +
                                 "' version " + std::to_string(row->version),
                             ts, row->geometry, box, &map.AddLayer(name));
-    if (!read.ok()) return read;
+    if (!read.ok()) return Located(read);
   }
   return map;
 }
@@ -152,7 +154,8 @@ Status SqliteMapStore::ReadStoredTiles(sqlite::Statement* stmt, const std::strin
     }
     layer->tiles.push_back(std::move(t));
   }
-  return stmt->status();
+  if (stmt->status().ok()) return Status::Ok();
+  return Located(Status(stmt->status().code(), label + ": " + stmt->status().message()));
 }
 
 Status SqliteMapStore::CheckStoredLayers(const std::vector<StoredLayer>& layers,
@@ -173,7 +176,7 @@ Status SqliteMapStore::CheckStoredLayers(const std::vector<StoredLayer>& layers,
     }
   });
   for (const Status& e : errors) {
-    if (!e.ok()) return e;
+    if (!e.ok()) return Located(e);
   }
   return Status::Ok();
 }
@@ -182,10 +185,10 @@ Result<std::vector<StoredLayer>> SqliteMapStore::LoadStoredTiles(
     const MapRef& ref, const std::vector<std::string>& layers, int /*tile_size*/) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+  if (!row.ok()) return Located(row.status());
   std::vector<std::string> wanted = layers;
   auto ids = LayerIds(ref, *row, &wanted);
-  if (!ids.ok()) return ids.status();
+  if (!ids.ok()) return Located(ids.status());
   const std::map<std::string, int64_t>& layer_ids = *ids;
   const std::string label =
       "map '" + row->site + "/" + row->name + "' version " + std::to_string(row->version);
@@ -199,18 +202,18 @@ Result<std::vector<StoredLayer>> SqliteMapStore::LoadStoredTiles(
     st.Reset();
     st.Bind(1, layer_ids.at(name));
     Status read = ReadStoredTiles(&st, "layer '" + name + "' of " + label, *row, &layer);
-    if (!read.ok()) return read;
+    if (!read.ok()) return Located(read);
     out.push_back(std::move(layer));
   }
   Status checked = CheckStoredLayers(out, label);
-  if (!checked.ok()) return checked;
+  if (!checked.ok()) return Located(checked);
   return out;
 }
 
 Result<common::ObstacleRegistry> SqliteMapStore::LoadObstacles(const MapRef& ref) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+  if (!row.ok()) return Located(row.status());
   common::ObstacleRegistry registry;
   registry.map_version = row->version;
   sqlite::Statement st = db_->Prepare(
@@ -256,7 +259,7 @@ Result<common::ObstacleRegistry> SqliteMapStore::LoadObstacles(const MapRef& ref
     index[o.id] = registry.obstacles.size();
     registry.obstacles.push_back(std::move(o));
   }
-  if (!st.status().ok()) return st.status();
+  if (!st.status().ok()) return Located(st.status());
   sqlite::Statement vd = db_->Prepare(
       "SELECT obstacle_id, profile, profile_hash, crossable, reason FROM obstacle_verdicts "
       "WHERE map_version_id = ? ORDER BY obstacle_id, profile");
@@ -271,20 +274,20 @@ Result<common::ObstacleRegistry> SqliteMapStore::LoadObstacles(const MapRef& ref
     v.reason = vd.Text(4);
     registry.obstacles[it->second].verdicts.push_back(std::move(v));
   }
-  if (!vd.status().ok()) return vd.status();
+  if (!vd.status().ok()) return Located(vd.status());
   return registry;
 }
 
 Result<OctomapData> SqliteMapStore::LoadOctomap(const MapRef& ref) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+  if (!row.ok()) return Located(row.status());
   sqlite::Statement st = db_->Prepare(
       "SELECT o.binary, o.resolution_m, b.codec, b.raw_size, b.raw_crc32, b.data FROM octomaps o "
       "JOIN blobs b ON b.id = o.blob_id WHERE o.map_version_id = ?");
   st.Bind(1, row->id);
   if (!st.Step()) {
-    if (!st.status().ok()) return st.status();
+    if (!st.status().ok()) return Located(st.status());
     return common::NotFoundError("map '" + row->site + "/" + row->name + "' version " +
                                  std::to_string(row->version) + " has no OctoMap");
   }
@@ -301,7 +304,7 @@ Result<OctomapData> SqliteMapStore::LoadOctomap(const MapRef& ref) const {
 Result<std::map<std::string, std::string>> SqliteMapStore::BaseBlobBytes(const MapRef& ref) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+  if (!row.ok()) return Located(row.status());
   sqlite::Statement st = db_->Prepare(
       "SELECT l.name, t.tile_ix, t.tile_iy, b.data FROM layers l JOIN layer_tiles t ON "
       "t.layer_id = l.id JOIN blobs b ON b.id = t.blob_id WHERE l.map_version_id = ?");
@@ -311,19 +314,19 @@ Result<std::map<std::string, std::string>> SqliteMapStore::BaseBlobBytes(const M
     out[st.Text(0) + "/" + std::to_string(st.Int(1)) + "/" + std::to_string(st.Int(2))] =
         st.Blob(3);
   }
-  if (!st.status().ok()) return st.status();
+  if (!st.status().ok()) return Located(st.status());
   return out;
 }
 
 Result<int64_t> SqliteMapStore::BaseBytes(const MapRef& ref) const {
   std::lock_guard<std::mutex> lock(mutex_);
   auto row = Resolve(ref);
-  if (!row.ok()) return row.status();
+  if (!row.ok()) return Located(row.status());
   sqlite::Statement st = db_->Prepare(
       "SELECT COALESCE(SUM(length(b.data)), 0) FROM layers l JOIN layer_tiles t ON "
       "t.layer_id = l.id JOIN blobs b ON b.id = t.blob_id WHERE l.map_version_id = ?");
   st.Bind(1, row->id);
-  if (!st.Step()) return st.status();
+  if (!st.Step()) return Located(st.status());
   return st.Int(0);
 }
 

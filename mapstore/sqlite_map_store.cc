@@ -1,13 +1,18 @@
 #include "mapstore/sqlite_map_store.h"
 
 #include <algorithm>
+#include <cctype>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <map>
 #include <set>
 #include <thread>
 
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <unistd.h>
 
 #include "common/check.h"
 #include "mapstore/names.h"
@@ -41,21 +46,91 @@ struct Header {
   bool empty() const { return application_id == 0 && user_version == 0 && tables == 0; }
 };
 
+// Why this process cannot write `path` and the WAL beside it, or "" when it can. Opening the
+// file for writing changes nothing in it (not even its mtime).
+std::string WriteBlocker(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
+  if (fd < 0) {
+    return std::string("the file is not writable (") + std::strerror(errno) + ")";
+  }
+  ::close(fd);
+  std::error_code ec;
+  if (fs::exists(path + "-wal", ec)) return "";
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  if (::access(dir.c_str(), W_OK) != 0) {
+    return "its folder '" + dir.string() + "' is not writable (" + std::strerror(errno) +
+           "), so SQLite cannot make its write-ahead log there";
+  }
+  return "";
+}
+
+// A WAL database is read through a shared-memory index file beside it (-shm). When neither it
+// nor a WAL is there and the folder does not let this process make one (a read-only mount, a
+// folder of mode 0555), SQLite can only read the file as immutable: no lock, no index.
+bool NeedsImmutable(const std::string& path) {
+  std::error_code ec;
+  if (fs::exists(path + "-wal", ec) || fs::exists(path + "-shm", ec)) return false;
+  fs::path dir = fs::path(path).parent_path();
+  if (dir.empty()) dir = ".";
+  return ::access(dir.c_str(), W_OK) != 0;
+}
+
 }  // namespace
 
-Status WriteError(const Status& s, const std::string& what) {
+const char* SynchronousName(Synchronous mode) {
+  return mode == Synchronous::kFull ? "full" : "normal";
+}
+
+std::optional<Synchronous> ParseSynchronous(const std::string& text) {
+  std::string lower;
+  for (char c : text) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (lower == "normal") return Synchronous::kNormal;
+  if (lower == "full") return Synchronous::kFull;
+  return std::nullopt;
+}
+
+Status SqliteMapStore::WriteError(const Status& s, const std::string& what) const {
   if (s.code() == common::StatusCode::kResourceExhausted) {
+    const std::string quota = options_.max_page_count > 0
+                                  ? " (or the database quota of " +
+                                        std::to_string(options_.max_page_count) +
+                                        " pages is reached)"
+                                  : "";
     return common::ResourceExhaustedError(
-        what +
-        ": the disk is full (or the database quota is reached); nothing of this change "
-        "was written and everything committed before is intact (" +
+        what + ": disk full: '" + path_ + "' cannot grow, the disk holding it is full" + quota +
+        "; nothing of this change was written and everything committed before is intact (" +
         s.message() + ")");
   }
   if (s.code() == common::StatusCode::kUnavailable) {
-    return common::UnavailableError(what + ": the database stayed locked by another writer (" +
+    return common::UnavailableError(what + ": '" + path_ + "' stayed locked by another writer (" +
                                     s.message() + ")");
   }
-  return Status(s.code(), what + ": " + s.message());
+  if (s.message().find(path_) != std::string::npos) {
+    return Status(s.code(), what + ": " + s.message());
+  }
+  if (s.code() == common::StatusCode::kPermissionDenied) {
+    return Status(s.code(), what + ": '" + path_ + "' cannot be written (" + s.message() +
+                                "); nothing of this change was written");
+  }
+  return Status(s.code(), what + " in '" + path_ + "': " + s.message());
+}
+
+Status SqliteMapStore::Located(const Status& s) const {
+  if (s.ok() || s.message().find(path_) != std::string::npos) return s;
+  if (s.code() == common::StatusCode::kCorrupt) {
+    return common::CorruptError(s.message() + " (database '" + path_ + "'; `cairn-map check --db " +
+                                path_ + "` lists every damaged map)");
+  }
+  if (s.code() == common::StatusCode::kInternal) {
+    return common::InternalError(s.message() + " (database '" + path_ + "')");
+  }
+  return s;
+}
+
+Result<int64_t> SqliteMapStore::SynchronousLevel() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return db_->QueryInt("PRAGMA synchronous");
 }
 
 SqliteMapStore::SqliteMapStore(std::string path, SqliteOptions options,
@@ -83,11 +158,27 @@ Result<std::unique_ptr<SqliteMapStore>> SqliteMapStore::Open(const std::string& 
       return common::InvalidArgumentError("'" + path + "' is not a regular file");
     }
   }
-  auto db = sqlite::Database::Open(path, options.read_only, options.create_if_missing);
+  // A file this process cannot write is served read-only, saying why writes fail.
+  SqliteOptions effective = options;
+  std::string refusal;
+  if (!memory && !options.read_only && fs::exists(path)) {
+    const std::string blocker = WriteBlocker(path);
+    if (!blocker.empty()) {
+      refusal = "'" + path + "' is read-only for this process: " + blocker;
+      effective.read_only = true;
+    }
+  }
+  const bool immutable = !memory && effective.read_only && fs::exists(path) && NeedsImmutable(path);
+  auto db =
+      sqlite::Database::Open(path, effective.read_only, effective.create_if_missing, immutable);
   if (!db.ok()) return db.status();
-  std::unique_ptr<SqliteMapStore> store(new SqliteMapStore(path, options, std::move(db).value()));
+  std::unique_ptr<SqliteMapStore> store(new SqliteMapStore(path, effective, std::move(db).value()));
+  store->write_refusal_ = refusal;
   Status s = store->Initialise();
-  if (!s.ok()) return s;
+  if (!s.ok()) {
+    if (refusal.empty()) return s;
+    return Status(s.code(), s.message() + " (opened read-only: " + refusal + ")");
+  }
   return store;
 }
 
@@ -206,8 +297,8 @@ Status SqliteMapStore::InitialiseWritable(bool empty, int64_t version) {
     }
   }
   Status s = db_->Exec(std::string("PRAGMA foreign_keys = ON; PRAGMA synchronous = ") +
-                       (options_.synchronous_full ? "FULL" : "NORMAL") + "; PRAGMA cache_size = -" +
-                       std::to_string(options_.cache_size_kib));
+                       (options_.synchronous == Synchronous::kFull ? "FULL" : "NORMAL") +
+                       "; PRAGMA cache_size = -" + std::to_string(options_.cache_size_kib));
   if (s.ok() && !memory) {
     s = db_->Exec("PRAGMA wal_autocheckpoint = " +
                   std::to_string(options_.wal_autocheckpoint_pages));
@@ -233,6 +324,11 @@ Status SqliteMapStore::InitialiseWritable(bool empty, int64_t version) {
 }
 
 Status SqliteMapStore::WriteTransaction(const std::function<Status()>& body) {
+  if (!write_refusal_.empty()) {
+    return common::PermissionDeniedError(write_refusal_ +
+                                         "; nothing was written (loads, lists and exports still "
+                                         "work)");
+  }
   if (options_.read_only) {
     return common::InvalidArgumentError("the database '" + path_ + "' is open read-only");
   }
@@ -439,6 +535,7 @@ bool SqliteMapStore::CheckpointIfIdle(double idle_s) {
 
 Result<int64_t> SqliteMapStore::Vacuum(const ProgressFn& progress) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (!write_refusal_.empty()) return common::PermissionDeniedError(write_refusal_);
   if (options_.read_only) return common::InvalidArgumentError("the store is open read-only");
   auto size_of = [&]() -> int64_t {
     std::error_code ec;

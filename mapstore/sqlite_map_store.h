@@ -32,19 +32,31 @@
 
 namespace cairn::mapstore {
 
+/// Durability of a commit (SqliteOptions::synchronous).
+enum class Synchronous { kNormal, kFull };
+/// "normal" / "full".
+const char* SynchronousName(Synchronous mode);
+/// Parses "normal" or "full" (any case); nullopt otherwise.
+std::optional<Synchronous> ParseSynchronous(const std::string& text);
+
 struct SqliteOptions {
   bool read_only{false};         ///< open without write access (no migration, no creation)
   bool create_if_missing{true};  ///< create an empty database when the file does not exist
   int busy_timeout_ms{5000};     ///< how long one statement waits for a lock
   int write_attempts{10};        ///< BEGIN IMMEDIATE attempts while the database stays busy
-  bool synchronous_full{false};  ///< fsync every commit (default NORMAL: safe against crashes
-                                 ///< of the process, a power cut may lose the newest commits)
-  int tile_size_cells{100};      ///< tile side of newly saved layers
-  int zstd_level{1};             ///< compression level of new blobs
-  int compression_threads{2};    ///< threads compressing/decompressing tiles
-  int cache_size_kib{32768};     ///< SQLite page cache
-  int64_t max_page_count{0};     ///< size quota in pages (0 = none); beyond it writes fail
-                                 ///< with kResourceExhausted like a full disk
+  /// When a commit reaches the disk (PRAGMA synchronous; the journal is always WAL):
+  /// - kNormal: the WAL is synced only at checkpoints. A killed process loses nothing
+  ///   committed; a power cut or kernel crash may lose the newest commits (they roll back: the
+  ///   file stays consistent, an older version is the latest), never corrupt older ones.
+  /// - kFull: the WAL is synced at every commit, so an acknowledged save survives a power cut
+  ///   too, at the price of one fsync per save.
+  Synchronous synchronous{Synchronous::kNormal};
+  int tile_size_cells{100};    ///< tile side of newly saved layers
+  int zstd_level{1};           ///< compression level of new blobs
+  int compression_threads{2};  ///< threads compressing/decompressing tiles
+  int cache_size_kib{32768};   ///< SQLite page cache
+  int64_t max_page_count{0};   ///< size quota in pages (0 = none); beyond it writes fail
+                               ///< with kResourceExhausted like a full disk
   /// WAL pages after which a commit also checkpoints (SQLite's default is 1000). A long-running
   /// writer sets it high and calls CheckpointIfIdle() so saves do not pay for checkpoints.
   int wal_autocheckpoint_pages{1000};
@@ -53,8 +65,14 @@ struct SqliteOptions {
 class SqliteMapStore final : public MapStore {
  public:
   /// Opens (and creates or migrates) a database. ":memory:" gives a private in-memory database.
-  /// Errors: kCorrupt (not a cairn database), kInvalidArgument (schema newer than this build, or
-  /// an older schema opened read-only), kUnavailable/kNotFound (cannot open the file).
+  /// A file this process cannot write (its mode, its folder's, or a read-only file system) is
+  /// opened read-only instead of failing: loads, lists and checks work, and every write fails
+  /// with kPermissionDenied naming the file and the reason (write_refusal()). A read-only open
+  /// of a file whose folder this process cannot write either (a read-only mount, mode 0555),
+  /// with no WAL beside it, reads the file as immutable (SQLite takes no lock and needs no -shm
+  /// file): a change another process makes to it meanwhile is not seen. Errors: kCorrupt (not a
+  /// cairn database), kInvalidArgument (schema newer than this build, or an older schema opened
+  /// read-only), kUnavailable/kNotFound (cannot open the file).
   static common::Result<std::unique_ptr<SqliteMapStore>> Open(const std::string& path,
                                                               const SqliteOptions& options = {});
   ~SqliteMapStore() override;
@@ -110,6 +128,12 @@ class SqliteMapStore final : public MapStore {
 
   const std::string& path() const { return path_; }
   int schema_version() const { return schema_version_; }
+  /// Why this store cannot write its file ("'<path>' is read-only for this process: the file
+  /// is not writable (Permission denied)"), or empty when it can (or was opened read-only on
+  /// purpose).
+  const std::string& write_refusal() const { return write_refusal_; }
+  /// The SQLite synchronous level in effect (1 NORMAL, 2 FULL; 0 OFF), for tests and logs.
+  common::Result<int64_t> SynchronousLevel() const;
 
  private:
   // Rows and the blobs of a save (mapstore/sqlite_store_rows.h).
@@ -127,6 +151,12 @@ class SqliteMapStore final : public MapStore {
   common::Status InitialiseWritable(bool empty, int64_t version);
   /// Runs `body` inside BEGIN IMMEDIATE ... COMMIT, retrying while the database is busy.
   common::Status WriteTransaction(const std::function<common::Status()>& body);
+  /// A failed write with what was being done, the file and the reason; a full disk says "disk
+  /// full" and that nothing was lost.
+  common::Status WriteError(const common::Status& s, const std::string& what) const;
+  /// A failed read (damaged page or blob, I/O error) with the file named and how to find every
+  /// damaged map; other statuses unchanged.
+  common::Status Located(const common::Status& s) const;
 
   // ---- Version rows (sqlite_map_store.cc): the one decoder of a kVersionSelect row ----
   static VersionRow ReadVersionRow(const sqlite::Statement& st);
@@ -196,10 +226,20 @@ class SqliteMapStore final : public MapStore {
   common::Status CheckPragmas(CheckReport* report, bool* go_on) const;
   common::Status CheckTilePlaces(CheckReport* report) const;
   common::Status CheckBlobs(CheckReport* report, const ProgressFn& progress) const;
+  /// What refers to a blob: "map lab/yard v2 layer elevation tile (1, 0)", a derived cache's
+  /// layer tile or registry, an OctoMap; "unreferenced" when nothing does.
+  std::vector<std::string> BlobUsers(int64_t blob_id) const;
+  /// The table or index whose b-tree has this root page ("table blobs", "index x of table y");
+  /// empty when none.
+  std::string RootOwner(int64_t root_page) const;
+  /// The table or index a database page belongs to ("page 12 belongs to table blobs"), from the
+  /// dbstat virtual table; empty when it cannot tell (a free page, dbstat missing or failing).
+  std::string PageOwner(int64_t page) const;
 
   std::string path_;
   SqliteOptions options_;
   std::unique_ptr<sqlite::Database> db_;
+  std::string write_refusal_;  // why writes are refused (a file this process cannot write)
   int schema_version_{0};
   bool dirty_{false};  // written since the last checkpoint
   int64_t last_write_utime_{0};

@@ -74,7 +74,4 @@ struct SqliteMapStore::EncodedTiles {
   std::optional<EncodedBlob> octomap;
 };
 
-/// Adds context to a failed write; a full disk also says that nothing was lost.
-common::Status WriteError(const common::Status& s, const std::string& what);
-
 }  // namespace cairn::mapstore

@@ -6,6 +6,7 @@
 #include "cairn/lcmt_occupancy_tile.hpp"
 
 #include "common/channels.h"
+#include "common/log.h"
 #include "mapstore/blob_codec.h"
 #include "mapstore/lcm/mapstore_conversions.h"
 #include "mapstore/lcm/mapstore_service.h"
@@ -103,7 +104,20 @@ void MapstoreService::FinishSave(SaveOutcome outcome, const Reply* first_reply) 
   reply.layers = outcome.layers;
   for (const MapInfo& info : outcome.maps) reply.maps.push_back(ToLcm(info));
   if (!outcome.message.empty()) reply.message = outcome.message;
-  SetStatus(outcome.status, &reply);
+  const common::StatusCode code = outcome.status.code();
+  if (!outcome.status.ok() && code != common::StatusCode::kInvalidArgument &&
+      code != common::StatusCode::kNotFound && code != common::StatusCode::kUnavailable) {
+    // The store could not keep a map (disk full, read-only or damaged file): every one is
+    // logged, with the file and the reason the store gave; the service goes on.
+    node_.Count("failed_saves");
+    node_.Count("failed_requests");
+    CAIRN_LOG_ERROR("save of %s/%s failed: %s", outcome.request.site.c_str(),
+                    outcome.request.map_name.c_str(), outcome.status.ToString().c_str());
+    reply.status = ReplyStatus(outcome.status);
+    reply.message = outcome.status.message();
+  } else {
+    SetStatus(outcome.status, &reply);
+  }
   if (outcome.timed_out) node_.Count("save_timeouts");
   if (outcome.saved_maps > 0) node_.Count("saves", outcome.saved_maps);
   for (const std::string& event : outcome.events) node_.Event("%s", event.c_str());

@@ -27,14 +27,15 @@ TEST(MapstoreParamsTest, DefaultsHoldWithoutAFileAndEveryKeyIsRead) {
       "  compress_reply_tiles: false\n"
       "database:\n"
       "  tile_size_cells: 50\n"
-      "  synchronous_full: true\n");
+      "  synchronous: FULL\n");
   EXPECT_EQ(p.service.files_root, "/srv/maps");
   EXPECT_EQ(p.service.save_timeout_s, 7.5);
   EXPECT_EQ(p.service.max_staged_bytes, 1000);
   EXPECT_EQ(p.service.batch_bytes, 0);
   EXPECT_FALSE(p.service.compress_reply_tiles);
   EXPECT_EQ(p.database.tile_size_cells, 50);
-  EXPECT_TRUE(p.database.synchronous_full);
+  EXPECT_EQ(p.database.synchronous, Synchronous::kFull);
+  EXPECT_EQ(MapstoreParams().database.synchronous, Synchronous::kNormal);
   const SaveAssemblerParams save = p.service.save();
   EXPECT_EQ(save.save_timeout_s, 7.5);
   EXPECT_EQ(save.max_staged_bytes, 1000);
@@ -66,6 +67,11 @@ TEST(MapstoreParamsTest, UnknownKeysAndBadValuesNameTheirLine) {
   }
   EXPECT_THROW(Load("service:\n  save_timeout_s: 0\n"), ConfigError);
   EXPECT_THROW(Load("database:\n  zstd: 3\n"), ConfigError);
+  // The durability choice is a word: anything but normal or full is an error, and so is the
+  // old boolean key.
+  EXPECT_THROW(Load("database:\n  synchronous: extra\n"), ConfigError);
+  EXPECT_THROW(Load("database:\n  synchronous_full: true\n"), ConfigError);
+  EXPECT_EQ(Load("database:\n  synchronous: normal\n").database.synchronous, Synchronous::kNormal);
   EXPECT_THROW(Load("services: {}\n"), ConfigError);
 }
 

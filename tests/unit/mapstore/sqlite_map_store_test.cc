@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "common/layers.h"
 #include "mapstore/blob_codec.h"
@@ -221,6 +222,139 @@ TEST(SqliteMapStoreTest, CorruptBlobIsRefusedAndReportedByCheck) {
   EXPECT_FALSE(report->ok);
   ASSERT_FALSE(report->problems.empty());
   EXPECT_NE(report->problems[0].find("blob"), std::string::npos) << report->problems[0];
+  // ... naming the map, layer and tile the blob holds.
+  EXPECT_NE(report->problems[0].find("map lab/corridor v1 layer elevation tile (1, 0)"),
+            std::string::npos)
+      << report->problems[0];
+  // A load's error names the file and how to find every damaged map.
+  EXPECT_NE(map.status().message().find("'" + path + "'"), std::string::npos)
+      << map.status().message();
+  EXPECT_NE(map.status().message().find("cairn-map check"), std::string::npos);
+}
+
+// A damaged b-tree page (not a blob's bytes: the page of the blobs table that holds their rows)
+// is found by integrity_check, named by its table, and every blob it hides is named with the
+// maps and tiles it holds; the other tables still read.
+TEST(SqliteMapStoreTest, ADamagedTablePageIsNamedWithTheMapsItHits) {
+  const std::string path = TempDir() + "/site.db";
+  {
+    auto dut = OpenOrDie(path);
+    ASSERT_TRUE(dut);
+    ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor"), kCtx).ok());
+  }
+  // The first leaf page of the blobs table, found with the dbstat virtual table.
+  int64_t page = 0, page_size = 0;
+  {
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(path.c_str(), &raw), SQLITE_OK);
+    sqlite3_stmt* st = nullptr;
+    ASSERT_EQ(sqlite3_prepare_v2(raw,
+                                 "SELECT pageno, pgsize FROM dbstat WHERE name = 'blobs' AND "
+                                 "pagetype = 'leaf' ORDER BY pageno LIMIT 1",
+                                 -1, &st, nullptr),
+              SQLITE_OK)
+        << sqlite3_errmsg(raw);
+    ASSERT_EQ(sqlite3_step(st), SQLITE_ROW);
+    page = sqlite3_column_int64(st, 0);
+    page_size = sqlite3_column_int64(st, 1);
+    sqlite3_finalize(st);
+    sqlite3_close(raw);
+  }
+  ASSERT_GT(page, 1);
+  // Another program writes over the page's header (its page type byte and cell count).
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    ASSERT_TRUE(f.good());
+    f.seekp((page - 1) * page_size);
+    const char garbage[8] = {0x7f, 0x7f, 0x7f, 0x7f, 0x7f, 0x7f, 0x7f, 0x7f};
+    f.write(garbage, sizeof(garbage));
+  }
+  auto dut = OpenOrDie(path, ReadOnly());
+  ASSERT_TRUE(dut);
+  auto report = dut->Check();
+  ASSERT_TRUE(report.ok()) << report.status().ToString();
+  EXPECT_FALSE(report->ok);
+  std::string all;
+  for (const std::string& p : report->problems) all += p + "\n";
+  EXPECT_NE(all.find("integrity_check"), std::string::npos) << all;
+  EXPECT_NE(all.find("table blobs"), std::string::npos) << all;
+  EXPECT_NE(all.find("cannot be read"), std::string::npos) << all;
+  EXPECT_NE(all.find("map lab/corridor v1 layer "), std::string::npos) << all;
+  // The map's list entry still reads; its tiles are refused as corrupt, naming the file.
+  EXPECT_TRUE(dut->GetMapInfo({"lab", "corridor", 0}).ok());
+  auto map = dut->LoadLayers({"lab", "corridor", 0}, {});
+  EXPECT_EQ(map.status().code(), StatusCode::kCorrupt) << map.status().ToString();
+  EXPECT_NE(map.status().message().find("'" + path + "'"), std::string::npos)
+      << map.status().message();
+}
+
+// SQLite's codes become statuses a caller can act on: a write the file refuses is not a bad
+// request (kPermissionDenied, not kInvalidArgument), a full disk is kResourceExhausted.
+TEST(SqliteMapStoreTest, SqliteCodesBecomeStatusesThatSayWhatWasWrong) {
+  const std::string path = TempDir() + "/site.db";
+  { ASSERT_TRUE(OpenOrDie(path)); }
+  auto db = sqlite::Database::Open(path, /*read_only=*/true, /*create=*/false);
+  ASSERT_TRUE(db.ok()) << db.status().ToString();
+  const common::Status s = (*db)->Exec("INSERT INTO sites(name, created_utime) VALUES('x', 0)");
+  EXPECT_EQ(s.code(), StatusCode::kPermissionDenied) << s.ToString();
+  EXPECT_NE(s.message().find("readonly"), std::string::npos) << s.message();
+  EXPECT_EQ(sqlite::StatusFromCode(SQLITE_FULL, "saving").code(), StatusCode::kResourceExhausted);
+  EXPECT_EQ(sqlite::StatusFromCode(SQLITE_FULL, "saving").message(),
+            "saving: database or disk is full");
+  EXPECT_EQ(sqlite::StatusFromCode(SQLITE_CORRUPT, "x").code(), StatusCode::kCorrupt);
+}
+
+TEST(SqliteMapStoreTest, SynchronousIsNormalUnlessFullIsAskedFor) {
+  const std::string path = TempDir() + "/site.db";
+  {
+    auto dut = OpenOrDie(path);
+    ASSERT_TRUE(dut);
+    EXPECT_EQ(dut->SynchronousLevel().value(), 1);  // NORMAL
+  }
+  SqliteOptions full;
+  full.synchronous = Synchronous::kFull;
+  auto dut = OpenOrDie(path, full);
+  ASSERT_TRUE(dut);
+  EXPECT_EQ(dut->SynchronousLevel().value(), 2);  // FULL
+  ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor"), kCtx).ok());
+  EXPECT_EQ(ParseSynchronous("Full"), Synchronous::kFull);
+  EXPECT_EQ(ParseSynchronous("normal"), Synchronous::kNormal);
+  EXPECT_FALSE(ParseSynchronous("off").has_value());
+  EXPECT_STREQ(SynchronousName(Synchronous::kFull), "full");
+}
+
+// A file this process may not write is served read-only: reads work, writes are refused naming
+// the file and the reason. Root writes any file whatever its mode, so as root this needs a
+// read-only mount (tests/integration/mapstore/mapstore_faults_test.cc does both).
+TEST(SqliteMapStoreTest, AFileWithoutWriteAccessOpensReadOnlyAndSaysWhy) {
+  if (geteuid() == 0) {
+    GTEST_SKIP() << "running as root, which may write a file of mode 0444; the integration test "
+                    "MapstoreFaultsTest.ReadOnlyFile covers it as user nobody";
+  }
+  const std::string dir = TempDir() + "/ro";
+  fs::create_directories(dir);
+  const std::string path = dir + "/site.db";
+  {
+    auto dut = OpenOrDie(path);
+    ASSERT_TRUE(dut);
+    ASSERT_TRUE(dut->SaveMap(SampleSnapshot("corridor"), kCtx).ok());
+  }
+  fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  fs::permissions(dir, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                           fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  const std::string before = ReadFile(path);
+  {
+    auto dut = OpenOrDie(path);
+    ASSERT_TRUE(dut);
+    EXPECT_NE(dut->write_refusal().find("Permission denied"), std::string::npos)
+        << dut->write_refusal();
+    EXPECT_TRUE(dut->LoadLayers({"lab", "corridor", 0}, {}).ok());
+    auto r = dut->SaveMap(SampleSnapshot("corridor"), kCtx);
+    EXPECT_EQ(r.status().code(), StatusCode::kPermissionDenied);
+    EXPECT_NE(r.status().message().find("'" + path + "'"), std::string::npos);
+  }
+  EXPECT_TRUE(ReadFile(path) == before);
+  fs::permissions(dir, fs::perms::owner_all);
 }
 
 TEST(SqliteMapStoreTest, CachedDerivedTilesAreTheStoredBlobsAndAreChecked) {
@@ -455,13 +589,24 @@ TEST(SqliteMapStoreTest, FullDiskGivesAClearErrorAndLosesNothing) {
   }
   auto r = dut->SaveMap(big, kCtx);
   ASSERT_EQ(r.status().code(), StatusCode::kResourceExhausted) << r.status().ToString();
-  EXPECT_NE(r.status().message().find("disk is full"), std::string::npos);
+  EXPECT_NE(r.status().message().find("disk full"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("'" + path + "'"), std::string::npos) << r.status().message();
+  EXPECT_NE(r.status().message().find("quota of"), std::string::npos) << r.status().message();
   EXPECT_NE(r.status().message().find("intact"), std::string::npos);
   // Nothing of the failed save exists; the earlier map loads and the file checks clean.
   EXPECT_EQ(dut->GetMapInfo({"lab", "big", 0}).status().code(), StatusCode::kNotFound);
   auto old = dut->LoadLayers({"lab", "corridor", 0}, {});
   ASSERT_TRUE(old.ok()) << old.status().ToString();
   EXPECT_FLOAT_EQ(old->at("elevation")(20, 1), 0.501f);
+  EXPECT_TRUE(dut->Check().value().ok);
+  // With room again (a larger quota) the same save succeeds on the same file.
+  dut.reset();
+  options.max_page_count = 0;
+  dut = OpenOrDie(path, options);
+  ASSERT_TRUE(dut);
+  auto again = dut->SaveMap(big, kCtx);
+  ASSERT_TRUE(again.ok()) << again.status().ToString();
+  EXPECT_EQ(again->version, 1);
   EXPECT_TRUE(dut->Check().value().ok);
 }
 
