@@ -12,7 +12,8 @@
 // headline is 8 robots, target >= 5x. Parts: where a simulated second of the 8-robot run goes
 // (physics, sensors, the rest of the service: conversion, encoding, sending, reading back), in
 // wall seconds per simulated second, and the real-time factor per CPU second of the simulation
-// thread (what the run would make with a core to itself).
+// thread (what the run would make with a core to itself); MujocoSim::Step alone with 1 and 8
+// robots (CPU per robot per simulated second, and the ray caster's rays per second).
 //
 // The command line: scripts/bench simulator (or build/bin/bench_sim_fleet).
 
@@ -144,6 +145,40 @@ Run Serve(int robots) {
   return r;
 }
 
+// MujocoSim::Step alone (nothing published), `robots` robots, 10 s simulated after 1 s of
+// warm-up: CPU of this thread per robot per simulated second, and the caster's rays per second.
+struct StepOnly {
+  double cpu_per_robot_s{0};
+  double rays_per_s{0};
+};
+
+StepOnly RunStepOnly(int robots) {
+  MujocoSim sim(Fleet(robots));
+  cairn::sim::SimOutputs out;
+  while (sim.time_s() < 1.0 - 1e-9) {
+    sim.Step(&out);
+    out.Clear();
+  }
+  const auto stats0 = sim.stats();
+  const double t0 = sim.time_s();
+  const double cpu0 = ThreadCpuSeconds();
+  while (sim.time_s() - t0 < 10.0 - 1e-9) {
+    sim.Step(&out);
+    out.Clear();
+  }
+  const double cpu = ThreadCpuSeconds() - cpu0;
+  const double simulated = sim.time_s() - t0;
+  StepOnly r;
+  r.cpu_per_robot_s = cpu / simulated / robots;
+  r.rays_per_s = static_cast<double>(sim.stats().rays_cast - stats0.rays_cast) /
+                 (sim.stats().ray_s - stats0.ray_s);
+  std::printf(
+      "  run: MujocoSim::Step only, %d robot%s: %.3f s of CPU per robot per simulated second; "
+      "%.1f M rays/s\n",
+      robots, robots == 1 ? "" : "s", r.cpu_per_robot_s, r.rays_per_s / 1e6);
+  return r;
+}
+
 }  // namespace
 
 int main() {
@@ -153,6 +188,8 @@ int main() {
       "planar laser, IMU, odometry, ground truth; SimService --speed max publishing on udpm\n");
   std::vector<Run> runs;
   for (int robots : {1, 2, 4, 8}) runs.push_back(Serve(robots));
+  const StepOnly step_one = RunStepOnly(1);
+  const StepOnly step_eight = RunStepOnly(8);
   const std::string load = LoadAverage();
   const Run& one = runs.front();
   bool pass = true;
@@ -216,6 +253,19 @@ int main() {
   cpu.baseline = "the same with 1 robot (measured in this run)";
   cpu.baseline_value = one.sim_s / one.cpu_s;
   Report(cpu);
+  Figure step_cpu = part("step_only_cpu_s_per_robot_per_sim_s", step_eight.cpu_per_robot_s,
+                         "MujocoSim::Step alone, CPU of the thread per robot (linear scaling: "
+                         "equal to the baseline)");
+  step_cpu.baseline = "the same with 1 robot (measured in this run)";
+  step_cpu.baseline_value = step_one.cpu_per_robot_s;
+  Report(step_cpu);
+  Figure rays = part("rays_per_s", step_eight.rays_per_s,
+                     "the ray caster's rays per second of casting, 8 robots");
+  rays.unit = "rays/s";
+  rays.higher_is_better = true;
+  rays.baseline = "the same with 1 robot (measured in this run)";
+  rays.baseline_value = step_one.rays_per_s;
+  Report(rays);
   Figure start = part("start_s", eight.start_s, "composing, compiling, sizing and placing");
   start.name = "simulator.fleet_tunnel_p3at_hdl32e.8_robots.start_s";
   start.unit = "s";
