@@ -17,7 +17,7 @@ struct GeomInfo {
   int conaffinity{0};
   int condim{3};
   int priority{0};
-  int weld{0};     ///< body this geom moves with (0: the world, static)
+  int weld{0};  ///< body this geom moves with (0: the world, static)
   bool moves{false};
   double rbound_m{0.0};
 };
@@ -46,7 +46,7 @@ GeomInfo Geom(const mjModel* m, int g, int parked_geom_group) {
 
 bool CanCollide(const GeomInfo& a, const GeomInfo& b) {
   if ((a.contype & b.conaffinity) == 0 && (b.contype & a.conaffinity) == 0) return false;
-  if (!a.moves && !b.moves) return false;  // static against static: MuJoCo never tests it
+  if (!a.moves && !b.moves) return false;     // static against static: MuJoCo never tests it
   return !(a.weld == b.weld && a.weld != 0);  // one rigid body: never in contact
 }
 
@@ -208,8 +208,8 @@ std::string WithSizes(const std::string& xml, const ModelCapacity& sizes,
                       const SizeAttributes& keep) {
   std::string attributes;
   const auto add = [&](const char* name, int value, bool kept) {
-    if (!kept && value >= 0) attributes += std::string(" ") + name + "=\"" +
-                                           std::to_string(value) + "\"";
+    if (!kept && value >= 0)
+      attributes += std::string(" ") + name + "=\"" + std::to_string(value) + "\"";
   };
   add("nconmax", sizes.nconmax, keep.nconmax);
   add("njmax", sizes.njmax, keep.njmax);

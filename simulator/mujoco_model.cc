@@ -69,7 +69,7 @@ std::string ReadTextFile(const std::string& path) {
 }
 
 MjModelPtr LoadModelFromText(const std::string& xml, const std::string& path,
-                              bool placeholder_buffers) {
+                             bool placeholder_buffers) {
   // mjVFS holds fixed-size name tables (about 2 MB): keep it off the stack.
   auto vfs = std::make_unique<mjVFS>();
   mj_defaultVFS(vfs.get());

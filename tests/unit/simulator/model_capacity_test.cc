@@ -118,7 +118,8 @@ TEST(ModelCapacityTextTest, WritesOnlyWhatTheTextDoesNotSet) {
   const std::string added = WithSizes(bare, sizes, SizeAttributesOf(bare));
   EXPECT_NE(added.find(R"(<size nconmax="11" njmax="22" nstack="33"/>)"), std::string::npos);
 
-  const std::string own = "<mujoco>\n  <size  njmax = \"5\" nkey=\"1\"/>\n  <worldbody/>\n</mujoco>";
+  const std::string own =
+      "<mujoco>\n  <size  njmax = \"5\" nkey=\"1\"/>\n  <worldbody/>\n</mujoco>";
   const SizeAttributes set = SizeAttributesOf(own);
   EXPECT_FALSE(set.nconmax);
   EXPECT_TRUE(set.njmax);
