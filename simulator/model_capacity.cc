@@ -17,8 +17,7 @@ struct GeomInfo {
   int conaffinity{0};
   int condim{3};
   int priority{0};
-  int weld{0};  ///< body this geom moves with (0: the world, static)
-  bool moves{false};
+  int weld{0};  ///< body this geom is welded to (0: the world, mocap bodies included)
   double rbound_m{0.0};
 };
 
@@ -31,7 +30,6 @@ GeomInfo Geom(const mjModel* m, int g, int parked_geom_group) {
   info.condim = m->geom_condim[g];
   info.priority = m->geom_priority[g];
   info.weld = m->body_weldid[body];
-  info.moves = info.weld != 0 || m->body_mocapid[body] >= 0;
   info.rbound_m = m->geom_rbound[g];
   if (m->geom_group[g] == parked_geom_group) {
     // A spawn-pool slot: at run time a box, cylinder or sphere of up to 50 m that collides
@@ -44,10 +42,12 @@ GeomInfo Geom(const mjModel* m, int g, int parked_geom_group) {
   return info;
 }
 
+// MuJoCo 2.2's filters: contype/conaffinity, and never two geoms welded to the same body (the
+// world's geoms, mocap bodies' included, never touch each other). Its parent-child filter is
+// left out: an over-estimate.
 bool CanCollide(const GeomInfo& a, const GeomInfo& b) {
   if ((a.contype & b.conaffinity) == 0 && (b.contype & a.conaffinity) == 0) return false;
-  if (!a.moves && !b.moves) return false;     // static against static: MuJoCo never tests it
-  return !(a.weld == b.weld && a.weld != 0);  // one rigid body: never in contact
+  return a.weld != b.weld;
 }
 
 // Prisms of height field `h` under a geom of bounding radius r (MuJoCo 2.2 collides a geom with
@@ -111,7 +111,9 @@ ModelCapacity ContactCapacity(const mjModel* m, int parked_geom_group) {
   std::vector<Demand> demands;
   for (int g = 0; g < m->ngeom; ++g) {
     const GeomInfo& a = geoms[g];
-    if (!a.moves || (a.contype == 0 && a.conaffinity == 0)) continue;
+    // Contacts are counted from the side of geoms on bodies with joints (robots, doors): a
+    // mocap body's geoms only touch those, and are counted as their partners.
+    if (a.weld == 0 || (a.contype == 0 && a.conaffinity == 0)) continue;
     demands.clear();
     for (int p = 0; p < m->ngeom; ++p) {
       if (p == g || !CanCollide(a, geoms[p])) continue;

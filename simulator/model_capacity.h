@@ -15,7 +15,7 @@
 /// page faults at start) and eight could not be allocated at all ("could not create mjData").
 ///
 /// `ContactCapacity` bounds what the scene can use from its compiled model instead: every geom
-/// that moves (a body with joints, or a mocap body) and collides touches at most
+/// on a body with joints (a robot, a door) that collides touches at most
 /// `kSimultaneousPartners` other geoms at once, each pair making at most the contacts MuJoCo
 /// 2.2's collision function for those two types makes (one for a sphere on anything but a height
 /// field, up to 8 for a box on a box or a plane, up to one per prism under the geom on a height
