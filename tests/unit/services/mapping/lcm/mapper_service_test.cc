@@ -45,6 +45,26 @@ using testing::SyntheticRevolution;
 // The mapper's node on memq:// (no network, no signal handlers, no simulator clock).
 runtime::NodeOptions MemqOptions() { return cairn::testing::MemqNodeOptions("cairn-mapper", "r1"); }
 
+// Publishes revolution k of `lidar` over `ground`, seen from (1, 0, 0.5), with its pose, as r1.
+template <typename Ground>
+void PublishRevolution(runtime::Node& node, const SyntheticLidar& lidar, Ground ground, int k,
+                       int64_t utime) {
+  common::LidarSlice slice = SyntheticRevolution(SensorAt(1.0, 0.0, 0.5), ground, lidar, k);
+  slice.utime = utime;
+  slice.robot = "r1";
+  node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(1.0, 0.0, 0.0), utime, "r1", "world"));
+  for (const auto& part : runtime::SplitSlice(slice, 60000)) {
+    node.Publish("r1.LIDAR", runtime::ToLcm(part));
+  }
+}
+
+// Spins `node` until `done` or `bound_s` wall seconds; returns done().
+bool SpinUntil(runtime::Node& node, const std::function<bool()>& done, double bound_s) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
+  while (!done() && std::chrono::steady_clock::now() < deadline) node.SpinOnce(5);
+  return done();
+}
+
 // MapperService over memq: slices and poses in, tiles, manifests and the registry out.
 TEST(MapperServiceTest, MapsSlicesOverMemq) {
   runtime::Node node(MemqOptions());
@@ -74,16 +94,7 @@ TEST(MapperServiceTest, MapsSlicesOverMemq) {
   lidar.rings = 12;
   lidar.azimuths = 360;
   lidar.max_range_m = 10.0;
-  for (int k = 0; k < 3; ++k) {
-    const int64_t utime = 1'000'000 + k * 100'000;
-    common::LidarSlice slice = SyntheticRevolution(SensorAt(1.0, 0.0, 0.5), ground, lidar, k);
-    slice.utime = utime;
-    slice.robot = "r1";
-    node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(1.0, 0.0, 0.0), utime, "r1", "world"));
-    for (const auto& part : runtime::SplitSlice(slice, 60000)) {
-      node.Publish("r1.LIDAR", runtime::ToLcm(part));
-    }
-  }
+  for (int k = 0; k < 3; ++k) PublishRevolution(node, lidar, ground, k, 1'000'000 + k * 100'000);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (std::chrono::steady_clock::now() < deadline &&
          !(service.revolutions() == 3 && received["r1.MAP.TILES"] > 0 && registry &&
@@ -138,23 +149,13 @@ TEST(MapperServiceTest, ACostLayerIsAnnouncedAsCurrentOnlyWhileRevolutionsComeIn
   auto flat = [](double, double) { return 0.0; };
   int sent = 0;
   auto send_revolution = [&] {
-    const int64_t utime = 1'000'000 + sent * 100'000;
-    common::LidarSlice slice = SyntheticRevolution(SensorAt(1.0, 0.0, 0.5), flat, lidar, sent);
-    slice.utime = utime;
-    slice.robot = "r1";
-    node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(1.0, 0.0, 0.0), utime, "r1", "world"));
-    for (const auto& part : runtime::SplitSlice(slice, 60000)) {
-      node.Publish("r1.LIDAR", runtime::ToLcm(part));
-    }
+    PublishRevolution(node, lidar, flat, sent, 1'000'000 + sent * 100'000);
     ++sent;
   };
   auto spin_until = [&](const std::function<bool()>& done, double bound_s) {
-    const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
-    while (!done() && std::chrono::steady_clock::now() < deadline) node.SpinOnce(5);
-    return done();
+    return SpinUntil(node, done, bound_s);
   };
-  auto spin_for = [&](double s) { spin_until([] { return false; }, s); };
+  auto spin_for = [&](double s) { SpinUntil(node, [] { return false; }, s); };
   // Revolutions coming in: announced every period.
   for (int i = 0; i < 3; ++i) send_revolution();
   ASSERT_TRUE(spin_until([&] { return service.revolutions() == 3 && cost_manifests >= 3; }, 20.0));
@@ -199,19 +200,9 @@ TEST(MapperServiceTest, AResendRequestForObstaclesPublishesTheRegistryAgain) {
   lidar.rings = 8;
   lidar.azimuths = 180;
   lidar.max_range_m = 8.0;
-  common::LidarSlice slice =
-      SyntheticRevolution(SensorAt(1.0, 0.0, 0.5), [](double, double) { return 0.0; }, lidar, 0);
-  slice.utime = 1'000'000;
-  slice.robot = "r1";
-  node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(1.0, 0.0, 0.0), slice.utime, "r1", "world"));
-  for (const auto& part : runtime::SplitSlice(slice, 60000)) {
-    node.Publish("r1.LIDAR", runtime::ToLcm(part));
-  }
+  PublishRevolution(node, lidar, [](double, double) { return 0.0; }, 0, 1'000'000);
   auto spin_until = [&](const std::function<bool()>& done, double bound_s) {
-    const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
-    while (!done() && std::chrono::steady_clock::now() < deadline) node.SpinOnce(5);
-    return done();
+    return SpinUntil(node, done, bound_s);
   };
   ASSERT_TRUE(spin_until([&] { return registries >= 1; }, 20.0));
   // Unchanged: not published again on its own.
