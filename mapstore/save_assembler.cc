@@ -197,9 +197,9 @@ struct SaveAssembler::LiveMirror {
 
 // What a pending save has and lacks at one moment.
 struct SaveAssembler::Gathered {
-  bool settling{false};  // a pull without named layers still collects layer names
+  bool settling{false};         // a pull without named layers still collects layer names
   bool awaiting_layers{false};  // ... and waits for the mapper's list of them
-  std::string invalid;   // pushed data were refused: the save fails
+  std::string invalid;          // pushed data were refused: the save fails
   TileAssembler* assembler{nullptr};
   Staging* push_staging{nullptr};  // a push: its compressed tiles go to the store as they came
   std::vector<std::string> wanted;

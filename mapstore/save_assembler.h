@@ -66,7 +66,7 @@ struct SaveAssemblerParams {
   double save_timeout_s{20.0};            ///< a save gives up waiting for its data after this
   double resend_interval_s{0.05};         ///< asks again for missing data this often
   double staging_timeout_s{30.0};         ///< pushed data no save asked for are dropped after this
-  double pull_settle_s{0.5};              ///< a pull without named layers waits this long for more
+  double pull_settle_s{0.5};              ///< pull naming no layers: 4 x this for the mapper's list
   int64_t max_staged_bytes{512LL << 20};  ///< pushed data held at once, every push together
   int max_pushes{64};                      ///< push names staged at once
 
@@ -136,9 +136,9 @@ struct SaveProgress {
   std::vector<SaveOutcome> finished;
   std::vector<ResendAsk> resends;
   std::vector<PublishAllAsk> publish_all;  ///< mappers that must publish every layer
-  std::vector<std::string> new_robots;   ///< robots followed from now on (feed Mirror*)
-  int abandoned_pushes{0};               ///< staged pushes dropped (nobody asked to save them)
-  std::vector<std::string> warnings;     ///< unexpected failures (also in their outcome)
+  std::vector<std::string> new_robots;     ///< robots followed from now on (feed Mirror*)
+  int abandoned_pushes{0};                 ///< staged pushes dropped (nobody asked to save them)
+  std::vector<std::string> warnings;       ///< unexpected failures (also in their outcome)
 };
 
 class SaveAssembler {

@@ -86,10 +86,9 @@ common::Result<Place> FromLcm(const cairn::lcmt_place& m) {
 common::Result<MapperLayers> FromLcm(const cairn::lcmt_map_control_reply& m) {
   if (m.num_layers < 0 || m.num_layers > cairn::lcmt_map_control_reply::MAX_LAYERS ||
       m.layers.size() != static_cast<size_t>(m.num_layers)) {
-    return common::InvalidArgumentError("map control reply: layers disagree with num_layers (" +
-                                        std::to_string(m.num_layers) + ", at most " +
-                                        std::to_string(cairn::lcmt_map_control_reply::MAX_LAYERS) +
-                                        ")");
+    return common::InvalidArgumentError(
+        "map control reply: layers disagree with num_layers (" + std::to_string(m.num_layers) +
+        ", at most " + std::to_string(cairn::lcmt_map_control_reply::MAX_LAYERS) + ")");
   }
   MapperLayers out;
   out.request_id = m.request_id;

@@ -410,7 +410,7 @@ TEST_F(MapstoreServiceTest, PullSaveTakesTheMappersRobotAgnosticLayers) {
   ASSERT_TRUE(reply.ok()) << reply.status().ToString();
   ASSERT_EQ(reply->status, kStatusOk) << reply->message;
   EXPECT_EQ(mapper.publish_all(), 1);  // asked again only with the same request id
-  EXPECT_GE(mapper.resends(), 1);  // the dropped tile was asked for again
+  EXPECT_GE(mapper.resends(), 1);      // the dropped tile was asked for again
   EXPECT_EQ(reply->layers,
             (std::vector<std::string>{"elevation", "elevation_variance", "occupancy"}));
   auto loaded = client_.Load("lab", "yard", reply->version, "");

@@ -340,7 +340,7 @@ TEST_F(SaveAssemblerTest, APullSaveTakesTheLiveMapsRobotAgnosticLayers) {
   reply.layers.push_back("occupancy");
   EXPECT_TRUE(dut.OnMapperLayers("rover1", reply, T(0.2)).finished.empty());
   EXPECT_TRUE(dut.Poll(T(0.3)).finished.empty());
-  SaveProgress later = dut.Poll(T(0.6));           // no obstacles yet: still waiting
+  SaveProgress later = dut.Poll(T(0.6));  // no obstacles yet: still waiting
   EXPECT_TRUE(later.finished.empty());
   for (const ResendAsk& ask : later.resends) EXPECT_EQ(ask.pull_robot, "rover1");
   dut.MirrorObstacles("rover1", snapshot_.obstacles, T(0.7));
@@ -382,9 +382,8 @@ TEST_F(SaveAssemblerTest, APullWaitsForEveryLayerTheMapperListsAndAsksForALostMa
   // Answers to other requests (or another robot's) are not the save's.
   EXPECT_TRUE(dut.OnMapperLayers("rover1", {id + 1, true, {names[0]}}, T(0.15)).finished.empty());
   EXPECT_TRUE(dut.OnMapperLayers("rover2", {id, true, {names[0]}}, T(0.15)).finished.empty());
-  EXPECT_TRUE(
-      dut.OnMapperLayers("rover1", {id, true, {names[0], names[1], "cost/rover"}}, T(0.2))
-          .finished.empty());
+  EXPECT_TRUE(dut.OnMapperLayers("rover1", {id, true, {names[0], names[1], "cost/rover"}}, T(0.2))
+                  .finished.empty());
   // Past the settle window the save still waits (it saved one layer of two before), asking for
   // the lost layer whole: its manifest comes with it.
   bool asked = false;

@@ -260,8 +260,8 @@ TEST(MapperServiceTest, TheReplyToPublishAllListsTheLayersPublished) {
   lidar.rings = 8;
   lidar.azimuths = 180;
   lidar.max_range_m = 8.0;
-  common::LidarSlice slice =
-      SyntheticRevolution(SensorAt(1.0, 0.0, 0.5), [](double, double) { return 0.0; }, lidar, 0);
+  common::LidarSlice slice = SyntheticRevolution(
+      SensorAt(1.0, 0.0, 0.5), [](double, double) { return 0.0; }, lidar, 0);
   slice.utime = 1'000'000;
   slice.robot = "r1";
   node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(1.0, 0.0, 0.0), slice.utime, "r1", "world"));
@@ -269,8 +269,7 @@ TEST(MapperServiceTest, TheReplyToPublishAllListsTheLayersPublished) {
     node.Publish("r1.LIDAR", runtime::ToLcm(part));
   }
   auto spin_until = [&](const std::function<bool()>& done, double bound_s) {
-    const auto deadline =
-        std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
     while (!done() && std::chrono::steady_clock::now() < deadline) node.SpinOnce(5);
     return done();
   };
@@ -290,10 +289,9 @@ TEST(MapperServiceTest, TheReplyToPublishAllListsTheLayersPublished) {
   std::set<std::string> announced(manifests.begin(), manifests.end());
   EXPECT_EQ(std::set<std::string>(reply.layers.begin(), reply.layers.end()), announced);
   EXPECT_EQ(announced.size(), reply.layers.size());  // each listed once
-  for (const std::string& layer : {std::string(layers::kElevation),
-                                   std::string(layers::kElevationVariance),
-                                   std::string(layers::kObservationCount),
-                                   layers::CostLayer("pioneer3at")}) {
+  for (const std::string& layer :
+       {std::string(layers::kElevation), std::string(layers::kElevationVariance),
+        std::string(layers::kObservationCount), layers::CostLayer("pioneer3at")}) {
     EXPECT_TRUE(announced.count(layer)) << layer << " not listed";
   }
   // A replay: the same list, nothing published again.
