@@ -179,6 +179,9 @@ struct SaveAssembler::PendingSave {
   Clock::time_point started;
   Clock::time_point next_resend;
   int resend_rounds{0};
+  int64_t publish_all_id{0};  // a pull: its OP_PUBLISH_ALL's request id
+  // A pull: the layers the mapper's answer to it listed (once it came).
+  std::optional<std::vector<std::string>> mapper_layers;
 };
 
 // The live map of a robot pulled from.
@@ -194,8 +197,9 @@ struct SaveAssembler::LiveMirror {
 
 // What a pending save has and lacks at one moment.
 struct SaveAssembler::Gathered {
-  bool settling{false};  // a pull without named layers still collects layer names
-  std::string invalid;   // pushed data were refused: the save fails
+  bool settling{false};         // a pull without named layers still collects layer names
+  bool awaiting_layers{false};  // ... and waits for the mapper's list of them
+  std::string invalid;          // pushed data were refused: the save fails
   TileAssembler* assembler{nullptr};
   Staging* push_staging{nullptr};  // a push: its compressed tiles go to the store as they came
   std::vector<std::string> wanted;
@@ -385,13 +389,31 @@ SaveProgress SaveAssembler::Start(SaveRequest request, Clock::time_point now) {
       mirrors_[request.robot] = std::make_unique<LiveMirror>();
       progress.new_robots.push_back(request.robot);
     }
-    progress.publish_all.push_back(request.robot);
+    save->publish_all_id = ++next_publish_all_id_;
+    progress.publish_all.push_back({request.robot, save->publish_all_id});
     save->next_resend = After(now, params_.pull_settle_s);
   }
   save->request = std::move(request);
   const std::string key = save->key;
   pending_[key] = std::move(save);
   TryFinishGuarded(key, false, now, &progress);  // finishes now when everything arrived already
+  return progress;
+}
+
+SaveProgress SaveAssembler::OnMapperLayers(const std::string& robot, const MapperLayers& reply,
+                                           Clock::time_point now) {
+  SaveProgress progress;
+  for (const auto& [key, save] : pending_) {
+    if (!save->pull || save->request.robot != robot || save->publish_all_id != reply.request_id ||
+        save->mapper_layers) {
+      continue;
+    }
+    // A refusal lists nothing: the save keeps the rule of mappers that do not list.
+    save->mapper_layers = reply.ok ? reply.layers : std::vector<std::string>{};
+    const std::string pending_key = key;  // TryFinish may erase the entry
+    TryFinishGuarded(pending_key, false, now, &progress);
+    break;
+  }
   return progress;
 }
 
@@ -471,6 +493,12 @@ void SaveAssembler::TryFinish(const std::string& key, bool timed_out, Clock::tim
   if (it == pending_.end()) return;
   PendingSave& save = *it->second;
   Gathered gathered = save.pull ? GatherPull(save, now) : GatherPush(save);
+  if (gathered.awaiting_layers && now >= save.next_resend) {
+    // The request or its answer was lost (or the mapper is still publishing): the same request
+    // id again; a mapper that has done it answers from its reply cache.
+    progress->publish_all.push_back({save.request.robot, save.publish_all_id});
+    save.next_resend = After(now, params_.resend_interval_s);
+  }
   if (gathered.settling) return;
   SaveOutcome outcome = OutcomeOf(save);
   if (!gathered.invalid.empty()) {
@@ -503,13 +531,28 @@ SaveAssembler::Gathered SaveAssembler::GatherPull(PendingSave& save, Clock::time
   g.assembler = &mirror.assembler;
   g.wanted = request.layers;
   if (g.wanted.empty()) {
-    // Every robot-agnostic layer announced since the request; wait until none is new.
-    for (const auto& [layer, when] : mirror.manifest_time) {
-      if (!IsDerivedLayer(layer)) g.wanted.push_back(layer);
-    }
-    if (SecondsBetween(save.started, now) < params_.pull_settle_s) {
+    // Every robot-agnostic layer the mapper lists in its answer to the request: each is waited
+    // for (and asked for again) like a named layer.
+    const double waited_s = SecondsBetween(save.started, now);
+    if (save.mapper_layers) {
+      for (const std::string& layer : *save.mapper_layers) {
+        if (!IsDerivedLayer(layer)) g.wanted.push_back(layer);
+      }
+    } else if (waited_s < 4 * params_.pull_settle_s) {
       g.settling = true;
+      g.awaiting_layers = true;
       return g;
+    }
+    if (g.wanted.empty()) {
+      // No list (a mapper that does not answer, or lists nothing robot-agnostic): every
+      // robot-agnostic layer announced; wait until none is new.
+      for (const auto& [layer, when] : mirror.manifest_time) {
+        if (!IsDerivedLayer(layer)) g.wanted.push_back(layer);
+      }
+      if (waited_s < params_.pull_settle_s) {
+        g.settling = true;
+        return g;
+      }
     }
   }
   if (g.wanted.empty()) {

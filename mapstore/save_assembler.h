@@ -33,7 +33,12 @@
 ///   and saves its robot-agnostic layers (cost and geometric profile layers are left out: the
 ///   store derives them per profile) once every wanted layer is complete in a manifest newer
 ///   than the request. A mapper's layers on another grid become companion maps
-///   "<map>-<layer>".
+///   "<map>-<layer>". A pull naming no layers wants every robot-agnostic layer the mapper's
+///   answer to that request lists (OnMapperLayers): it asks again with the same request id every
+///   resend round until the answer comes, then asks for each listed layer still missing, so a
+///   manifest lost on the link is waited for rather than silently left out. A mapper that never
+///   answers (an older one) gets 4 x pull_settle_s; then every robot-agnostic layer announced is
+///   taken (the rule before mappers listed their layers).
 ///
 /// Missing pieces are asked for again every resend_interval_s (SaveProgress::resends); a save
 /// still incomplete after save_timeout_s fails with kUnavailable naming what is missing. Staged
@@ -61,7 +66,7 @@ struct SaveAssemblerParams {
   double save_timeout_s{20.0};            ///< a save gives up waiting for its data after this
   double resend_interval_s{0.05};         ///< asks again for missing data this often
   double staging_timeout_s{30.0};         ///< pushed data no save asked for are dropped after this
-  double pull_settle_s{0.5};              ///< a pull without named layers waits this long for more
+  double pull_settle_s{0.5};              ///< pull naming no layers: 4 x this for the mapper's list
   int64_t max_staged_bytes{512LL << 20};  ///< pushed data held at once, every push together
   int max_pushes{64};                      ///< push names staged at once
 
@@ -82,6 +87,13 @@ struct SaveRequest {
   std::string parameters;           ///< provenance
   bool expect_obstacles{false};     ///< push: wait for pushed obstacles
   bool expect_octomap{false};       ///< push: wait for a pushed OctoMap
+};
+
+/// A mapper's answer (<robot>.MAP.CONTROL_REPLY) to the OP_PUBLISH_ALL a pull save sent.
+struct MapperLayers {
+  int64_t request_id{0};
+  bool ok{true};                    ///< the mapper did it (STATUS_OK)
+  std::vector<std::string> layers;  ///< every layer whose manifest its publication sent
 };
 
 /// "<requester>#<request_id>": what identifies a request (and its replays).
@@ -111,15 +123,22 @@ struct ResendAsk {
   TileRequest tiles;
 };
 
+/// OP_PUBLISH_ALL to send to a robot's mapper; a save sends the same request id every time, so
+/// the mapper publishes everything once and answers the others from its reply cache.
+struct PublishAllAsk {
+  std::string robot;
+  int64_t request_id{0};
+};
+
 /// What the caller must do after a call: reply to finished saves, send resend requests, and ask
 /// mappers to publish everything.
 struct SaveProgress {
   std::vector<SaveOutcome> finished;
   std::vector<ResendAsk> resends;
-  std::vector<std::string> publish_all;  ///< robots whose mapper must publish every layer
-  std::vector<std::string> new_robots;   ///< robots followed from now on (feed Mirror*)
-  int abandoned_pushes{0};               ///< staged pushes dropped (nobody asked to save them)
-  std::vector<std::string> warnings;     ///< unexpected failures (also in their outcome)
+  std::vector<PublishAllAsk> publish_all;  ///< mappers that must publish every layer
+  std::vector<std::string> new_robots;     ///< robots followed from now on (feed Mirror*)
+  int abandoned_pushes{0};                 ///< staged pushes dropped (nobody asked to save them)
+  std::vector<std::string> warnings;       ///< unexpected failures (also in their outcome)
 };
 
 class SaveAssembler {
@@ -158,6 +177,14 @@ class SaveAssembler {
                        Clock::time_point now);
   /// False for an inconsistent chunk.
   bool MirrorOctomapChunk(const std::string& robot, const OctomapChunk& chunk);
+  /// The mapper of `robot` answered a control request: the pull save whose OP_PUBLISH_ALL has
+  /// this request id learns the layers the mapper has (the first answer counts; replays and
+  /// answers to other requests are ignored). The save finishes now when nothing is missing.
+  SaveProgress OnMapperLayers(const std::string& robot, const MapperLayers& reply,
+                              Clock::time_point now);
+  /// OP_PUBLISH_ALL request ids start above `base` (a process passes its wall-clock start, so
+  /// that ids stay unique across restarts: a mapper answers a known id from its reply cache).
+  void set_publish_all_id_base(int64_t base) { next_publish_all_id_ = base; }
 
   // ---- Saves ----
   /// Starts a save. A bad request, or one the audit log says was saved already (a replay after
@@ -218,6 +245,7 @@ class SaveAssembler {
   std::map<std::string, std::unique_ptr<Staging>> staging_;      // by push name
   std::map<std::string, std::unique_ptr<PendingSave>> pending_;  // by SaveKey
   std::map<std::string, std::unique_ptr<LiveMirror>> mirrors_;   // by robot
+  int64_t next_publish_all_id_{0};
 };
 
 }  // namespace cairn::mapstore

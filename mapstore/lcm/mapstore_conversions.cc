@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/crc32.h"
+#include "mapstore/names.h"
 
 namespace cairn::mapstore {
 
@@ -80,6 +81,24 @@ common::Result<Place> FromLcm(const cairn::lcmt_place& m) {
     p.polygon_m.emplace_back(m.x_m[i], m.y_m[i]);
   }
   return p;
+}
+
+common::Result<MapperLayers> FromLcm(const cairn::lcmt_map_control_reply& m) {
+  if (m.num_layers < 0 || m.num_layers > cairn::lcmt_map_control_reply::MAX_LAYERS ||
+      m.layers.size() != static_cast<size_t>(m.num_layers)) {
+    return common::InvalidArgumentError(
+        "map control reply: layers disagree with num_layers (" + std::to_string(m.num_layers) +
+        ", at most " + std::to_string(cairn::lcmt_map_control_reply::MAX_LAYERS) + ")");
+  }
+  MapperLayers out;
+  out.request_id = m.request_id;
+  out.ok = m.status == cairn::lcmt_map_control_reply::STATUS_OK;
+  for (const std::string& layer : m.layers) {
+    common::Status s = ValidateLayerName(layer);
+    if (!s.ok()) return common::InvalidArgumentError("map control reply: " + s.message());
+    out.layers.push_back(layer);
+  }
+  return out;
 }
 
 common::Result<OctomapChunk> FromLcm(const cairn::lcmt_octomap& m) {

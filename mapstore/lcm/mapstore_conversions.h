@@ -5,6 +5,7 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_map_control_reply.hpp"
 #include "cairn/lcmt_map_info.hpp"
 #include "cairn/lcmt_mapstore_request.hpp"
 #include "cairn/lcmt_occupancy_tile.hpp"
@@ -50,5 +51,9 @@ common::Result<Place> FromLcm(const cairn::lcmt_place& msg);
 common::Result<OctomapChunk> FromLcm(const cairn::lcmt_octomap& msg);
 cairn::lcmt_octomap ToLcm(const OctomapChunk& chunk, const std::string& robot,
                           const std::string& map_name, int64_t utime);
+
+/// A mapper's answer to OP_PUBLISH_ALL in core terms. kInvalidArgument when `layers` disagrees
+/// with num_layers, holds more than MAX_LAYERS names, or a name is not a valid layer name.
+common::Result<MapperLayers> FromLcm(const cairn::lcmt_map_control_reply& msg);
 
 }  // namespace cairn::mapstore

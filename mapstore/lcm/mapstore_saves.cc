@@ -2,6 +2,7 @@
 // tiles, manifests and chunks; what it asks for (resends, a mapper's full publication) and the
 // saves it finishes go back on the bus.
 
+#include "cairn/lcmt_map_control_reply.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_occupancy_tile.hpp"
 
@@ -64,14 +65,14 @@ void MapstoreService::StartSave(const Request& request, Reply* reply, Clock::tim
 
 void MapstoreService::Apply(SaveProgress progress, const Reply* first_reply) {
   for (const std::string& robot : progress.new_robots) FollowRobot(robot);
-  for (const std::string& robot : progress.publish_all) {
+  for (const PublishAllAsk& ask : progress.publish_all) {
     cairn::lcmt_map_control_request control{};
     control.utime = node_.NowUtime();
     control.requester = kActor;
     control.op = cairn::lcmt_map_control_request::OP_PUBLISH_ALL;
     control.has_profile = false;
-    if (first_reply != nullptr) control.request_id = first_reply->request_id;
-    node_.Publish(channels::ForRobot(robot, channels::kMapControl), control);
+    control.request_id = ask.request_id;
+    node_.Publish(channels::ForRobot(ask.robot, channels::kMapControl), control);
   }
   const int64_t utime = node_.NowUtime();
   for (const ResendAsk& ask : progress.resends) {
@@ -258,6 +259,19 @@ void MapstoreService::FollowRobot(const std::string& robot) {
         if (!chunk.ok() || !saves_.MirrorOctomapChunk(robot, *chunk)) {
           node_.CountDropped("bad_mapper_octomap");
         }
+      });
+  // The mapper's answer to OP_PUBLISH_ALL lists its layers: a pull save naming none waits for
+  // each of them.
+  node_.Subscribe<cairn::lcmt_map_control_reply>(
+      channels::ForRobot(robot, channels::kMapControlReply),
+      [this, robot](const cairn::lcmt_map_control_reply& r) {
+        auto reply = FromLcm(r);
+        std::lock_guard<std::mutex> lock(mutex_);
+        if (!reply.ok()) {
+          node_.CountDropped("bad_mapper_replies");
+          return;
+        }
+        Apply(saves_.OnMapperLayers(robot, *reply, Clock::now()));
       });
   node_.Event("following the live map of %s for pull saves", robot.c_str());
 }

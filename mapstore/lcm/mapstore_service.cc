@@ -60,6 +60,8 @@ MapstoreService::MapstoreService(runtime::Node& node, MapStore& store, ProfileDe
       saves_(store, params_.save()),
       resend_limits_(params_.resend_limits) {
   params_.Validate();
+  // A mapper caches its control replies by request id: ids unique across restarts.
+  saves_.set_publish_all_id_base(runtime::Node::WallUtime());
   node_.Subscribe<Request>(channels::kMapstoreRequest, [this](const Request& r) { OnRequest(r); });
   node_.Subscribe<cairn::lcmt_tile_resend_request>(
       channels::kMapstoreTileResend,

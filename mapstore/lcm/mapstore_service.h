@@ -52,7 +52,9 @@
 /// - pull: OP_SAVE with `robot` set. The store listens to <robot>.MAP.* (the mapper's "live"
 ///   map), asks the mapper to publish everything (<robot>.MAP.CONTROL, OP_PUBLISH_ALL), asks for
 ///   missed tiles on <robot>.MAP.TILE_RESEND and saves the robot-agnostic layers (cost and other
-///   profile layers are left out: the store derives them per profile).
+///   profile layers are left out: the store derives them per profile). A pull naming no layers
+///   waits for the mapper's reply (<robot>.MAP.CONTROL_REPLY, sending the request again with the
+///   same id until it comes), then for every robot-agnostic layer it lists.
 ///
 /// Statuses: NOT_FOUND (unknown map, version, layer, profile), INVALID (bad names, values or
 /// requests; counted as dropped inputs in HEALTH), CORRUPT (a stored blob failed its checksum),

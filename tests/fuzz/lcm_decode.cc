@@ -54,6 +54,10 @@ void Handle(const lcmt_occupancy_tile& tile) {
   (void)runtime::CheckOccupancyTile(tile, &cells);
 }
 template <>
+void Handle(const lcmt_map_control_reply& m) {
+  (void)mapstore::FromLcm(m);
+}
+template <>
 void Handle(const lcmt_octomap& m) {
   (void)mapstore::FromLcm(m);
 }

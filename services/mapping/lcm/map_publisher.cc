@@ -56,6 +56,7 @@ void MapPublisher::Send(const std::string& stream, const std::vector<Msg>& messa
 void MapPublisher::PublishDue(bool force, int64_t map_version) {
   const auto now = Clock::now();
   last_map_version_ = map_version;
+  announced_.clear();
   for (LayerState& state : layers_) {
     if (state.layer == terrain_) {
       const TerrainMapperLayerParams& p = terrain_->params();
@@ -121,6 +122,7 @@ std::vector<std::string> MapPublisher::SlowLayers() {
 void MapPublisher::PublishTerrain(const std::vector<std::string>& names, bool force) {
   std::vector<std::string> all = names;
   for (const auto& r : retired_layers_) all.push_back(r);
+  const std::vector<std::string> retired = std::move(retired_layers_);
   retired_layers_.clear();
   const auto batch = terrain_publisher_.Update(terrain_->map(), all, node_.NowUtime(), force);
   Send(channels::kMapTiles, batch.tiles);
@@ -132,6 +134,11 @@ void MapPublisher::PublishTerrain(const std::vector<std::string>& names, bool fo
     if (auto m = terrain_publisher_.Manifest(name)) out.push_back(*m);
   }
   Send(channels::kMapManifest, out);
+  for (const auto& m : out) {
+    if (std::find(retired.begin(), retired.end(), m.layer) == retired.end()) {
+      announced_.push_back(m.layer);
+    }
+  }
 }
 
 void MapPublisher::PublishRegistry(bool force, int64_t map_version) {
@@ -177,6 +184,7 @@ void MapPublisher::PublishGrids(LayerState* state, bool force) {
     // Every manifest goes out, changed or not: receivers (the navigator's staleness check
     // when it plans on the final layer) read it as "the layer is current".
     manifests.push_back(batch.manifest);
+    announced_.push_back(batch.manifest.layer);
   }
   Send(channels::kMapManifest, manifests);
 }

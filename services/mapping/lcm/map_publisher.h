@@ -49,6 +49,9 @@ class MapPublisher {
   /// Publishes every layer whose period is due (all of them with `force`). `map_version` stamps
   /// the registry (the revolutions mapped).
   void PublishDue(bool force, int64_t map_version);
+  /// The layers whose manifests the last PublishDue sent, in the order sent (a retired layer's
+  /// empty manifest is not counted): with `force`, every layer the mapper has.
+  const std::vector<std::string>& announced() const { return announced_; }
   /// Answers a resend request for a terrain layer or another layer's grid.
   void Resend(const cairn::lcmt_tile_resend_request& request);
   /// After the core was reset: every terrain layer starts afresh; with `send`, their empty
@@ -89,6 +92,7 @@ class MapPublisher {
   TerrainPublisher terrain_publisher_;
   runtime::LayerTiler grid_tiler_;
   std::vector<std::string> retired_layers_;
+  std::vector<std::string> announced_;  ///< see announced()
   std::string last_registry_bytes_;
   Clock::time_point next_slow_, next_registry_;
   int64_t octomap_chunk_version_{0};

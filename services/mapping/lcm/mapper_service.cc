@@ -558,8 +558,21 @@ void MapperService::ProcessControl(const lcmt_map_control_request& request) {
       RemoveProfile(request, &reply);
       break;
     case lcmt_map_control_request::OP_PUBLISH_ALL:
-      if (mode_ == Mode::kLive) PublishDue(/*force=*/true);
-      reply.message = "published everything";
+      if (mode_ == Mode::kLive) {
+        PublishDue(/*force=*/true);
+        // What went out: a pull save naming no layers waits for every one of them.
+        for (const std::string& layer : publisher_->announced()) {
+          if (static_cast<int32_t>(reply.layers.size()) >= lcmt_map_control_reply::MAX_LAYERS) {
+            node_.Warn("control_reply", "more layers than a control reply lists: some left out");
+            break;
+          }
+          if (std::find(reply.layers.begin(), reply.layers.end(), layer) == reply.layers.end()) {
+            reply.layers.push_back(layer);
+          }
+        }
+        reply.num_layers = static_cast<int32_t>(reply.layers.size());
+      }
+      reply.message = "published everything (" + std::to_string(reply.num_layers) + " layers)";
       break;
     case lcmt_map_control_request::OP_CLEAR_SHORT_TERM:
       ClearShortTerm(request, &reply);

@@ -422,6 +422,28 @@ TEST_F(BusFaultsTest, LossyLinkMissionCompletesTilesAreResentAndTheSaveCompletes
   auto elevation = (*reader)->LoadLayers(MapRef{"bus", "lane4", saved->version}, elevation_only);
   ASSERT_TRUE(elevation.ok()) << elevation.status().ToString();
 
+  // A save naming no layers, under the same loss: it waits for the mapper's list of its layers
+  // and then for each of them (a manifest lost on the link is asked for again), so the five
+  // robot-agnostic layers of the main grid are all stored (Issue 21: it stored four, replying
+  // OK, when one manifest was lost within pull_settle_s).
+  const auto u0 = Clock::now();
+  auto unnamed = client_->Call(PullSave());
+  const double unnamed_s = Seconds(Clock::now() - u0);
+  ASSERT_TRUE(unnamed.ok()) << unnamed.status().ToString();
+  ASSERT_EQ(unnamed->status, kStatusOk) << unnamed->message;
+  for (const std::string& layer : base) {
+    EXPECT_TRUE(std::find(unnamed->layers.begin(), unnamed->layers.end(), layer) !=
+                unnamed->layers.end())
+        << layer << " was left out of a save naming no layers";
+  }
+  EXPECT_EQ(unnamed->num_maps, 2) << "the map and its 2-D occupancy companion";
+  auto unnamed_layers =
+      (*reader)->LoadLayers(MapRef{"bus", "lane4", unnamed->version}, mapstore::LayerQuery{});
+  ASSERT_TRUE(unnamed_layers.ok()) << unnamed_layers.status().ToString();
+  for (const std::string& layer : base) {
+    EXPECT_TRUE(unnamed_layers->HasLayer(layer)) << layer << " is not in the stored map";
+  }
+
   // Resends, from the processes' own HEALTH counters (1 Hz; the mapper's crosses the link).
   int64_t requests = 0, resent = 0;
   const bool counted = WaitFor(
@@ -452,11 +474,12 @@ TEST_F(BusFaultsTest, LossyLinkMissionCompletesTilesAreResentAndTheSaveCompletes
   std::printf(
       "[figures] loss %d %%: mission %.1f s to x %.1f; navigator resend requests %lld, mapper "
       "tiles resent %lld, store resend rounds %d, safety-stop commands %lld; pull save %.2f s "
-      "(version %lld, %zu layers, %d obstacles%s)\n",
+      "(version %lld, %zu layers, %d obstacles%s); pull save naming no layers %.2f s (%zu "
+      "layers)\n",
       loss, mission_s, goal_x, static_cast<long long>(requests), static_cast<long long>(resent),
       store_rounds, static_cast<long long>(stops), save_s, static_cast<long long>(saved->version),
       saved->layers.size(), saved->num_maps > 0 ? saved->maps[0].num_obstacles : -1,
-      park ? ", robot parked" : ", robot mapping");
+      park ? ", robot parked" : ", robot mapping", unnamed_s, unnamed->layers.size());
 }
 
 // (b) The bridge drops everything for 10 s while the robot drives. The navigator, whose cost

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -10,6 +11,7 @@
 #include <signal.h>
 #include <sys/stat.h>
 
+#include "cairn/lcmt_map_control_reply.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
 
@@ -307,7 +309,8 @@ TEST_F(MapstoreServiceTest, ReadOnlyUseNeverChangesTheDatabase) {
 }
 
 // Plays a mapper: publishes its live map on <robot>.MAP.*, republishes everything on
-// OP_PUBLISH_ALL and answers resend requests.
+// OP_PUBLISH_ALL (once per request id, as cairn-mapper: a replay is answered from its cache)
+// with a reply listing the layers, and answers resend requests.
 class FakeMapper {
  public:
   FakeMapper(lcm::LCM& lcm, std::string robot, common::GridMap map,
@@ -353,10 +356,17 @@ class FakeMapper {
  private:
   void OnControl(const lcm::ReceiveBuffer*, const std::string&,
                  const cairn::lcmt_map_control_request* m) {
-    if (m->op == cairn::lcmt_map_control_request::OP_PUBLISH_ALL) {
+    if (m->op != cairn::lcmt_map_control_request::OP_PUBLISH_ALL) return;
+    if (answered_.insert(m->request_id).second) {
       ++publish_all_;
       PublishAll();
     }
+    cairn::lcmt_map_control_reply reply{};
+    reply.request_id = m->request_id;
+    reply.status = cairn::lcmt_map_control_reply::STATUS_OK;
+    reply.layers = map_.layer_names();
+    reply.num_layers = static_cast<int32_t>(reply.layers.size());
+    lcm_.publish(channels::ForRobot(robot_, channels::kMapControlReply), &reply);
   }
   void OnResend(const lcm::ReceiveBuffer*, const std::string&,
                 const cairn::lcmt_tile_resend_request* m) {
@@ -379,6 +389,7 @@ class FakeMapper {
   bool dropped_{false};
   int resends_{0};
   int publish_all_{0};
+  std::set<int64_t> answered_;
 };
 
 TEST_F(MapstoreServiceTest, PullSaveTakesTheMappersRobotAgnosticLayers) {
@@ -398,8 +409,8 @@ TEST_F(MapstoreServiceTest, PullSaveTakesTheMappersRobotAgnosticLayers) {
   auto reply = client_.Call(save);
   ASSERT_TRUE(reply.ok()) << reply.status().ToString();
   ASSERT_EQ(reply->status, kStatusOk) << reply->message;
-  EXPECT_GE(mapper.publish_all(), 1);
-  EXPECT_GE(mapper.resends(), 1);  // the dropped tile was asked for again
+  EXPECT_EQ(mapper.publish_all(), 1);  // asked again only with the same request id
+  EXPECT_GE(mapper.resends(), 1);      // the dropped tile was asked for again
   EXPECT_EQ(reply->layers,
             (std::vector<std::string>{"elevation", "elevation_variance", "occupancy"}));
   auto loaded = client_.Load("lab", "yard", reply->version, "");

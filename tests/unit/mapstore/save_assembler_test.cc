@@ -314,7 +314,8 @@ TEST_F(SaveAssemblerTest, APullSaveTakesTheLiveMapsRobotAgnosticLayers) {
   const SaveRequest request = PullRequest(21, "tunnel", "rover1");
   SaveProgress started = dut.Start(request, T(0.0));
   EXPECT_EQ(started.new_robots, std::vector<std::string>{"rover1"});
-  EXPECT_EQ(started.publish_all, std::vector<std::string>{"rover1"});
+  ASSERT_EQ(started.publish_all.size(), 1u);
+  EXPECT_EQ(started.publish_all[0].robot, "rover1");
   EXPECT_TRUE(started.finished.empty());
 
   common::GridMap live = snapshot_.base;
@@ -334,8 +335,12 @@ TEST_F(SaveAssemblerTest, APullSaveTakesTheLiveMapsRobotAgnosticLayers) {
     dut.MirrorManifest("rover1", cut.manifest, T(0.1));
     for (const auto& t : cut.tiles) EXPECT_TRUE(dut.MirrorTile("rover1", t.As()));
   }
-  EXPECT_TRUE(dut.Poll(T(0.3)).finished.empty());  // still settling
-  SaveProgress later = dut.Poll(T(0.6));           // no obstacles yet: still waiting
+  // The mapper's answer lists what it published, its profile layer too.
+  MapperLayers reply{started.publish_all[0].request_id, true, live.layer_names()};
+  reply.layers.push_back("occupancy");
+  EXPECT_TRUE(dut.OnMapperLayers("rover1", reply, T(0.2)).finished.empty());
+  EXPECT_TRUE(dut.Poll(T(0.3)).finished.empty());
+  SaveProgress later = dut.Poll(T(0.6));  // no obstacles yet: still waiting
   EXPECT_TRUE(later.finished.empty());
   for (const ResendAsk& ask : later.resends) EXPECT_EQ(ask.pull_robot, "rover1");
   dut.MirrorObstacles("rover1", snapshot_.obstacles, T(0.7));
@@ -354,6 +359,99 @@ TEST_F(SaveAssemblerTest, APullSaveTakesTheLiveMapsRobotAgnosticLayers) {
   EXPECT_EQ(info->provenance.source_robot, "rover1");
   EXPECT_EQ(info->num_obstacles, 2);
   EXPECT_TRUE(store_.GetMapInfo({"lab", "tunnel-occupancy", 1}).ok());
+}
+
+// Issue 21 (found by the bus-fault test under 5 % loss): a pull naming no layers took every
+// robot-agnostic layer announced within pull_settle_s of its request. A manifest lost in that
+// window left its layer out of the save, which replied OK. Now the save waits for the mapper's
+// list of its layers and asks for each one missing, like a named layer.
+TEST_F(SaveAssemblerTest, APullWaitsForEveryLayerTheMapperListsAndAsksForALostManifest) {
+  SaveAssembler dut(store_, Params());
+  SaveProgress started = dut.Start(PullRequest(61, "tunnel", "rover1"), T(0.0));
+  ASSERT_EQ(started.publish_all.size(), 1u);
+  const int64_t id = started.publish_all[0].request_id;
+  const std::vector<std::string> names = snapshot_.base.layer_names();
+  ASSERT_EQ(names.size(), 2u);
+  const auto kept = CutLayer(snapshot_.base, names[0], 10, "live");
+  const auto lost = CutLayer(snapshot_.base, names[1], 10, "live");
+  dut.MirrorManifest("rover1", kept.manifest, T(0.1));
+  for (const auto& t : kept.tiles) dut.MirrorTile("rover1", t.As());
+  dut.MirrorObstacles("rover1", snapshot_.obstacles, T(0.1));
+  // The second layer's manifest is lost on the link (its tiles came).
+  for (const auto& t : lost.tiles) dut.MirrorTile("rover1", t.As());
+  // Answers to other requests (or another robot's) are not the save's.
+  EXPECT_TRUE(dut.OnMapperLayers("rover1", {id + 1, true, {names[0]}}, T(0.15)).finished.empty());
+  EXPECT_TRUE(dut.OnMapperLayers("rover2", {id, true, {names[0]}}, T(0.15)).finished.empty());
+  EXPECT_TRUE(dut.OnMapperLayers("rover1", {id, true, {names[0], names[1], "cost/rover"}}, T(0.2))
+                  .finished.empty());
+  // Past the settle window the save still waits (it saved one layer of two before), asking for
+  // the lost layer whole: its manifest comes with it.
+  bool asked = false;
+  for (double t = 0.6; t < 1.5; t += 0.1) {
+    SaveProgress p = dut.Poll(T(t));
+    EXPECT_TRUE(p.finished.empty()) << "saved at " << t << " s without " << names[1];
+    EXPECT_TRUE(p.publish_all.empty());  // the answer came: no need to ask again
+    for (const ResendAsk& ask : p.resends) {
+      EXPECT_NE(ask.tiles.layer, names[0]);
+      EXPECT_NE(ask.tiles.layer, "cost/rover");  // a profile layer is never waited for
+      if (ask.tiles.layer != names[1]) continue;
+      asked = true;
+      EXPECT_EQ(ask.pull_robot, "rover1");
+      EXPECT_EQ(ask.tiles.map_name, "live");
+      EXPECT_TRUE(ask.tiles.tiles.empty());
+    }
+  }
+  EXPECT_TRUE(asked) << names[1] << " was never asked for";
+  dut.MirrorManifest("rover1", lost.manifest, T(1.5));  // the mapper answers with the layer
+  for (const auto& t : lost.tiles) dut.MirrorTile("rover1", t.As());
+  SaveProgress done = dut.Poll(T(1.6));
+  ASSERT_EQ(done.finished.size(), 1u);
+  ASSERT_TRUE(done.finished[0].status.ok()) << done.finished[0].status.ToString();
+  EXPECT_EQ(done.finished[0].layers, names);
+  auto stored = store_.LoadLayers({"lab", "tunnel", 1}, {});
+  ASSERT_TRUE(stored.ok());
+  for (const std::string& layer : names) {
+    EXPECT_TRUE(SameLayer(stored->at(layer), snapshot_.base.at(layer))) << layer;
+  }
+}
+
+// Until the mapper answers, the save sends the same request again every resend round (a mapper
+// answers a replay from its cache, without publishing again). A mapper that never answers (one
+// older than the list) gets 4 x pull_settle_s; then the layers announced are taken.
+TEST_F(SaveAssemblerTest, APullWithoutTheMappersAnswerAsksAgainThenTakesTheLayersAnnounced) {
+  SaveAssemblerParams params = Params();
+  params.save_timeout_s = 5.0;
+  SaveAssembler dut(store_, params);
+  SaveProgress started = dut.Start(PullRequest(71, "tunnel", "rover1"), T(0.0));
+  ASSERT_EQ(started.publish_all.size(), 1u);
+  const int64_t id = started.publish_all[0].request_id;
+  for (const std::string& layer : snapshot_.base.layer_names()) {
+    const auto cut = CutLayer(snapshot_.base, layer, 10, "live");
+    dut.MirrorManifest("rover1", cut.manifest, T(0.1));
+    for (const auto& t : cut.tiles) dut.MirrorTile("rover1", t.As());
+  }
+  dut.MirrorObstacles("rover1", snapshot_.obstacles, T(0.1));
+  int asks = 0;
+  for (double t = 0.3; t < 1.95; t += 0.05) {
+    SaveProgress p = dut.Poll(T(t));
+    EXPECT_TRUE(p.finished.empty()) << "saved at " << t << " s before the mapper answered";
+    for (const PublishAllAsk& ask : p.publish_all) {
+      EXPECT_EQ(ask.robot, "rover1");
+      EXPECT_EQ(ask.request_id, id);  // the same request: not a second publication
+      ++asks;
+    }
+  }
+  EXPECT_GE(asks, 10);  // every resend round (0.1 s) from pull_settle_s on
+  EXPECT_LE(asks, 16);
+  SaveProgress done = dut.Poll(T(2.05));
+  ASSERT_EQ(done.finished.size(), 1u);
+  ASSERT_TRUE(done.finished[0].status.ok()) << done.finished[0].status.ToString();
+  EXPECT_EQ(done.finished[0].layers, snapshot_.base.layer_names());
+  // Request ids differ between saves and start above the base a process gives.
+  dut.set_publish_all_id_base(1000);
+  SaveProgress second = dut.Start(PullRequest(72, "tunnel", "rover1"), T(3.0));
+  ASSERT_EQ(second.publish_all.size(), 1u);
+  EXPECT_EQ(second.publish_all[0].request_id, 1001);
 }
 
 TEST_F(SaveAssemblerTest, APullSaveOnlyTakesManifestsNewerThanItsRequest) {

@@ -104,6 +104,33 @@ TEST(MapstoreConversionsTest, ResendRequestsAndOctomapChunksRoundTrip) {
   EXPECT_EQ(FromLcm(bad).status().code(), common::StatusCode::kInvalidArgument);
 }
 
+// A mapper's list of layers (its answer to OP_PUBLISH_ALL) is checked before a save waits for
+// any of them.
+TEST(MapstoreConversionsTest, AMapperReplysLayersAreCheckedAgainstTheirCountAndNames) {
+  cairn::lcmt_map_control_reply m{};
+  m.request_id = 5;
+  m.status = cairn::lcmt_map_control_reply::STATUS_OK;
+  m.layers = {"elevation", "cost/pioneer3at"};
+  m.num_layers = 2;
+  auto ok = FromLcm(m);
+  ASSERT_TRUE(ok.ok()) << ok.status().ToString();
+  EXPECT_EQ(ok->request_id, 5);
+  EXPECT_TRUE(ok->ok);
+  EXPECT_EQ(ok->layers, m.layers);
+  m.num_layers = 3;  // disagrees with the list
+  EXPECT_EQ(FromLcm(m).status().code(), common::StatusCode::kInvalidArgument);
+  m.layers = {"elevation", "../etc"};
+  m.num_layers = 2;
+  EXPECT_EQ(FromLcm(m).status().code(), common::StatusCode::kInvalidArgument);
+  m.layers.assign(cairn::lcmt_map_control_reply::MAX_LAYERS + 1, "elevation");
+  m.num_layers = static_cast<int32_t>(m.layers.size());
+  EXPECT_EQ(FromLcm(m).status().code(), common::StatusCode::kInvalidArgument);
+  m.layers.clear();
+  m.num_layers = 0;
+  m.status = cairn::lcmt_map_control_reply::STATUS_INVALID;
+  EXPECT_FALSE(FromLcm(m).value().ok);
+}
+
 TEST(MapstoreConversionsTest, RequestsNameTheirMapWriterAndSave) {
   cairn::lcmt_mapstore_request r{};
   r.request_id = 42;

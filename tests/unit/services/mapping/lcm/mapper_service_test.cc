@@ -9,6 +9,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <set>
 
 #include <gtest/gtest.h>
 
@@ -219,6 +220,86 @@ TEST(MapperServiceTest, AResendRequestForObstaclesPublishesTheRegistryAgain) {
   EXPECT_TRUE(spin_until([&] { return registries >= before + 20; }, 10.0))
       << registries - before << " of 20 asked for";
   EXPECT_EQ(node.counter("resend_rate_limited"), 0);
+  service.Stop();
+}
+
+// Issue 21 (found by the bus-fault test): a pull save naming no layers took what was announced
+// within pull_settle_s, so a manifest lost on the link left its layer out. The reply to
+// OP_PUBLISH_ALL now lists every layer whose manifest the publication sent; a replay of the
+// request id gets the same list from the reply cache, without a second publication.
+TEST(MapperServiceTest, TheReplyToPublishAllListsTheLayersPublished) {
+  runtime::Node node(MemqOptions());
+  MapperParams params;
+  params.robot = "r1";
+  // No publication on its own during the test: only the forced one.
+  params.core.terrain.publish_period_s = 100.0;
+  params.core.terrain.slow_publish_period_s = 100.0;
+  params.core.terrain.registry_period_s = 100.0;
+  params.core.SetListed(kOctomapLayerName, false);
+  params.core.SetListed(kOccupancyLayerName, false);
+  std::vector<std::string> manifests;
+  node.Subscribe<cairn::lcmt_grid_manifest>(
+      "r1.MAP.MANIFEST", [&](const cairn::lcmt_grid_manifest& m) { manifests.push_back(m.layer); });
+  std::vector<lcmt_map_control_reply> replies;
+  node.Subscribe<lcmt_map_control_reply>(
+      "r1.MAP.CONTROL_REPLY", [&](const lcmt_map_control_reply& r) { replies.push_back(r); });
+  MapperService service(node, params, {ShippedProfile("pioneer3at")},
+                        [](const std::string& name) -> common::Result<common::RobotProfile> {
+                          return common::NotFoundError("no profile " + name);
+                        });
+  SyntheticLidar lidar;
+  lidar.rings = 8;
+  lidar.azimuths = 180;
+  lidar.max_range_m = 8.0;
+  common::LidarSlice slice = SyntheticRevolution(
+      SensorAt(1.0, 0.0, 0.5), [](double, double) { return 0.0; }, lidar, 0);
+  slice.utime = 1'000'000;
+  slice.robot = "r1";
+  node.Publish("r1.POSE", runtime::ToLcmPose(SensorAt(1.0, 0.0, 0.0), slice.utime, "r1", "world"));
+  for (const auto& part : runtime::SplitSlice(slice, 60000)) {
+    node.Publish("r1.LIDAR", runtime::ToLcm(part));
+  }
+  auto spin_until = [&](const std::function<bool()>& done, double bound_s) {
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
+    while (!done() && std::chrono::steady_clock::now() < deadline) node.SpinOnce(5);
+    return done();
+  };
+  ASSERT_TRUE(spin_until([&] { return service.revolutions() == 1; }, 20.0));
+  manifests.clear();
+  lcmt_map_control_request publish_all{};
+  publish_all.request_id = 9;
+  publish_all.requester = "store";
+  publish_all.op = lcmt_map_control_request::OP_PUBLISH_ALL;
+  node.Publish("r1.MAP.CONTROL", publish_all);
+  ASSERT_TRUE(spin_until([&] { return replies.size() == 1; }, 10.0));
+  const lcmt_map_control_reply& reply = replies[0];
+  EXPECT_EQ(reply.request_id, 9);
+  EXPECT_EQ(reply.status, +lcmt_map_control_reply::STATUS_OK) << reply.message;
+  ASSERT_EQ(reply.num_layers, static_cast<int32_t>(reply.layers.size()));
+  // Every layer the publication announced, and only those.
+  std::set<std::string> announced(manifests.begin(), manifests.end());
+  EXPECT_EQ(std::set<std::string>(reply.layers.begin(), reply.layers.end()), announced);
+  EXPECT_EQ(announced.size(), reply.layers.size());  // each listed once
+  for (const std::string& layer :
+       {std::string(layers::kElevation), std::string(layers::kElevationVariance),
+        std::string(layers::kObservationCount), layers::CostLayer("pioneer3at")}) {
+    EXPECT_TRUE(announced.count(layer)) << layer << " not listed";
+  }
+  // A replay: the same list, nothing published again.
+  const size_t published = manifests.size();
+  node.Publish("r1.MAP.CONTROL", publish_all);
+  ASSERT_TRUE(spin_until([&] { return replies.size() == 2; }, 10.0));
+  EXPECT_EQ(replies[1].layers, replies[0].layers);
+  spin_until([] { return false; }, 0.2);
+  EXPECT_EQ(manifests.size(), published) << "a replayed request published everything again";
+  // Another op lists nothing.
+  lcmt_map_control_request clear{};
+  clear.request_id = 10;
+  clear.requester = "store";
+  clear.op = lcmt_map_control_request::OP_CLEAR_SHORT_TERM;
+  node.Publish("r1.MAP.CONTROL", clear);
+  ASSERT_TRUE(spin_until([&] { return replies.size() == 3; }, 10.0));
+  EXPECT_EQ(replies[2].num_layers, 0);
   service.Stop();
 }
 
