@@ -59,6 +59,21 @@ void PublishRevolution(runtime::Node& node, const SyntheticLidar& lidar, Ground 
   }
 }
 
+// The profile resolver of a mapper with no profiles folder: every name is unknown.
+common::Result<common::RobotProfile> NoProfileFolder(const std::string& name) {
+  return common::NotFoundError("no profile " + name);
+}
+
+// Robot r1 with the terrain layer only (no OctoMap, no occupancy), publishing every period_s.
+MapperParams TerrainOnly(double period_s) {
+  MapperParams params;
+  params.robot = "r1";
+  params.core.terrain.publish_period_s = period_s;
+  params.core.SetListed(kOctomapLayerName, false);
+  params.core.SetListed(kOccupancyLayerName, false);
+  return params;
+}
+
 // Spins `node` until `done` or `bound_s` wall seconds; returns done().
 bool SpinUntil(runtime::Node& node, const std::function<bool()>& done, double bound_s) {
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(bound_s);
@@ -86,9 +101,7 @@ TEST(MapperServiceTest, MapsSlicesOverMemq) {
                       }
                     });
   MapperService service(node, params, {ShippedProfile("pioneer3at")},
-                        [](const std::string& name) -> common::Result<common::RobotProfile> {
-                          return common::NotFoundError("no profile " + name);
-                        });
+                        NoProfileFolder);
   // A 20 cm block ahead of the sensor.
   auto ground = [](double x, double) { return (x > 3.0 && x < 4.0) ? 0.2 : 0.0; };
   SyntheticLidar lidar;
@@ -127,12 +140,8 @@ TEST(MapperServiceTest, MapsSlicesOverMemq) {
 // save's OP_PUBLISH_ALL) still goes out.
 TEST(MapperServiceTest, ACostLayerIsAnnouncedAsCurrentOnlyWhileRevolutionsComeIn) {
   runtime::Node node(MemqOptions());
-  MapperParams params;
-  params.robot = "r1";
-  params.core.terrain.publish_period_s = 0.02;
+  MapperParams params = TerrainOnly(0.02);
   params.core.terrain.max_announce_without_data_s = 0.2;
-  params.core.SetListed(kOctomapLayerName, false);
-  params.core.SetListed(kOccupancyLayerName, false);
   const std::string cost = layers::CostLayer("pioneer3at");
   int cost_manifests = 0;
   node.Subscribe<cairn::lcmt_grid_manifest>("r1.MAP.MANIFEST",
@@ -140,9 +149,7 @@ TEST(MapperServiceTest, ACostLayerIsAnnouncedAsCurrentOnlyWhileRevolutionsComeIn
                                               if (m.layer == cost) ++cost_manifests;
                                             });
   MapperService service(node, params, {ShippedProfile("pioneer3at")},
-                        [](const std::string& name) -> common::Result<common::RobotProfile> {
-                          return common::NotFoundError("no profile " + name);
-                        });
+                        NoProfileFolder);
   SyntheticLidar lidar;
   lidar.rings = 8;
   lidar.azimuths = 180;
@@ -184,19 +191,13 @@ TEST(MapperServiceTest, ACostLayerIsAnnouncedAsCurrentOnlyWhileRevolutionsComeIn
 // (and counts as one tile against the resend rate).
 TEST(MapperServiceTest, AResendRequestForObstaclesPublishesTheRegistryAgain) {
   runtime::Node node(MemqOptions());
-  MapperParams params;
-  params.robot = "r1";
-  params.core.terrain.publish_period_s = 0.02;
+  MapperParams params = TerrainOnly(0.02);
   params.core.terrain.registry_period_s = 0.02;
-  params.core.SetListed(kOctomapLayerName, false);
-  params.core.SetListed(kOccupancyLayerName, false);
   int registries = 0;
   node.Subscribe<cairn::lcmt_obstacle_registry>(
       "r1.MAP.OBSTACLES", [&](const cairn::lcmt_obstacle_registry&) { ++registries; });
   MapperService service(node, params, {ShippedProfile("pioneer3at")},
-                        [](const std::string& name) -> common::Result<common::RobotProfile> {
-                          return common::NotFoundError("no profile " + name);
-                        });
+                        NoProfileFolder);
   SyntheticLidar lidar;
   lidar.rings = 8;
   lidar.azimuths = 180;
@@ -223,20 +224,16 @@ TEST(MapperServiceTest, AResendRequestForObstaclesPublishesTheRegistryAgain) {
   service.Stop();
 }
 
-// Issue 21 (found by the bus-fault test): a pull save naming no layers took what was announced
+// Issue 20 (found by the bus-fault test): a pull save naming no layers took what was announced
 // within pull_settle_s, so a manifest lost on the link left its layer out. The reply to
 // OP_PUBLISH_ALL now lists every layer whose manifest the publication sent; a replay of the
 // request id gets the same list from the reply cache, without a second publication.
 TEST(MapperServiceTest, TheReplyToPublishAllListsTheLayersPublished) {
   runtime::Node node(MemqOptions());
-  MapperParams params;
-  params.robot = "r1";
   // No publication on its own during the test: only the forced one.
-  params.core.terrain.publish_period_s = 100.0;
+  MapperParams params = TerrainOnly(100.0);
   params.core.terrain.slow_publish_period_s = 100.0;
   params.core.terrain.registry_period_s = 100.0;
-  params.core.SetListed(kOctomapLayerName, false);
-  params.core.SetListed(kOccupancyLayerName, false);
   std::vector<std::string> manifests;
   node.Subscribe<cairn::lcmt_grid_manifest>(
       "r1.MAP.MANIFEST", [&](const cairn::lcmt_grid_manifest& m) { manifests.push_back(m.layer); });
@@ -244,9 +241,7 @@ TEST(MapperServiceTest, TheReplyToPublishAllListsTheLayersPublished) {
   node.Subscribe<lcmt_map_control_reply>(
       "r1.MAP.CONTROL_REPLY", [&](const lcmt_map_control_reply& r) { replies.push_back(r); });
   MapperService service(node, params, {ShippedProfile("pioneer3at")},
-                        [](const std::string& name) -> common::Result<common::RobotProfile> {
-                          return common::NotFoundError("no profile " + name);
-                        });
+                        NoProfileFolder);
   SyntheticLidar lidar;
   lidar.rings = 8;
   lidar.azimuths = 180;
@@ -459,9 +454,7 @@ TEST(MapperServiceTest, PublishesTheRestoredLongTermLayerAndAsksTheStoreToSaveIt
   node.Subscribe<cairn::lcmt_mapstore_request>(
       "MAPSTORE.REQUEST", [&](const cairn::lcmt_mapstore_request& r) { requests.push_back(r); });
   MapperService service(node, params, {ShippedProfile("kobuki")},
-                        [](const std::string& name) -> common::Result<common::RobotProfile> {
-                          return common::NotFoundError("no profile " + name);
-                        });
+                        NoProfileFolder);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
   while (std::chrono::steady_clock::now() < deadline &&
          !(assembler.Complete(layers::kLongTerm) && !requests.empty())) {
