@@ -810,7 +810,14 @@ Velocity Navigator::Command(double now_s, StepOutput* out) {
     case NavState::kRecovering: {
       const RecoveryStep step = recovery_.Step(*pose_, last_command_, map_.get(), now_s);
       if (step.request_clear_short_term) out->clear_short_term = true;
-      if (step.done) {
+      if (step.done && step.blocked) {
+        // Blocked where it stood: the next behaviour at once (planning again from the same
+        // pose would drive into the same pocket and wait out another no-progress timeout).
+        StartRecoveryOrFail(failure_reason_,
+                            std::string("after ") + RecoveryKindName(recovery_.kind()) + " (" +
+                                step.note + ")",
+                            now_s);
+      } else if (step.done) {
         SetState(NavState::kPlanning, failure_reason_,
                  std::string("after ") + RecoveryKindName(recovery_.kind()) + " (" + step.note +
                      "): planning again");

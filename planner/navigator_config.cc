@@ -153,6 +153,8 @@ void LoadRecovery(YamlMap map, RecoveryParams* p) {
   map.Get("rotate_speed_radps", &p->rotate_speed_radps);
   map.Get("backup_distance_m", &p->backup_distance_m);
   map.Get("backup_speed_mps", &p->backup_speed_mps);
+  map.Get("forward_distance_m", &p->forward_distance_m);
+  map.Get("forward_speed_mps", &p->forward_speed_mps);
   map.Get("wait_s", &p->wait_s);
   map.Get("clear_wait_s", &p->clear_wait_s);
   map.Get("behaviour_timeout_s", &p->behaviour_timeout_s);

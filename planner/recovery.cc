@@ -33,6 +33,8 @@ const char* RecoveryKindName(RecoveryKind kind) {
       return "rotate";
     case RecoveryKind::kBackUp:
       return "back_up";
+    case RecoveryKind::kDriveForward:
+      return "drive_forward";
     case RecoveryKind::kWait:
       return "wait";
     case RecoveryKind::kClearShortTerm:
@@ -44,10 +46,13 @@ const char* RecoveryKindName(RecoveryKind kind) {
 RecoveryKind RecoveryKindFromName(const std::string& name) {
   if (name == "rotate") return RecoveryKind::kRotate;
   if (name == "back_up") return RecoveryKind::kBackUp;
+  if (name == "drive_forward") return RecoveryKind::kDriveForward;
   if (name == "wait") return RecoveryKind::kWait;
   if (name == "clear_short_term") return RecoveryKind::kClearShortTerm;
   CAIRN_THROW_UNLESS(false,
-                     "unknown recovery '" << name << "' (rotate, back_up, wait, clear_short_term)");
+                     "unknown recovery '" << name
+                                          << "' (rotate, back_up, drive_forward, wait, "
+                                             "clear_short_term)");
   return RecoveryKind::kWait;
 }
 
@@ -56,6 +61,8 @@ void RecoveryParams::Validate() const {
   CAIRN_THROW_UNLESS(rotate_speed_radps > 0.0, "rotate_speed_radps must be positive");
   CAIRN_THROW_UNLESS(backup_distance_m > 0.0, "backup_distance_m must be positive");
   CAIRN_THROW_UNLESS(backup_speed_mps > 0.0, "backup_speed_mps must be positive");
+  CAIRN_THROW_UNLESS(forward_distance_m > 0.0, "forward_distance_m must be positive");
+  CAIRN_THROW_UNLESS(forward_speed_mps > 0.0, "forward_speed_mps must be positive");
   CAIRN_THROW_UNLESS(wait_s >= 0.0, "wait_s must not be negative");
   CAIRN_THROW_UNLESS(clear_wait_s >= 0.0, "clear_wait_s must not be negative");
   CAIRN_THROW_UNLESS(behaviour_timeout_s > 0.0, "behaviour_timeout_s must be positive");
@@ -110,7 +117,9 @@ void RecoveryBehaviour::Start(RecoveryKind kind, const Pose2& pose, double now_s
   last_pose_ = pose;
   start_s_ = now_s;
   turned_rad_ = 0.0;
+  rotate_sign_ = 1.0;
   clear_sent_ = false;
+  blocked_ = false;
   stopping_ = false;
   stop_note_.clear();
 }
@@ -124,6 +133,11 @@ RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_com
     stopping_ = true;
     stop_note_ = note;
   };
+  // A motion blocked before the behaviour moved: the next one may start at once.
+  auto blocked = [&](const std::string& note) {
+    blocked_ = (pose.position() - start_pose_.position()).norm() < 0.01 && turned_rad_ < 0.02;
+    stop(note);
+  };
   if (!stopping_ && now_s - start_s_ > params_.behaviour_timeout_s) stop("timed out");
 
   if (!stopping_) {
@@ -134,12 +148,21 @@ RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_com
           stop(Format("turned %.2f rad", turned_rad_));
           break;
         }
-        out.command =
-            RotateInPlaceCommand(generator_, last_command, remaining, params_.rotate_speed_radps);
-        if (!MotionClear(map, pose, {0.0, params_.rotate_speed_radps},
-                         params_.collision_lookahead_s)) {
-          stop("rotation blocked");
+        const auto clear = [&](double sign) {
+          return MotionClear(map, pose, {0.0, sign * params_.rotate_speed_radps},
+                             params_.collision_lookahead_s);
+        };
+        // Counter-clockwise, or clockwise where only that way is clear (checked before it
+        // turns: once turning, it keeps its direction).
+        if (turned_rad_ < 0.02 && !clear(rotate_sign_) && clear(-rotate_sign_)) {
+          rotate_sign_ = -rotate_sign_;
         }
+        if (!clear(rotate_sign_)) {
+          blocked("rotation blocked");
+          break;
+        }
+        out.command = RotateInPlaceCommand(generator_, last_command, rotate_sign_ * remaining,
+                                           params_.rotate_speed_radps);
         break;
       }
       case RecoveryKind::kBackUp: {
@@ -155,7 +178,24 @@ RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_com
         }
         const Velocity target{-std::min(params_.backup_speed_mps, reverse), 0.0};
         if (!MotionClear(map, pose, target, params_.collision_lookahead_s)) {
-          stop("backing up is blocked");
+          blocked("backing up is blocked");
+          break;
+        }
+        out.command = generator_.Toward(last_command, target);
+        break;
+      }
+      case RecoveryKind::kDriveForward: {
+        // Out of a pocket the other way: where turning and reversing touch something, the way
+        // ahead may be the one that is clear.
+        const double travelled = (pose.position() - start_pose_.position()).norm();
+        if (travelled >= params_.forward_distance_m) {
+          stop(Format("drove forward %.2f m", travelled));
+          break;
+        }
+        const double forward = generator_.limits().max_vel_x_mps;
+        const Velocity target{std::min(params_.forward_speed_mps, forward), 0.0};
+        if (forward <= 0.0 || !MotionClear(map, pose, target, params_.collision_lookahead_s)) {
+          blocked("driving forward is blocked");
           break;
         }
         out.command = generator_.Toward(last_command, target);
@@ -187,6 +227,7 @@ RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_com
     if (Stopped(out.command)) {
       out.done = true;
       out.note = stop_note_;
+      out.blocked = blocked_;
     }
   }
   return out;

@@ -9,26 +9,29 @@
 
 /// @file
 /// Recovery behaviours, tried in order before a goal is declared failed (Nav2's behaviour
-/// server: Spin, BackUp, Wait, plus clearing the mapper's short-term layer). Each is a small
+/// server: Spin, BackUp, DriveOnHeading, Wait, plus clearing the mapper's short-term layer). Each is a small
 /// controller stepped once per control cycle; every command it returns lies inside the dynamic
 /// window of the previous one, and motions stop when the footprint would hit something.
 
 namespace cairn::planner {
 
-enum class RecoveryKind { kRotate, kBackUp, kWait, kClearShortTerm };
+enum class RecoveryKind { kRotate, kBackUp, kDriveForward, kWait, kClearShortTerm };
 
-/// "rotate", "back_up", "wait", "clear_short_term".
+/// "rotate", "back_up", "drive_forward", "wait", "clear_short_term".
 const char* RecoveryKindName(RecoveryKind kind);
 /// @throws std::invalid_argument for an unknown name.
 RecoveryKind RecoveryKindFromName(const std::string& name);
 
 struct RecoveryParams {
   std::vector<RecoveryKind> sequence{RecoveryKind::kRotate, RecoveryKind::kBackUp,
-                                     RecoveryKind::kWait, RecoveryKind::kClearShortTerm};
+                                     RecoveryKind::kDriveForward, RecoveryKind::kWait,
+                                     RecoveryKind::kClearShortTerm};
   double rotate_angle_rad{1.57};  ///< how far "rotate" turns (Nav2 Spin default)
   double rotate_speed_radps{0.6};
   double backup_distance_m{0.3};
   double backup_speed_mps{0.1};
+  double forward_distance_m{0.3};  ///< how far "drive_forward" drives (Nav2 DriveOnHeading)
+  double forward_speed_mps{0.1};
   double wait_s{2.0};
   double clear_wait_s{1.0};           ///< pause after asking the mapper to clear
   double behaviour_timeout_s{15.0};   ///< a behaviour that has not finished by then stops
@@ -43,6 +46,9 @@ struct RecoveryStep {
   Velocity command;
   bool done{false};
   bool request_clear_short_term{false};  ///< ask the mapper to clear (once)
+  /// Set when done: the behaviour's motion was blocked before it moved at all, so the next
+  /// behaviour may start at once (a plan from the same pose would only meet the same pocket).
+  bool blocked{false};
   std::string note;                      ///< set when done: how it ended
 };
 
@@ -65,7 +71,9 @@ class RecoveryBehaviour {
   common::Pose2 last_pose_;
   double start_s_{0.0};
   double turned_rad_{0.0};
+  double rotate_sign_{1.0};  ///< the direction "rotate" turns: counter-clockwise unless blocked
   bool clear_sent_{false};
+  bool blocked_{false};
   bool stopping_{false};
   std::string stop_note_;
 };

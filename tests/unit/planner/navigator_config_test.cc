@@ -26,7 +26,7 @@ TEST(NavigatorConfigTest, LoadsTheShippedFileAndRefusesUnknownKeys) {
   EXPECT_EQ(c.local_planner.generator.vx_samples, 20);
   EXPECT_DOUBLE_EQ(c.navigator.control_period_s, 0.05);
   EXPECT_DOUBLE_EQ(c.local_planner.generator.control_period_s, 0.05);
-  EXPECT_EQ(c.navigator.recovery.sequence.size(), 4u);
+  EXPECT_EQ(c.navigator.recovery.sequence.size(), 5u);
   const auto error = ConfigError;
   EXPECT_NE(error("local_planner:\n  critics:\n    - {name: speed, scale: 1, speedd: 1}\n")
                 .find("nav.yaml:3"),

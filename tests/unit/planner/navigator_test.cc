@@ -500,14 +500,36 @@ TEST(NavigatorTest, NoPathRunsEveryRecoveryThenFails) {
   sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
   ASSERT_TRUE(sim.RunUntilState(120.0, NavState::kFailed)) << sim.nav_.status().message;
   EXPECT_EQ(sim.nav_.status().reason, NavReason::kNoPath);
-  EXPECT_EQ(sim.nav_.status().recoveries, 4);
+  EXPECT_EQ(sim.nav_.status().recoveries, 5);  // rotate, back_up, drive_forward, wait, clear
   EXPECT_EQ(sim.clears_, 1);
-  EXPECT_EQ(sim.plans_, 5);  // the first plan and one after each recovery
+  EXPECT_EQ(sim.plans_, 6);  // the first plan and one after each recovery
   EXPECT_EQ(sim.last_plan_.status, PlanStatus::kNoPath);
   // It never crossed towards the wall.
   EXPECT_LT(sim.pose_.x_m, 9.0);
   const auto recovering = std::count(sim.states_.begin(), sim.states_.end(), NavState::kRecovering);
-  EXPECT_EQ(recovering, 4);
+  EXPECT_EQ(recovering, 5);
+}
+
+TEST(NavigatorTest, ABlockedRecoveryHandsOverToTheNextAtOnce) {
+  // A pocket just wider than the robot, a wall 5 mm behind it and 0.6 m of room ahead, and a
+  // goal outside: no path. Turning and backing up are blocked where it stands, so each hands
+  // over to the next behaviour without a plan in between; driving forward is clear and moves it.
+  TestLayer layer(200, 100, 0.1);
+  layer.Rect(3.0, 3.0, 7.0, 4.7, 100.0f).Rect(3.0, 5.3, 7.0, 7.0, 100.0f);
+  layer.Rect(3.0, 3.0, 4.7, 7.0, 100.0f).Rect(6.0, 3.0, 7.0, 7.0, 100.0f);
+  NavSim sim(layer.Build(PioneerFootprint()));
+  sim.pose_ = {5.02, 5.0, 0.0};
+  ASSERT_TRUE(sim.map_->IsValid(sim.pose_));
+  sim.nav_.SetGoal(PoseGoal(15.0, 5.0), 0.0);
+  ASSERT_TRUE(sim.RunUntilState(120.0, NavState::kFailed)) << sim.nav_.status().message;
+  EXPECT_EQ(sim.nav_.status().reason, NavReason::kNoPath);
+  EXPECT_EQ(sim.nav_.status().recoveries, 5);
+  // The first plan, then one after drive_forward, wait and clear_short_term: none after the
+  // two that were blocked (one after each recovery before).
+  EXPECT_EQ(sim.plans_, 4);
+  EXPECT_GT(sim.pose_.x_m, 5.02 + 0.25);
+  EXPECT_NEAR(sim.pose_.y_m, 5.0, 0.02);
+  EXPECT_TRUE(sim.map_->IsValid(sim.pose_));
 }
 
 TEST(NavigatorTest, NoProgressTriggersRecoveriesAndThenFails) {
@@ -518,7 +540,7 @@ TEST(NavigatorTest, NoProgressTriggersRecoveriesAndThenFails) {
   sim.nav_.SetGoal(PoseGoal(18.0, 2.0), 0.0);
   ASSERT_TRUE(sim.RunUntilState(200.0, NavState::kFailed)) << sim.nav_.status().message;
   EXPECT_EQ(sim.nav_.status().reason, NavReason::kRecoveryExhausted);
-  EXPECT_EQ(sim.nav_.status().recoveries, 4);
+  EXPECT_EQ(sim.nav_.status().recoveries, 5);
 }
 
 TEST(NavigatorTest, ReplansEverySecondDoNotHoldOffTheNoProgressRecovery) {
