@@ -1,5 +1,7 @@
 #include "simulator/mujoco_sim.h"
 
+#include "common/log.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -386,6 +388,14 @@ void MujocoSim::Step(SimOutputs* out) {
   saved_mocap_quat_.assign(d->mocap_quat, d->mocap_quat + 4 * m->nmocap);
   mj_step(model_.get(), data_.get());
   ++stats_.physics_steps;
+  // Full contact or constraint buffers drop contacts silently: said once per run.
+  for (int w : {mjWARN_CONTACTFULL, mjWARN_CNSTRFULL}) {
+    if (d->warning[w].number > 0 && !buffer_full_reported_[w == mjWARN_CNSTRFULL]) {
+      buffer_full_reported_[w == mjWARN_CNSTRFULL] = true;
+      CAIRN_LOG_WARN("MuJoCo's %s buffer is full (%d needed): contacts are dropped",
+                     w == mjWARN_CONTACTFULL ? "contact" : "constraint", d->warning[w].lastinfo);
+    }
+  }
   // MuJoCo resets mjData after a bad acceleration (its warning counters too, then counts this
   // one): a count above 0, or a clock that did not advance, is such a step.
   if (d->warning[mjWARN_BADQACC].number > 0 || !(d->time > time_before)) {
