@@ -134,28 +134,7 @@ std::string ComposeScene(const std::string& world_xml_in, const std::string& wor
   out += world.substr(body_close, mujoco_close - body_close);
   out += sections;
   out += world.substr(mujoco_close);
-  return WithContactCapacity(out, static_cast<int>(robots.size()));
-}
-
-std::string WithContactCapacity(const std::string& xml, int robots) {
-  // Wheels on a height field make many contacts each (one per prism they touch); MuJoCo 2.2's
-  // default buffer of 100 overflows. Size it unless the world says otherwise.
-  const int contacts = 200 + 300 * robots;
-  const std::string attributes = " nconmax=\"" + std::to_string(contacts) + "\" njmax=\"" +
-                                 std::to_string(6 * contacts) + "\"";
-  const size_t size = FindOpenTag(xml, "size", 0);
-  if (size != std::string::npos) {
-    const size_t end = xml.find('>', size);
-    const std::string element = xml.substr(size, end - size);
-    if (element.find("nconmax") != std::string::npos ||
-        element.find("njmax") != std::string::npos) {
-      return xml;
-    }
-    return xml.substr(0, size + 5) + attributes + xml.substr(size + 5);
-  }
-  const size_t open = FindOpenTag(xml, "mujoco", 0);
-  const size_t open_end = xml.find('>', open);
-  return xml.substr(0, open_end + 1) + "\n  <size" + attributes + "/>" + xml.substr(open_end + 1);
+  return out;
 }
 
 }  // namespace cairn::sim

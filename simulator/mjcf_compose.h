@@ -12,6 +12,9 @@
 /// - the robot bodies and the spawn pool go at the end of the world's <worldbody>, the other
 ///   sections before the closing </mujoco>.
 ///
+/// The buffers MuJoCo allocates for the result (<size nconmax njmax nstack>) are sized from the
+/// compiled scene by model_capacity.h (MujocoSim does it).
+///
 /// Robot files are ordinary MJCF files (loadable on their own) and must not use default classes
 /// or angle-valued attributes (euler, axisangle) so that the world's <compiler> and <default>
 /// settings cannot change them.
@@ -36,10 +39,6 @@ struct RobotInsertion {
 /// missing or malformed, or a robot id is not [A-Za-z0-9_-]+.
 std::string ComposeScene(const std::string& world_xml, const std::string& world_source,
                          const std::vector<RobotInsertion>& robots, int spawn_slots);
-
-/// Gives the model room for the contacts `robots` robots make (MuJoCo's nconmax and njmax),
-/// unless its <size> element sets them already.
-std::string WithContactCapacity(const std::string& xml, int robots);
 
 /// Text between <tag ...> and </tag> (first occurrence, comments removed), or "" when absent.
 /// A self-closing <tag/> yields "".

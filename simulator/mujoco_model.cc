@@ -14,6 +14,10 @@ namespace {
 
 std::atomic<int64_t> g_warning_count{0};
 
+// Set while this thread compiles a scene with placeholder buffers (LoadModelFromText's
+// `placeholder_buffers`).
+thread_local bool t_placeholder_buffers = false;
+
 // MuJoCo prints warnings in bursts (one per step while a condition lasts): log them at most
 // once every few seconds with the number swallowed in between.
 common::RateLimiter& WarningLimiter() {
@@ -22,6 +26,9 @@ common::RateLimiter& WarningLimiter() {
 }
 
 void OnMujocoWarning(const char* message) {
+  // The compiler's own mjData of a scene compiled with placeholder buffers sees every robot at
+  // the origin, on top of each other: its full buffers say nothing about the simulation.
+  if (t_placeholder_buffers && std::strstr(message, "Pre-allocated") != nullptr) return;
   ++g_warning_count;
   int64_t suppressed = 0;
   if (WarningLimiter().Allow(&suppressed)) {
@@ -61,7 +68,8 @@ std::string ReadTextFile(const std::string& path) {
   return text.str();
 }
 
-MjModelPtr LoadModelFromText(const std::string& xml, const std::string& path) {
+MjModelPtr LoadModelFromText(const std::string& xml, const std::string& path,
+                             bool placeholder_buffers) {
   // mjVFS holds fixed-size name tables (about 2 MB): keep it off the stack.
   auto vfs = std::make_unique<mjVFS>();
   mj_defaultVFS(vfs.get());
@@ -74,12 +82,23 @@ MjModelPtr LoadModelFromText(const std::string& xml, const std::string& path) {
   std::memcpy(vfs->filedata[index], xml.data(), xml.size());
 
   char error[1024] = {0};
-  mjModel* model = mj_loadXML(path.c_str(), vfs.get(), error, sizeof(error));
+  t_placeholder_buffers = placeholder_buffers;
+  mjModel* model = nullptr;
+  try {
+    model = mj_loadXML(path.c_str(), vfs.get(), error, sizeof(error));
+  } catch (...) {
+    t_placeholder_buffers = false;
+    mj_deleteVFS(vfs.get());
+    throw;
+  }
+  t_placeholder_buffers = false;
   mj_deleteVFS(vfs.get());
   if (model == nullptr) {
     throw std::runtime_error(path + ": " + (error[0] ? error : "MuJoCo could not load the model"));
   }
-  if (error[0]) CAIRN_LOG_WARN("MuJoCo (%s): %s", path.c_str(), error);
+  const bool placeholder_warning =
+      placeholder_buffers && std::strstr(error, "Pre-allocated") != nullptr;
+  if (error[0] && !placeholder_warning) CAIRN_LOG_WARN("MuJoCo (%s): %s", path.c_str(), error);
   return MjModelPtr(model);
 }
 

@@ -24,8 +24,12 @@ using MjDataPtr = std::unique_ptr<mjData, MjDataDeleter>;
 /// Compiles MJCF text as if it were the file at `path`: the text is served through MuJoCo's
 /// virtual file system under that name, so includes, meshes and height-field images named
 /// relative to `path` resolve next to it on disk.
+/// With `placeholder_buffers` the text's <size> buffers are placeholders the caller replaces
+/// before making its mjData: warnings that the compiler's own mjData ran out of contact or
+/// constraint room are not reported.
 /// @throws std::runtime_error "<path>: <MuJoCo's message>" when parsing or compiling fails.
-MjModelPtr LoadModelFromText(const std::string& xml, const std::string& path);
+MjModelPtr LoadModelFromText(const std::string& xml, const std::string& path,
+                             bool placeholder_buffers = false);
 
 /// Compiles an MJCF file from disk. @throws std::runtime_error with the file name and
 /// MuJoCo's message.

@@ -1,5 +1,7 @@
 #include "simulator/mujoco_sim.h"
 
+#include "common/log.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,6 +11,7 @@
 
 #include "common/check.h"
 #include "simulator/mjcf_compose.h"
+#include "simulator/model_capacity.h"
 #include "simulator/sensor_registry.h"
 
 namespace cairn::sim {
@@ -73,7 +76,9 @@ MujocoSim::MujocoSim(const Scenario& scenario) : scenario_(scenario) {
   SetupSpawnPool();
   CollectMocapObjects();
   OpenDoors();
-  mj_forward(model_.get(), data_.get());
+  // Poses only (for placing robots on the surface): every robot is still at the model's origin,
+  // on top of the others, and a collision pass there would fill the contact buffer for nothing.
+  mj_kinematics(model_.get(), data_.get());
   SetupRobots();
   rays_->MarkMoved();
 }
@@ -87,14 +92,33 @@ void MujocoSim::Compose() {
   }
   const std::string world_xml =
       scenario_.world_xml.empty() ? ReadTextFile(scenario_.world_path) : scenario_.world_xml;
+  std::string composed;
   try {
-    composed_xml_ =
-        ComposeScene(world_xml, scenario_.world_path, insertions, scenario_.spawn_slots);
+    composed = ComposeScene(world_xml, scenario_.world_path, insertions, scenario_.spawn_slots);
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(e.what());
   }
-  model_ = LoadModelFromText(composed_xml_, scenario_.world_path);
+  // Buffers sized for what the scene holds (model_capacity.h). MuJoCo's compiler makes an
+  // mjData of the text's sizes, so it compiles with MuJoCo's small defaults (100 contacts, 500
+  // rows) and the model then gets the sizes its contents need before the real mjData is made;
+  // the composed text records them (compiling it gives the same model). Sizes the world's own
+  // <size> element sets are kept.
+  const SizeAttributes world_sizes = SizeAttributesOf(composed);
+  ModelCapacity compile_sizes;
+  compile_sizes.nconmax = 100;
+  compile_sizes.njmax = 500;
+  compile_sizes.nstack = -1;  // MuJoCo's rule for 500 rows: a few MB
+  model_ = LoadModelFromText(WithSizes(composed, compile_sizes, world_sizes), scenario_.world_path,
+                             /*placeholder_buffers=*/true);
   mjModel* m = model_.get();
+  ModelCapacity sizes = ContactCapacity(m, kParkedGeomGroup);
+  if (world_sizes.nconmax) sizes.nconmax = m->nconmax;
+  if (world_sizes.njmax) sizes.njmax = m->njmax;
+  sizes.nstack = world_sizes.nstack ? m->nstack : MujocoStackHeuristic(m, sizes.njmax);
+  m->nconmax = sizes.nconmax;
+  m->njmax = sizes.njmax;
+  m->nstack = sizes.nstack;
+  composed_xml_ = WithSizes(composed, sizes, world_sizes);
   m->opt.timestep = scenario_.physics.timestep_s;
   const std::string& integ = scenario_.physics.integrator;
   m->opt.integrator = integ == "rk4"        ? mjINT_RK4
@@ -364,6 +388,14 @@ void MujocoSim::Step(SimOutputs* out) {
   saved_mocap_quat_.assign(d->mocap_quat, d->mocap_quat + 4 * m->nmocap);
   mj_step(model_.get(), data_.get());
   ++stats_.physics_steps;
+  // Full contact or constraint buffers drop contacts silently: said once per run.
+  for (int w : {mjWARN_CONTACTFULL, mjWARN_CNSTRFULL}) {
+    if (d->warning[w].number > 0 && !buffer_full_reported_[w == mjWARN_CNSTRFULL]) {
+      buffer_full_reported_[w == mjWARN_CNSTRFULL] = true;
+      CAIRN_LOG_WARN("MuJoCo's %s buffer is full (%d needed): contacts are dropped",
+                     w == mjWARN_CONTACTFULL ? "contact" : "constraint", d->warning[w].lastinfo);
+    }
+  }
   // MuJoCo resets mjData after a bad acceleration (its warning counters too, then counts this
   // one): a count above 0, or a clock that did not advance, is such a step.
   if (d->warning[mjWARN_BADQACC].number > 0 || !(d->time > time_before)) {

@@ -161,6 +161,7 @@ class MujocoSim {
   std::map<std::string, std::unique_ptr<Object>> objects_;
   std::vector<int> free_slots_;  ///< spawn pool geoms not in use
   SimStats stats_;
+  bool buffer_full_reported_[2] = {false, false};  ///< contact, constraint
   // The state before the current step (qpos, act, mocap), for UndoBadStep.
   std::vector<double> saved_qpos_;
   std::vector<double> saved_act_;

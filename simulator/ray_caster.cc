@@ -294,6 +294,8 @@ double RayPlane(const mjModel* m, const mjData* d, int g, const double p[3], con
 // (beyond which a ray cannot hit any of them), and the planes, tested for every ray.
 struct GroupCandidates {
   std::vector<Candidate> boxes;
+  /// Per geom id: its index in `boxes`, or -1 (the neighbouring ray's geom is found at once).
+  std::vector<int> box_of_geom;
   std::vector<Candidate> planes;
   double z_low{kInfinity};
   double z_high{-kInfinity};
@@ -356,7 +358,10 @@ void CollectCandidates(const RayScene& scene, const mjData* data, const double o
     for (int k = 0; k < 4; ++k) planes_world[k] = rotation * g.planes[k];
   }
   std::vector<Candidate>& all = out->boxes;
+  for (const Candidate& c : all) out->box_of_geom[c.geom] = -1;
   all.clear();
+  const size_t ngeom = static_cast<size_t>(scene.model()->ngeom);
+  if (out->box_of_geom.size() < ngeom) out->box_of_geom.resize(ngeom, -1);
   for (const RayScene::Bound& b : scene.bounds()) {
     if (b.owner >= 0 && b.owner == exclude_owner) continue;
     if (b.infinite) {
@@ -388,6 +393,7 @@ void CollectCandidates(const RayScene& scene, const mjData* data, const double o
     }
     out->z_low = std::min(out->z_low, c.lo[2]);
     out->z_high = std::max(out->z_high, c.hi[2]);
+    out->box_of_geom[c.geom] = static_cast<int>(kept);
     all[kept++] = c;
   }
   all.resize(kept);
@@ -439,8 +445,13 @@ inline RayHit CastRay(const mjModel* m, const mjData* data, const GroupCandidate
   const double v[3] = {dw.x(), dw.y(), dw.z()};
   double inv[3];
   bool negative[3];
+  // The three divisions unconditionally, so they overlap (one behind a branch each waited for
+  // the one before: a sixth of the caster's time); near-zero components are then replaced.
+  double divisor[3];
+  for (int k = 0; k < 3; ++k) divisor[k] = std::abs(v[k]) > 1e-12 ? v[k] : 1.0;
+  for (int k = 0; k < 3; ++k) inv[k] = 1.0 / divisor[k];
   for (int k = 0; k < 3; ++k) {
-    inv[k] = std::abs(v[k]) > 1e-12 ? 1.0 / v[k] : (v[k] >= 0 ? 1e12 : -1e12);
+    if (!(std::abs(v[k]) > 1e-12)) inv[k] = v[k] >= 0 ? 1e12 : -1e12;
     negative[k] = inv[k] < 0.0;
   }
   // Plain pointers: MuJoCo's functions are called in between, nothing is reloaded after them.
@@ -457,12 +468,8 @@ inline RayHit CastRay(const mjModel* m, const mjData* data, const GroupCandidate
   double best = max_range_m;
   int best_geom = -1;
   if (warm >= 0) {
-    for (const Candidate* c = boxes; c != boxes_end; ++c) {
-      if (c->geom == warm) {
-        TestCandidate(m, data, o, v, inv, negative, *c, &best, &best_geom);
-        break;
-      }
-    }
+    const int k = candidates.box_of_geom[warm];
+    if (k >= 0) TestCandidate(m, data, o, v, inv, negative, boxes[k], &best, &best_geom);
   }
   for (const Candidate* c = planes; c != planes_end; ++c) {
     TestCandidate(m, data, o, v, inv, negative, *c, &best, &best_geom);
@@ -595,14 +602,15 @@ void RayPattern::BuildGroups(int group_size) {
 
 void RayCaster::Cast(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
                      const Eigen::Matrix3d& rotation, const RayPattern& pattern, int group_begin,
-                     int group_end, double max_range_m, int exclude_owner, RayHit* hits) const {
+                     int group_end, double max_range_m, int exclude_owner, RayHit* hits,
+                     int hits_base) const {
   group_begin = std::max(0, group_begin);
   group_end = std::min(group_end, static_cast<int>(pattern.groups.size()));
   const int count = group_end - group_begin;
   if (count <= 0) return;
   auto task = [&](int i) {
     CastGroup(scene, data, origin, rotation, pattern, group_begin + i, max_range_m, exclude_owner,
-              hits);
+              hits, hits_base);
   };
   if (pool_ != nullptr) {
     pool_->ParallelFor(count, task);
@@ -613,23 +621,25 @@ void RayCaster::Cast(const RayScene& scene, const mjData* data, const Eigen::Vec
 
 void RayCaster::CastGroup(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
                           const Eigen::Matrix3d& rotation, const RayPattern& pattern, int group,
-                          double max_range_m, int exclude_owner, RayHit* hits) const {
+                          double max_range_m, int exclude_owner, RayHit* hits,
+                          int hits_base) const {
   const RayPattern::Group& g = pattern.groups[group];
   const double o[3] = {origin.x(), origin.y(), origin.z()};
   thread_local GroupCandidates candidates;
   CollectCandidates(scene, data, o, rotation, g, max_range_m, exclude_owner, &candidates);
   for (int i = g.begin; i < g.end; ++i) {
     // The geom the neighbouring ray hit: usually the same, and it tightens the search.
-    const int warm = i - pattern.warm_stride >= g.begin ? hits[i - pattern.warm_stride].geom : -1;
-    hits[i] = CastRay(scene.model(), data, candidates, o, rotation * pattern.directions[i],
-                      max_range_m, warm);
+    const int warm =
+        i - pattern.warm_stride >= g.begin ? hits[i - pattern.warm_stride - hits_base].geom : -1;
+    hits[i - hits_base] = CastRay(scene.model(), data, candidates, o,
+                                  rotation * pattern.directions[i], max_range_m, warm);
   }
 }
 
 void RayCaster::CastWithMjRay(const mjModel* model, const mjData* data,
                               const Eigen::Vector3d& origin, const Eigen::Matrix3d& rotation,
                               const RayPattern& pattern, int group_begin, int group_end,
-                              double max_range_m, RayHit* hits) {
+                              double max_range_m, RayHit* hits, int hits_base) {
   static const mjtByte kGroups[mjNGROUP] = {1, 1, 1, 0, 0, 0};
   const double o[3] = {origin.x(), origin.y(), origin.z()};
   group_end = std::min(group_end, static_cast<int>(pattern.groups.size()));
@@ -641,9 +651,9 @@ void RayCaster::CastWithMjRay(const mjModel* model, const mjData* data,
       int geom = -1;
       const double x = mj_ray(model, data, o, v, kGroups, 1, -1, &geom);
       if (x >= 0.0 && x <= max_range_m) {
-        hits[i] = {x, geom};
+        hits[i - hits_base] = {x, geom};
       } else {
-        hits[i] = {-1.0, -1};
+        hits[i - hits_base] = {-1.0, -1};
       }
     }
   }

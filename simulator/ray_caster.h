@@ -105,22 +105,25 @@ class RayCaster {
   explicit RayCaster(ThreadPool* pool = nullptr) : pool_(pool) {}
 
   /// Casts groups [group_begin, group_end) of `pattern` from a sensor at `origin` with
-  /// orientation `rotation` (sensor to world). Results go to hits[ray index]; rays of other
-  /// groups are untouched. Geoms owned by `exclude_owner` are skipped (-1: none).
+  /// orientation `rotation` (sensor to world). Results go to hits[ray index - hits_base] (a
+  /// buffer holding just the rays cast, e.g. one lidar slice, with hits_base its first ray);
+  /// rays of other groups are untouched. Geoms owned by `exclude_owner` are skipped (-1: none).
   void Cast(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
             const Eigen::Matrix3d& rotation, const RayPattern& pattern, int group_begin,
-            int group_end, double max_range_m, int exclude_owner, RayHit* hits) const;
+            int group_end, double max_range_m, int exclude_owner, RayHit* hits,
+            int hits_base = 0) const;
 
   /// The reference: MuJoCo's mj_ray for each ray of the groups (geom groups 0-2 only, so every
   /// robot is excluded), single-threaded.
   static void CastWithMjRay(const mjModel* model, const mjData* data, const Eigen::Vector3d& origin,
                             const Eigen::Matrix3d& rotation, const RayPattern& pattern,
-                            int group_begin, int group_end, double max_range_m, RayHit* hits);
+                            int group_begin, int group_end, double max_range_m, RayHit* hits,
+                            int hits_base = 0);
 
  private:
   void CastGroup(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
                  const Eigen::Matrix3d& rotation, const RayPattern& pattern, int group,
-                 double max_range_m, int exclude_owner, RayHit* hits) const;
+                 double max_range_m, int exclude_owner, RayHit* hits, int hits_base) const;
 
   ThreadPool* pool_;
 };

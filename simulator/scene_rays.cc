@@ -21,6 +21,12 @@ SceneRays::~SceneRays() = default;
 void SceneRays::Cast(const mjData* data, int robot_index, const common::Pose3& sensor,
                      const RayPattern& pattern, int group_begin, int group_end, double max_range_m,
                      std::vector<RayHit>* hits) {
+  Cast(data, robot_index, sensor, pattern, group_begin, group_end, max_range_m, hits->data(), 0);
+}
+
+void SceneRays::Cast(const mjData* data, int robot_index, const common::Pose3& sensor,
+                     const RayPattern& pattern, int group_begin, int group_end, double max_range_m,
+                     RayHit* hits, int first_ray) {
   using Clock = std::chrono::steady_clock;
   const auto t0 = Clock::now();
   if (dirty_) {
@@ -30,10 +36,10 @@ void SceneRays::Cast(const mjData* data, int robot_index, const common::Pose3& s
   const Eigen::Matrix3d rotation = sensor.orientation.toRotationMatrix();
   if (use_mj_ray_) {
     RayCaster::CastWithMjRay(model_, data, sensor.position_m, rotation, pattern, group_begin,
-                             group_end, max_range_m, hits->data());
+                             group_end, max_range_m, hits, first_ray);
   } else {
     caster_->Cast(*scene_, data, sensor.position_m, rotation, pattern, group_begin, group_end,
-                  max_range_m, robot_index, hits->data());
+                  max_range_m, robot_index, hits, first_ray);
   }
   rays_cast_ += pattern.groups[group_end - 1].end - pattern.groups[group_begin].begin;
   ray_s_ += std::chrono::duration<double>(Clock::now() - t0).count();

@@ -30,6 +30,10 @@ class SceneRays {
   void Cast(const mjData* data, int robot_index, const common::Pose3& sensor,
             const RayPattern& pattern, int group_begin, int group_end, double max_range_m,
             std::vector<RayHit>* hits);
+  /// The same into a buffer holding only the rays cast: hits[ray index - first_ray].
+  void Cast(const mjData* data, int robot_index, const common::Pose3& sensor,
+            const RayPattern& pattern, int group_begin, int group_end, double max_range_m,
+            RayHit* hits, int first_ray);
   /// The same for every group of the pattern.
   void CastAll(const mjData* data, int robot_index, const common::Pose3& sensor,
                const RayPattern& pattern, double max_range_m, std::vector<RayHit>* hits);

@@ -69,6 +69,12 @@ struct SensorFrame {
             double max_range_m, std::vector<RayHit>* hits) const {
     rays->Cast(data, robot_index, sensor, pattern, group_begin, group_end, max_range_m, hits);
   }
+  /// The same into a buffer of just these rays: hits[ray index - first_ray].
+  void Cast(const common::Pose3& sensor, const RayPattern& pattern, int group_begin, int group_end,
+            double max_range_m, RayHit* hits, int first_ray) const {
+    rays->Cast(data, robot_index, sensor, pattern, group_begin, group_end, max_range_m, hits,
+               first_ray);
+  }
   void CastAll(const common::Pose3& sensor, const RayPattern& pattern, double max_range_m,
                std::vector<RayHit>* hits) const {
     rays->CastAll(data, robot_index, sensor, pattern, max_range_m, hits);

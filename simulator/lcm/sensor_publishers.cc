@@ -1,6 +1,9 @@
 #include "simulator/lcm/sensor_publishers.h"
 
+#include <cstdint>
+#include <cstring>
 #include <stdexcept>
+#include <utility>
 
 #include "cairn/lcmt_imu.hpp"
 #include "cairn/lcmt_laser_scan.hpp"
@@ -99,7 +102,36 @@ cairn::lcmt_pose GroundTruthToLcm(const GroundTruthReading& r) {
   return m;
 }
 
-cairn::lcmt_point_cloud_slice LidarToLcm(const common::LidarSlice& s) { return runtime::ToLcm(s); }
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the fast encoding swaps bytes");
+
+// Big-endian 32-bit values (LCM's byte order), one swap per value.
+void EncodeFloatsBigEndian(const std::vector<float>& values, uint8_t* out) {
+  const size_t n = values.size();
+  const float* in = values.data();
+  for (size_t i = 0; i < n; ++i) {
+    uint32_t v;
+    std::memcpy(&v, in + i, sizeof(v));
+    v = __builtin_bswap32(v);
+    std::memcpy(out + 4 * i, &v, sizeof(v));
+  }
+}
+
+/// The lidar's publisher: its slices go out through FastPointCloudSlice.
+SensorPublisher LidarPublisher() {
+  SensorPublisher p;
+  p.sensor = LidarSensor::kName;
+  p.stream = channels::kLidar;
+  p.publish = [stream = p.stream](runtime::Node& node, const ReadingGroup& group) {
+    const std::vector<common::LidarSlice>* slices = group.As<common::LidarSlice>();
+    CAIRN_DEMAND(slices != nullptr);
+    for (const common::LidarSlice& slice : *slices) {
+      cairn::lcmt_point_cloud_slice msg = runtime::ToLcm(slice);
+      node.Publish(channels::ForRobot(msg.robot, stream.c_str()), FastPointCloudSlice{&msg});
+    }
+  };
+  return p;
+}
+
 cairn::lcmt_laser_scan ScanToLcm(const common::LaserScan& s) { return runtime::ToLcm(s); }
 
 }  // namespace
@@ -108,7 +140,7 @@ const SensorPublishers& BuiltinSensorPublishers() {
   // A new sensor kind adds its conversion above and one line here.
   static const SensorPublishers publishers = [] {
     SensorPublishers p;
-    p.Add(MakeSensorPublisher(LidarSensor::kName, channels::kLidar, &LidarToLcm));
+    p.Add(LidarPublisher());
     p.Add(MakeSensorPublisher(PlanarLaserSensor::kName, channels::kScan, &ScanToLcm));
     p.Add(MakeSensorPublisher(TurretSensor::kName, channels::kTurretScan, &TurretLineToLcm));
     p.Add(MakeSensorPublisher(SonarSensor::kName, channels::kSonar, &SonarToLcm));
@@ -118,6 +150,44 @@ const SensorPublishers& BuiltinSensorPublishers() {
     return p;
   }();
   return publishers;
+}
+
+int FastPointCloudSlice::encode(void* buf, int offset, int maxlen) const {
+  cairn::lcmt_point_cloud_slice& m = *msg;
+  const int size = m.getEncodedSize();
+  const int32_t n = m.num_points;
+  if (offset < 0 || maxlen < size || n < 0 || static_cast<size_t>(n) != m.x_m.size() ||
+      m.y_m.size() != m.x_m.size() || m.z_m.size() != m.x_m.size() ||
+      m.intensity.size() != m.x_m.size() || m.ring.size() != m.x_m.size()) {
+    return -1;
+  }
+  // The fields up to num_points, by the generated code: the message without its points ends
+  // with num_points = 0, which then gets the real count.
+  std::vector<float> x, y, z, intensity;
+  std::vector<int8_t> ring;
+  std::swap(x, m.x_m);
+  std::swap(y, m.y_m);
+  std::swap(z, m.z_m);
+  std::swap(intensity, m.intensity);
+  std::swap(ring, m.ring);
+  m.num_points = 0;
+  const int head = m.encode(buf, offset, maxlen);
+  m.num_points = n;
+  std::swap(x, m.x_m);
+  std::swap(y, m.y_m);
+  std::swap(z, m.z_m);
+  std::swap(intensity, m.intensity);
+  std::swap(ring, m.ring);
+  if (head < 4 || head + 17 * static_cast<int64_t>(n) != size) return -1;
+  uint8_t* out = static_cast<uint8_t*>(buf) + offset + head;
+  const uint32_t count = __builtin_bswap32(static_cast<uint32_t>(n));
+  std::memcpy(out - 4, &count, sizeof(count));
+  EncodeFloatsBigEndian(m.x_m, out);
+  EncodeFloatsBigEndian(m.y_m, out + 4 * n);
+  EncodeFloatsBigEndian(m.z_m, out + 8 * n);
+  EncodeFloatsBigEndian(m.intensity, out + 12 * n);
+  std::memcpy(out + 16 * n, m.ring.data(), static_cast<size_t>(n));
+  return size;
 }
 
 void SensorPublishers::Add(SensorPublisher publisher) {

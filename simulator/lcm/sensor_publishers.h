@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "cairn/lcmt_point_cloud_slice.hpp"
+
 #include "common/channels.h"
 #include "common/check.h"
 #include "services/runtime/node.h"
@@ -43,6 +45,17 @@ SensorPublisher MakeSensorPublisher(std::string sensor, std::string stream,
   };
   return p;
 }
+
+/// A point cloud slice published with LCM's exact encoding, faster: the generated encode()
+/// writes each float of the point arrays byte by byte (about a tenth of a fleet's CPU time);
+/// this one encodes the fields before the arrays with the generated code and the arrays with
+/// one byte swap per value. The bytes are the same (tested). Node::Publish takes it like any
+/// message; `msg` is borrowed (its arrays are moved aside and back while encoding).
+struct FastPointCloudSlice {
+  cairn::lcmt_point_cloud_slice* msg;
+  int getEncodedSize() const { return msg->getEncodedSize(); }
+  int encode(void* buf, int offset, int maxlen) const;
+};
 
 /// Publishers by sensor name.
 class SensorPublishers {

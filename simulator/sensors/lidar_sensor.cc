@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <mutex>
+#include <tuple>
 
 #include "common/check.h"
 #include "simulator/sensor_registry.h"
@@ -131,15 +134,43 @@ LidarPattern BuildLidarPattern(const LidarParams& p) {
   return out;
 }
 
+std::shared_ptr<const LidarPattern> SharedLidarPattern(const LidarParams& p) {
+  // Everything BuildLidarPattern reads.
+  using Key = std::tuple<int, double, double, int, int, int, int>;
+  const Key key{p.rings,
+                p.min_elevation_deg,
+                p.max_elevation_deg,
+                p.azimuth_steps,
+                p.slices_per_revolution,
+                p.azimuths_per_ray_group,
+                p.rings_per_ray_group};
+  static std::mutex mutex;
+  static std::map<Key, std::weak_ptr<const LidarPattern>> cache;
+  const std::lock_guard<std::mutex> lock(mutex);
+  std::weak_ptr<const LidarPattern>& slot = cache[key];
+  std::shared_ptr<const LidarPattern> pattern = slot.lock();
+  if (pattern == nullptr) {
+    pattern = std::make_shared<const LidarPattern>(BuildLidarPattern(p));
+    slot = pattern;
+  }
+  return pattern;
+}
+
 // --- the sensor --------------------------------------------------------------------------------
 
 LidarSensor::LidarSensor(const LidarParams& params, const SensorContext& context)
     : params_(params),
-      pattern_(BuildLidarPattern(params)),
+      pattern_(SharedLidarPattern(params)),
       robot_(context.robot),
       site_(context.RequireSite(params.mount_site)),
-      hits_(pattern_.rays.directions.size()),
-      noise_(context.Noise()) {}
+      noise_(context.Noise()) {
+  size_t largest = 0;
+  for (size_t s = 0; s + 1 < pattern_->slice_ray_begin.size(); ++s) {
+    largest = std::max(largest, static_cast<size_t>(pattern_->slice_ray_begin[s + 1] -
+                                                    pattern_->slice_ray_begin[s]));
+  }
+  hits_.resize(largest);
+}
 
 bool LidarSensor::Due(double now_s) const {
   return static_cast<double>(slices_done_ + 1) /
@@ -154,10 +185,11 @@ void LidarSensor::Produce(const SensorFrame& frame, SimOutputs* out) {
     const int slice = static_cast<int>(slices_done_ % slices);
     ++slices_done_;
     const common::Pose3 sensor = SitePose(frame.data, site_);
-    const int g0 = pattern_.slice_group_begin[slice];
-    const int g1 = pattern_.slice_group_begin[slice + 1];
+    const int g0 = pattern_->slice_group_begin[slice];
+    const int g1 = pattern_->slice_group_begin[slice + 1];
     if (g1 <= g0) continue;
-    frame.Cast(sensor, pattern_.rays, g0, g1, params_.max_range_m, &hits_);
+    frame.Cast(sensor, pattern_->rays, g0, g1, params_.max_range_m, hits_.data(),
+               pattern_->slice_ray_begin[slice]);
     out->Add(kName, MakeSlice(frame, revolution, slice, sensor));
   }
 }
@@ -165,7 +197,8 @@ void LidarSensor::Produce(const SensorFrame& frame, SimOutputs* out) {
 common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revolution, int slice,
                                           const common::Pose3& sensor) const {
   const LidarParams& p = params_;
-  const RayPattern& rays = pattern_.rays;
+  const LidarPattern& pattern = *pattern_;
+  const RayPattern& rays = pattern.rays;
   common::LidarSlice s;
   s.utime = frame.utime;
   s.robot = robot_;
@@ -176,18 +209,21 @@ common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revo
   s.azimuth_end_rad = LidarAzimuthRad(p, LidarSliceBegin(p, slice + 1));
   s.max_range_m = p.max_range_m;
   s.sensor_pose = sensor;
-  const int first = pattern_.slice_ray_begin[slice];
-  const int last = pattern_.slice_ray_begin[slice + 1];
-  s.points.reserve(last - first);
+  const int first = pattern.slice_ray_begin[slice];
+  const int last = pattern.slice_ray_begin[slice + 1];
+  // Sized for every ray and trimmed at the end: the points are written in place, field by
+  // field (a point built aside and pushed back stalled on its 2-byte ring store).
+  s.points.resize(last - first);
+  common::LidarPoint* out = s.points.data();
   const uint64_t noise_base =
       static_cast<uint64_t>(revolution) * static_cast<uint64_t>(rays.directions.size());
   // Half a million points per simulated second: plain pointers, nothing reloaded per point.
-  const RayHit* hits = hits_.data();
+  const RayHit* hits = hits_.data();  // the slice's rays: hits[i - first]
   const Eigen::Vector3d* directions = rays.directions.data();
-  const int16_t* rings = pattern_.ring.data();
+  const int16_t* rings = pattern.ring.data();
   const float* intensity = frame.rays->intensities();
   for (int i = first; i < last; ++i) {
-    const RayHit& h = hits[i];
+    const RayHit& h = hits[i - first];
     if (h.geom < 0) continue;
     double range = h.range_m;
     if (p.range_noise_sigma_m > 0.0) {
@@ -195,14 +231,14 @@ common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revo
     }
     if (range < p.min_range_m || range > p.max_range_m) continue;
     const Eigen::Vector3d& dir = directions[i];
-    common::LidarPoint point;
-    point.x_m = static_cast<float>(dir.x() * range);
-    point.y_m = static_cast<float>(dir.y() * range);
-    point.z_m = static_cast<float>(dir.z() * range);
-    point.intensity = intensity[h.geom];
-    point.ring = rings[i];
-    s.points.push_back(point);
+    out->x_m = static_cast<float>(dir.x() * range);
+    out->y_m = static_cast<float>(dir.y() * range);
+    out->z_m = static_cast<float>(dir.z() * range);
+    out->intensity = intensity[h.geom];
+    out->ring = rings[i];
+    ++out;
   }
+  s.points.resize(out - s.points.data());
   return s;
 }
 

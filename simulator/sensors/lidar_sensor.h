@@ -1,6 +1,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,9 @@ struct LidarPattern {
   std::vector<int> slice_group_begin;  ///< slice s owns groups [begin[s], begin[s + 1])
 };
 LidarPattern BuildLidarPattern(const LidarParams& params);
+/// The same pattern, shared by every sensor with the same layout (eight HDL-32Es then read one
+/// 2 MB table instead of eight, which keeps it in the cache). Thread-safe.
+std::shared_ptr<const LidarPattern> SharedLidarPattern(const LidarParams& params);
 
 // --- the sensor --------------------------------------------------------------------------------
 
@@ -82,11 +86,11 @@ class LidarSensor final : public SimSensor {
                                const common::Pose3& sensor) const;
 
   LidarParams params_;
-  LidarPattern pattern_;
+  std::shared_ptr<const LidarPattern> pattern_;
   std::string robot_;
   int site_{-1};
   int64_t slices_done_{0};
-  std::vector<RayHit> hits_;
+  std::vector<RayHit> hits_;  ///< one slice: hits_[ray - slice_ray_begin[slice]]
   NoiseSource noise_;
 };
 

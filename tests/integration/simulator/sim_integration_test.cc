@@ -1,7 +1,9 @@
 // cairn-sim as a real process on a private LCM bus: sensor rates, physics on the tunnel's
 // features, SIM.CONTROL, bad input, repeatability, start-up errors and --help.
 
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -177,6 +179,59 @@ robots:
   EXPECT_GT(slice->num_points, 1000);
   EXPECT_LT(slice->getEncodedSize(), 64 * 1024);
   // SIGTERM: a clean exit.
+  const int status = sim.Stop(10.0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+}
+
+// --- many robots --------------------------------------------------------------------------------
+
+TEST(SimIntegrationTest, EightPioneersInTheTunnelStartAndPublishEveryRobotsStreams) {
+  // Formerly refused at start ("could not create mjData": buffers sized 300 contacts and 1800
+  // constraint rows per robot, some of them squared). Every robot's every stream must be on the
+  // bus within a bounded wait, and MuJoCo must not have warned (a full contact buffer would).
+  ProcessSet procs(PrivateLcmUrl());
+  std::vector<std::string> args = {"--world", "tunnel", "--speed", "1"};
+  std::vector<std::string> robots;
+  for (int i = 0; i < 8; ++i) {
+    robots.push_back("fleet" + std::to_string(i));
+    args.push_back("--robot");
+    args.push_back(robots.back() + ":pioneer3at::4," + std::to_string(2 + 4 * i));
+  }
+  const auto start = std::chrono::steady_clock::now();
+  ChildProcess& sim = procs.Start("cairn-sim", args);
+  Bus bus(procs.url());
+  const std::vector<std::string> streams = {"LIDAR", "SCAN", "ODOM", "POSE", "IMU"};
+  std::vector<std::string> missing;
+  const bool all = WaitFor(
+      [&] {
+        missing.clear();
+        for (const auto& r : robots) {
+          for (const auto& s : streams) {
+            if (!bus.Seen(r + "." + s)) missing.push_back(r + "." + s);
+          }
+        }
+        return missing.empty();
+      },
+      20.0, [&] { PumpAll(bus); });
+  const double waited_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_TRUE(all) << missing.size() << " streams never seen, the first "
+                   << (missing.empty() ? "" : missing.front());
+  std::printf("8 robots: every stream seen %.2f s after the start\n", waited_s);
+  ASSERT_TRUE(sim.Running());
+  for (const auto& r : robots) {
+    auto slice = bus.Last<cairn::lcmt_point_cloud_slice>(r + ".LIDAR");
+    ASSERT_TRUE(slice.has_value()) << r;
+    EXPECT_EQ(slice->robot, r);
+    EXPECT_GT(slice->num_points, 0) << r;
+    auto pose = Pose(bus, r);
+    ASSERT_TRUE(pose.has_value()) << r;
+    EXPECT_NEAR(pose->position_m[1], 2.0 + 4.0 * (&r - robots.data()), 0.2) << r;
+  }
+  std::optional<cairn::lcmt_health> health;
+  ASSERT_TRUE(WaitFor([&] { return (health = bus.Health("cairn-sim")).has_value(); }, 5.0,
+                      [&] { PumpAll(bus); }));
+  EXPECT_EQ(Counter(*health, "mujoco_warnings"), 0);
   const int status = sim.Stop(10.0);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
 }

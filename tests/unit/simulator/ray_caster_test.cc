@@ -98,6 +98,57 @@ TEST_F(RayCasterTest, TwoThreadsGiveTheSameResult) {
   }
 }
 
+// A lidar casts one slice at a time into a buffer of just that slice (hits_base: its first ray):
+// the same hits as casting into a buffer of the whole revolution, and nothing written outside.
+TEST_F(RayCasterTest, SliceSizedBuffersGiveTheSameHits) {
+  LidarParams lidar;
+  lidar.azimuth_steps = 720;
+  lidar.slices_per_revolution = 8;
+  const LidarPattern layout = BuildLidarPattern(lidar);
+  const RayPattern& pattern = layout.rays;
+  RayCaster caster;
+  const Eigen::Vector3d origin(1.0, -1.0, 0.6);
+  std::vector<RayHit> full(pattern.directions.size());
+  const int groups = static_cast<int>(pattern.groups.size());
+  caster.Cast(*scene_, data_.get(), origin, Eigen::Matrix3d::Identity(), pattern, 0, groups, 40.0,
+              -1, full.data());
+  int64_t hits = 0;
+  for (int s = 0; s < lidar.slices_per_revolution; ++s) {
+    const int first = layout.slice_ray_begin[s], last = layout.slice_ray_begin[s + 1];
+    // One guard entry on each side must stay untouched.
+    std::vector<RayHit> slice(last - first + 2, RayHit{-7.0, -7});
+    caster.Cast(*scene_, data_.get(), origin, Eigen::Matrix3d::Identity(), pattern,
+                layout.slice_group_begin[s], layout.slice_group_begin[s + 1], 40.0, -1,
+                slice.data() + 1, first);
+    EXPECT_EQ(slice.front().geom, -7);
+    EXPECT_EQ(slice.back().geom, -7);
+    for (int i = first; i < last; ++i) {
+      ASSERT_EQ(slice[i - first + 1].geom, full[i].geom) << "ray " << i;
+      ASSERT_EQ(slice[i - first + 1].range_m, full[i].range_m) << "ray " << i;
+      hits += full[i].geom >= 0 ? 1 : 0;
+    }
+  }
+  EXPECT_GT(hits, 1000);
+}
+
+TEST(SharedLidarPatternTest, SharedByEqualLayoutsOnly) {
+  LidarParams a;
+  LidarParams b = a;
+  b.max_range_m = 30.0;  // not part of the layout
+  LidarParams c = a;
+  c.azimuth_steps = 900;
+  const auto pa = SharedLidarPattern(a), pb = SharedLidarPattern(b), pc = SharedLidarPattern(c);
+  EXPECT_EQ(pa.get(), pb.get());
+  EXPECT_NE(pa.get(), pc.get());
+  const LidarPattern built = BuildLidarPattern(c);
+  ASSERT_EQ(pc->rays.directions.size(), built.rays.directions.size());
+  EXPECT_EQ(pc->slice_ray_begin, built.slice_ray_begin);
+  EXPECT_EQ(pc->ring, built.ring);
+  for (size_t i = 0; i < built.rays.directions.size(); ++i) {
+    ASSERT_EQ(pc->rays.directions[i], built.rays.directions[i]);
+  }
+}
+
 TEST_F(RayCasterTest, HiddenGeomsAndOwnersAreSkipped) {
   RayPattern pattern;
   pattern.directions = {Eigen::Vector3d(0, 1, 0)};  // towards the transparent box at y = 3

@@ -107,6 +107,47 @@ TEST(SensorPublishersTest, LidarSlicesAndScans) {
   EXPECT_EQ(msg.ranges_m, (std::vector<float>{1.f, 2.f}));
 }
 
+TEST(SensorPublishersTest, FastPointCloudSliceEncodesTheSameBytesAsLcm) {
+  for (int n : {0, 1, 7, 2880}) {
+    cairn::lcmt_point_cloud_slice m{};
+    m.utime = 123456789;
+    m.robot = "robot-7";
+    m.frame = "lidar";
+    m.revolution = 42;
+    m.slice_index = 5;
+    m.slice_count = 20;
+    m.azimuth_start_rad = -0.3;
+    m.azimuth_end_rad = 0.01;
+    m.max_range_m = 70.0;
+    for (int k = 0; k < 3; ++k) m.sensor_position_m[k] = 1.5 * k - 0.25;
+    for (int k = 0; k < 4; ++k) m.sensor_orientation_wxyz[k] = 0.5 - 0.1 * k;
+    m.num_points = n;
+    for (int i = 0; i < n; ++i) {
+      m.x_m.push_back(0.001f * static_cast<float>(i) - 3.0f);
+      m.y_m.push_back(-1e-7f * static_cast<float>(i * i));
+      m.z_m.push_back(i % 3 == 0 ? -0.0f : 12345.678f / static_cast<float>(i + 1));
+      m.intensity.push_back(static_cast<float>(i % 256));
+      m.ring.push_back(static_cast<int8_t>(i % 32 - 5));
+    }
+    const int size = m.getEncodedSize();
+    std::vector<uint8_t> expected(static_cast<size_t>(size) + 3, 0xAB);
+    std::vector<uint8_t> fast(static_cast<size_t>(size) + 3, 0xAB);
+    ASSERT_EQ(m.encode(expected.data(), 3, size), size);
+    const FastPointCloudSlice wrapped{&m};
+    ASSERT_EQ(wrapped.getEncodedSize(), size);
+    ASSERT_EQ(wrapped.encode(fast.data(), 3, size), size) << n << " points";
+    EXPECT_EQ(fast, expected) << n << " points";
+    // The message is as it was.
+    EXPECT_EQ(m.num_points, n);
+    EXPECT_EQ(static_cast<int>(m.x_m.size()), n);
+    EXPECT_EQ(static_cast<int>(m.ring.size()), n);
+    // Too little room, or arrays that disagree with num_points: refused like LCM's own.
+    EXPECT_EQ(wrapped.encode(fast.data(), 0, size - 1), -1);
+    m.num_points = n + 1;
+    EXPECT_EQ(wrapped.encode(fast.data(), 0, size + 17), -1);
+  }
+}
+
 TEST(SensorPublishersTest, TurretLineCarriesPanPeriodAndFrame) {
   SimOutputs out;
   TurretLine line;
