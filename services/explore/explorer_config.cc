@@ -21,6 +21,7 @@ void LoadReactive(YamlMap map, ReactiveParams* p) {
   map.Get("front_lateral_divisor", &p->front_lateral_divisor);
   map.Get("critical_distance_m", &p->critical_distance_m);
   map.Get("block_time_limit_s", &p->block_time_limit_s);
+  map.Get("max_reverse_s", &p->max_reverse_s);
   map.Get("cruise_speed_mps", &p->cruise_speed_mps);
   map.Get("centring_speed_mps", &p->centring_speed_mps);
   map.Get("centring_turn_rate_radps", &p->centring_turn_rate_radps);

@@ -110,6 +110,9 @@ void ReactiveParams::Validate() const {
                      "clean_min_range_m, got "
                          << clean_max_range_m);
   CheckPositive(clean_replacement_m, "clean_replacement_m");
+  CAIRN_THROW_UNLESS(std::isfinite(max_reverse_s) && max_reverse_s >= 0.0,
+                     "ReactiveParams.max_reverse_s must be >= 0 and finite (0: no limit), got "
+                         << max_reverse_s);
 }
 
 SectorMinima ComputeSectorMinima(const std::vector<float>& ranges_m, const ReactiveParams& params) {
@@ -158,9 +161,20 @@ VelocityCommand ReactiveExplorer::Step(const std::vector<float>& ranges_m, doubl
     st.blocked_s = sim_time_s - *st.block_start_s;
     if (sectors.global_m < params_.critical_distance_m ||
         st.blocked_s > params_.block_time_limit_s) {
-      st.mode = ReactiveMode::kReverse;
-      st.command = {params_.reverse_speed_mps, 0.0};
-      return st.command;
+      if (!st.reverse_start_s) st.reverse_start_s = sim_time_s;
+      const bool too_long = params_.max_reverse_s > 0.0 &&
+                            sim_time_s - *st.reverse_start_s > params_.max_reverse_s;
+      if (!too_long) {
+        st.mode = ReactiveMode::kReverse;
+        st.command = {params_.reverse_speed_mps, 0.0};
+        return st.command;
+      }
+      // Reversed for too long without the front clearing: turn instead, on a new timer.
+      st.reverse_start_s.reset();
+      st.block_start_s = sim_time_s;
+      st.blocked_s = 0.0;
+    } else {
+      st.reverse_start_s.reset();
     }
     if (st.turn_direction == 0) st.turn_direction = FreerSide(sectors);
     st.mode = ReactiveMode::kTurnInPlace;
@@ -169,6 +183,7 @@ VelocityCommand ReactiveExplorer::Step(const std::vector<float>& ranges_m, doubl
   }
   st.turn_direction = 0;
   st.block_start_s.reset();
+  st.reverse_start_s.reset();
   st.blocked_s = 0.0;
   ClearFrontDecision(sectors, params_, &st.mode, &st.command);
   return st.command;

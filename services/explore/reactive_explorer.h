@@ -68,6 +68,11 @@ struct ReactiveParams {
   double side_distance_m{0.45};          ///< left / right sector threshold for centring
   double turn_rate_radps{0.6};           ///< turn in place, magnitude
   double reverse_speed_mps{-0.15};       ///< negative: backwards
+  /// Longest reverse, then a turn in place toward the remembered (or freer) side with a new
+  /// block timer; 0: reverse until the front clears (the seed's rule). A robot backed against a
+  /// wall with something ahead otherwise pushes backwards for ever, pitched, its laser finding
+  /// the floor ahead.
+  double max_reverse_s{0.0};
   double clean_min_range_m{0.05};        ///< readings strictly below are replaced
   double clean_max_range_m{10.0};        ///< readings strictly above are replaced
   double clean_replacement_m{10.0};      ///< the "reasonable maximum distance"
@@ -107,6 +112,7 @@ struct ReactiveState {
   /// reverses since the obstacle appeared).
   int turn_direction{0};
   std::optional<double> block_start_s;  ///< sim time of the first scan of the current obstacle
+  std::optional<double> reverse_start_s;  ///< sim time the current reverse began
   double blocked_s{0.0};                ///< time blocked at the last scan (0 when clear)
   std::optional<double> last_time_s;    ///< sim time of the last scan
   int64_t scans{0};                     ///< scans processed

@@ -148,6 +148,37 @@ TEST(ReactiveExplorerTest, BlockedLongerThanTheLimitReversesUntilTheFrontClears)
   ExpectCommand(explorer.Step(blocked, 22.3), -0.15, 0.0);
 }
 
+TEST(ReactiveExplorerTest, AReverseThatDoesNotClearTheFrontEndsInATurnWhenCapped) {
+  // Backed against a wall with the front still blocked: with max_reverse_s the reverse ends
+  // after 3 s in a turn on a new block timer, then a new reverse; without it (the seed's rule,
+  // the test above) it would reverse for ever.
+  ReactiveParams p;
+  p.max_reverse_s = 3.0;
+  ReactiveExplorer explorer(p);
+  const std::vector<float> blocked = Sectors(3.f, 3.f, 0.6f, 8.f, 8.f);
+  for (const double t : {10.0, 11.0, 12.0}) ExpectCommand(explorer.Step(blocked, t), 0.0, +0.6);
+  for (const double t : {12.1, 13.0, 15.1}) {
+    ExpectCommand(explorer.Step(blocked, t), -0.15, 0.0);
+    EXPECT_EQ(explorer.state().mode, ReactiveMode::kReverse) << "t = " << t;
+  }
+  // 3.1 s of reversing: the remembered side, on a timer started now.
+  ExpectCommand(explorer.Step(blocked, 15.2), 0.0, +0.6);
+  EXPECT_EQ(explorer.state().mode, ReactiveMode::kTurnInPlace);
+  ASSERT_TRUE(explorer.state().block_start_s.has_value());
+  EXPECT_DOUBLE_EQ(*explorer.state().block_start_s, 15.2);
+  ExpectCommand(explorer.Step(blocked, 17.2), 0.0, +0.6);
+  ExpectCommand(explorer.Step(blocked, 17.3), -0.15, 0.0);
+  // A critical reading is capped the same way.
+  ReactiveExplorer critical(p);
+  const std::vector<float> close = Sectors(3.f, 3.f, 0.2f, 8.f, 8.f);
+  ExpectCommand(critical.Step(close, 0.0), -0.15, 0.0);
+  ExpectCommand(critical.Step(close, 3.0), -0.15, 0.0);
+  EXPECT_EQ(critical.Step(close, 3.1).v_mps, 0.0);
+  EXPECT_EQ(critical.state().mode, ReactiveMode::kTurnInPlace);
+  p.max_reverse_s = -1.0;
+  EXPECT_THROW(ReactiveExplorer bad(p), std::invalid_argument);
+}
+
 TEST(ReactiveExplorerTest, ACriticalReverseLeavesTheTurnSideUnchosen) {
   ReactiveExplorer explorer;
   ExpectCommand(explorer.Step(Sectors(3.f, 3.f, 0.2f, 8.f, 8.f), 0.0), -0.15, 0.0);
