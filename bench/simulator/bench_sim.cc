@@ -34,33 +34,16 @@
 namespace {
 
 using cairn::bench::Figure;
+using cairn::bench::LoadAverage;
 using cairn::bench::Report;
+using cairn::bench::ProcessCpuSeconds;
+using cairn::bench::ThreadCpuSeconds;
 using cairn::sim::MujocoSim;
 using cairn::sim::Scenario;
 using cairn::sim::SimOutputs;
 using Clock = std::chrono::steady_clock;
 
 constexpr double kWindowS = 5.0;  // simulated seconds per window
-
-double CpuSeconds(clockid_t clock) {
-  timespec ts{};
-  clock_gettime(clock, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-double ThreadCpuSeconds() { return CpuSeconds(CLOCK_THREAD_CPUTIME_ID); }
-double ProcessCpuSeconds() { return CpuSeconds(CLOCK_PROCESS_CPUTIME_ID); }
-
-// The 1-minute load average, so a reader can tell a busy machine from a slow simulator.
-std::string LoadAverage() {
-  double load = 0.0;
-  if (FILE* f = std::fopen("/proc/loadavg", "r")) {
-    if (std::fscanf(f, "%lf", &load) != 1) load = 0.0;
-    std::fclose(f);
-  }
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.2f", load);
-  return text;
-}
 
 Scenario Workload(int ray_threads) {
   const cairn::sim::SimPaths paths = cairn::sim::SimPaths::InTree(CAIRN_SOURCE_DIR);

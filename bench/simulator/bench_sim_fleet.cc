@@ -35,7 +35,9 @@
 namespace {
 
 using cairn::bench::Figure;
+using cairn::bench::LoadAverage;
 using cairn::bench::Report;
+using cairn::bench::ThreadCpuSeconds;
 using cairn::sim::MujocoSim;
 using cairn::sim::Scenario;
 using Clock = std::chrono::steady_clock;
@@ -43,23 +45,6 @@ using Clock = std::chrono::steady_clock;
 constexpr double kWindowS = 5.0;    // simulated seconds per window
 constexpr double kRunS = 20.0;      // simulated seconds per robot count
 constexpr double kTargetRtf = 5.0;  // 8 robots, median window
-
-double ThreadCpuSeconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-std::string LoadAverage() {
-  double load = 0.0;
-  if (FILE* f = std::fopen("/proc/loadavg", "r")) {
-    if (std::fscanf(f, "%lf", &load) != 1) load = 0.0;
-    std::fclose(f);
-  }
-  char text[32];
-  std::snprintf(text, sizeof(text), "%.2f", load);
-  return text;
-}
 
 Scenario Fleet(int robots) {
   const cairn::sim::SimPaths paths = cairn::sim::SimPaths::InTree(CAIRN_SOURCE_DIR);

@@ -6,6 +6,7 @@
 #include <sstream>
 #include <string>
 
+#include <time.h>
 #include <unistd.h>
 
 /// @file
@@ -70,6 +71,28 @@ inline void Report(const Figure& f) {
       JsonNumber(ratio).c_str(), JsonEscape(f.target).c_str(), f.pass ? "true" : "false",
       f.higher_is_better ? "true" : "false");
   std::fflush(stdout);
+}
+
+/// CPU seconds of `clock` (CLOCK_THREAD_CPUTIME_ID, CLOCK_PROCESS_CPUTIME_ID) so far.
+inline double CpuSeconds(clockid_t clock) {
+  timespec ts{};
+  clock_gettime(clock, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+inline double ThreadCpuSeconds() { return CpuSeconds(CLOCK_THREAD_CPUTIME_ID); }
+inline double ProcessCpuSeconds() { return CpuSeconds(CLOCK_PROCESS_CPUTIME_ID); }
+
+/// The 1-minute load average as text ("3.20"), so a reader can tell a busy machine from a slow
+/// program; "0.00" where unknown.
+inline std::string LoadAverage() {
+  double load = 0.0;
+  if (FILE* f = std::fopen("/proc/loadavg", "r")) {
+    if (std::fscanf(f, "%lf", &load) != 1) load = 0.0;
+    std::fclose(f);
+  }
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.2f", load);
+  return text;
 }
 
 /// CPU time the host took from this machine's processors so far (the `steal` column of

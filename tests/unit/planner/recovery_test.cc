@@ -62,20 +62,6 @@ TEST_F(RecoveryTest, RotateTurnsByTheAngleAndStops) {
   EXPECT_NEAR(pose.x_m, 3.0, 1e-9);
 }
 
-TEST_F(RecoveryTest, RotateStopsWhenTheTurnIsBlocked) {
-  // A long robot in a corridor just wider than it is: it cannot turn.
-  TestLayer layer(60, 60, 0.1);
-  layer.Rect(0.0, 0.0, 6.0, 2.65, 100.0f).Rect(0.0, 3.35, 6.0, 6.0, 100.0f);
-  const auto map = layer.Build(common::RectangleFootprint(1.5, 0.4));
-  RecoveryBehaviour dut(gen_, {});
-  Pose2 pose{3.0, 3.0, 0.0};
-  ASSERT_TRUE(map->IsValid(pose));
-  dut.Start(RecoveryKind::kRotate, pose, 0.0);
-  ASSERT_GT(Run(&dut, map.get(), &pose, 100), 0);
-  EXPECT_EQ(note_, "rotation blocked");
-  EXPECT_TRUE(map->IsValid(pose));
-}
-
 TEST_F(RecoveryTest, BackUpReversesTheDistanceUnlessBlocked) {
   TestLayer layer(60, 60, 0.1);
   const auto map = layer.Build(PioneerFootprint());
@@ -118,7 +104,7 @@ TEST_F(RecoveryTest, RotateTurnsClockwiseWhereOnlyThatWayIsClear) {
   EXPECT_FALSE(last_blocked_);
 }
 
-TEST_F(RecoveryTest, ABehaviourBlockedBeforeItMovedSaysSo) {
+TEST_F(RecoveryTest, TurnsAndReversesBlockedBeforeTheyMovedSaySo) {
   // A long robot in a corridor just wider than it is, a wall at its tail: it can neither turn
   // nor back up, and both say they were blocked where they stood.
   TestLayer layer(60, 60, 0.1);
@@ -132,6 +118,7 @@ TEST_F(RecoveryTest, ABehaviourBlockedBeforeItMovedSaysSo) {
   ASSERT_GT(Run(&dut, map.get(), &pose, 100), 0);
   EXPECT_EQ(note_, "rotation blocked");
   EXPECT_TRUE(last_blocked_);
+  EXPECT_TRUE(map->IsValid(pose));
   dut.Start(RecoveryKind::kBackUp, pose, 0.0);
   ASSERT_GT(Run(&dut, map.get(), &pose, 100), 0);
   EXPECT_EQ(note_, "backing up is blocked");
