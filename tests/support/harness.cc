@@ -20,6 +20,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "cairn/lcmt_goal.hpp"
+#include "cairn/lcmt_nav_status.hpp"
+#include "common/channels.h"
+
 namespace cairn::testing {
 namespace fs = std::filesystem;
 
@@ -272,6 +276,30 @@ std::optional<cairn::lcmt_health> Bus::Health(const std::string& process,
   auto it = health_.find(process + "|" + (robot.empty() ? "*" : robot));
   if (it == health_.end()) return std::nullopt;
   return it->second;
+}
+
+bool SendPoseGoal(Bus& bus, const std::string& robot, int64_t goal_id, double x_m, double y_m,
+                  double timeout_s, const std::function<void()>& pump) {
+  cairn::lcmt_goal goal{};
+  goal.robot = robot;
+  goal.goal_id = goal_id;
+  goal.kind = cairn::lcmt_goal::KIND_POSE;
+  goal.x_m = x_m;
+  goal.y_m = y_m;
+  const std::string status_channel = channels::ForRobot(robot, channels::kNavStatus);
+  const std::string goal_channel = channels::ForRobot(robot, channels::kGoal);
+  auto last_sent = std::chrono::steady_clock::now() - std::chrono::seconds(2);
+  return WaitFor(
+      [&] {
+        const auto status = bus.Last<cairn::lcmt_nav_status>(status_channel);
+        if (status && status->goal_id == goal_id) return true;
+        if (std::chrono::steady_clock::now() - last_sent > std::chrono::seconds(1)) {
+          bus.Publish(goal_channel, goal);
+          last_sent = std::chrono::steady_clock::now();
+        }
+        return false;
+      },
+      timeout_s, pump ? pump : std::function<void()>([&] { bus.Pump(20); }));
 }
 
 }  // namespace cairn::testing

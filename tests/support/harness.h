@@ -143,4 +143,11 @@ class Bus {
   std::map<std::string, std::vector<std::vector<uint8_t>>> keep_;
 };
 
+/// Sends a pose goal to `robot`'s navigator, again every second until its status names the
+/// goal (a message on the bus can be lost; re-sending a goal id is idempotent). Returns whether
+/// the navigator took it within timeout_s. `pump` handles traffic in between (bus.Pump(20)
+/// when null).
+bool SendPoseGoal(Bus& bus, const std::string& robot, int64_t goal_id, double x_m, double y_m,
+                  double timeout_s, const std::function<void()>& pump = nullptr);
+
 }  // namespace cairn::testing

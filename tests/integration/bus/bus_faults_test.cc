@@ -254,24 +254,7 @@ class BusFaultsTest : public ::testing::Test {
   }
 
   void SendGoal(int64_t id, double x, double y) {
-    cairn::lcmt_goal g{};
-    g.robot = kRobot;
-    g.goal_id = id;
-    g.kind = cairn::lcmt_goal::KIND_POSE;
-    g.x_m = x;
-    g.y_m = y;
-    auto last_sent = Clock::now() - std::chrono::seconds(2);
-    ASSERT_TRUE(WaitFor(
-        [&] {
-          auto s = Status();
-          if (s && s->goal_id == id) return true;
-          if (Clock::now() - last_sent > std::chrono::seconds(1)) {
-            bus_->Publish(ch::ForRobot(kRobot, ch::kGoal), g);
-            last_sent = Clock::now();
-          }
-          return false;
-        },
-        15.0, [&] { Pump(); }))
+    ASSERT_TRUE(testing::SendPoseGoal(*bus_, kRobot, id, x, y, 15.0, [&] { Pump(); }))
         << "the navigator never took goal " << id;
   }
   std::optional<cairn::lcmt_nav_status> Status() {

@@ -216,26 +216,7 @@ class NavigatorStackTest : public ::testing::Test {
   }
 
   void SendGoal(int64_t id, double x, double y) {
-    cairn::lcmt_goal g{};
-    g.robot = kRobot;
-    g.goal_id = id;
-    g.kind = cairn::lcmt_goal::KIND_POSE;
-    g.x_m = x;
-    g.y_m = y;
-    // Re-sent until the status names it (a message on the bus can be lost; re-sends of a goal
-    // id are idempotent).
-    auto last_sent = std::chrono::steady_clock::now() - std::chrono::seconds(2);
-    EXPECT_TRUE(WaitFor(
-        [&] {
-          auto s = bus_.Last<cairn::lcmt_nav_status>(ch::ForRobot(kRobot, ch::kNavStatus));
-          if (s && s->goal_id == id) return true;
-          if (std::chrono::steady_clock::now() - last_sent > std::chrono::seconds(1)) {
-            bus_.Publish(ch::ForRobot(kRobot, ch::kGoal), g);
-            last_sent = std::chrono::steady_clock::now();
-          }
-          return false;
-        },
-        15.0, [&] { bus_.Pump(20); }))
+    EXPECT_TRUE(testing::SendPoseGoal(bus_, kRobot, id, x, y, 15.0))
         << "the navigator never took goal " << id;
   }
   std::optional<cairn::lcmt_nav_status> Status() {

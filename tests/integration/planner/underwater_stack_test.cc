@@ -178,24 +178,7 @@ class UnderwaterStackTest : public ::testing::Test {
   }
 
   void SendGoal(int64_t id, double x, double y) {
-    cairn::lcmt_goal g{};
-    g.robot = kRobot;
-    g.goal_id = id;
-    g.kind = cairn::lcmt_goal::KIND_POSE;
-    g.x_m = x;
-    g.y_m = y;
-    auto last_sent = std::chrono::steady_clock::now() - std::chrono::seconds(2);
-    ASSERT_TRUE(WaitFor(
-        [&] {
-          auto s = Status();
-          if (s && s->goal_id == id) return true;
-          if (std::chrono::steady_clock::now() - last_sent > std::chrono::seconds(1)) {
-            bus_.Publish(ch::ForRobot(kRobot, ch::kGoal), g);
-            last_sent = std::chrono::steady_clock::now();
-          }
-          return false;
-        },
-        30.0, [&] { bus_.Pump(20); }))
+    ASSERT_TRUE(testing::SendPoseGoal(bus_, kRobot, id, x, y, 30.0))
         << "the navigator never took goal " << id << "\n"
         << navigator_->Log();
   }
