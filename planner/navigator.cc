@@ -348,10 +348,18 @@ bool Navigator::WaitForMap(PlanStatus status, const std::string& why, double now
   return true;
 }
 
-void Navigator::StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s) {
+void Navigator::StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s,
+                                    bool after_blocked) {
   failure_reason_ = reason;
   plan_wanted_ = false;
   const auto& sequence = params_.recovery.sequence;
+  // drive_forward is the way out of a pocket: only when the behaviour before it was blocked
+  // where the robot stood (after a turn or a reverse that moved, or a plan that failed, the
+  // plan from the new pose decides).
+  while (!after_blocked && recovery_index_ < sequence.size() &&
+         sequence[recovery_index_] == RecoveryKind::kDriveForward) {
+    ++recovery_index_;
+  }
   if (recovery_index_ < sequence.size() && pose_) {
     const RecoveryKind kind = sequence[recovery_index_++];
     recovery_.Start(kind, *pose_, now_s);
@@ -816,7 +824,7 @@ Velocity Navigator::Command(double now_s, StepOutput* out) {
         StartRecoveryOrFail(failure_reason_,
                             std::string("after ") + RecoveryKindName(recovery_.kind()) + " (" +
                                 step.note + ")",
-                            now_s);
+                            now_s, /*after_blocked=*/true);
       } else if (step.done) {
         SetState(NavState::kPlanning, failure_reason_,
                  std::string("after ") + RecoveryKindName(recovery_.kind()) + " (" + step.note +

@@ -181,7 +181,8 @@ class Navigator {
   bool ResolveGoal();
   /// A place goal chosen on an earlier map moves when the map now shows obstacles near it.
   void MovePlaceGoalIfCrowded();
-  void StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s);
+  void StartRecoveryOrFail(NavReason reason, const std::string& why, double now_s,
+                           bool after_blocked = false);
   /// True when a pose of the path ahead is invalid on the planning map; `where` (if given)
   /// gets " at (x, y)" of that pose and the extent of the blocking cells under it.
   bool PathBlockedAhead(std::string* where = nullptr) const;
