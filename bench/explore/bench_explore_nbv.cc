@@ -23,10 +23,7 @@ using cairn::explore::InterestZone;
 using cairn::explore::ScoredPoint;
 using Clock = std::chrono::steady_clock;
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using cairn::bench::Median;
 
 InfoMap FortyScans(std::vector<cairn::common::Vector2>* scans) {
   InfoMap map(cairn::explore::RectangleWorkArea({0.0, 0.0}, {60.0, 60.0}));

@@ -61,11 +61,7 @@ Scenario Workload(int ray_threads) {
   return s;
 }
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using cairn::bench::Median;
 
 // Real-time factors of the 5 s windows of one run, and what the run did.
 struct Windows {

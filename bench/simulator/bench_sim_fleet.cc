@@ -65,11 +65,7 @@ Scenario Fleet(int robots) {
   return s;
 }
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using cairn::bench::Median;
 
 struct Run {
   int robots{0};

@@ -61,10 +61,7 @@ Scenario LaserWorkload() {
   return cairn::sim::MakeScenario("hall", {"p3dx:p3dx::8,1,90"}, paths);
 }
 
-double Median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v.empty() ? NAN : v[v.size() / 2];
-}
+using cairn::bench::Median;
 
 struct Run {
   std::vector<double> rtf;  // per window

@@ -1,10 +1,12 @@
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include <time.h>
 #include <unistd.h>
@@ -71,6 +73,14 @@ inline void Report(const Figure& f) {
       JsonNumber(ratio).c_str(), JsonEscape(f.target).c_str(), f.pass ? "true" : "false",
       f.higher_is_better ? "true" : "false");
   std::fflush(stdout);
+}
+
+/// The median of `v` (the mean of the middle two for an even count); NaN when empty.
+inline double Median(std::vector<double> v) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 /// CPU seconds of `clock` (CLOCK_THREAD_CPUTIME_ID, CLOCK_PROCESS_CPUTIME_ID) so far.
