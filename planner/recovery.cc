@@ -138,6 +138,22 @@ RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_com
     blocked_ = (pose.position() - start_pose_.position()).norm() < 0.01 && turned_rad_ < 0.02;
     stop(note);
   };
+  // Straight at `speed_mps` (negative: backwards) until `distance_m` from the start, unless the
+  // footprint ahead would hit something.
+  auto straight = [&](double speed_mps, double distance_m, const char* moved_format,
+                      const char* blocked_note) {
+    const double travelled = (pose.position() - start_pose_.position()).norm();
+    if (travelled >= distance_m) {
+      stop(Format(moved_format, travelled));
+      return;
+    }
+    const Velocity target{speed_mps, 0.0};
+    if (!MotionClear(map, pose, target, params_.collision_lookahead_s)) {
+      blocked(blocked_note);
+      return;
+    }
+    out.command = generator_.Toward(last_command, target);
+  };
   if (!stopping_ && now_s - start_s_ > params_.behaviour_timeout_s) stop("timed out");
 
   if (!stopping_) {
@@ -154,10 +170,12 @@ RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_com
         };
         // Counter-clockwise, or clockwise where only that way is clear (checked before it
         // turns: once turning, it keeps its direction).
-        if (turned_rad_ < 0.02 && !clear(rotate_sign_) && clear(-rotate_sign_)) {
+        bool turn_clear = clear(rotate_sign_);
+        if (!turn_clear && turned_rad_ < 0.02 && clear(-rotate_sign_)) {
           rotate_sign_ = -rotate_sign_;
+          turn_clear = true;
         }
-        if (!clear(rotate_sign_)) {
+        if (!turn_clear) {
           blocked("rotation blocked");
           break;
         }
@@ -166,39 +184,25 @@ RecoveryStep RecoveryBehaviour::Step(const Pose2& pose, const Velocity& last_com
         break;
       }
       case RecoveryKind::kBackUp: {
-        const double travelled = (pose.position() - start_pose_.position()).norm();
         const double reverse = -generator_.limits().min_vel_x_mps;
-        if (travelled >= params_.backup_distance_m) {
-          stop(Format("backed up %.2f m", travelled));
-          break;
-        }
         if (reverse <= 0.0) {
           stop("the profile cannot reverse");
           break;
         }
-        const Velocity target{-std::min(params_.backup_speed_mps, reverse), 0.0};
-        if (!MotionClear(map, pose, target, params_.collision_lookahead_s)) {
-          blocked("backing up is blocked");
-          break;
-        }
-        out.command = generator_.Toward(last_command, target);
+        straight(-std::min(params_.backup_speed_mps, reverse), params_.backup_distance_m,
+                 "backed up %.2f m", "backing up is blocked");
         break;
       }
       case RecoveryKind::kDriveForward: {
         // Out of a pocket the other way: where turning and reversing touch something, the way
         // ahead may be the one that is clear.
-        const double travelled = (pose.position() - start_pose_.position()).norm();
-        if (travelled >= params_.forward_distance_m) {
-          stop(Format("drove forward %.2f m", travelled));
-          break;
-        }
         const double forward = generator_.limits().max_vel_x_mps;
-        const Velocity target{std::min(params_.forward_speed_mps, forward), 0.0};
-        if (forward <= 0.0 || !MotionClear(map, pose, target, params_.collision_lookahead_s)) {
+        if (forward <= 0.0) {
           blocked("driving forward is blocked");
           break;
         }
-        out.command = generator_.Toward(last_command, target);
+        straight(std::min(params_.forward_speed_mps, forward), params_.forward_distance_m,
+                 "drove forward %.2f m", "driving forward is blocked");
         break;
       }
       case RecoveryKind::kWait:

@@ -1,7 +1,5 @@
 #include "simulator/mujoco_sim.h"
 
-#include "common/log.h"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -10,6 +8,7 @@
 #include <stdexcept>
 
 #include "common/check.h"
+#include "common/log.h"
 #include "simulator/mjcf_compose.h"
 #include "simulator/model_capacity.h"
 #include "simulator/sensor_registry.h"
