@@ -408,8 +408,9 @@ inline void TestCandidate(const mjModel* m, const mjData* data, const double o[3
   double x;
   if (c.infinite) {
     // Only the front face counts; planes met farther than `best` are skipped cheaply.
+    // The plane is met at -hi[0] / vz (vz < 0): beyond *best when -hi[0] < *best * vz.
     const double vz = c.lo[0] * v[0] + c.lo[1] * v[1] + c.lo[2] * v[2];
-    if (vz > -mjMINVAL || -c.hi[0] / vz > *best) return;
+    if (vz > -mjMINVAL || -c.hi[0] < *best * vz) return;
     x = RayPlane(m, data, c.geom, o, v);
   } else {
     // Slab test (box relative to the sensor), clipped to [0, best].

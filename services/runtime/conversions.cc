@@ -35,7 +35,7 @@ Result<common::Pose3> PoseFromArrays(const double position_m[3], const double or
   return pose;
 }
 
-cairn::lcmt_point_cloud_slice ToLcm(const common::LidarSlice& slice) {
+cairn::lcmt_point_cloud_slice ToLcmWithoutPoints(const common::LidarSlice& slice) {
   cairn::lcmt_point_cloud_slice m{};
   m.utime = slice.utime;
   m.robot = slice.robot;
@@ -47,6 +47,12 @@ cairn::lcmt_point_cloud_slice ToLcm(const common::LidarSlice& slice) {
   m.azimuth_end_rad = slice.azimuth_end_rad;
   m.max_range_m = slice.max_range_m;
   ToLcm(slice.sensor_pose, m.sensor_position_m, m.sensor_orientation_wxyz);
+  m.num_points = 0;
+  return m;
+}
+
+cairn::lcmt_point_cloud_slice ToLcm(const common::LidarSlice& slice) {
+  cairn::lcmt_point_cloud_slice m = ToLcmWithoutPoints(slice);
   const size_t n = slice.points.size();
   m.num_points = static_cast<int32_t>(n);
   m.x_m.resize(n);

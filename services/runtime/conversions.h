@@ -24,6 +24,8 @@ common::Result<common::Pose3> PoseFromArrays(const double position_m[3],
                                              const double orientation_wxyz[4]);
 
 cairn::lcmt_point_cloud_slice ToLcm(const common::LidarSlice& slice);
+/// The same without the points (num_points 0): what a fast encoder writes before them.
+cairn::lcmt_point_cloud_slice ToLcmWithoutPoints(const common::LidarSlice& slice);
 /// Points with non-finite coordinates are kept (the mapper counts and drops them); a size
 /// mismatch or a bad pose is an error.
 common::Result<common::LidarSlice> FromLcm(const cairn::lcmt_point_cloud_slice& msg);

@@ -1,5 +1,6 @@
 #include "services/runtime/node.h"
 
+#include <algorithm>
 #include <csignal>
 #include <cstdarg>
 #include <cstdlib>
@@ -13,6 +14,18 @@
 #include "common/channels.h"
 
 namespace cairn::runtime {
+
+namespace internal {
+uint8_t* PublishBuffer(size_t size) {
+  thread_local std::unique_ptr<uint8_t[]> buffer;
+  thread_local size_t capacity = 0;
+  if (size > capacity) {
+    capacity = std::max(size, 2 * capacity);
+    buffer.reset(new uint8_t[capacity]);
+  }
+  return buffer.get();
+}
+}  // namespace internal
 namespace {
 
 std::atomic<bool> g_shutdown{false};

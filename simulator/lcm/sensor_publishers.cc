@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <utility>
 
@@ -104,16 +105,12 @@ cairn::lcmt_pose GroundTruthToLcm(const GroundTruthReading& r) {
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "the fast encoding swaps bytes");
 
-// Big-endian 32-bit values (LCM's byte order), one swap per value.
-void EncodeFloatsBigEndian(const std::vector<float>& values, uint8_t* out) {
-  const size_t n = values.size();
-  const float* in = values.data();
-  for (size_t i = 0; i < n; ++i) {
-    uint32_t v;
-    std::memcpy(&v, in + i, sizeof(v));
-    v = __builtin_bswap32(v);
-    std::memcpy(out + 4 * i, &v, sizeof(v));
-  }
+// A float as LCM writes it: big-endian, one swap.
+inline void PutFloatBigEndian(float value, uint8_t* out) {
+  uint32_t v;
+  std::memcpy(&v, &value, sizeof(v));
+  v = __builtin_bswap32(v);
+  std::memcpy(out, &v, sizeof(v));
 }
 
 /// The lidar's publisher: its slices go out through FastPointCloudSlice.
@@ -125,8 +122,7 @@ SensorPublisher LidarPublisher() {
     const std::vector<common::LidarSlice>* slices = group.As<common::LidarSlice>();
     CAIRN_DEMAND(slices != nullptr);
     for (const common::LidarSlice& slice : *slices) {
-      cairn::lcmt_point_cloud_slice msg = runtime::ToLcm(slice);
-      node.Publish(channels::ForRobot(msg.robot, stream.c_str()), FastPointCloudSlice{&msg});
+      node.Publish(channels::ForRobot(slice.robot, stream.c_str()), FastPointCloudSlice(slice));
     }
   };
   return p;
@@ -152,41 +148,39 @@ const SensorPublishers& BuiltinSensorPublishers() {
   return publishers;
 }
 
+FastPointCloudSlice::FastPointCloudSlice(const common::LidarSlice& slice)
+    : slice_(&slice), head_(runtime::ToLcmWithoutPoints(slice)) {}
+
+int FastPointCloudSlice::getEncodedSize() const {
+  const int64_t size = head_.getEncodedSize() + 17 * static_cast<int64_t>(slice_->points.size());
+  return size <= std::numeric_limits<int32_t>::max() ? static_cast<int>(size) : -1;
+}
+
 int FastPointCloudSlice::encode(void* buf, int offset, int maxlen) const {
-  cairn::lcmt_point_cloud_slice& m = *msg;
-  const int size = m.getEncodedSize();
-  const int32_t n = m.num_points;
-  if (offset < 0 || maxlen < size || n < 0 || static_cast<size_t>(n) != m.x_m.size() ||
-      m.y_m.size() != m.x_m.size() || m.z_m.size() != m.x_m.size() ||
-      m.intensity.size() != m.x_m.size() || m.ring.size() != m.x_m.size()) {
-    return -1;
-  }
+  const int size = getEncodedSize();
+  if (size < 0 || offset < 0 || maxlen < size) return -1;
   // The fields up to num_points, by the generated code: the message without its points ends
   // with num_points = 0, which then gets the real count.
-  std::vector<float> x, y, z, intensity;
-  std::vector<int8_t> ring;
-  std::swap(x, m.x_m);
-  std::swap(y, m.y_m);
-  std::swap(z, m.z_m);
-  std::swap(intensity, m.intensity);
-  std::swap(ring, m.ring);
-  m.num_points = 0;
-  const int head = m.encode(buf, offset, maxlen);
-  m.num_points = n;
-  std::swap(x, m.x_m);
-  std::swap(y, m.y_m);
-  std::swap(z, m.z_m);
-  std::swap(intensity, m.intensity);
-  std::swap(ring, m.ring);
+  const int head = head_.encode(buf, offset, maxlen);
+  const std::vector<common::LidarPoint>& points = slice_->points;
+  const size_t n = points.size();
   if (head < 4 || head + 17 * static_cast<int64_t>(n) != size) return -1;
   uint8_t* out = static_cast<uint8_t*>(buf) + offset + head;
   const uint32_t count = __builtin_bswap32(static_cast<uint32_t>(n));
   std::memcpy(out - 4, &count, sizeof(count));
-  EncodeFloatsBigEndian(m.x_m, out);
-  EncodeFloatsBigEndian(m.y_m, out + 4 * n);
-  EncodeFloatsBigEndian(m.z_m, out + 8 * n);
-  EncodeFloatsBigEndian(m.intensity, out + 12 * n);
-  std::memcpy(out + 16 * n, m.ring.data(), static_cast<size_t>(n));
+  uint8_t* const x = out;
+  uint8_t* const y = out + 4 * n;
+  uint8_t* const z = out + 8 * n;
+  uint8_t* const intensity = out + 12 * n;
+  uint8_t* const ring = out + 16 * n;
+  for (size_t i = 0; i < n; ++i) {
+    const common::LidarPoint& p = points[i];
+    PutFloatBigEndian(p.x_m, x + 4 * i);
+    PutFloatBigEndian(p.y_m, y + 4 * i);
+    PutFloatBigEndian(p.z_m, z + 4 * i);
+    PutFloatBigEndian(p.intensity, intensity + 4 * i);
+    ring[i] = static_cast<uint8_t>(static_cast<int8_t>(p.ring));
+  }
   return size;
 }
 

@@ -14,6 +14,8 @@
 #include "cairn/lcmt_sonar_ping.hpp"
 
 #include "common/channels.h"
+#include "common/point_cloud.h"
+#include "services/runtime/conversions.h"
 #include "simulator/lcm/sim_service.h"
 #include "simulator/sensor_registry.h"
 #include "simulator/sensors/ground_truth_sensor.h"
@@ -109,42 +111,39 @@ TEST(SensorPublishersTest, LidarSlicesAndScans) {
 
 TEST(SensorPublishersTest, FastPointCloudSliceEncodesTheSameBytesAsLcm) {
   for (int n : {0, 1, 7, 2880}) {
-    cairn::lcmt_point_cloud_slice m{};
-    m.utime = 123456789;
-    m.robot = "robot-7";
-    m.frame = "lidar";
-    m.revolution = 42;
-    m.slice_index = 5;
-    m.slice_count = 20;
-    m.azimuth_start_rad = -0.3;
-    m.azimuth_end_rad = 0.01;
-    m.max_range_m = 70.0;
-    for (int k = 0; k < 3; ++k) m.sensor_position_m[k] = 1.5 * k - 0.25;
-    for (int k = 0; k < 4; ++k) m.sensor_orientation_wxyz[k] = 0.5 - 0.1 * k;
-    m.num_points = n;
+    common::LidarSlice slice;
+    slice.utime = 123456789;
+    slice.robot = "robot-7";
+    slice.revolution = 42;
+    slice.slice_index = 5;
+    slice.slice_count = 20;
+    slice.azimuth_start_rad = -0.3;
+    slice.azimuth_end_rad = 0.01;
+    slice.max_range_m = 70.0;
+    slice.sensor_pose.position_m = common::Vector3(-0.25, 1.25, 2.75);
+    slice.sensor_pose.orientation = common::Quaternion(0.5, -0.5, 0.5, 0.5);
     for (int i = 0; i < n; ++i) {
-      m.x_m.push_back(0.001f * static_cast<float>(i) - 3.0f);
-      m.y_m.push_back(-1e-7f * static_cast<float>(i * i));
-      m.z_m.push_back(i % 3 == 0 ? -0.0f : 12345.678f / static_cast<float>(i + 1));
-      m.intensity.push_back(static_cast<float>(i % 256));
-      m.ring.push_back(static_cast<int8_t>(i % 32 - 5));
+      common::LidarPoint p;
+      p.x_m = 0.001f * static_cast<float>(i) - 3.0f;
+      p.y_m = -1e-7f * static_cast<float>(i * i);
+      p.z_m = i % 3 == 0 ? -0.0f : 12345.678f / static_cast<float>(i + 1);
+      p.intensity = static_cast<float>(i % 256);
+      p.ring = static_cast<int16_t>(i % 32 - 5);
+      slice.points.push_back(p);
     }
+    // LCM's own encoding of the message runtime::ToLcm makes.
+    const cairn::lcmt_point_cloud_slice m = runtime::ToLcm(slice);
     const int size = m.getEncodedSize();
     std::vector<uint8_t> expected(static_cast<size_t>(size) + 3, 0xAB);
     std::vector<uint8_t> fast(static_cast<size_t>(size) + 3, 0xAB);
     ASSERT_EQ(m.encode(expected.data(), 3, size), size);
-    const FastPointCloudSlice wrapped{&m};
+    const FastPointCloudSlice wrapped(slice);
     ASSERT_EQ(wrapped.getEncodedSize(), size);
     ASSERT_EQ(wrapped.encode(fast.data(), 3, size), size) << n << " points";
     EXPECT_EQ(fast, expected) << n << " points";
-    // The message is as it was.
-    EXPECT_EQ(m.num_points, n);
-    EXPECT_EQ(static_cast<int>(m.x_m.size()), n);
-    EXPECT_EQ(static_cast<int>(m.ring.size()), n);
-    // Too little room, or arrays that disagree with num_points: refused like LCM's own.
+    // Too little room, or a negative offset: refused like LCM's own.
     EXPECT_EQ(wrapped.encode(fast.data(), 0, size - 1), -1);
-    m.num_points = n + 1;
-    EXPECT_EQ(wrapped.encode(fast.data(), 0, size + 17), -1);
+    EXPECT_EQ(wrapped.encode(fast.data(), -1, size), -1);
   }
 }
 
