@@ -416,9 +416,14 @@ TEST(ExploreStackTest, TenMinutesOfReactiveStatelessAndFrontierExplorationInTheA
   EXPECT_GE(reactive_eval.coverage, stateless_eval.coverage - 0.05);
   EXPECT_LE(reactive.trapped_windows, 2);
 
-  // The frontier mode covers more than the reactive mode in the same time (it stops earlier,
-  // when no frontier is left: about four simulated minutes).
-  EXPECT_GT(frontier_eval.coverage, reactive_eval.coverage);
+  // The frontier mode covers what the reactive mode covers in a fraction of the time: it stops
+  // when no frontier is left, after three to five simulated minutes against the reactive mode's
+  // ten. Both can come near the 99.9 % of the reachable floor the laser sees (in ten runs the
+  // frontier mode mapped 99.85-99.87 %, but once 95 % on a machine overloaded with compile jobs,
+  // and the reactive mode 97.2-99.9 %), and there which of the two ends a few cells ahead is
+  // chance; so the frontier mode is held within a tenth of a point.
+  EXPECT_GE(frontier_eval.coverage, reactive_eval.coverage - 0.001);
+  EXPECT_LE(frontier.sim_s, 0.75 * reactive.sim_s) << frontier.explorer_log;
   EXPECT_GE(frontier_eval.coverage, 0.97) << frontier.explorer_log;
   EXPECT_NE(frontier.explorer_log.find("goal 1:"), std::string::npos) << frontier.explorer_log;
 }
