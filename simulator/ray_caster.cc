@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <Eigen/Geometry>
@@ -263,6 +264,16 @@ struct Candidate {
   bool infinite;  ///< a plane
   bool exact;     ///< an axis-aligned box: the slab test is the exact intersection
   bool inside;    ///< the sensor is inside the box
+  /// A box turned against the world's axes: its index in GroupCandidates::oriented (its own
+  /// frame, for an exact test there), or -1.
+  int oriented;
+};
+
+// A turned box in its own frame: the sensor's position there, and its half extents.
+struct OrientedBox {
+  double axes[9];  ///< geom_xmat: box frame to world, row-major
+  double origin[3];  ///< the sensor in the box frame
+  double half[3];
 };
 
 // MuJoCo's plane rule (mj_ray): hit the front face only, within the rendered rectangle when
@@ -297,6 +308,7 @@ struct GroupCandidates {
   /// Per geom id: its index in `boxes`, or -1 (the neighbouring ray's geom is found at once).
   std::vector<int> box_of_geom;
   std::vector<Candidate> planes;
+  std::vector<OrientedBox> oriented;
   double z_low{kInfinity};
   double z_high{-kInfinity};
 };
@@ -316,6 +328,7 @@ Candidate PlaneCandidate(const mjData* data, const RayScene::Bound& b, const dou
   c.infinite = true;
   c.exact = false;
   c.inside = false;
+  c.oriented = -1;
   return c;
 }
 
@@ -345,7 +358,22 @@ Candidate BoxCandidate(const RayScene::Bound& b, const double o[3], double min_d
   c.type = b.type;
   c.infinite = false;
   c.exact = b.exact;
+  c.oriented = -1;
   return c;
+}
+
+// A turned box: the sensor's position in the box frame, as MuJoCo's ray_map computes it.
+OrientedBox MakeOrientedBox(const mjModel* m, const mjData* d, int g, const double o[3]) {
+  OrientedBox box;
+  const double* pos = d->geom_xpos + 3 * g;
+  const double* mat = d->geom_xmat + 9 * g;
+  const double dif[3] = {o[0] - pos[0], o[1] - pos[1], o[2] - pos[2]};
+  for (int i = 0; i < 9; ++i) box.axes[i] = mat[i];
+  for (int k = 0; k < 3; ++k) {
+    box.origin[k] = mat[k] * dif[0] + mat[3 + k] * dif[1] + mat[6 + k] * dif[2];
+    box.half[k] = m->geom_size[3 * g + k];
+  }
+  return box;
 }
 
 // Broad phase for a whole group: the planes, and the geoms whose box lies within range and
@@ -360,6 +388,7 @@ void CollectCandidates(const RayScene& scene, const mjData* data, const double o
   std::vector<Candidate>& all = out->boxes;
   for (const Candidate& c : all) out->box_of_geom[c.geom] = -1;
   all.clear();
+  out->oriented.clear();
   const size_t ngeom = static_cast<size_t>(scene.model()->ngeom);
   if (out->box_of_geom.size() < ngeom) out->box_of_geom.resize(ngeom, -1);
   for (const RayScene::Bound& b : scene.bounds()) {
@@ -377,6 +406,10 @@ void CollectCandidates(const RayScene& scene, const mjData* data, const double o
     if (min_d > max_range_m) continue;
     if (g.bounded && OutsidePyramid(b, planes_world, o)) continue;
     all.push_back(BoxCandidate(b, o, min_d));
+    if (b.type == mjGEOM_BOX && !b.exact) {
+      all.back().oriented = static_cast<int>(out->oriented.size());
+      out->oriented.push_back(MakeOrientedBox(scene.model(), data, b.geom, o));
+    }
   }
   std::sort(all.begin(), all.end(),
             [](const Candidate& a, const Candidate& b) { return a.min_distance < b.min_distance; });
@@ -399,87 +432,184 @@ void CollectCandidates(const RayScene& scene, const mjData* data, const double o
   all.resize(kept);
 }
 
-// Tests one candidate against the ray from `o` along `v` (world frame; `inv` its inverse,
-// `negative` its signs) and keeps the nearest hit no farther than *best. Separate scalars, not
-// a struct: `v` goes to MuJoCo's functions, and the hit state must stay in registers.
-inline void TestCandidate(const mjModel* m, const mjData* data, const double o[3],
-                          const double v[3], const double inv[3], const bool negative[3],
-                          const Candidate& c, double* best, int* best_geom) {
-  double x;
-  if (c.infinite) {
-    // Only the front face counts; planes met farther than `best` are skipped cheaply.
-    // The plane is met at -hi[0] / vz (vz < 0): beyond *best when -hi[0] < *best * vz.
-    const double vz = c.lo[0] * v[0] + c.lo[1] * v[1] + c.lo[2] * v[2];
-    if (vz > -mjMINVAL || -c.hi[0] < *best * vz) return;
-    x = RayPlane(m, data, c.geom, o, v);
-  } else {
-    // Slab test (box relative to the sensor), clipped to [0, best].
-    double t_in = 0.0, t_out = *best;
-    for (int k = 0; k < 3; ++k) {
-      const double t_near = (negative[k] ? c.hi[k] : c.lo[k]) * inv[k];
-      const double t_far = (negative[k] ? c.lo[k] : c.hi[k]) * inv[k];
-      if (t_near > t_in) t_in = t_near;
-      if (t_far < t_out) t_out = t_far;
-    }
-    if (t_in > t_out) return;
-    if (!c.exact) {
-      x = Narrow(m, data, c.geom, c.type, o, v);
-    } else if (!c.inside) {
-      x = t_in;
-    } else {
-      // From inside a box a ray meets its far side (as mju_rayGeom reports).
-      x = kInfinity;
-      for (int k = 0; k < 3; ++k) x = std::min(x, (negative[k] ? c.lo[k] : c.hi[k]) * inv[k]);
-    }
-  }
-  if (x >= 0.0 && x <= *best) {
-    *best = x;
-    *best_geom = c.geom;
-  }
-}
+// Narrow phase, four neighbouring rays at once on four lanes of doubles (GCC/Clang vector
+// extensions: AVX2 where the processor has it, two SSE2 halves otherwise). For each ray: the geom
+// its neighbour hit first (it tightens the search at once), then the planes, then the boxes
+// nearest first until the next one lies beyond every lane's nearest hit and beyond where the
+// rays leave the boxes' vertical extent. Axis-aligned and turned boxes are tested here (slab
+// tests, in the box's own frame for a turned one); other shapes go to MuJoCo's functions lane by
+// lane. The rays of a packet are neighbours in the pattern, so they meet nearly the same
+// candidates; a lane's result is its ray's alone (the tests compare every ray with mj_ray).
+typedef double V4 __attribute__((vector_size(32)));
+typedef long long M4 __attribute__((vector_size(32)));
 
-// Narrow phase of one ray (direction `dw` in the world): the geom the neighbouring ray hit
-// (`warm`, -1 for none) first, then the planes, then the boxes nearest first until the next
-// one lies beyond the nearest hit or beyond where the ray leaves the boxes' vertical extent.
-inline RayHit CastRay(const mjModel* m, const mjData* data, const GroupCandidates& candidates,
-                      const double o[3], const Eigen::Vector3d& dw, double max_range_m, int warm) {
-  const double v[3] = {dw.x(), dw.y(), dw.z()};
-  double inv[3];
-  bool negative[3];
-  // The three divisions unconditionally, so they overlap (one behind a branch each waited for
-  // the one before: a sixth of the caster's time); near-zero components are then replaced.
-  double divisor[3];
-  for (int k = 0; k < 3; ++k) divisor[k] = std::abs(v[k]) > 1e-12 ? v[k] : 1.0;
-  for (int k = 0; k < 3; ++k) inv[k] = 1.0 / divisor[k];
+// Sanitizer builds take the default path only (the plain build tests the AVX2 one).
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define CAIRN_SANITIZED_BUILD 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define CAIRN_SANITIZED_BUILD 1
+#endif
+#if defined(__x86_64__) && defined(__linux__) && !defined(CAIRN_SANITIZED_BUILD)
+#define CAIRN_PACKET_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define CAIRN_PACKET_CLONES
+#endif
+
+// `rays` rays (1 to 4; lanes past them hold the next directions, cast and not written) with
+// their direction components at components[0..2]; `warm`: the geoms their neighbours hit (-1).
+CAIRN_PACKET_CLONES
+void CastPacket(const mjModel* m, const mjData* data, const GroupCandidates& candidates,
+                const double o[3], const double rot[9], const double* const components[3],
+                int rays, const int warm[4], double max_range_m, RayHit* out) {
+  // World directions, as Eigen's rotation * direction computes them (same order of operations).
+  // Lanes past `rays` hold the next rays of the pattern: cast, never written.
+  V4 d[3];
+  for (int k = 0; k < 3; ++k) std::memcpy(&d[k], components[k], sizeof(V4));
+  V4 v[3], inv[3];
+  const V4 zero = {0.0, 0.0, 0.0, 0.0};
+  const V4 one = zero + 1.0;
   for (int k = 0; k < 3; ++k) {
-    if (!(std::abs(v[k]) > 1e-12)) inv[k] = v[k] >= 0 ? 1e12 : -1e12;
-    negative[k] = inv[k] < 0.0;
+    v[k] = (rot[k] * d[0] + rot[k + 3] * d[1]) + rot[k + 6] * d[2];
+    const V4 a = v[k] < zero ? -v[k] : v[k];
+    const M4 big = a > 1e-12;
+    const V4 divisor = (V4)(((M4)v[k] & big) | ((M4)one & ~big));
+    const V4 q = one / divisor;
+    const M4 pos = v[k] >= zero;
+    const V4 tiny = (V4)(((M4)(zero + 1e12) & pos) | ((M4)(zero - 1e12) & ~pos));
+    inv[k] = (V4)(((M4)q & big) | ((M4)tiny & ~big));
   }
-  // Plain pointers: MuJoCo's functions are called in between, nothing is reloaded after them.
+  // Beyond `reach` a ray has left the boxes' vertical extent.
+  V4 reach = zero + max_range_m;
+  for (int j = 0; j < 4; ++j) {
+    if (v[2][j] > 1e-12) {
+      reach[j] = std::max(0.0, candidates.z_high * inv[2][j]);
+    } else if (v[2][j] < -1e-12) {
+      reach[j] = std::max(0.0, candidates.z_low * inv[2][j]);
+    }
+  }
+  V4 best = zero + max_range_m;
+  int best_geom[4] = {-1, -1, -1, -1};
+
+  auto lane_dir = [&](int j, double w[3]) __attribute__((always_inline)) {
+    w[0] = v[0][j];
+    w[1] = v[1][j];
+    w[2] = v[2][j];
+  };
+  auto keep = [&](int j, double x, int geom) __attribute__((always_inline)) {
+    if (x >= 0.0 && x <= best[j]) {
+      best[j] = x;
+      best_geom[j] = geom;
+    }
+  };
+  // Inlined in each clone (a call would leave the vector code on the default target).
+  auto test = [&](const Candidate& c) __attribute__((always_inline)) {
+    if (c.infinite) {
+      const V4 vz = (c.lo[0] * v[0] + c.lo[1] * v[1]) + c.lo[2] * v[2];
+      const M4 front = (vz <= -mjMINVAL) & (-c.hi[0] >= best * vz);
+      for (int j = 0; j < 4; ++j) {
+        if (!front[j]) continue;
+        double w[3];
+        lane_dir(j, w);
+        keep(j, RayPlane(m, data, c.geom, o, w), c.geom);
+      }
+      return;
+    }
+    V4 t_in = zero, t_out = best, far = zero + kInfinity;
+    for (int k = 0; k < 3; ++k) {
+      const V4 a = c.lo[k] * inv[k];
+      const V4 b = c.hi[k] * inv[k];
+      const M4 a_near = a < b;
+      const V4 t_near = (V4)(((M4)a & a_near) | ((M4)b & ~a_near));
+      const V4 t_far = (V4)(((M4)b & a_near) | ((M4)a & ~a_near));
+      t_in = t_near > t_in ? t_near : t_in;
+      t_out = t_far < t_out ? t_far : t_out;
+      far = t_far < far ? t_far : far;
+    }
+    const M4 hit = t_in <= t_out;
+    if (!(hit[0] | hit[1] | hit[2] | hit[3])) return;
+    if (c.oriented >= 0) {
+      // The same slab test in the box's own frame: exact for a turned box, as mju_rayGeom's
+      // face tests are; from inside, the far side.
+      const OrientedBox& box = candidates.oriented[c.oriented];
+      V4 enter = zero - kInfinity, exit = zero + kInfinity;
+      for (int k = 0; k < 3; ++k) {
+        const V4 lv = (box.axes[k] * v[0] + box.axes[3 + k] * v[1]) + box.axes[6 + k] * v[2];
+        const V4 a = lv < zero ? -lv : lv;
+        const M4 big = a > 1e-12;
+        const V4 divisor = (V4)(((M4)lv & big) | ((M4)one & ~big));
+        const V4 q = one / divisor;
+        const M4 pos = lv >= zero;
+        const V4 tiny = (V4)(((M4)(zero + 1e12) & pos) | ((M4)(zero - 1e12) & ~pos));
+        const V4 il = (V4)(((M4)q & big) | ((M4)tiny & ~big));
+        const V4 ta = (-box.half[k] - box.origin[k]) * il;
+        const V4 tb = (box.half[k] - box.origin[k]) * il;
+        const M4 a_near = ta < tb;
+        const V4 t_near = (V4)(((M4)ta & a_near) | ((M4)tb & ~a_near));
+        const V4 t_far = (V4)(((M4)tb & a_near) | ((M4)ta & ~a_near));
+        enter = t_near > enter ? t_near : enter;
+        exit = t_far < exit ? t_far : exit;
+      }
+      const M4 outside = enter >= zero;
+      const V4 x = (V4)(((M4)enter & outside) | ((M4)exit & ~outside));
+      const M4 nearer = hit & (enter <= exit) & (x >= zero) & (x <= best);
+      best = (V4)(((M4)x & nearer) | ((M4)best & ~nearer));
+      for (int j = 0; j < 4; ++j) {
+        if (nearer[j]) best_geom[j] = c.geom;
+      }
+      return;
+    }
+    if (c.exact) {
+      // From outside: the entry; from inside a box a ray meets its far side.
+      const V4 x = c.inside ? far : t_in;
+      const M4 nearer = hit & (x >= zero) & (x <= best);
+      best = (V4)(((M4)x & nearer) | ((M4)best & ~nearer));
+      for (int j = 0; j < 4; ++j) {
+        if (nearer[j]) best_geom[j] = c.geom;
+      }
+      return;
+    }
+    for (int j = 0; j < 4; ++j) {
+      if (!hit[j]) continue;
+      double w[3];
+      lane_dir(j, w);
+      keep(j, Narrow(m, data, c.geom, c.type, o, w), c.geom);
+    }
+  };
+
   const Candidate* const boxes = candidates.boxes.data();
   const Candidate* const boxes_end = boxes + candidates.boxes.size();
-  const Candidate* const planes = candidates.planes.data();
-  const Candidate* const planes_end = planes + candidates.planes.size();
-  double reach = max_range_m;
-  if (v[2] > 1e-12) {
-    reach = std::max(0.0, candidates.z_high * inv[2]);
-  } else if (v[2] < -1e-12) {
-    reach = std::max(0.0, candidates.z_low * inv[2]);
+  int tested[4];
+  int n_tested = 0;
+  for (int j = 0; j < 4; ++j) {
+    if (warm[j] < 0) continue;
+    const int k = candidates.box_of_geom[warm[j]];
+    if (k < 0) continue;
+    bool seen = false;
+    for (int t = 0; t < n_tested; ++t) seen = seen || tested[t] == warm[j];
+    if (seen) continue;
+    tested[n_tested++] = warm[j];
+    test(boxes[k]);
   }
-  double best = max_range_m;
-  int best_geom = -1;
-  if (warm >= 0) {
-    const int k = candidates.box_of_geom[warm];
-    if (k >= 0) TestCandidate(m, data, o, v, inv, negative, boxes[k], &best, &best_geom);
-  }
-  for (const Candidate* c = planes; c != planes_end; ++c) {
-    TestCandidate(m, data, o, v, inv, negative, *c, &best, &best_geom);
-  }
+  for (const Candidate& c : candidates.planes) test(c);
+  auto bound = [&]() __attribute__((always_inline)) {
+    const V4 lim = best < reach ? best : reach;
+    return std::max(std::max(lim[0], lim[1]), std::max(lim[2], lim[3]));
+  };
+  double limit = bound();
   for (const Candidate* c = boxes; c != boxes_end; ++c) {
-    if (c->min_distance > best || c->min_distance > reach) break;
-    if (c->geom != warm) TestCandidate(m, data, o, v, inv, negative, *c, &best, &best_geom);
+    if (c->min_distance > limit) break;
+    bool seen = false;
+    for (int t = 0; t < n_tested; ++t) seen = seen || tested[t] == c->geom;
+    if (seen) continue;
+    test(*c);
+    limit = bound();
   }
-  return RayHit{best_geom >= 0 ? best : -1.0, best_geom};
+  for (int j = 0; j < rays; ++j) {
+    out[j] = RayHit{best_geom[j] >= 0 ? best[j] : -1.0, best_geom[j]};
+  }
 }
 
 }  // namespace
@@ -552,6 +682,7 @@ void RayPattern::BuildGroups(int group_size) {
   groups.clear();
   group_size = std::max(1, group_size);
   const int n = static_cast<int>(directions.size());
+  BuildComponents();
   for (int begin = 0; begin < n; begin += group_size) {
     Group g;
     g.begin = begin;
@@ -598,6 +729,15 @@ void RayPattern::BuildGroups(int group_size) {
   }
 }
 
+void RayPattern::BuildComponents() {
+  const size_t n = directions.size();
+  components.assign(3 * (n + 4), 0.0);
+  for (size_t k = 0; k < 3; ++k) {
+    double* column = components.data() + k * (n + 4);
+    for (size_t i = 0; i < n + 4; ++i) column[i] = n > 0 ? directions[std::min(i, n - 1)][k] : 0.0;
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // RayCaster
 
@@ -628,12 +768,38 @@ void RayCaster::CastGroup(const RayScene& scene, const mjData* data, const Eigen
   const double o[3] = {origin.x(), origin.y(), origin.z()};
   thread_local GroupCandidates candidates;
   CollectCandidates(scene, data, o, rotation, g, max_range_m, exclude_owner, &candidates);
-  for (int i = g.begin; i < g.end; ++i) {
-    // The geom the neighbouring ray hit: usually the same, and it tightens the search.
-    const int warm =
-        i - pattern.warm_stride >= g.begin ? hits[i - pattern.warm_stride - hits_base].geom : -1;
-    hits[i - hits_base] = CastRay(scene.model(), data, candidates, o,
-                                  rotation * pattern.directions[i], max_range_m, warm);
+  const size_t n = pattern.directions.size();
+  const bool packed = pattern.components.size() == 3 * (n + 4);
+  const double* const column[3] = {pattern.components.data(), pattern.components.data() + n + 4,
+                                   pattern.components.data() + 2 * (n + 4)};
+  double gathered[3][4];
+  // Column-major, as Eigen stores it.
+  double rot[9];
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) rot[3 * c + r] = rotation(r, c);
+  }
+  for (int i = g.begin; i < g.end; i += 4) {
+    const int rays = std::min(4, g.end - i);
+    // The geom each ray's neighbour hit (usually the same, and it tightens the search): the
+    // neighbour one stride back, or the packet's first ray's neighbour when that one is in this
+    // packet and not cast yet.
+    int warm[4];
+    for (int j = 0; j < 4; ++j) {
+      int source = i + j - pattern.warm_stride;
+      if (source >= i) source = i - 1;
+      warm[j] = j < rays && source >= g.begin ? hits[source - hits_base].geom : -1;
+    }
+    const double* components[3];
+    if (packed) {
+      for (int k = 0; k < 3; ++k) components[k] = column[k] + i;
+    } else {
+      for (int k = 0; k < 3; ++k) {
+        for (int j = 0; j < 4; ++j) gathered[k][j] = pattern.directions[i + std::min(j, rays - 1)][k];
+        components[k] = gathered[k];
+      }
+    }
+    CastPacket(scene.model(), data, candidates, o, rot, components, rays, warm, max_range_m,
+               hits + (i - hits_base));
   }
 }
 

@@ -79,10 +79,16 @@ struct RayPattern {
   std::vector<Group> groups;
   /// Ray i retries the geom hit by ray i - warm_stride of the same group first.
   int warm_stride{1};
+  /// The directions again, as three arrays (x, y, z) of directions.size() + 4 doubles each (the
+  /// last direction repeated), so that four neighbouring rays load at once. Set by BuildGroups
+  /// and BuildComponents; when it is out of date, casting gathers the directions (slower).
+  std::vector<double> components;
 
   /// Splits the directions into consecutive groups of `group_size` rays and computes each
-  /// group's bounding pyramid.
+  /// group's bounding pyramid; fills `components`.
   void BuildGroups(int group_size);
+  /// Fills `components` from `directions` (for patterns whose groups are made by hand).
+  void BuildComponents();
 };
 
 /// Ray against a height-field geom: the same surface as mj_rayHfield (two triangles per cell,

@@ -131,6 +131,7 @@ LidarPattern BuildLidarPattern(const LidarParams& p) {
   }
   out.slice_ray_begin.push_back(static_cast<int>(rays.directions.size()));
   out.slice_group_begin.push_back(static_cast<int>(rays.groups.size()));
+  rays.BuildComponents();
   return out;
 }
 
