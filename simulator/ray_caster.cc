@@ -269,37 +269,13 @@ struct Candidate {
   int oriented;
 };
 
-// A turned box in its own frame: the sensor's position there, and its half extents.
+// A turned box or a plane in its own frame: the sensor's position there, and its half extents
+// (a plane's: the half size of its rendered rectangle, 0 for unbounded).
 struct OrientedBox {
   double axes[9];  ///< geom_xmat: box frame to world, row-major
   double origin[3];  ///< the sensor in the box frame
   double half[3];
 };
-
-// MuJoCo's plane rule (mj_ray): hit the front face only, within the rendered rectangle when
-// the plane has a size.
-double RayPlane(const mjModel* m, const mjData* d, int g, const double p[3], const double v[3]) {
-  const double* pos = d->geom_xpos + 3 * g;
-  const double* r = d->geom_xmat + 9 * g;
-  const double dif[3] = {p[0] - pos[0], p[1] - pos[1], p[2] - pos[2]};
-  const double lz = r[2] * dif[0] + r[5] * dif[1] + r[8] * dif[2];
-  const double vz = r[2] * v[0] + r[5] * v[1] + r[8] * v[2];
-  if (vz > -mjMINVAL) return -1.0;
-  const double x = -lz / vz;
-  if (x < 0.0) return -1.0;
-  const double* size = m->geom_size + 3 * g;
-  if (size[0] > 0.0 || size[1] > 0.0) {
-    const double lx = r[0] * dif[0] + r[3] * dif[1] + r[6] * dif[2];
-    const double ly = r[1] * dif[0] + r[4] * dif[1] + r[7] * dif[2];
-    const double vx = r[0] * v[0] + r[3] * v[1] + r[6] * v[2];
-    const double vy = r[1] * v[0] + r[4] * v[1] + r[7] * v[2];
-    if ((size[0] > 0.0 && std::abs(lx + x * vx) > size[0]) ||
-        (size[1] > 0.0 && std::abs(ly + x * vy) > size[1])) {
-      return -1.0;
-    }
-  }
-  return x;
-}
 
 // The geoms a group's rays may hit: boxes sorted by distance, with their vertical extent
 // (beyond which a ray cannot hit any of them), and the planes, tested for every ray.
@@ -362,7 +338,7 @@ Candidate BoxCandidate(const RayScene::Bound& b, const double o[3], double min_d
   return c;
 }
 
-// A turned box: the sensor's position in the box frame, as MuJoCo's ray_map computes it.
+// A turned box or a plane: the sensor's position in its frame, as MuJoCo's ray_map computes it.
 OrientedBox MakeOrientedBox(const mjModel* m, const mjData* d, int g, const double o[3]) {
   OrientedBox box;
   const double* pos = d->geom_xpos + 3 * g;
@@ -395,6 +371,8 @@ void CollectCandidates(const RayScene& scene, const mjData* data, const double o
     if (b.owner >= 0 && b.owner == exclude_owner) continue;
     if (b.infinite) {
       all.push_back(PlaneCandidate(data, b, o));
+      all.back().oriented = static_cast<int>(out->oriented.size());
+      out->oriented.push_back(MakeOrientedBox(scene.model(), data, b.geom, o));
       continue;
     }
     double min_d2 = 0.0;
@@ -507,13 +485,27 @@ void CastPacket(const mjModel* m, const mjData* data, const GroupCandidates& can
   // Inlined in each clone (a call would leave the vector code on the default target).
   auto test = [&](const Candidate& c) __attribute__((always_inline)) {
     if (c.infinite) {
+      // MuJoCo's plane rule (mj_ray's), on four lanes: the front face only, within the
+      // rendered rectangle when the plane has a size.
+      const OrientedBox& plane = candidates.oriented[c.oriented];
       const V4 vz = (c.lo[0] * v[0] + c.lo[1] * v[1]) + c.lo[2] * v[2];
-      const M4 front = (vz <= -mjMINVAL) & (-c.hi[0] >= best * vz);
+      M4 front = (vz <= -mjMINVAL) & (-c.hi[0] >= best * vz);
+      long long any = front[0] | front[1] | front[2] | front[3];
+      if (any == 0) return;
+      const V4 x = -plane.origin[2] / (V4)(((M4)vz & front) | ((M4)(zero - 1.0) & ~front));
+      front &= x >= zero;
+      for (int axis = 0; axis < 2; ++axis) {
+        if (!(plane.half[axis] > 0.0)) continue;
+        const double* r = plane.axes;
+        const V4 va = (r[axis] * v[0] + r[3 + axis] * v[1]) + r[6 + axis] * v[2];
+        const V4 e = plane.origin[axis] + x * va;
+        const V4 ae = e < zero ? -e : e;
+        front &= ae <= plane.half[axis];
+      }
+      const M4 nearer = front & (x <= best);
+      best = (V4)(((M4)x & nearer) | ((M4)best & ~nearer));
       for (int j = 0; j < 4; ++j) {
-        if (!front[j]) continue;
-        double w[3];
-        lane_dir(j, w);
-        keep(j, RayPlane(m, data, c.geom, o, w), c.geom);
+        if (nearer[j]) best_geom[j] = c.geom;
       }
       return;
     }

@@ -27,7 +27,7 @@ struct LidarParams {
   double max_range_m{70.0};
   double min_range_m{0.4};
   double range_noise_sigma_m{0.02};
-  int azimuths_per_ray_group{10};  ///< broad-phase granularity of the ray caster...
+  int azimuths_per_ray_group{15};  ///< broad-phase granularity of the ray caster...
   int rings_per_ray_group{32};     ///< ... in azimuth and in elevation
   std::string mount_site{"lidar_mount"};
 
