@@ -272,7 +272,7 @@ struct Candidate {
 // A turned box or a plane in its own frame: the sensor's position there, and its half extents
 // (a plane's: the half size of its rendered rectangle, 0 for unbounded).
 struct OrientedBox {
-  double axes[9];  ///< geom_xmat: box frame to world, row-major
+  double axes[9];    ///< geom_xmat: box frame to world, row-major
   double origin[3];  ///< the sensor in the box frame
   double half[3];
 };
@@ -440,8 +440,8 @@ typedef long long M4 __attribute__((vector_size(32)));
 // their direction components at components[0..2]; `warm`: the geoms their neighbours hit (-1).
 CAIRN_PACKET_CLONES
 void CastPacket(const mjModel* m, const mjData* data, const GroupCandidates& candidates,
-                const double o[3], const double rot[9], const double* const components[3],
-                int rays, const int warm[4], double max_range_m, RayHit* out) {
+                const double o[3], const double rot[9], const double* const components[3], int rays,
+                const int warm[4], double max_range_m, RayHit* out) {
   // World directions, as Eigen's rotation * direction computes them (same order of operations).
   // Lanes past `rays` hold the next rays of the pattern: cast, never written.
   V4 d[3];
@@ -786,7 +786,9 @@ void RayCaster::CastGroup(const RayScene& scene, const mjData* data, const Eigen
       for (int k = 0; k < 3; ++k) components[k] = column[k] + i;
     } else {
       for (int k = 0; k < 3; ++k) {
-        for (int j = 0; j < 4; ++j) gathered[k][j] = pattern.directions[i + std::min(j, rays - 1)][k];
+        for (int j = 0; j < 4; ++j) {
+          gathered[k][j] = pattern.directions[i + std::min(j, rays - 1)][k];
+        }
         components[k] = gathered[k];
       }
     }
