@@ -410,66 +410,70 @@ void CollectCandidates(const RayScene& scene, const mjData* data, const double o
   all.resize(kept);
 }
 
-// Narrow phase, four neighbouring rays at once on four lanes of doubles (GCC/Clang vector
-// extensions: AVX2 where the processor has it, two SSE2 halves otherwise). For each ray: the geom
-// its neighbour hit first (it tightens the search at once), then the planes, then the boxes
-// nearest first until the next one lies beyond every lane's nearest hit and beyond where the
-// rays leave the boxes' vertical extent. Axis-aligned and turned boxes are tested here (slab
-// tests, in the box's own frame for a turned one); other shapes go to MuJoCo's functions lane by
-// lane. The rays of a packet are neighbours in the pattern, so they meet nearly the same
+// Narrow phase, L neighbouring rays at once on L lanes of doubles (GCC/Clang vector
+// extensions): four with AVX2 where the processor has it, two (SSE2, NEON) otherwise; a vector
+// wider than the hardware's is split element by element and runs three times slower. For each
+// ray: the geom its neighbour hit first (it tightens the search at once), then the planes, then
+// the boxes nearest first until the next one lies beyond every lane's nearest hit and beyond
+// where the rays leave the boxes' vertical extent. Axis-aligned and turned boxes are tested here
+// (slab tests, in the box's own frame for a turned one); other shapes go to MuJoCo's functions
+// lane by lane. The rays of a packet are neighbours in the pattern, so they meet nearly the same
 // candidates; a lane's result is its ray's alone (the tests compare every ray with mj_ray).
-typedef double V4 __attribute__((vector_size(32)));
-typedef long long M4 __attribute__((vector_size(32)));
+template <int L>
+struct Lanes;
+template <>
+struct Lanes<2> {
+  typedef double V __attribute__((vector_size(16)));
+  typedef long long M __attribute__((vector_size(16)));
+};
+template <>
+struct Lanes<4> {
+  typedef double V __attribute__((vector_size(32)));
+  typedef long long M __attribute__((vector_size(32)));
+};
+constexpr int kMaxLanes = 4;
 
-// Sanitizer builds take the default path only (the plain build tests the AVX2 one).
-#if defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-#define CAIRN_SANITIZED_BUILD 1
-#endif
-#endif
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-#define CAIRN_SANITIZED_BUILD 1
-#endif
-#if defined(__x86_64__) && defined(__linux__) && !defined(CAIRN_SANITIZED_BUILD)
-#define CAIRN_PACKET_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define CAIRN_PACKET_CLONES
-#endif
-
-// `rays` rays (1 to 4; lanes past them hold the next directions, cast and not written) with
+// `rays` rays (1 to L; lanes past them hold the next directions, cast and not written) with
 // their direction components at components[0..2]; `warm`: the geoms their neighbours hit (-1).
-CAIRN_PACKET_CLONES
-void CastPacket(const mjModel* m, const mjData* data, const GroupCandidates& candidates,
-                const double o[3], const double rot[9], const double* const components[3], int rays,
-                const int warm[4], double max_range_m, RayHit* out) {
+// Inlined into CastPacket2 and CastPacket4, each compiled for its target.
+template <int L>
+__attribute__((always_inline)) inline void CastPacket(const mjModel* m, const mjData* data,
+                                                      const GroupCandidates& candidates,
+                                                      const double o[3], const double rot[9],
+                                                      const double* const components[3], int rays,
+                                                      const int* warm, double max_range_m,
+                                                      RayHit* out) {
+  using V = typename Lanes<L>::V;
+  using M = typename Lanes<L>::M;
   // World directions, as Eigen's rotation * direction computes them (same order of operations).
   // Lanes past `rays` hold the next rays of the pattern: cast, never written.
-  V4 d[3];
-  for (int k = 0; k < 3; ++k) std::memcpy(&d[k], components[k], sizeof(V4));
-  V4 v[3], inv[3];
-  const V4 zero = {0.0, 0.0, 0.0, 0.0};
-  const V4 one = zero + 1.0;
+  V d[3];
+  for (int k = 0; k < 3; ++k) std::memcpy(&d[k], components[k], sizeof(V));
+  V v[3], inv[3];
+  const V zero = {};
+  const V one = zero + 1.0;
   for (int k = 0; k < 3; ++k) {
     v[k] = (rot[k] * d[0] + rot[k + 3] * d[1]) + rot[k + 6] * d[2];
-    const V4 a = v[k] < zero ? -v[k] : v[k];
-    const M4 big = a > 1e-12;
-    const V4 divisor = (V4)(((M4)v[k] & big) | ((M4)one & ~big));
-    const V4 q = one / divisor;
-    const M4 pos = v[k] >= zero;
-    const V4 tiny = (V4)(((M4)(zero + 1e12) & pos) | ((M4)(zero - 1e12) & ~pos));
-    inv[k] = (V4)(((M4)q & big) | ((M4)tiny & ~big));
+    const V a = v[k] < zero ? -v[k] : v[k];
+    const M big = a > 1e-12;
+    const V divisor = (V)(((M)v[k] & big) | ((M)one & ~big));
+    const V q = one / divisor;
+    const M pos = v[k] >= zero;
+    const V tiny = (V)(((M)(zero + 1e12) & pos) | ((M)(zero - 1e12) & ~pos));
+    inv[k] = (V)(((M)q & big) | ((M)tiny & ~big));
   }
   // Beyond `reach` a ray has left the boxes' vertical extent.
-  V4 reach = zero + max_range_m;
-  for (int j = 0; j < 4; ++j) {
+  V reach = zero + max_range_m;
+  for (int j = 0; j < L; ++j) {
     if (v[2][j] > 1e-12) {
       reach[j] = std::max(0.0, candidates.z_high * inv[2][j]);
     } else if (v[2][j] < -1e-12) {
       reach[j] = std::max(0.0, candidates.z_low * inv[2][j]);
     }
   }
-  V4 best = zero + max_range_m;
-  int best_geom[4] = {-1, -1, -1, -1};
+  V best = zero + max_range_m;
+  int best_geom[L];
+  for (int j = 0; j < L; ++j) best_geom[j] = -1;
 
   auto lane_dir = [&](int j, double w[3]) __attribute__((always_inline)) {
     w[0] = v[0][j];
@@ -488,82 +492,85 @@ void CastPacket(const mjModel* m, const mjData* data, const GroupCandidates& can
       // MuJoCo's plane rule (mj_ray's), on four lanes: the front face only, within the
       // rendered rectangle when the plane has a size.
       const OrientedBox& plane = candidates.oriented[c.oriented];
-      const V4 vz = (c.lo[0] * v[0] + c.lo[1] * v[1]) + c.lo[2] * v[2];
-      M4 front = (vz <= -mjMINVAL) & (-c.hi[0] >= best * vz);
-      long long any = front[0] | front[1] | front[2] | front[3];
+      const V vz = (c.lo[0] * v[0] + c.lo[1] * v[1]) + c.lo[2] * v[2];
+      M front = (vz <= -mjMINVAL) & (-c.hi[0] >= best * vz);
+      long long any = 0;
+      for (int j = 0; j < L; ++j) any |= front[j];
       if (any == 0) return;
-      const V4 x = -plane.origin[2] / (V4)(((M4)vz & front) | ((M4)(zero - 1.0) & ~front));
+      const V x = -plane.origin[2] / (V)(((M)vz & front) | ((M)(zero - 1.0) & ~front));
       front &= x >= zero;
       for (int axis = 0; axis < 2; ++axis) {
         if (!(plane.half[axis] > 0.0)) continue;
         const double* r = plane.axes;
-        const V4 va = (r[axis] * v[0] + r[3 + axis] * v[1]) + r[6 + axis] * v[2];
-        const V4 e = plane.origin[axis] + x * va;
-        const V4 ae = e < zero ? -e : e;
+        const V va = (r[axis] * v[0] + r[3 + axis] * v[1]) + r[6 + axis] * v[2];
+        const V e = plane.origin[axis] + x * va;
+        const V ae = e < zero ? -e : e;
         front &= ae <= plane.half[axis];
       }
-      const M4 nearer = front & (x <= best);
-      best = (V4)(((M4)x & nearer) | ((M4)best & ~nearer));
-      for (int j = 0; j < 4; ++j) {
+      const M nearer = front & (x <= best);
+      best = (V)(((M)x & nearer) | ((M)best & ~nearer));
+      for (int j = 0; j < L; ++j) {
         if (nearer[j]) best_geom[j] = c.geom;
       }
       return;
     }
-    V4 t_in = zero, t_out = best, far = zero + kInfinity;
+    V t_in = zero, t_out = best, far = zero + kInfinity;
     for (int k = 0; k < 3; ++k) {
-      const V4 a = c.lo[k] * inv[k];
-      const V4 b = c.hi[k] * inv[k];
-      const M4 a_near = a < b;
-      const V4 t_near = (V4)(((M4)a & a_near) | ((M4)b & ~a_near));
-      const V4 t_far = (V4)(((M4)b & a_near) | ((M4)a & ~a_near));
+      const V a = c.lo[k] * inv[k];
+      const V b = c.hi[k] * inv[k];
+      const M a_near = a < b;
+      const V t_near = (V)(((M)a & a_near) | ((M)b & ~a_near));
+      const V t_far = (V)(((M)b & a_near) | ((M)a & ~a_near));
       t_in = t_near > t_in ? t_near : t_in;
       t_out = t_far < t_out ? t_far : t_out;
       far = t_far < far ? t_far : far;
     }
-    const M4 hit = t_in <= t_out;
-    if (!(hit[0] | hit[1] | hit[2] | hit[3])) return;
+    const M hit = t_in <= t_out;
+    long long any = 0;
+    for (int j = 0; j < L; ++j) any |= hit[j];
+    if (any == 0) return;
     if (c.oriented >= 0) {
       // The same slab test in the box's own frame: exact for a turned box, as mju_rayGeom's
       // face tests are; from inside, the far side.
       const OrientedBox& box = candidates.oriented[c.oriented];
-      V4 enter = zero - kInfinity, exit = zero + kInfinity;
+      V enter = zero - kInfinity, exit = zero + kInfinity;
       for (int k = 0; k < 3; ++k) {
-        const V4 lv = (box.axes[k] * v[0] + box.axes[3 + k] * v[1]) + box.axes[6 + k] * v[2];
-        const V4 a = lv < zero ? -lv : lv;
-        const M4 big = a > 1e-12;
-        const V4 divisor = (V4)(((M4)lv & big) | ((M4)one & ~big));
-        const V4 q = one / divisor;
-        const M4 pos = lv >= zero;
-        const V4 tiny = (V4)(((M4)(zero + 1e12) & pos) | ((M4)(zero - 1e12) & ~pos));
-        const V4 il = (V4)(((M4)q & big) | ((M4)tiny & ~big));
-        const V4 ta = (-box.half[k] - box.origin[k]) * il;
-        const V4 tb = (box.half[k] - box.origin[k]) * il;
-        const M4 a_near = ta < tb;
-        const V4 t_near = (V4)(((M4)ta & a_near) | ((M4)tb & ~a_near));
-        const V4 t_far = (V4)(((M4)tb & a_near) | ((M4)ta & ~a_near));
+        const V lv = (box.axes[k] * v[0] + box.axes[3 + k] * v[1]) + box.axes[6 + k] * v[2];
+        const V a = lv < zero ? -lv : lv;
+        const M big = a > 1e-12;
+        const V divisor = (V)(((M)lv & big) | ((M)one & ~big));
+        const V q = one / divisor;
+        const M pos = lv >= zero;
+        const V tiny = (V)(((M)(zero + 1e12) & pos) | ((M)(zero - 1e12) & ~pos));
+        const V il = (V)(((M)q & big) | ((M)tiny & ~big));
+        const V ta = (-box.half[k] - box.origin[k]) * il;
+        const V tb = (box.half[k] - box.origin[k]) * il;
+        const M a_near = ta < tb;
+        const V t_near = (V)(((M)ta & a_near) | ((M)tb & ~a_near));
+        const V t_far = (V)(((M)tb & a_near) | ((M)ta & ~a_near));
         enter = t_near > enter ? t_near : enter;
         exit = t_far < exit ? t_far : exit;
       }
-      const M4 outside = enter >= zero;
-      const V4 x = (V4)(((M4)enter & outside) | ((M4)exit & ~outside));
-      const M4 nearer = hit & (enter <= exit) & (x >= zero) & (x <= best);
-      best = (V4)(((M4)x & nearer) | ((M4)best & ~nearer));
-      for (int j = 0; j < 4; ++j) {
+      const M outside = enter >= zero;
+      const V x = (V)(((M)enter & outside) | ((M)exit & ~outside));
+      const M nearer = hit & (enter <= exit) & (x >= zero) & (x <= best);
+      best = (V)(((M)x & nearer) | ((M)best & ~nearer));
+      for (int j = 0; j < L; ++j) {
         if (nearer[j]) best_geom[j] = c.geom;
       }
       return;
     }
     if (c.exact) {
       // From outside: the entry; from inside a box a ray meets its far side.
-      const V4 x = c.inside ? far : t_in;
-      const M4 nearer = hit & (x >= zero) & (x <= best);
-      best = (V4)(((M4)x & nearer) | ((M4)best & ~nearer));
-      for (int j = 0; j < 4; ++j) {
+      const V x = c.inside ? far : t_in;
+      const M nearer = hit & (x >= zero) & (x <= best);
+      best = (V)(((M)x & nearer) | ((M)best & ~nearer));
+      for (int j = 0; j < L; ++j) {
         if (nearer[j]) best_geom[j] = c.geom;
       }
       return;
     }
-    for (int j = 0; j < 4; ++j) {
+    for (int j = 0; j < L; ++j) {
       if (!hit[j]) continue;
       double w[3];
       lane_dir(j, w);
@@ -573,9 +580,9 @@ void CastPacket(const mjModel* m, const mjData* data, const GroupCandidates& can
 
   const Candidate* const boxes = candidates.boxes.data();
   const Candidate* const boxes_end = boxes + candidates.boxes.size();
-  int tested[4];
+  int tested[L];
   int n_tested = 0;
-  for (int j = 0; j < 4; ++j) {
+  for (int j = 0; j < L; ++j) {
     if (warm[j] < 0) continue;
     const int k = candidates.box_of_geom[warm[j]];
     if (k < 0) continue;
@@ -587,8 +594,10 @@ void CastPacket(const mjModel* m, const mjData* data, const GroupCandidates& can
   }
   for (const Candidate& c : candidates.planes) test(c);
   auto bound = [&]() __attribute__((always_inline)) {
-    const V4 lim = best < reach ? best : reach;
-    return std::max(std::max(lim[0], lim[1]), std::max(lim[2], lim[3]));
+    const V lim = best < reach ? best : reach;
+    double most = lim[0];
+    for (int j = 1; j < L; ++j) most = std::max(most, lim[j]);
+    return most;
   };
   double limit = bound();
   for (const Candidate* c = boxes; c != boxes_end; ++c) {
@@ -601,6 +610,90 @@ void CastPacket(const mjModel* m, const mjData* data, const GroupCandidates& can
   }
   for (int j = 0; j < rays; ++j) {
     out[j] = RayHit{best_geom[j] >= 0 ? best[j] : -1.0, best_geom[j]};
+  }
+}
+
+// One packet, compiled for each lane count's target and called per packet (inlined into the
+// group's loop, the packet's code was a fifth slower).
+__attribute__((noinline)) void CastPacket2(const mjModel* m, const mjData* data,
+                                           const GroupCandidates& candidates, const double o[3],
+                                           const double rot[9], const double* const components[3],
+                                           int rays, const int* warm, double max_range_m,
+                                           RayHit* out) {
+  CastPacket<2>(m, data, candidates, o, rot, components, rays, warm, max_range_m, out);
+}
+
+// Four lanes need AVX2 (x86-64 only). Sanitizer builds take the default path only; the plain
+// build tests the AVX2 one where the processor has it.
+#if defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+#define CAIRN_SANITIZED_BUILD 1
+#endif
+#endif
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define CAIRN_SANITIZED_BUILD 1
+#endif
+#if defined(__x86_64__) && !defined(CAIRN_SANITIZED_BUILD)
+#define CAIRN_PACKETS_AVX2 1
+__attribute__((target("avx2"), noinline)) void CastPacket4(const mjModel* m, const mjData* data,
+                                                           const GroupCandidates& candidates,
+                                                           const double o[3], const double rot[9],
+                                                           const double* const components[3],
+                                                           int rays, const int* warm,
+                                                           double max_range_m, RayHit* out) {
+  CastPacket<4>(m, data, candidates, o, rot, components, rays, warm, max_range_m, out);
+}
+
+bool HasAvx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#endif
+
+using PacketFunction = void (*)(const mjModel*, const mjData*, const GroupCandidates&,
+                                const double*, const double*, const double* const*, int, const int*,
+                                double, RayHit*);
+
+// A group's rays, L at a time.
+template <int L, PacketFunction Packet>
+void CastPackets(const mjModel* m, const mjData* data, const GroupCandidates& candidates,
+                 const double o[3], const Eigen::Matrix3d& rotation, const RayPattern& pattern,
+                 const RayPattern::Group& g, double max_range_m, RayHit* hits, int hits_base) {
+  const size_t n = pattern.directions.size();
+  const bool packed = pattern.components.size() == 3 * (n + kMaxLanes);
+  const double* const column[3] = {pattern.components.data(),
+                                   pattern.components.data() + n + kMaxLanes,
+                                   pattern.components.data() + 2 * (n + kMaxLanes)};
+  double gathered[3][L];
+  // Column-major, as Eigen stores it.
+  double rot[9];
+  for (int c = 0; c < 3; ++c) {
+    for (int r = 0; r < 3; ++r) rot[3 * c + r] = rotation(r, c);
+  }
+  for (int i = g.begin; i < g.end; i += L) {
+    const int rays = std::min(L, g.end - i);
+    // The geom each ray's neighbour hit (usually the same, and it tightens the search): the
+    // neighbour one stride back, or the packet's first ray's neighbour when that one is in this
+    // packet and not cast yet.
+    int warm[L];
+    for (int j = 0; j < L; ++j) {
+      int source = i + j - pattern.warm_stride;
+      if (source >= i) source = i - 1;
+      warm[j] = j < rays && source >= g.begin ? hits[source - hits_base].geom : -1;
+    }
+    const double* components[3];
+    if (packed) {
+      for (int k = 0; k < 3; ++k) components[k] = column[k] + i;
+    } else {
+      for (int k = 0; k < 3; ++k) {
+        for (int j = 0; j < L; ++j) {
+          gathered[k][j] = pattern.directions[i + std::min(j, rays - 1)][k];
+        }
+        components[k] = gathered[k];
+      }
+    }
+    Packet(m, data, candidates, o, rot, components, rays, warm, max_range_m,
+           hits + (i - hits_base));
   }
 }
 
@@ -723,15 +816,27 @@ void RayPattern::BuildGroups(int group_size) {
 
 void RayPattern::BuildComponents() {
   const size_t n = directions.size();
-  components.assign(3 * (n + 4), 0.0);
+  components.assign(3 * (n + kMaxLanes), 0.0);
   for (size_t k = 0; k < 3; ++k) {
-    double* column = components.data() + k * (n + 4);
-    for (size_t i = 0; i < n + 4; ++i) column[i] = n > 0 ? directions[std::min(i, n - 1)][k] : 0.0;
+    double* column = components.data() + k * (n + kMaxLanes);
+    for (size_t i = 0; i < n + kMaxLanes; ++i)
+      column[i] = n > 0 ? directions[std::min(i, n - 1)][k] : 0.0;
   }
 }
 
 // ---------------------------------------------------------------------------------------------
 // RayCaster
+
+RayCaster::RayCaster(ThreadPool* pool, int lanes)
+    : pool_(pool), lanes_(lanes == 2 ? 2 : MostLanes()) {}
+
+int RayCaster::MostLanes() {
+#if defined(CAIRN_PACKETS_AVX2)
+  return HasAvx2() ? 4 : 2;
+#else
+  return 2;
+#endif
+}
 
 void RayCaster::Cast(const RayScene& scene, const mjData* data, const Eigen::Vector3d& origin,
                      const Eigen::Matrix3d& rotation, const RayPattern& pattern, int group_begin,
@@ -760,41 +865,15 @@ void RayCaster::CastGroup(const RayScene& scene, const mjData* data, const Eigen
   const double o[3] = {origin.x(), origin.y(), origin.z()};
   thread_local GroupCandidates candidates;
   CollectCandidates(scene, data, o, rotation, g, max_range_m, exclude_owner, &candidates);
-  const size_t n = pattern.directions.size();
-  const bool packed = pattern.components.size() == 3 * (n + 4);
-  const double* const column[3] = {pattern.components.data(), pattern.components.data() + n + 4,
-                                   pattern.components.data() + 2 * (n + 4)};
-  double gathered[3][4];
-  // Column-major, as Eigen stores it.
-  double rot[9];
-  for (int c = 0; c < 3; ++c) {
-    for (int r = 0; r < 3; ++r) rot[3 * c + r] = rotation(r, c);
+#if defined(CAIRN_PACKETS_AVX2)
+  if (lanes_ == 4) {
+    CastPackets<4, CastPacket4>(scene.model(), data, candidates, o, rotation, pattern, g,
+                                max_range_m, hits, hits_base);
+    return;
   }
-  for (int i = g.begin; i < g.end; i += 4) {
-    const int rays = std::min(4, g.end - i);
-    // The geom each ray's neighbour hit (usually the same, and it tightens the search): the
-    // neighbour one stride back, or the packet's first ray's neighbour when that one is in this
-    // packet and not cast yet.
-    int warm[4];
-    for (int j = 0; j < 4; ++j) {
-      int source = i + j - pattern.warm_stride;
-      if (source >= i) source = i - 1;
-      warm[j] = j < rays && source >= g.begin ? hits[source - hits_base].geom : -1;
-    }
-    const double* components[3];
-    if (packed) {
-      for (int k = 0; k < 3; ++k) components[k] = column[k] + i;
-    } else {
-      for (int k = 0; k < 3; ++k) {
-        for (int j = 0; j < 4; ++j) {
-          gathered[k][j] = pattern.directions[i + std::min(j, rays - 1)][k];
-        }
-        components[k] = gathered[k];
-      }
-    }
-    CastPacket(scene.model(), data, candidates, o, rot, components, rays, warm, max_range_m,
-               hits + (i - hits_base));
-  }
+#endif
+  CastPackets<2, CastPacket2>(scene.model(), data, candidates, o, rotation, pattern, g, max_range_m,
+                              hits, hits_base);
 }
 
 void RayCaster::CastWithMjRay(const mjModel* model, const mjData* data,

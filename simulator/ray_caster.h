@@ -108,7 +108,14 @@ struct RayHit {
 class RayCaster {
  public:
   /// @param pool optional; with it, groups are cast in parallel.
-  explicit RayCaster(ThreadPool* pool = nullptr) : pool_(pool) {}
+  /// @param lanes rays cast together (SIMD): 2, or 4 where the processor has AVX2; 0 (the
+  ///     default) takes the most the processor has, and 4 where it has not falls back to 2.
+  explicit RayCaster(ThreadPool* pool = nullptr, int lanes = 0);
+
+  /// Rays this caster casts together.
+  int lanes() const { return lanes_; }
+  /// The most rays cast together on this processor: 4 with AVX2 (x86-64), 2 otherwise.
+  static int MostLanes();
 
   /// Casts groups [group_begin, group_end) of `pattern` from a sensor at `origin` with
   /// orientation `rotation` (sensor to world). Results go to hits[ray index - hits_base] (a
@@ -132,6 +139,7 @@ class RayCaster {
                  double max_range_m, int exclude_owner, RayHit* hits, int hits_base) const;
 
   ThreadPool* pool_;
+  int lanes_;
 };
 
 }  // namespace cairn::sim

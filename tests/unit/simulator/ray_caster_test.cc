@@ -2,6 +2,8 @@
 
 #include <cmath>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -50,35 +52,54 @@ class RayCasterTest : public ::testing::Test {
   std::unique_ptr<RayScene> scene_;
 };
 
+// Rays are cast two at a time, or four where the processor has AVX2: every width it has.
+std::vector<int> LanesToTest() {
+  std::vector<int> lanes = {2};
+  if (RayCaster::MostLanes() > 2) lanes.push_back(RayCaster::MostLanes());
+  return lanes;
+}
+
+TEST(RayCasterLanesTest, TwoLanesAlwaysAndFourOnlyWithAvx2) {
+  EXPECT_EQ(RayCaster(nullptr, 2).lanes(), 2);
+  EXPECT_EQ(RayCaster(nullptr, 4).lanes(), RayCaster::MostLanes());
+  EXPECT_EQ(RayCaster().lanes(), RayCaster::MostLanes());
+  EXPECT_TRUE(RayCaster::MostLanes() == 2 || RayCaster::MostLanes() == 4);
+}
+
 TEST_F(RayCasterTest, MatchesMjRayEverywhere) {
   LidarParams lidar;
   lidar.azimuth_steps = 720;
   lidar.slices_per_revolution = 8;
   const RayPattern pattern = BuildLidarPattern(lidar).rays;
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> xy(-8.0, 8.0), z(0.2, 2.5), angle(-0.5, 0.5);
-  RayCaster caster;
-  std::vector<RayHit> fast(pattern.directions.size()), reference(pattern.directions.size());
-  int64_t hits = 0;
-  for (int trial = 0; trial < 12; ++trial) {
-    const Eigen::Vector3d origin(xy(rng), xy(rng), z(rng));
-    const Eigen::Matrix3d rotation = (Eigen::AngleAxisd(angle(rng) * 6, Eigen::Vector3d::UnitZ()) *
-                                      Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitY()) *
-                                      Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitX()))
-                                         .toRotationMatrix();
-    const int groups = static_cast<int>(pattern.groups.size());
-    caster.Cast(*scene_, data_.get(), origin, rotation, pattern, 0, groups, 40.0, -1, fast.data());
-    RayCaster::CastWithMjRay(model_.get(), data_.get(), origin, rotation, pattern, 0, groups, 40.0,
-                             reference.data());
-    for (size_t i = 0; i < fast.size(); ++i) {
-      ASSERT_EQ(fast[i].geom, reference[i].geom) << "trial " << trial << " ray " << i;
-      if (reference[i].geom >= 0) {
-        ASSERT_NEAR(fast[i].range_m, reference[i].range_m, 1e-9);
-        ++hits;
+  for (const int lanes : LanesToTest()) {
+    SCOPED_TRACE(std::to_string(lanes) + " lanes");
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> xy(-8.0, 8.0), z(0.2, 2.5), angle(-0.5, 0.5);
+    RayCaster caster(nullptr, lanes);
+    std::vector<RayHit> fast(pattern.directions.size()), reference(pattern.directions.size());
+    int64_t hits = 0;
+    for (int trial = 0; trial < 12; ++trial) {
+      const Eigen::Vector3d origin(xy(rng), xy(rng), z(rng));
+      const Eigen::Matrix3d rotation =
+          (Eigen::AngleAxisd(angle(rng) * 6, Eigen::Vector3d::UnitZ()) *
+           Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitY()) *
+           Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitX()))
+              .toRotationMatrix();
+      const int groups = static_cast<int>(pattern.groups.size());
+      caster.Cast(*scene_, data_.get(), origin, rotation, pattern, 0, groups, 40.0, -1,
+                  fast.data());
+      RayCaster::CastWithMjRay(model_.get(), data_.get(), origin, rotation, pattern, 0, groups,
+                               40.0, reference.data());
+      for (size_t i = 0; i < fast.size(); ++i) {
+        ASSERT_EQ(fast[i].geom, reference[i].geom) << "trial " << trial << " ray " << i;
+        if (reference[i].geom >= 0) {
+          ASSERT_NEAR(fast[i].range_m, reference[i].range_m, 1e-9);
+          ++hits;
+        }
       }
     }
+    EXPECT_GT(hits, 100000);
   }
-  EXPECT_GT(hits, 100000);
 }
 
 TEST_F(RayCasterTest, TwoThreadsGiveTheSameResult) {
@@ -149,54 +170,57 @@ TEST(SharedLidarPatternTest, SharedByEqualLayoutsOnly) {
   }
 }
 
-// Rays are cast four at a time: a planar fan (each ray warmed by the one before, in the same
-// packet) whose groups end in packets of 1 to 3 rays, and the same fan without its component
+// Rays are cast in packets: a planar fan (each ray warmed by the one before, in the same packet)
+// whose groups end in short packets, and the same fan without its component
 // arrays (directions gathered ray by ray) give mj_ray's hits, ray for ray.
 TEST_F(RayCasterTest, FansWithShortLastPacketsAndGatheredDirectionsMatchMjRay) {
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> xy(-8.0, 8.0), z(0.2, 2.5), angle(-0.5, 0.5);
-  RayCaster caster;
-  int64_t hits = 0;
-  for (const int beams : {361, 362, 363, 364, 7}) {
-    RayPattern pattern;
-    for (int i = 0; i < beams; ++i) {
-      const double a = -M_PI + 2.0 * M_PI * i / beams;
-      // Tilted a little so that the fan meets the floor, the tops of boxes and the planes' edges.
-      pattern.directions.emplace_back(std::cos(a), std::sin(a), -0.15 + 0.3 * i / beams);
-      pattern.directions.back().normalize();
-    }
-    pattern.BuildGroups(beams > 100 ? 17 : 3);
-    RayPattern gathered = pattern;
-    gathered.components.clear();
-    const int groups = static_cast<int>(pattern.groups.size());
-    const size_t n = pattern.directions.size();
-    for (int trial = 0; trial < 6; ++trial) {
-      const Eigen::Vector3d origin(xy(rng), xy(rng), z(rng));
-      const Eigen::Matrix3d rotation =
-          (Eigen::AngleAxisd(angle(rng) * 6, Eigen::Vector3d::UnitZ()) *
-           Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitY()))
-              .toRotationMatrix();
-      std::vector<RayHit> fast(n), slow(n), reference(n);
-      caster.Cast(*scene_, data_.get(), origin, rotation, pattern, 0, groups, 40.0, -1,
-                  fast.data());
-      caster.Cast(*scene_, data_.get(), origin, rotation, gathered, 0, groups, 40.0, -1,
-                  slow.data());
-      RayCaster::CastWithMjRay(model_.get(), data_.get(), origin, rotation, pattern, 0, groups,
-                               40.0, reference.data());
-      for (size_t i = 0; i < n; ++i) {
-        ASSERT_EQ(fast[i].geom, reference[i].geom)
-            << beams << " beams, trial " << trial << " ray " << i;
-        ASSERT_EQ(slow[i].geom, reference[i].geom)
-            << beams << " beams, trial " << trial << " ray " << i;
-        if (reference[i].geom >= 0) {
-          ASSERT_NEAR(fast[i].range_m, reference[i].range_m, 1e-9);
-          ASSERT_EQ(slow[i].range_m, fast[i].range_m);
-          ++hits;
+  for (const int lanes : LanesToTest()) {
+    SCOPED_TRACE(std::to_string(lanes) + " lanes");
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> xy(-8.0, 8.0), z(0.2, 2.5), angle(-0.5, 0.5);
+    RayCaster caster(nullptr, lanes);
+    int64_t hits = 0;
+    for (const int beams : {361, 362, 363, 364, 7}) {
+      RayPattern pattern;
+      for (int i = 0; i < beams; ++i) {
+        const double a = -M_PI + 2.0 * M_PI * i / beams;
+        // Tilted a little so that the fan meets the floor, the tops of boxes and the planes' edges.
+        pattern.directions.emplace_back(std::cos(a), std::sin(a), -0.15 + 0.3 * i / beams);
+        pattern.directions.back().normalize();
+      }
+      pattern.BuildGroups(beams > 100 ? 17 : 3);
+      RayPattern gathered = pattern;
+      gathered.components.clear();
+      const int groups = static_cast<int>(pattern.groups.size());
+      const size_t n = pattern.directions.size();
+      for (int trial = 0; trial < 6; ++trial) {
+        const Eigen::Vector3d origin(xy(rng), xy(rng), z(rng));
+        const Eigen::Matrix3d rotation =
+            (Eigen::AngleAxisd(angle(rng) * 6, Eigen::Vector3d::UnitZ()) *
+             Eigen::AngleAxisd(angle(rng), Eigen::Vector3d::UnitY()))
+                .toRotationMatrix();
+        std::vector<RayHit> fast(n), slow(n), reference(n);
+        caster.Cast(*scene_, data_.get(), origin, rotation, pattern, 0, groups, 40.0, -1,
+                    fast.data());
+        caster.Cast(*scene_, data_.get(), origin, rotation, gathered, 0, groups, 40.0, -1,
+                    slow.data());
+        RayCaster::CastWithMjRay(model_.get(), data_.get(), origin, rotation, pattern, 0, groups,
+                                 40.0, reference.data());
+        for (size_t i = 0; i < n; ++i) {
+          ASSERT_EQ(fast[i].geom, reference[i].geom)
+              << beams << " beams, trial " << trial << " ray " << i;
+          ASSERT_EQ(slow[i].geom, reference[i].geom)
+              << beams << " beams, trial " << trial << " ray " << i;
+          if (reference[i].geom >= 0) {
+            ASSERT_NEAR(fast[i].range_m, reference[i].range_m, 1e-9);
+            ASSERT_EQ(slow[i].range_m, fast[i].range_m);
+            ++hits;
+          }
         }
       }
     }
+    EXPECT_GT(hits, 4000);  // of 8742 rays
   }
-  EXPECT_GT(hits, 4000);  // of 8742 rays
 }
 
 TEST_F(RayCasterTest, HiddenGeomsAndOwnersAreSkipped) {
