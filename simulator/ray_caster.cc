@@ -264,8 +264,8 @@ struct Candidate {
   bool infinite;  ///< a plane
   bool exact;     ///< an axis-aligned box: the slab test is the exact intersection
   bool inside;    ///< the sensor is inside the box
-  /// A box turned against the world's axes: its index in GroupCandidates::oriented (its own
-  /// frame, for an exact test there), or -1.
+  /// A plane, or a box turned against the world's axes: its index in GroupCandidates::oriented
+  /// (its own frame, for an exact test there), or -1.
   int oriented;
 };
 
@@ -433,6 +433,19 @@ struct Lanes<4> {
 };
 constexpr int kMaxLanes = 4;
 
+// 1 / x lane by lane, and +-1e12 for a component within 1e-12 of zero (a slab the ray runs
+// along). Vectors by reference: passed by value, a 32-byte vector changes the ABI without AVX.
+template <typename V, typename M>
+__attribute__((always_inline)) inline void SafeInverse(const V& x, V* inverse) {
+  const V zero = {};
+  const V one = zero + 1.0;
+  const M big = (x < zero ? -x : x) > 1e-12;
+  const V q = one / (V)(((M)x & big) | ((M)one & ~big));
+  const M pos = x >= zero;
+  const V tiny = (V)(((M)(zero + 1e12) & pos) | ((M)(zero - 1e12) & ~pos));
+  *inverse = (V)(((M)q & big) | ((M)tiny & ~big));
+}
+
 // `rays` rays (1 to L; lanes past them hold the next directions, cast and not written) with
 // their direction components at components[0..2]; `warm`: the geoms their neighbours hit (-1).
 // Inlined into CastPacket2 and CastPacket4, each compiled for its target.
@@ -451,16 +464,9 @@ __attribute__((always_inline)) inline void CastPacket(const mjModel* m, const mj
   for (int k = 0; k < 3; ++k) std::memcpy(&d[k], components[k], sizeof(V));
   V v[3], inv[3];
   const V zero = {};
-  const V one = zero + 1.0;
   for (int k = 0; k < 3; ++k) {
     v[k] = (rot[k] * d[0] + rot[k + 3] * d[1]) + rot[k + 6] * d[2];
-    const V a = v[k] < zero ? -v[k] : v[k];
-    const M big = a > 1e-12;
-    const V divisor = (V)(((M)v[k] & big) | ((M)one & ~big));
-    const V q = one / divisor;
-    const M pos = v[k] >= zero;
-    const V tiny = (V)(((M)(zero + 1e12) & pos) | ((M)(zero - 1e12) & ~pos));
-    inv[k] = (V)(((M)q & big) | ((M)tiny & ~big));
+    SafeInverse<V, M>(v[k], &inv[k]);
   }
   // Beyond `reach` a ray has left the boxes' vertical extent.
   V reach = zero + max_range_m;
@@ -480,16 +486,23 @@ __attribute__((always_inline)) inline void CastPacket(const mjModel* m, const mj
     w[1] = v[1][j];
     w[2] = v[2][j];
   };
+  // The lanes in `nearer` hit geom `geom` at x.
+  auto take = [&](const M& nearer, const V& x, int geom) __attribute__((always_inline)) {
+    best = (V)(((M)x & nearer) | ((M)best & ~nearer));
+    for (int j = 0; j < L; ++j) {
+      if (nearer[j]) best_geom[j] = geom;
+    }
+  };
   auto keep = [&](int j, double x, int geom) __attribute__((always_inline)) {
     if (x >= 0.0 && x <= best[j]) {
       best[j] = x;
       best_geom[j] = geom;
     }
   };
-  // Inlined in each clone (a call would leave the vector code on the default target).
+  // Inlined (a call would leave the vector code on the default target, and pass vectors by value).
   auto test = [&](const Candidate& c) __attribute__((always_inline)) {
     if (c.infinite) {
-      // MuJoCo's plane rule (mj_ray's), on four lanes: the front face only, within the
+      // MuJoCo's plane rule (mj_ray's), on the lanes: the front face only, within the
       // rendered rectangle when the plane has a size.
       const OrientedBox& plane = candidates.oriented[c.oriented];
       const V vz = (c.lo[0] * v[0] + c.lo[1] * v[1]) + c.lo[2] * v[2];
@@ -508,10 +521,7 @@ __attribute__((always_inline)) inline void CastPacket(const mjModel* m, const mj
         front &= ae <= plane.half[axis];
       }
       const M nearer = front & (x <= best);
-      best = (V)(((M)x & nearer) | ((M)best & ~nearer));
-      for (int j = 0; j < L; ++j) {
-        if (nearer[j]) best_geom[j] = c.geom;
-      }
+      take(nearer, x, c.geom);
       return;
     }
     V t_in = zero, t_out = best, far = zero + kInfinity;
@@ -536,13 +546,8 @@ __attribute__((always_inline)) inline void CastPacket(const mjModel* m, const mj
       V enter = zero - kInfinity, exit = zero + kInfinity;
       for (int k = 0; k < 3; ++k) {
         const V lv = (box.axes[k] * v[0] + box.axes[3 + k] * v[1]) + box.axes[6 + k] * v[2];
-        const V a = lv < zero ? -lv : lv;
-        const M big = a > 1e-12;
-        const V divisor = (V)(((M)lv & big) | ((M)one & ~big));
-        const V q = one / divisor;
-        const M pos = lv >= zero;
-        const V tiny = (V)(((M)(zero + 1e12) & pos) | ((M)(zero - 1e12) & ~pos));
-        const V il = (V)(((M)q & big) | ((M)tiny & ~big));
+        V il;
+        SafeInverse<V, M>(lv, &il);
         const V ta = (-box.half[k] - box.origin[k]) * il;
         const V tb = (box.half[k] - box.origin[k]) * il;
         const M a_near = ta < tb;
@@ -554,20 +559,14 @@ __attribute__((always_inline)) inline void CastPacket(const mjModel* m, const mj
       const M outside = enter >= zero;
       const V x = (V)(((M)enter & outside) | ((M)exit & ~outside));
       const M nearer = hit & (enter <= exit) & (x >= zero) & (x <= best);
-      best = (V)(((M)x & nearer) | ((M)best & ~nearer));
-      for (int j = 0; j < L; ++j) {
-        if (nearer[j]) best_geom[j] = c.geom;
-      }
+      take(nearer, x, c.geom);
       return;
     }
     if (c.exact) {
       // From outside: the entry; from inside a box a ray meets its far side.
       const V x = c.inside ? far : t_in;
       const M nearer = hit & (x >= zero) & (x <= best);
-      best = (V)(((M)x & nearer) | ((M)best & ~nearer));
-      for (int j = 0; j < L; ++j) {
-        if (nearer[j]) best_geom[j] = c.geom;
-      }
+      take(nearer, x, c.geom);
       return;
     }
     for (int j = 0; j < L; ++j) {
