@@ -30,7 +30,8 @@ inline constexpr char kMapstorePushOctomap[] = "MAPSTORE.PUSH.OCTOMAP";
 inline constexpr char kMapstorePushTileResend[] = "MAPSTORE.PUSH.TILE_RESEND";
 
 // Per-robot stream suffixes.
-inline constexpr char kLidar[] = "LIDAR";
+inline constexpr char kLidar[] = "LIDAR";  // lidar slices as points (lcmt_point_cloud_slice)
+inline constexpr char kLidarRanges[] = "LIDAR_RANGES";  // as ranges (lcmt_lidar_ranges)
 inline constexpr char kScan[] = "SCAN";
 inline constexpr char kTurretScan[] = "TURRET_SCAN";
 inline constexpr char kOdom[] = "ODOM";

@@ -18,6 +18,19 @@ struct LidarPoint {
   float z_m{0.f};
   float intensity{0.f};
   int16_t ring{0};
+  uint16_t column{0};  ///< azimuth step within its slice, when the slice has a grid
+};
+
+/// How a spinning lidar lays out one slice, when its source has a grid of rays (the simulator's
+/// lidar, a Velodyne): `columns` azimuth steps `azimuth_step_rad` apart from the slice's
+/// azimuth_start_rad, by the rings at `ring_elevation_rad`. A point's ring and column name its
+/// ray. When `range_resolution_m` > 0 every range is a multiple of it, and the slice travels as
+/// 3 bytes a ray (lcmt_lidar_ranges) instead of 17 a point.
+struct LidarGrid {
+  std::vector<float> ring_elevation_rad;  ///< ring 0 first
+  double azimuth_step_rad{0.0};
+  int32_t columns{0};
+  double range_resolution_m{0.0};
 };
 
 struct LidarSlice {
@@ -31,6 +44,7 @@ struct LidarSlice {
   double max_range_m{0.0};
   Pose3 sensor_pose;       ///< sensor in world at this slice's time
   std::vector<LidarPoint> points;
+  LidarGrid grid;          ///< columns == 0: the points have no grid
 };
 
 /// A full revolution: its slices in order; a missing slice leaves a gap.

@@ -1,6 +1,8 @@
 #include "services/runtime/conversions.h"
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "services/runtime/tiler.h"
 
@@ -96,6 +98,131 @@ Result<common::LidarSlice> FromLcm(const cairn::lcmt_point_cloud_slice& m) {
   s.points.resize(n);
   for (size_t i = 0; i < n; ++i) {
     s.points[i] = {m.x_m[i], m.y_m[i], m.z_m[i], m.intensity[i], m.ring[i]};
+  }
+  return s;
+}
+
+bool HasRangeGrid(const common::LidarSlice& slice) {
+  const common::LidarGrid& grid = slice.grid;
+  return grid.columns >= 1 && grid.columns <= 65535 && grid.range_resolution_m > 0.0 &&
+         std::isfinite(grid.range_resolution_m) && !grid.ring_elevation_rad.empty() &&
+         grid.ring_elevation_rad.size() <= 127;
+}
+
+cairn::lcmt_lidar_ranges ToLcmRangesWithoutRays(const common::LidarSlice& slice) {
+  const common::LidarGrid& grid = slice.grid;
+  if (!HasRangeGrid(slice)) {
+    throw std::invalid_argument("ToLcmRanges: the slice has no grid of ranges");
+  }
+  cairn::lcmt_lidar_ranges m{};
+  m.utime = slice.utime;
+  m.robot = slice.robot;
+  m.frame = "lidar";
+  m.revolution = slice.revolution;
+  m.slice_index = slice.slice_index;
+  m.slice_count = slice.slice_count;
+  m.azimuth_start_rad = slice.azimuth_start_rad;
+  m.azimuth_step_rad = grid.azimuth_step_rad;
+  m.max_range_m = slice.max_range_m;
+  m.range_resolution_m = grid.range_resolution_m;
+  ToLcm(slice.sensor_pose, m.sensor_position_m, m.sensor_orientation_wxyz);
+  const int rings = static_cast<int>(grid.ring_elevation_rad.size());
+  m.num_rings = static_cast<int16_t>(rings);
+  m.ring_elevation_rad = grid.ring_elevation_rad;
+  m.num_columns = grid.columns;
+  m.num_rays = 0;
+  return m;
+}
+
+cairn::lcmt_lidar_ranges ToLcmRanges(const common::LidarSlice& slice) {
+  cairn::lcmt_lidar_ranges m = ToLcmRangesWithoutRays(slice);
+  const common::LidarGrid& grid = slice.grid;
+  const int rings = m.num_rings;
+  m.num_rays = grid.columns * rings;
+  m.ranges.assign(static_cast<size_t>(m.num_rays), 0);
+  m.intensity.assign(static_cast<size_t>(m.num_rays), 0);
+  const float steps_per_m = static_cast<float>(1.0 / grid.range_resolution_m);
+  for (const common::LidarPoint& p : slice.points) {
+    if (p.ring < 0 || p.ring >= rings || p.column >= grid.columns) {
+      throw std::invalid_argument("ToLcmRanges: a point lies outside the slice's grid");
+    }
+    const size_t ray = static_cast<size_t>(p.column) * rings + p.ring;
+    m.ranges[ray] = static_cast<int16_t>(LidarRangeSteps(p, steps_per_m));
+    m.intensity[ray] = LidarIntensityByte(p.intensity);
+  }
+  return m;
+}
+
+Result<common::LidarSlice> FromLcm(const cairn::lcmt_lidar_ranges& m) {
+  if (m.slice_count <= 0 || m.slice_index < 0 || m.slice_index >= m.slice_count) {
+    return InvalidArgumentError("lidar ranges: slice index " + std::to_string(m.slice_index) +
+                                " of " + std::to_string(m.slice_count) + " is out of range");
+  }
+  if (m.num_rings < 1 || m.num_rings > 127 || m.num_columns < 1 || m.num_columns > 65535 ||
+      static_cast<int64_t>(m.num_rings) * m.num_columns != m.num_rays ||
+      m.ring_elevation_rad.size() != static_cast<size_t>(m.num_rings) ||
+      m.ranges.size() != static_cast<size_t>(m.num_rays) ||
+      m.intensity.size() != static_cast<size_t>(m.num_rays)) {
+    return InvalidArgumentError("lidar ranges: " + std::to_string(m.num_rays) + " rays for " +
+                                std::to_string(m.num_rings) + " rings (1 to 127) by " +
+                                std::to_string(m.num_columns) + " columns, or arrays that disagree");
+  }
+  if (!std::isfinite(m.range_resolution_m) || m.range_resolution_m <= 0.0 ||
+      m.range_resolution_m > 1.0) {
+    return InvalidArgumentError("lidar ranges: range resolution " +
+                                std::to_string(m.range_resolution_m) + " m is not in (0, 1]");
+  }
+  if (!std::isfinite(m.azimuth_start_rad) || !std::isfinite(m.azimuth_step_rad) ||
+      std::abs(m.azimuth_start_rad) > 8.0 * M_PI ||
+      std::abs(m.azimuth_step_rad) * m.num_columns > 2.0 * M_PI + 1e-6) {
+    return InvalidArgumentError("lidar ranges: the columns' azimuths are not finite or exceed a turn");
+  }
+  for (const float elevation : m.ring_elevation_rad) {
+    if (!(std::abs(elevation) <= static_cast<float>(M_PI / 2.0))) {
+      return InvalidArgumentError("lidar ranges: a ring elevation is not in [-pi/2, pi/2]");
+    }
+  }
+  auto pose = PoseFromArrays(m.sensor_position_m, m.sensor_orientation_wxyz);
+  if (!pose.ok()) return InvalidArgumentError("lidar ranges: " + pose.status().message());
+  common::LidarSlice s;
+  s.utime = m.utime;
+  s.robot = m.robot;
+  s.revolution = m.revolution;
+  s.slice_index = m.slice_index;
+  s.slice_count = m.slice_count;
+  s.azimuth_start_rad = m.azimuth_start_rad;
+  s.azimuth_end_rad = m.azimuth_start_rad + m.azimuth_step_rad * m.num_columns;
+  s.max_range_m = m.max_range_m;
+  s.sensor_pose = *pose;
+  s.grid.ring_elevation_rad = m.ring_elevation_rad;
+  s.grid.azimuth_step_rad = m.azimuth_step_rad;
+  s.grid.columns = m.num_columns;
+  s.grid.range_resolution_m = m.range_resolution_m;
+  const int rings = m.num_rings;
+  std::vector<double> cos_el(rings), sin_el(rings);
+  for (int r = 0; r < rings; ++r) {
+    cos_el[r] = std::cos(static_cast<double>(m.ring_elevation_rad[r]));
+    sin_el[r] = std::sin(static_cast<double>(m.ring_elevation_rad[r]));
+  }
+  s.points.reserve(m.ranges.size());
+  for (int c = 0; c < m.num_columns; ++c) {
+    const double azimuth = m.azimuth_start_rad + c * m.azimuth_step_rad;
+    const double ca = std::cos(azimuth), sa = std::sin(azimuth);
+    const int16_t* ranges = m.ranges.data() + static_cast<size_t>(c) * rings;
+    const uint8_t* intensity = m.intensity.data() + static_cast<size_t>(c) * rings;
+    for (int r = 0; r < rings; ++r) {
+      const uint16_t steps = static_cast<uint16_t>(ranges[r]);
+      if (steps == 0) continue;
+      const double range_m = steps * m.range_resolution_m;
+      common::LidarPoint p;
+      p.x_m = static_cast<float>(cos_el[r] * ca * range_m);
+      p.y_m = static_cast<float>(cos_el[r] * sa * range_m);
+      p.z_m = static_cast<float>(sin_el[r] * range_m);
+      p.intensity = intensity[r];
+      p.ring = static_cast<int16_t>(r);
+      p.column = static_cast<uint16_t>(c);
+      s.points.push_back(p);
+    }
   }
   return s;
 }

@@ -113,16 +113,23 @@ inline void PutFloatBigEndian(float value, uint8_t* out) {
   std::memcpy(out, &v, sizeof(v));
 }
 
-/// The lidar's publisher: its slices go out through FastPointCloudSlice.
+/// The lidar's publisher: slices with a range resolution go out as ranges (3 bytes a ray) on
+/// <robot>.LIDAR_RANGES, others as points through FastPointCloudSlice on <robot>.LIDAR.
 SensorPublisher LidarPublisher() {
   SensorPublisher p;
   p.sensor = LidarSensor::kName;
-  p.stream = channels::kLidar;
-  p.publish = [stream = p.stream](runtime::Node& node, const ReadingGroup& group) {
+  p.stream = channels::kLidarRanges;
+  p.publish = [](runtime::Node& node, const ReadingGroup& group) {
     const std::vector<common::LidarSlice>* slices = group.As<common::LidarSlice>();
     CAIRN_DEMAND(slices != nullptr);
     for (const common::LidarSlice& slice : *slices) {
-      node.Publish(channels::ForRobot(slice.robot, stream.c_str()), FastPointCloudSlice(slice));
+      if (slice.grid.range_resolution_m > 0.0) {
+        node.Publish(channels::ForRobot(slice.robot, channels::kLidarRanges),
+                     FastLidarRanges(slice));
+      } else {
+        node.Publish(channels::ForRobot(slice.robot, channels::kLidar),
+                     FastPointCloudSlice(slice));
+      }
     }
   };
   return p;
@@ -180,6 +187,44 @@ int FastPointCloudSlice::encode(void* buf, int offset, int maxlen) const {
     PutFloatBigEndian(p.z_m, z + 4 * i);
     PutFloatBigEndian(p.intensity, intensity + 4 * i);
     ring[i] = static_cast<uint8_t>(static_cast<int8_t>(p.ring));
+  }
+  return size;
+}
+
+FastLidarRanges::FastLidarRanges(const common::LidarSlice& slice) : slice_(&slice) {
+  if (!runtime::HasRangeGrid(slice)) return;  // encode() refuses it
+  head_ = runtime::ToLcmRangesWithoutRays(slice);
+  rays_ = static_cast<int64_t>(head_.num_columns) * head_.num_rings;
+}
+
+int FastLidarRanges::getEncodedSize() const {
+  if (!runtime::HasRangeGrid(*slice_)) return -1;
+  const int64_t size = head_.getEncodedSize() + 3 * rays_;
+  return size <= std::numeric_limits<int32_t>::max() ? static_cast<int>(size) : -1;
+}
+
+int FastLidarRanges::encode(void* buf, int offset, int maxlen) const {
+  const int size = getEncodedSize();
+  if (size < 0 || offset < 0 || maxlen < size) return -1;
+  // The fields up to num_rays by the generated code, then the real count and the arrays.
+  const int head = head_.encode(buf, offset, maxlen);
+  if (head < 4 || head + 3 * rays_ != size) return -1;
+  uint8_t* out = static_cast<uint8_t*>(buf) + offset + head;
+  const uint32_t count = __builtin_bswap32(static_cast<uint32_t>(rays_));
+  std::memcpy(out - 4, &count, sizeof(count));
+  uint8_t* const ranges = out;  // big-endian 16-bit steps
+  uint8_t* const intensity = out + 2 * rays_;
+  std::memset(out, 0, static_cast<size_t>(3 * rays_));
+  const int rings = head_.num_rings;
+  const int columns = head_.num_columns;
+  const float steps_per_m = static_cast<float>(1.0 / head_.range_resolution_m);
+  for (const common::LidarPoint& p : slice_->points) {
+    if (p.ring < 0 || p.ring >= rings || p.column >= columns) return -1;
+    const size_t ray = static_cast<size_t>(p.column) * rings + p.ring;
+    const uint16_t steps = runtime::LidarRangeSteps(p, steps_per_m);
+    ranges[2 * ray] = static_cast<uint8_t>(steps >> 8);
+    ranges[2 * ray + 1] = static_cast<uint8_t>(steps);
+    intensity[ray] = runtime::LidarIntensityByte(p.intensity);
   }
   return size;
 }

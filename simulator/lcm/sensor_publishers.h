@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
 
 #include "common/channels.h"
@@ -62,6 +63,23 @@ class FastPointCloudSlice {
  private:
   const common::LidarSlice* slice_;
   cairn::lcmt_point_cloud_slice head_;  ///< every field but the points
+};
+
+/// A lidar slice with a grid of ranges published with LCM's exact encoding of
+/// lcmt_lidar_ranges, written straight from the slice's points as FastPointCloudSlice does: the
+/// bytes are those of runtime::ToLcmRanges(slice).encode() (tested), without the message's two
+/// arrays filled and freed for every slice and written by the generated code value by value.
+/// encode() refuses (-1) a slice without a grid (runtime::HasRangeGrid) or with a point off it.
+class FastLidarRanges {
+ public:
+  explicit FastLidarRanges(const common::LidarSlice& slice);
+  int getEncodedSize() const;
+  int encode(void* buf, int offset, int maxlen) const;
+
+ private:
+  const common::LidarSlice* slice_;
+  cairn::lcmt_lidar_ranges head_;  ///< every field but the rays (num_rays 0)
+  int64_t rays_{0};
 };
 
 /// Publishers by sensor name.

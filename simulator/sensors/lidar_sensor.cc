@@ -31,14 +31,22 @@ void LidarParams::Validate() const {
                      "hdl32e.min_range_m must be in [0, max_range_m)");
   CAIRN_THROW_UNLESS(FiniteNonNegative(range_noise_sigma_m),
                      "hdl32e.range_noise_sigma_m must be >= 0");
+  // 16 bits of range steps must reach the maximum range.
+  CAIRN_THROW_UNLESS(range_resolution_m == 0.0 || (FinitePositive(range_resolution_m) &&
+                                                   max_range_m / range_resolution_m <= 65535.0),
+                     "hdl32e.range_resolution_m must be 0 or at least max_range_m / 65535");
   CAIRN_THROW_UNLESS(azimuths_per_ray_group >= 1, "hdl32e.azimuths_per_ray_group must be >= 1");
   CAIRN_THROW_UNLESS(rings_per_ray_group >= 1, "hdl32e.rings_per_ray_group must be >= 1");
-  // One slice must fit a UDP-friendly message (17 bytes per point).
+  // One slice must fit a UDP-friendly message (17 bytes per point, 3 per ray as ranges), and
+  // so its columns a 16-bit index.
   const int64_t steps_per_slice =
       (azimuth_steps + slices_per_revolution - 1) / slices_per_revolution;
-  CAIRN_THROW_UNLESS(steps_per_slice * rings * 17 <= 64 * 1024,
-                     "hdl32e: a slice of " << steps_per_slice * rings
-                                           << " points exceeds 64 KB; raise slices_per_revolution");
+  const int64_t bytes_per_ray = range_resolution_m > 0.0 ? 3 : 17;
+  CAIRN_THROW_UNLESS(steps_per_slice * rings * bytes_per_ray <= 64 * 1024,
+                     "hdl32e: a slice of " << steps_per_slice * rings << " rays at "
+                                           << bytes_per_ray
+                                           << " bytes each exceeds 64 KB; raise "
+                                              "slices_per_revolution");
 }
 
 LidarParams LoadLidarParams(common::YamlMap& map, const LidarParams& defaults) {
@@ -52,6 +60,7 @@ LidarParams LoadLidarParams(common::YamlMap& map, const LidarParams& defaults) {
   map.Get("max_range_m", &p.max_range_m);
   map.Get("min_range_m", &p.min_range_m);
   map.Get("range_noise_sigma_m", &p.range_noise_sigma_m);
+  map.Get("range_resolution_m", &p.range_resolution_m);
   map.Get("azimuths_per_ray_group", &p.azimuths_per_ray_group);
   map.Get("rings_per_ray_group", &p.rings_per_ray_group);
   map.Get("mount_site", &p.mount_site);
@@ -171,6 +180,9 @@ LidarSensor::LidarSensor(const LidarParams& params, const SensorContext& context
                                                     pattern_->slice_ray_begin[s]));
   }
   hits_.resize(largest);
+  for (int r = 0; r < params_.rings; ++r) {
+    ring_elevation_rad_.push_back(static_cast<float>(LidarRingElevationRad(params_, r)));
+  }
 }
 
 bool LidarSensor::Due(double now_s) const {
@@ -210,6 +222,11 @@ common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revo
   s.azimuth_end_rad = LidarAzimuthRad(p, LidarSliceBegin(p, slice + 1));
   s.max_range_m = p.max_range_m;
   s.sensor_pose = sensor;
+  const int k_begin = LidarSliceBegin(p, slice);
+  s.grid.ring_elevation_rad = ring_elevation_rad_;
+  s.grid.azimuth_step_rad = LidarAzimuthRad(p, 1);
+  s.grid.columns = LidarSliceBegin(p, slice + 1) - k_begin;
+  s.grid.range_resolution_m = p.range_resolution_m;
   const int first = pattern.slice_ray_begin[slice];
   const int last = pattern.slice_ray_begin[slice + 1];
   // Sized for every ray and trimmed at the end: the points are written in place, field by
@@ -222,7 +239,10 @@ common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revo
   const RayHit* hits = hits_.data();  // the slice's rays: hits[i - first]
   const Eigen::Vector3d* directions = rays.directions.data();
   const int16_t* rings = pattern.ring.data();
+  const int32_t* steps = pattern.azimuth_step.data();
   const float* intensity = frame.rays->intensities();
+  // Locals: the compiler cannot keep members in registers across the stores to the points.
+  const double min_range_m = p.min_range_m, max_range_m = p.max_range_m;
   for (int i = first; i < last; ++i) {
     const RayHit& h = hits[i - first];
     if (h.geom < 0) continue;
@@ -230,13 +250,14 @@ common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revo
     if (p.range_noise_sigma_m > 0.0) {
       range += p.range_noise_sigma_m * noise_.Gaussian(noise_base + i);
     }
-    if (range < p.min_range_m || range > p.max_range_m) continue;
+    if (range < min_range_m || range > max_range_m) continue;
     const Eigen::Vector3d& dir = directions[i];
     out->x_m = static_cast<float>(dir.x() * range);
     out->y_m = static_cast<float>(dir.y() * range);
     out->z_m = static_cast<float>(dir.z() * range);
     out->intensity = intensity[h.geom];
     out->ring = rings[i];
+    out->column = static_cast<uint16_t>(steps[i] - k_begin);
     ++out;
   }
   s.points.resize(out - s.points.data());

@@ -23,10 +23,14 @@ struct LidarParams {
   double max_elevation_deg{10.67};
   int azimuth_steps{1800};        ///< per revolution (0.2 deg)
   double rate_hz{10.0};           ///< revolutions per second
-  int slices_per_revolution{20};  ///< each slice is one message
+  int slices_per_revolution{10};  ///< each slice is one message (17 KB as ranges)
   double max_range_m{70.0};
   double min_range_m{0.4};
   double range_noise_sigma_m{0.02};
+  /// Slices travel as ranges in steps of this (the HDL-32E's 2 mm), 3 bytes a ray, on
+  /// <robot>.LIDAR_RANGES (the readings in the process are not rounded); 0: as float points
+  /// on <robot>.LIDAR, 17 bytes a point.
+  double range_resolution_m{0.002};
   int azimuths_per_ray_group{15};  ///< broad-phase granularity of the ray caster...
   int rings_per_ray_group{32};     ///< ... in azimuth and in elevation
   std::string mount_site{"lidar_mount"};
@@ -69,7 +73,7 @@ class LidarSensor final : public SimSensor {
   static constexpr char kName[] = "hdl32e";
   static constexpr char kDescription[] =
       "HDL-32E-like 3-D lidar: 32 rings -30.67..+10.67 deg, 1800 azimuth steps, 10 Hz, 70 m, "
-      "sigma 0.02 m; azimuth slices on <robot>.LIDAR";
+      "sigma 0.02 m; 10 slices a turn on <robot>.LIDAR_RANGES, 2 mm steps, 3 bytes a ray";
   using Params = LidarParams;
   using Reading = common::LidarSlice;
   static constexpr auto kLoadParams = &LoadLidarParams;
@@ -91,6 +95,7 @@ class LidarSensor final : public SimSensor {
   int site_{-1};
   int64_t slices_done_{0};
   std::vector<RayHit> hits_;  ///< one slice: hits_[ray - slice_ray_begin[slice]]
+  std::vector<float> ring_elevation_rad_;
   NoiseSource noise_;
 };
 

@@ -140,8 +140,10 @@ std::vector<std::unique_lock<std::mutex>> MapperService::LockAllLayers() {
 
 void MapperService::Subscribe() {
   const std::string& r = params_.robot;
-  node_.Subscribe<cairn::lcmt_point_cloud_slice>(Ch(r, channels::kLidar),
-                                                 [this](const auto& m) { OnSlice(m); });
+  node_.Subscribe<cairn::lcmt_point_cloud_slice>(
+      Ch(r, channels::kLidar), [this](const auto& m) { OnSlice(runtime::FromLcm(m)); });
+  node_.Subscribe<cairn::lcmt_lidar_ranges>(
+      Ch(r, channels::kLidarRanges), [this](const auto& m) { OnSlice(runtime::FromLcm(m)); });
   node_.Subscribe<cairn::lcmt_laser_scan>(Ch(r, channels::kScan),
                                           [this](const auto& m) { OnScan(m); });
   node_.Subscribe<cairn::lcmt_pose>(Ch(r, channels::kPose), [this](const auto& m) { OnPose(m); });
@@ -175,7 +177,10 @@ void MapperService::HandleLogged(const std::string& channel, const void* data, i
   };
   if (channel == Ch(r, channels::kLidar)) {
     cairn::lcmt_point_cloud_slice m{};
-    if (decode(m)) OnSlice(m);
+    if (decode(m)) OnSlice(runtime::FromLcm(m));
+  } else if (channel == Ch(r, channels::kLidarRanges)) {
+    cairn::lcmt_lidar_ranges m{};
+    if (decode(m)) OnSlice(runtime::FromLcm(m));
   } else if (channel == Ch(r, channels::kScan)) {
     cairn::lcmt_laser_scan m{};
     if (decode(m)) OnScan(m);
@@ -236,8 +241,7 @@ void MapperService::LogNewMounts() {
   }
 }
 
-void MapperService::OnSlice(const cairn::lcmt_point_cloud_slice& msg) {
-  auto slice = runtime::FromLcm(msg);
+void MapperService::OnSlice(common::Result<common::LidarSlice> slice) {
   if (!slice.ok()) {
     node_.CountDropped("bad_lidar_slices");
     node_.Warn("bad_slice", "dropped a lidar slice: " + slice.status().message());

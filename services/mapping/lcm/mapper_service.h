@@ -20,6 +20,7 @@
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_mapstore_reply.hpp"
 #include "cairn/lcmt_odometry.hpp"
+#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
@@ -113,7 +114,8 @@ class MapperService {
 
   // LCM-thread side (or the replay thread): decode, check, resolve poses, queue.
   void Subscribe();
-  void OnSlice(const cairn::lcmt_point_cloud_slice& msg);
+  /// A lidar slice decoded from either message (points or ranges), or why it was refused.
+  void OnSlice(common::Result<common::LidarSlice> slice);
   void OnScan(const cairn::lcmt_laser_scan& msg);
   void OnPose(const cairn::lcmt_pose& msg);
   void OnOdometry(const cairn::lcmt_odometry& msg);

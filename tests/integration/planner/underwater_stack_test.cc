@@ -47,6 +47,11 @@ using testing::WaitFor;
 constexpr char kRobot[] = "auv";
 constexpr int kStateReached = cairn::lcmt_nav_status::STATE_REACHED;
 constexpr int kStateFailed = cairn::lcmt_nav_status::STATE_FAILED;
+// How far the AUV may drift in the wall second after REACHED (4 s of sim time at --speed 4):
+// the navigator then requests zero surge, and the hull, from up to 1 m/s, slows under the
+// water's drag alone (test 14 measured 1.17 m, on towards the goal). It stops; it does not
+// drive on.
+constexpr double kMaxCoastM = 2.0;
 using Request = cairn::lcmt_mapstore_request;
 constexpr int8_t kStoreOk = cairn::lcmt_mapstore_reply::STATUS_OK;
 
@@ -222,6 +227,28 @@ class UnderwaterStackTest : public ::testing::Test {
     return -1;
   }
 
+  // The drive to goal `id` at `goal` ended where it should: the ground-truth pose at the
+  // REACHED status lies within the navigator's 2 m goal tolerance (plus 2 cm, a pose period at
+  // full surge: the navigator judged the pose it had, the test takes the last one stamped by
+  // then), and in the second after it the AUV, no longer commanded, coasts less than
+  // kMaxCoastM. The pose a second later is not held to the 2 m: a goal reached at 1.99 m and a
+  // hull that drifts on by a centimetre is a reached goal.
+  void ExpectEndsAtGoal(int64_t id, const Vector2& goal) {
+    const int64_t reached_utime = ReachedUtime(id);
+    ASSERT_GT(reached_utime, 0);
+    const std::vector<common::Pose2> until = Poses(reached_utime);
+    const std::vector<common::Pose2> all = Poses();
+    ASSERT_FALSE(until.empty());
+    ASSERT_FALSE(all.empty());
+    const Vector2 at_reached = until.back().position();
+    EXPECT_LE((at_reached - goal).norm(), 2.02);
+    const double coast_m = (all.back().position() - at_reached).norm();
+    ::testing::Test::RecordProperty("coast_mm", static_cast<int>(coast_m * 1000.0));
+    EXPECT_LT(coast_m, kMaxCoastM)
+        << "from (" << at_reached.x() << ", " << at_reached.y() << ") to ("
+        << all.back().position().x() << ", " << all.back().position().y() << ")";
+  }
+
   // The sim time (s) of the first status for goal `id`, or -1.
   double GoalTakenS(int64_t id) {
     for (const auto& raw : bus_.Kept(ch::ForRobot(kRobot, ch::kNavStatus))) {
@@ -277,7 +304,7 @@ TEST_F(UnderwaterStackTest, Seed004Test13RocksToTheGoalWithoutContactThenTest18F
   WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
   const std::vector<common::Pose2> poses = Poses();
   ASSERT_GT(poses.size(), 100u);
-  EXPECT_LE((poses.back().position() - Vector2(35.0, 0.0)).norm(), 2.0);
+  ExpectEndsAtGoal(13, Vector2(35.0, 0.0));
   const std::vector<Rock> rocks = RocksWorld();
   ExpectNoContact(poses, rocks);
   // The drive went through the velocity bridge: body-velocity requests, surge and yaw only.
@@ -357,7 +384,7 @@ TEST_F(UnderwaterStackTest, Seed004Test13RocksToTheGoalWithoutContactThenTest18F
   WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
   const std::vector<common::Pose2> again = Poses();
   ASSERT_GT(again.size(), 100u);
-  EXPECT_LE((again.back().position() - Vector2(35.0, 0.0)).norm(), 2.0);
+  ExpectEndsAtGoal(18, Vector2(35.0, 0.0));
   // It went at once: surging within 3 s of sim time of taking the goal (on the first drive the
   // sonar took over 10 s to show a way), and never waited for the map.
   const double taken_s = GoalTakenS(18), surge_s = FirstSurgeS();
@@ -411,7 +438,7 @@ TEST_F(UnderwaterStackTest, Seed004Test14ThroughTheBreakwaterFourClustersNoConta
   WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
   const std::vector<common::Pose2> poses = Poses();
   ASSERT_GT(poses.size(), 100u);
-  EXPECT_LE((poses.back().position() - Vector2(34.0, 0.0)).norm(), 2.0);
+  ExpectEndsAtGoal(14, Vector2(34.0, 0.0));
   const std::vector<Rock> columns = BreakwaterWorld();
   ExpectNoContact(poses, columns);
   const auto map = tiles_.Layer();
@@ -436,7 +463,7 @@ TEST_F(UnderwaterStackTest, Seed004Test16ExploreFirstWaitsForTheSonarThenGoes) {
   WaitFor([] { return false; }, 1.0, [&] { bus_.Pump(20); });
   const std::vector<common::Pose2> poses = Poses();
   ASSERT_GT(poses.size(), 100u);
-  EXPECT_LE((poses.back().position() - Vector2(20.0, -15.0)).norm(), 2.0);
+  ExpectEndsAtGoal(16, Vector2(20.0, -15.0));
   const double first_surge_s = FirstSurgeS();
   ASSERT_GT(first_surge_s, 0.0);
   // 88 pings to the left limit and back past the straight ahead: over 10 s at 15 pings/s.

@@ -1,6 +1,8 @@
 #include "services/runtime/conversions.h"
 
 #include <cmath>
+#include <stdexcept>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -57,6 +59,130 @@ TEST(ConversionsTest, LidarSliceRejectsBadInput) {
   m = ToLcm(s);
   m.slice_index = 5;
   EXPECT_FALSE(FromLcm(m).ok());
+}
+
+// A slice on a grid of 4 rings by 6 columns, as the simulator's lidar makes it: every ray but
+// two returned, each point along its ray at a range of whole 2 mm steps.
+common::LidarSlice GriddedSlice() {
+  common::LidarSlice s;
+  s.utime = 42;
+  s.robot = "rover1";
+  s.revolution = 3;
+  s.slice_index = 1;
+  s.slice_count = 20;
+  s.azimuth_start_rad = 0.3;
+  s.max_range_m = 70.0;
+  s.sensor_pose = SomePose();
+  s.grid.ring_elevation_rad = {-0.5f, -0.2f, 0.0f, 0.18f};
+  s.grid.azimuth_step_rad = 0.0035;
+  s.grid.columns = 6;
+  s.grid.range_resolution_m = 0.002;
+  s.azimuth_end_rad = s.azimuth_start_rad + 6 * s.grid.azimuth_step_rad;
+  for (int c = 0; c < 6; ++c) {
+    for (int r = 0; r < 4; ++r) {
+      if ((c == 2 && r == 1) || (c == 5 && r == 3)) continue;  // no return
+      const double el = s.grid.ring_elevation_rad[r];
+      const double az = s.azimuth_start_rad + c * s.grid.azimuth_step_rad;
+      const double range_m = 0.002 * (500 + 3001 * c + 17 * r);  // 1.0 m to 31.1 m
+      common::LidarPoint p;
+      p.x_m = static_cast<float>(std::cos(el) * std::cos(az) * range_m);
+      p.y_m = static_cast<float>(std::cos(el) * std::sin(az) * range_m);
+      p.z_m = static_cast<float>(std::sin(el) * range_m);
+      p.intensity = static_cast<float>(10 * c + r);
+      p.ring = static_cast<int16_t>(r);
+      p.column = static_cast<uint16_t>(c);
+      s.points.push_back(p);
+    }
+  }
+  return s;
+}
+
+TEST(ConversionsTest, LidarRangesRoundTripThroughTheWire) {
+  const common::LidarSlice s = GriddedSlice();
+  const cairn::lcmt_lidar_ranges m = ToLcmRanges(s);
+  EXPECT_EQ(m.num_rays, 24);
+  // 3 bytes a ray, against 17 a point: the rays' bytes and a header under 256 bytes.
+  EXPECT_LT(m.getEncodedSize(), 24 * 3 + 256);
+  std::vector<uint8_t> bytes(static_cast<size_t>(m.getEncodedSize()));
+  ASSERT_EQ(m.encode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  cairn::lcmt_lidar_ranges decoded;
+  ASSERT_EQ(decoded.decode(bytes.data(), 0, static_cast<int>(bytes.size())),
+            static_cast<int>(bytes.size()));
+  auto back = FromLcm(decoded);
+  ASSERT_TRUE(back.ok()) << back.status().ToString();
+  EXPECT_EQ(back->utime, 42);
+  EXPECT_EQ(back->robot, "rover1");
+  EXPECT_EQ(back->revolution, 3);
+  EXPECT_EQ(back->slice_index, 1);
+  EXPECT_EQ(back->slice_count, 20);
+  EXPECT_NEAR(back->azimuth_end_rad, s.azimuth_end_rad, 1e-12);
+  EXPECT_TRUE(back->sensor_pose.position_m.isApprox(s.sensor_pose.position_m));
+  EXPECT_EQ(back->grid.columns, 6);
+  EXPECT_EQ(back->grid.ring_elevation_rad, s.grid.ring_elevation_rad);
+  // Every point comes back, in column then ring order, on its ray within a micrometre.
+  ASSERT_EQ(back->points.size(), s.points.size());
+  for (size_t i = 0; i < s.points.size(); ++i) {
+    const common::LidarPoint& a = s.points[i];
+    const common::LidarPoint& b = back->points[i];
+    EXPECT_EQ(b.ring, a.ring);
+    EXPECT_EQ(b.column, a.column);
+    EXPECT_EQ(b.intensity, a.intensity);
+    const Eigen::Vector3f d(a.x_m - b.x_m, a.y_m - b.y_m, a.z_m - b.z_m);
+    EXPECT_LT(d.norm(), 1e-5f) << "point " << i;
+  }
+}
+
+TEST(ConversionsTest, LidarRangesRoundAndClampWhatTheirBitsCannotHold) {
+  common::LidarSlice s = GriddedSlice();
+  s.points.resize(3);
+  s.points[0].x_m *= 1.0003f;  // off the 2 mm steps: rounded to the nearest
+  s.points[1].intensity = 300.f;
+  s.points[2].x_m = NAN;  // no range: no return
+  const cairn::lcmt_lidar_ranges m = ToLcmRanges(s);
+  EXPECT_EQ(m.ranges[0], 500);  // about 1.0002 m
+  EXPECT_EQ(m.intensity[1], 255);
+  EXPECT_EQ(m.ranges[2], 0);
+  s.points[0].x_m = 500.f;  // 250,000 steps: the last of 16 bits
+  EXPECT_EQ(static_cast<uint16_t>(ToLcmRanges(s).ranges[0]), 65535);
+  // A point off the grid, or a slice without one, is a caller's bug.
+  s.points[0].column = 6;
+  EXPECT_THROW(ToLcmRanges(s), std::invalid_argument);
+  s.grid = {};
+  EXPECT_THROW(ToLcmRanges(s), std::invalid_argument);
+}
+
+TEST(ConversionsTest, LidarRangesRejectBadInput) {
+  const cairn::lcmt_lidar_ranges good = ToLcmRanges(GriddedSlice());
+  ASSERT_TRUE(FromLcm(good).ok());
+  auto refused = [&](auto&& change) {
+    cairn::lcmt_lidar_ranges m = good;
+    change(m);
+    return !FromLcm(m).ok();
+  };
+  EXPECT_TRUE(refused([](auto& m) { m.num_rays = 25; }));
+  EXPECT_TRUE(refused([](auto& m) { m.num_columns = 7; }));
+  EXPECT_TRUE(refused([](auto& m) { m.ranges.pop_back(); }));
+  EXPECT_TRUE(refused([](auto& m) { m.intensity.pop_back(); }));
+  EXPECT_TRUE(refused([](auto& m) {
+    m.num_rings = 128;
+    m.ring_elevation_rad.assign(128, 0.f);
+    m.num_columns = 1;
+    m.num_rays = 128;
+    m.ranges.assign(128, 1);
+    m.intensity.assign(128, 0);
+  }));
+  EXPECT_TRUE(refused([](auto& m) { m.num_rings = 0; }));
+  EXPECT_TRUE(refused([](auto& m) { m.range_resolution_m = 0.0; }));
+  EXPECT_TRUE(refused([](auto& m) { m.range_resolution_m = NAN; }));
+  EXPECT_TRUE(refused([](auto& m) { m.range_resolution_m = 5.0; }));
+  EXPECT_TRUE(refused([](auto& m) { m.ring_elevation_rad[2] = NAN; }));
+  EXPECT_TRUE(refused([](auto& m) { m.ring_elevation_rad[2] = 1.6f; }));
+  EXPECT_TRUE(refused([](auto& m) { m.azimuth_step_rad = INFINITY; }));
+  EXPECT_TRUE(refused([](auto& m) { m.azimuth_step_rad = 2.0; }));  // 6 columns: 12 rad
+  EXPECT_TRUE(refused([](auto& m) { m.azimuth_start_rad = NAN; }));
+  EXPECT_TRUE(refused([](auto& m) { m.slice_index = 20; }));
+  EXPECT_TRUE(refused([](auto& m) { m.sensor_orientation_wxyz[0] = NAN; }));
 }
 
 TEST(ConversionsTest, LaserScanRoundTrip) {

@@ -9,6 +9,7 @@
 #include "cairn/lcmt_imu.hpp"
 #include "cairn/lcmt_laser_scan.hpp"
 #include "cairn/lcmt_odometry.hpp"
+#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_sonar_ping.hpp"
@@ -64,7 +65,7 @@ Msg PublishAndReceive(const SimOutputs& out, const std::string& channel) {
 
 TEST(SensorPublishersTest, EveryBuiltinSensorHasOneOnItsChannel) {
   const std::map<std::string, std::string> streams = {
-      {"hdl32e", channels::kLidar},      {"planar_laser", channels::kScan},
+      {"hdl32e", channels::kLidarRanges}, {"planar_laser", channels::kScan},
       {"turret", channels::kTurretScan}, {"odometry", channels::kOdom},
       {"imu", channels::kImu},           {"ground_truth", channels::kPose},
       {"sonar", channels::kSonar}};
@@ -96,6 +97,23 @@ TEST(SensorPublishersTest, LidarSlicesAndScans) {
   EXPECT_EQ(lidar.utime, 5000);
   EXPECT_EQ(lidar.slice_index, 3);
   EXPECT_EQ(lidar.robot, "r");
+  EXPECT_EQ(lidar.num_points, 1);
+  // With a grid and a range resolution, the same slice goes out as ranges, on LIDAR_RANGES.
+  SimOutputs gridded;
+  slice.grid.ring_elevation_rad.assign(8, 0.f);
+  slice.grid.columns = 4;
+  slice.grid.azimuth_step_rad = 0.01;
+  slice.grid.range_resolution_m = 0.002;
+  slice.points[0].column = 2;
+  gridded.Add(LidarSensor::kName, slice);
+  const auto ranges = PublishAndReceive<cairn::lcmt_lidar_ranges>(gridded, "r.LIDAR_RANGES");
+  EXPECT_EQ(ranges.utime, 5000);
+  EXPECT_EQ(ranges.slice_index, 3);
+  EXPECT_EQ(ranges.num_rays, 32);
+  ASSERT_EQ(ranges.ranges.size(), 32u);
+  // The point (1, 2, 3) m is 3.742 m away: 1871 steps of 2 mm, at column 2, ring 7.
+  EXPECT_EQ(ranges.ranges[2 * 8 + 7], 1871);
+  EXPECT_EQ(ranges.intensity[2 * 8 + 7], 40);
 
   SimOutputs scans;
   common::LaserScan scan;
@@ -144,6 +162,56 @@ TEST(SensorPublishersTest, FastPointCloudSliceEncodesTheSameBytesAsLcm) {
     // Too little room, or a negative offset: refused like LCM's own.
     EXPECT_EQ(wrapped.encode(fast.data(), 0, size - 1), -1);
     EXPECT_EQ(wrapped.encode(fast.data(), -1, size), -1);
+  }
+}
+
+TEST(SensorPublishersTest, FastLidarRangesEncodesTheSameBytesAsLcm) {
+  for (int columns : {1, 7, 90}) {
+    common::LidarSlice slice;
+    slice.utime = 987654321;
+    slice.robot = "robot-3";
+    slice.revolution = 11;
+    slice.slice_index = 19;
+    slice.slice_count = 20;
+    slice.azimuth_start_rad = 5.9;
+    slice.max_range_m = 70.0;
+    slice.sensor_pose.position_m = common::Vector3(3.5, -1.25, 0.75);
+    slice.sensor_pose.orientation = common::Quaternion(0.5, 0.5, -0.5, 0.5);
+    for (int r = 0; r < 32; ++r) slice.grid.ring_elevation_rad.push_back(-0.5f + 0.02f * r);
+    slice.grid.azimuth_step_rad = 2.0 * M_PI / 1800.0;
+    slice.grid.columns = columns;
+    slice.grid.range_resolution_m = 0.002;
+    for (int c = 0; c < columns; ++c) {
+      for (int r = 0; r < 32; ++r) {
+        if ((c + r) % 5 == 0) continue;  // no return
+        common::LidarPoint p;
+        p.x_m = 0.37f * static_cast<float>(r + 1) - 0.01f * static_cast<float>(c);
+        p.y_m = r % 3 == 0 ? NAN : -0.5f;  // a point without a range: no return either
+        p.z_m = 200.f * static_cast<float>(c % 2);  // beyond 16 bits of 2 mm steps
+        p.intensity = static_cast<float>((c * 32 + r) % 300) - 20.f;  // clamped to 0..255
+        p.ring = static_cast<int16_t>(r);
+        p.column = static_cast<uint16_t>(c);
+        slice.points.push_back(p);
+      }
+    }
+    // LCM's own encoding of the message runtime::ToLcmRanges makes.
+    const cairn::lcmt_lidar_ranges m = runtime::ToLcmRanges(slice);
+    const int size = m.getEncodedSize();
+    std::vector<uint8_t> expected(static_cast<size_t>(size) + 3, 0xAB);
+    std::vector<uint8_t> fast(static_cast<size_t>(size) + 3, 0xAB);
+    ASSERT_EQ(m.encode(expected.data(), 3, size), size);
+    const FastLidarRanges wrapped(slice);
+    ASSERT_EQ(wrapped.getEncodedSize(), size);
+    ASSERT_EQ(wrapped.encode(fast.data(), 3, size), size) << columns << " columns";
+    EXPECT_EQ(fast, expected) << columns << " columns";
+    EXPECT_EQ(wrapped.encode(fast.data(), 0, size - 1), -1);
+    EXPECT_EQ(wrapped.encode(fast.data(), -1, size), -1);
+    // A point off the grid, or no grid at all: refused.
+    common::LidarSlice off = slice;
+    off.points.back().column = static_cast<uint16_t>(columns);
+    EXPECT_EQ(FastLidarRanges(off).encode(fast.data(), 3, size), -1);
+    off.grid = {};
+    EXPECT_EQ(FastLidarRanges(off).getEncodedSize(), -1);
   }
 }
 

@@ -10,7 +10,7 @@
 #include "cairn/lcmt_imu.hpp"
 #include "cairn/lcmt_laser_scan.hpp"
 #include "cairn/lcmt_odometry.hpp"
-#include "cairn/lcmt_point_cloud_slice.hpp"
+#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_sim_clock.hpp"
 
@@ -87,14 +87,15 @@ class SimServiceTest : public testing::SimTest {
 };
 
 TEST_F(SimServiceTest, PublishesEverySensorAndTheClockInSimTime) {
-  cairn::lcmt_point_cloud_slice last_slice;
+  cairn::lcmt_lidar_ranges last_slice;
   cairn::lcmt_pose last_pose;
-  node_->Subscribe<cairn::lcmt_point_cloud_slice>(
-      "r.LIDAR", [&](const cairn::lcmt_point_cloud_slice& m) { last_slice = m; });
+  node_->Subscribe<cairn::lcmt_lidar_ranges>(
+      "r.LIDAR_RANGES", [&](const cairn::lcmt_lidar_ranges& m) { last_slice = m; });
   node_->Subscribe<cairn::lcmt_pose>("r.POSE", [&](const cairn::lcmt_pose& m) { last_pose = m; });
   dut_->StepAndPublish(500);  // 1 s
   dut_->HandlePending();
-  EXPECT_EQ(counts_["r.LIDAR"], 200);
+  EXPECT_EQ(counts_["r.LIDAR_RANGES"], 100);  // ranges, 3 bytes a ray; no points
+  EXPECT_EQ(counts_["r.LIDAR"], 0);
   EXPECT_EQ(counts_["r.SCAN"], 10);
   EXPECT_EQ(counts_["r.TURRET_SCAN"], 50);
   EXPECT_EQ(counts_["r.ODOM"], 50);
@@ -104,12 +105,14 @@ TEST_F(SimServiceTest, PublishesEverySensorAndTheClockInSimTime) {
   EXPECT_EQ(last_pose.utime, 1000000);
   EXPECT_EQ(last_pose.robot, "r");
   EXPECT_EQ(last_slice.utime, 1000000);
-  EXPECT_EQ(last_slice.slice_index, 19);
-  EXPECT_EQ(last_slice.slice_count, 20);
+  EXPECT_EQ(last_slice.slice_index, 9);
+  EXPECT_EQ(last_slice.slice_count, 10);
   // The slice round-trips through the product's conversion.
   const auto slice = runtime::FromLcm(last_slice);
   ASSERT_TRUE(slice.ok()) << slice.status().ToString();
   EXPECT_GT(slice->points.size(), 1000u);
+  EXPECT_EQ(last_slice.num_rays, 180 * 32);
+  EXPECT_DOUBLE_EQ(last_slice.range_resolution_m, 0.002);
 }
 
 TEST(SimServiceClockTest, ClockIsCappedInWallTimeWhenRunningFast) {

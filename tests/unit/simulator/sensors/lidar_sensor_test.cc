@@ -4,6 +4,8 @@
 #include <map>
 #include <set>
 
+#include <string>
+
 #include <gtest/gtest.h>
 
 #include "simulator/mujoco_sim.h"
@@ -91,11 +93,35 @@ TEST(LidarLayoutTest, SlicesCoverTheTurnOnce) {
 TEST(LidarLayoutTest, DefaultSliceFitsOneDatagramFriendlyMessage) {
   const LidarParams p;
   EXPECT_NO_THROW(p.Validate());
-  const int points = (p.azimuth_steps / p.slices_per_revolution) * p.rings;
-  EXPECT_LE(points * 17, 64 * 1024);
-  LidarParams too_big = p;
-  too_big.slices_per_revolution = 4;
-  EXPECT_THROW(too_big.Validate(), std::invalid_argument);
+  const int rays = (p.azimuth_steps / p.slices_per_revolution) * p.rings;
+  EXPECT_GT(p.range_resolution_m, 0.0);  // published as ranges: 3 bytes a ray
+  EXPECT_LE(rays * 3, 64 * 1024);
+  // As points (17 bytes each) the default slice of 5,760 rays would not fit: refused with the
+  // way out, 20 slices a turn or more.
+  LidarParams points = p;
+  points.range_resolution_m = 0.0;
+  EXPECT_GT(rays * 17, 64 * 1024);
+  try {
+    points.Validate();
+    ADD_FAILURE() << "a 98 KB slice of points was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("slices_per_revolution"), std::string::npos) << e.what();
+  }
+  points.slices_per_revolution = 20;
+  EXPECT_NO_THROW(points.Validate());
+  // Four slices a turn: 14,400 rays, 43 KB as ranges.
+  LidarParams four = p;
+  four.slices_per_revolution = 4;
+  EXPECT_NO_THROW(four.Validate());
+  LidarParams one = p;
+  one.slices_per_revolution = 1;
+  EXPECT_THROW(one.Validate(), std::invalid_argument);
+  // 16 bits of 1 mm steps reach 65.5 m, short of the 70 m range.
+  LidarParams fine = p;
+  fine.range_resolution_m = 0.001;
+  EXPECT_THROW(fine.Validate(), std::invalid_argument);
+  fine.max_range_m = 65.0;
+  EXPECT_NO_THROW(fine.Validate());
 }
 
 class LidarSimTest : public SimTest {};
@@ -121,13 +147,18 @@ TEST_F(LidarSimTest, OneRevolutionIsSlicesCoveringTheTurnOnce) {
       EXPECT_TRUE(by_index.emplace(slice.slice_index, &slice).second) << slice.slice_index;
     }
   }
-  ASSERT_EQ(by_index.size(), 20u);
+  ASSERT_EQ(by_index.size(), 10u);
   double expected_start = 0.0;
   size_t points = 0;
   for (const auto& [index, slice] : by_index) {
-    EXPECT_EQ(slice->slice_count, 20);
+    EXPECT_EQ(slice->slice_count, 10);
     EXPECT_NEAR(slice->azimuth_start_rad, expected_start, 1e-12);
-    EXPECT_NEAR(slice->azimuth_end_rad - slice->azimuth_start_rad, 2.0 * M_PI / 20, 1e-12);
+    EXPECT_NEAR(slice->azimuth_end_rad - slice->azimuth_start_rad, 2.0 * M_PI / 10, 1e-12);
+    // Its grid: 180 columns of 0.2 deg by the 32 rings, 2 mm range steps.
+    EXPECT_EQ(slice->grid.columns, 180);
+    EXPECT_NEAR(slice->grid.azimuth_step_rad, 2.0 * M_PI / 1800, 1e-15);
+    EXPECT_EQ(slice->grid.ring_elevation_rad.size(), 32u);
+    EXPECT_DOUBLE_EQ(slice->grid.range_resolution_m, 0.002);
     expected_start = slice->azimuth_end_rad;
     for (const auto& pt : slice->points) {
       double az = std::atan2(pt.y_m, pt.x_m);
@@ -137,14 +168,18 @@ TEST_F(LidarSimTest, OneRevolutionIsSlicesCoveringTheTurnOnce) {
       EXPECT_LT(az, slice->azimuth_end_rad + 1e-5);
       EXPECT_GE(pt.ring, 0);
       EXPECT_LT(pt.ring, 32);
+      // Its ray is the one its column and ring name.
+      EXPECT_NEAR(az, slice->azimuth_start_rad + pt.column * slice->grid.azimuth_step_rad, 1e-5);
+      const double elevation = std::atan2(pt.z_m, std::hypot(pt.x_m, pt.y_m));
+      EXPECT_NEAR(elevation, slice->grid.ring_elevation_rad[pt.ring], 1e-5);
     }
     points += slice->points.size();
   }
   EXPECT_NEAR(expected_start, 2.0 * M_PI, 1e-12);
   // In a closed room every ray returns (no point is closer than the minimum range).
   EXPECT_EQ(points, 32u * 1800u);
-  // Slices are stamped with their own time, 5 ms apart.
-  EXPECT_LT(by_index.at(0)->utime, by_index.at(19)->utime);
+  // Slices are stamped with their own time, 10 ms apart.
+  EXPECT_LT(by_index.at(0)->utime, by_index.at(9)->utime);
 }
 
 TEST_F(LidarSimTest, WallAtKnownDistanceReadsWithinNoise) {
