@@ -44,7 +44,7 @@ struct LidarSlice {
   double max_range_m{0.0};
   Pose3 sensor_pose;       ///< sensor in world at this slice's time
   std::vector<LidarPoint> points;
-  LidarGrid grid;          ///< columns == 0: the points have no grid
+  LidarGrid grid;  ///< columns == 0: the points have no grid
 };
 
 /// A full revolution: its slices in order; a missing slice leaves a gap.

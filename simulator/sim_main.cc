@@ -84,7 +84,8 @@ int main(int argc, char** argv) {
   cairn::common::FlagParser flags(
       "cairn-sim",
       "Simulates a world with robots on MuJoCo and publishes their sensors on LCM:\n"
-      "<robot>.LIDAR/.SCAN/.TURRET_SCAN/.ODOM/.POSE/.IMU and SIM.CLOCK; takes <robot>.CMD_VEL\n"
+      "<robot>.LIDAR_RANGES/.SCAN/.TURRET_SCAN/.ODOM/.POSE/.IMU and SIM.CLOCK; takes\n"
+      "<robot>.CMD_VEL "
       "and SIM.CONTROL (spawn, move, remove objects, doors, reset, pause, resume, speed, list).\n"
       "Give a scenario file (config/sim/*.yaml), or a world and robots.");
   AddFlags(flags, &f, &paths);

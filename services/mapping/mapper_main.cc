@@ -58,7 +58,8 @@ int ParseFlags(int argc, char** argv, Flags* f) {
                   "map.yaml, obstacles.yaml, octomap.bt)");
   flags.AddHelpSection(
       "Channels",
-      "in:  <robot>.LIDAR .SCAN .POSE .ODOM .IMU .MAP.CONTROL .MAP.TILE_RESEND\n"
+      "in:  <robot>.LIDAR_RANGES (or .LIDAR, points) .SCAN .POSE .ODOM .IMU .MAP.CONTROL\n"
+      "     <robot>.MAP.TILE_RESEND\n"
       "     <robot>.TURRET_SCAN (with the explore layer), <robot>.SONAR (with the sonar layer)\n"
       "out: <robot>.MAP.TILES .MAP.MANIFEST .MAP.OCCUPANCY .MAP.OBSTACLES "
       ".MAP.OCTOMAP .MAP.CONTROL_REPLY, HEALTH\n"

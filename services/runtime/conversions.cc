@@ -165,7 +165,8 @@ Result<common::LidarSlice> FromLcm(const cairn::lcmt_lidar_ranges& m) {
       m.intensity.size() != static_cast<size_t>(m.num_rays)) {
     return InvalidArgumentError("lidar ranges: " + std::to_string(m.num_rays) + " rays for " +
                                 std::to_string(m.num_rings) + " rings (1 to 127) by " +
-                                std::to_string(m.num_columns) + " columns, or arrays that disagree");
+                                std::to_string(m.num_columns) +
+                                " columns, or arrays that disagree");
   }
   if (!std::isfinite(m.range_resolution_m) || m.range_resolution_m <= 0.0 ||
       m.range_resolution_m > 1.0) {
@@ -175,7 +176,8 @@ Result<common::LidarSlice> FromLcm(const cairn::lcmt_lidar_ranges& m) {
   if (!std::isfinite(m.azimuth_start_rad) || !std::isfinite(m.azimuth_step_rad) ||
       std::abs(m.azimuth_start_rad) > 8.0 * M_PI ||
       std::abs(m.azimuth_step_rad) * m.num_columns > 2.0 * M_PI + 1e-6) {
-    return InvalidArgumentError("lidar ranges: the columns' azimuths are not finite or exceed a turn");
+    return InvalidArgumentError(
+        "lidar ranges: the columns' azimuths are not finite or exceed a turn");
   }
   for (const float elevation : m.ring_elevation_rad) {
     if (!(std::abs(elevation) <= static_cast<float>(M_PI / 2.0))) {

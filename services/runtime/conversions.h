@@ -10,6 +10,7 @@
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_robot_profile.hpp"
+
 #include "common/obstacle.h"
 #include "common/point_cloud.h"
 #include "common/robot_profile.h"

@@ -127,8 +127,7 @@ SensorPublisher LidarPublisher() {
         node.Publish(channels::ForRobot(slice.robot, channels::kLidarRanges),
                      FastLidarRanges(slice));
       } else {
-        node.Publish(channels::ForRobot(slice.robot, channels::kLidar),
-                     FastPointCloudSlice(slice));
+        node.Publish(channels::ForRobot(slice.robot, channels::kLidar), FastPointCloudSlice(slice));
       }
     }
   };

@@ -21,8 +21,8 @@
 /// readings (each sensor kind through its SensorPublisher) and SIM.CLOCK, takes velocity
 /// commands and answers SIM.CONTROL.
 ///
-/// Channels (per robot r): one per sensor kind (r.LIDAR, r.SCAN, r.TURRET_SCAN, r.ODOM, r.POSE,
-/// r.IMU for the built-in ones) out; r.CMD_VEL in. Fleet: SIM.CLOCK out, SIM.CONTROL in,
+/// Channels (per robot r): one per sensor kind (r.LIDAR_RANGES, r.SCAN, r.TURRET_SCAN, r.ODOM,
+/// r.POSE, r.IMU for the built-in ones) out; r.CMD_VEL in. Fleet: SIM.CLOCK out, SIM.CONTROL in,
 /// SIM.CONTROL_REPLY out. Every message's utime is simulation time.
 
 namespace cairn::sim {

@@ -25,7 +25,8 @@ inline std::vector<std::string> MapperChannels() {
   return {ch::ForRobot(kRobot, ch::kLidar),         ch::ForRobot(kRobot, ch::kScan),
           ch::ForRobot(kRobot, ch::kPose),          ch::ForRobot(kRobot, ch::kOdom),
           ch::ForRobot(kRobot, ch::kImu),           ch::ForRobot(kRobot, ch::kMapControl),
-          ch::ForRobot(kRobot, ch::kMapTileResend), ch::kMapstoreReply};
+          ch::ForRobot(kRobot, ch::kMapTileResend), ch::kMapstoreReply,
+          ch::ForRobot(kRobot, ch::kLidarRanges)};  // last: earlier seeds keep their channels
 }
 
 inline std::vector<std::string> MapstoreChannels() {
@@ -47,7 +48,7 @@ inline std::vector<std::string> MapstoreChannels() {
 inline std::vector<std::string> LauncherChannels() {
   namespace ch = channels;
   return {ch::kHealth, ch::ForRobot(kRobot, ch::kPose), ch::ForRobot(kRobot, ch::kLidar),
-          ch::kSimClock};
+          ch::kSimClock, ch::ForRobot(kRobot, ch::kLidarRanges)};
 }
 
 /// cairn-explorer in every mode: reactive (scans, poses), frontier (the occupancy layer, the

@@ -74,6 +74,10 @@ void Handle(const lcmt_point_cloud_slice& m) {
   (void)runtime::FromLcm(m);
 }
 template <>
+void Handle(const lcmt_lidar_ranges& m) {
+  (void)runtime::FromLcm(m);
+}
+template <>
 void Handle(const lcmt_pose& m) {
   (void)runtime::FromLcm(m);
 }

@@ -10,6 +10,7 @@
 #include "cairn/lcmt_health.hpp"
 #include "cairn/lcmt_imu.hpp"
 #include "cairn/lcmt_laser_scan.hpp"
+#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_map_control_reply.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_map_info.hpp"
@@ -39,6 +40,7 @@
 /// @file
 /// Every lcmt_* type, in one list: the decode fuzz target picks a type by its index here (a
 /// seed's first byte), and the corpus tool finds a recorded message's index by its fingerprint.
+/// A new type goes at the end, so the seeds of the others keep their index.
 #define CAIRN_FUZZ_LCM_TYPES(X) \
   X(lcmt_body_velocity_request) \
   X(lcmt_channel_stats)         \
@@ -74,4 +76,5 @@
   X(lcmt_sonar_detection)       \
   X(lcmt_sonar_ping)            \
   X(lcmt_tile_resend_request)   \
-  X(lcmt_velocity_command)
+  X(lcmt_velocity_command)      \
+  X(lcmt_lidar_ranges)

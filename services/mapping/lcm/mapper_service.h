@@ -16,11 +16,11 @@
 
 #include "cairn/lcmt_imu.hpp"
 #include "cairn/lcmt_laser_scan.hpp"
+#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_map_control_reply.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_mapstore_reply.hpp"
 #include "cairn/lcmt_odometry.hpp"
-#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_tile_resend_request.hpp"
@@ -40,7 +40,8 @@
 /// and moves messages: MapperInputs resolves poses and drops bad points, MapperCore maps,
 /// MapPublisher sends the layers.
 ///
-/// Reads <robot>.LIDAR (slices, assembled into revolutions), <robot>.SCAN, <robot>.POSE or
+/// Reads <robot>.LIDAR_RANGES and <robot>.LIDAR (slices as ranges or as points, assembled into
+/// revolutions), <robot>.SCAN, <robot>.POSE or
 /// <robot>.ODOM (per pose_source), <robot>.IMU, <robot>.MAP.TILE_RESEND and
 /// <robot>.MAP.CONTROL. Writes, with map_name "live", what MapPublisher lists (the layers'
 /// tiles, manifests, registry and OctoMap), and:

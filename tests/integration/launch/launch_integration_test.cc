@@ -474,6 +474,7 @@ TEST(LaunchIntegrationTest, TheDemoGraphTakesABombOfEveryTypeOnEveryChannel) {
                                              "p3at.CMD_VEL",
                                              "p3at.GOAL",
                                              "p3at.LIDAR",
+                                             "p3at.LIDAR_RANGES",
                                              "p3at.SCAN",
                                              "p3at.ODOM",
                                              "p3at.POSE",
@@ -505,7 +506,7 @@ TEST(LaunchIntegrationTest, TheDemoGraphTakesABombOfEveryTypeOnEveryChannel) {
   // The rates each process keeps (the sim's sensors, the mapper's maps, the navigator's status,
   // every heartbeat): at least 70 % of what they were.
   for (const char* channel :
-       {"p3at.LIDAR", "p3at.POSE", "p3at.MAP.MANIFEST", "p3at.NAV_STATUS", "HEALTH"}) {
+       {"p3at.LIDAR_RANGES", "p3at.POSE", "p3at.MAP.MANIFEST", "p3at.NAV_STATUS", "HEALTH"}) {
     const double was = before.count(channel) ? before.at(channel) : 0.0;
     const double is = after.count(channel) ? after.at(channel) : 0.0;
     EXPECT_GT(was, 0.0) << channel << " was silent before the bombs";

@@ -23,6 +23,7 @@
 
 #include "cairn/lcmt_grid_manifest.hpp"
 #include "cairn/lcmt_grid_tile.hpp"
+#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_map_control_reply.hpp"
 #include "cairn/lcmt_map_control_request.hpp"
 #include "cairn/lcmt_obstacle_registry.hpp"
@@ -391,6 +392,27 @@ TEST_F(MappingProcessTest, BadInputIsCountedAndRefused) {
         bus_->Publish(Ch("LIDAR"), mismatched);
       },
       [](const auto& h) { return Counter(h, "bad_lidar_slices") >= 1; }));
+  // Ranges whose rays are not its rings by its columns (64 rays for 32 rings by 3 columns).
+  EXPECT_TRUE(counted_after(
+      [&] {
+        cairn::lcmt_lidar_ranges m{};
+        m.utime = 1'300'000;
+        m.robot = kRobot;
+        m.revolution = revolution++;
+        m.slice_count = 1;
+        m.azimuth_step_rad = 0.0035;
+        m.max_range_m = 70.0;
+        m.range_resolution_m = 0.002;
+        m.sensor_orientation_wxyz[0] = 1.0;
+        m.num_rings = 32;
+        m.ring_elevation_rad.assign(32, 0.f);
+        m.num_columns = 3;
+        m.num_rays = 64;
+        m.ranges.assign(64, 1000);
+        m.intensity.assign(64, 50);
+        bus_->Publish(Ch("LIDAR_RANGES"), m);
+      },
+      [](const auto& h) { return Counter(h, "bad_lidar_slices") >= 2; }));
 
   // Unknown profile, invalid profile data, unknown op.
   ControlRequest add_unknown{};

@@ -15,13 +15,14 @@
 #include <sys/wait.h>
 
 #include "cairn/lcmt_laser_scan.hpp"
-#include "cairn/lcmt_point_cloud_slice.hpp"
+#include "cairn/lcmt_lidar_ranges.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_sim_clock.hpp"
 #include "cairn/lcmt_sim_control_reply.hpp"
 #include "cairn/lcmt_sim_control_request.hpp"
 #include "cairn/lcmt_velocity_command.hpp"
 
+#include "services/runtime/conversions.h"
 #include "tests/support/harness.h"
 
 namespace cairn::testing {
@@ -142,9 +143,13 @@ robots:
   ChildProcess& sim = procs.Start("cairn-sim", {"--scenario", scenario, "--speed", "1"});
   Bus bus(procs.url());
   const std::map<std::string, double> expected = {
-      {"p3at.LIDAR", 10.0 * 20},  // 10 revolutions/s, 20 slices each
-      {"p3at.SCAN", 15.0},       {"p3at.TURRET_SCAN", 40.0}, {"p3at.ODOM", 40.0},
-      {"p3at.IMU", 80.0},        {"p3at.POSE", 25.0},        {"SIM.CLOCK", 50.0}};
+      {"p3at.LIDAR_RANGES", 10.0 * 10},  // 10 revolutions/s, 10 slices each
+      {"p3at.SCAN", 15.0},
+      {"p3at.TURRET_SCAN", 40.0},
+      {"p3at.ODOM", 40.0},
+      {"p3at.IMU", 80.0},
+      {"p3at.POSE", 25.0},
+      {"SIM.CLOCK", 50.0}};
   auto within = [&](const std::map<std::string, double>& rates) {
     for (const auto& [channel, hz] : expected) {
       auto it = rates.find(channel);
@@ -173,11 +178,16 @@ robots:
   EXPECT_LT(std::abs(clock->utime - pose->utime), 1000000);
   EXPECT_GT(clock->real_time_factor, 0.8);
   EXPECT_EQ(clock->target_speed, 1.0);
-  auto slice = bus.Last<cairn::lcmt_point_cloud_slice>("p3at.LIDAR");
+  auto slice = bus.Last<cairn::lcmt_lidar_ranges>("p3at.LIDAR_RANGES");
   ASSERT_TRUE(slice.has_value());
-  EXPECT_EQ(slice->slice_count, 20);
-  EXPECT_GT(slice->num_points, 1000);
-  EXPECT_LT(slice->getEncodedSize(), 64 * 1024);
+  EXPECT_EQ(slice->slice_count, 10);
+  EXPECT_EQ(slice->num_rays, 180 * 32);
+  // 3 bytes a ray and a header: 17 KB, where points took 17 bytes each.
+  EXPECT_LT(slice->getEncodedSize(), 3 * 180 * 32 + 512);
+  auto points = cairn::runtime::FromLcm(*slice);
+  ASSERT_TRUE(points.ok()) << points.status().ToString();
+  EXPECT_GT(points->points.size(), 1000u);
+  EXPECT_FALSE(bus.Seen("p3at.LIDAR"));  // no float points besides
   // SIGTERM: a clean exit.
   const int status = sim.Stop(10.0);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
@@ -200,7 +210,7 @@ TEST(SimIntegrationTest, EightPioneersInTheTunnelStartAndPublishEveryRobotsStrea
   const auto start = std::chrono::steady_clock::now();
   ChildProcess& sim = procs.Start("cairn-sim", args);
   Bus bus(procs.url());
-  const std::vector<std::string> streams = {"LIDAR", "SCAN", "ODOM", "POSE", "IMU"};
+  const std::vector<std::string> streams = {"LIDAR_RANGES", "SCAN", "ODOM", "POSE", "IMU"};
   std::vector<std::string> missing;
   const bool all = WaitFor(
       [&] {
@@ -220,10 +230,12 @@ TEST(SimIntegrationTest, EightPioneersInTheTunnelStartAndPublishEveryRobotsStrea
   std::printf("8 robots: every stream seen %.2f s after the start\n", waited_s);
   ASSERT_TRUE(sim.Running());
   for (const auto& r : robots) {
-    auto slice = bus.Last<cairn::lcmt_point_cloud_slice>(r + ".LIDAR");
+    auto slice = bus.Last<cairn::lcmt_lidar_ranges>(r + ".LIDAR_RANGES");
     ASSERT_TRUE(slice.has_value()) << r;
     EXPECT_EQ(slice->robot, r);
-    EXPECT_GT(slice->num_points, 0) << r;
+    auto points = cairn::runtime::FromLcm(*slice);
+    ASSERT_TRUE(points.ok()) << r << ": " << points.status().ToString();
+    EXPECT_GT(points->points.size(), 0u) << r;
     auto pose = Pose(bus, r);
     ASSERT_TRUE(pose.has_value()) << r;
     EXPECT_NEAR(pose->position_m[1], 2.0 + 4.0 * (&r - robots.data()), 0.2) << r;
@@ -286,7 +298,7 @@ TEST(SimIntegrationTest, Pioneer3AtDrivenAtTheTwentyCentimetreStepDoesNotClimbIt
 class SliceCounter {
  public:
   explicit SliceCounter(Bus& bus) : bus_(bus) {
-    bus.lcm().subscribe("p3at.LIDAR", &SliceCounter::OnSlice, this);
+    bus.lcm().subscribe("p3at.LIDAR_RANGES", &SliceCounter::OnSlice, this);
   }
 
   int Count(int64_t after_utime, double x0, double x1, double half_width, double z_min) {
@@ -297,8 +309,8 @@ class SliceCounter {
     z_min_ = z_min;
     revolution_ = -1;
     slices_.clear();
-    WaitFor([&] { return slices_.size() == 20; }, 20.0, [&] { PumpAll(bus_); });
-    EXPECT_EQ(slices_.size(), 20u) << "missing slices of a revolution";
+    WaitFor([&] { return slices_.size() == 10; }, 20.0, [&] { PumpAll(bus_); });
+    EXPECT_EQ(slices_.size(), 10u) << "missing slices of a revolution";
     int total = 0;
     for (const auto& [index, n] : slices_) total += n;
     after_utime_ = std::numeric_limits<int64_t>::max();
@@ -306,17 +318,15 @@ class SliceCounter {
   }
 
  private:
-  void OnSlice(const lcm::ReceiveBuffer*, const std::string&,
-               const cairn::lcmt_point_cloud_slice* s) {
+  void OnSlice(const lcm::ReceiveBuffer*, const std::string&, const cairn::lcmt_lidar_ranges* s) {
     if (s->utime <= after_utime_) return;
     if (revolution_ < 0 && s->slice_index == 0) revolution_ = s->revolution;
     if (s->revolution != revolution_) return;
+    auto slice = cairn::runtime::FromLcm(*s);
+    ASSERT_TRUE(slice.ok()) << slice.status().ToString();
     int n = 0;
-    for (int i = 0; i < s->num_points; ++i) {
-      if (s->x_m[i] > x0_ && s->x_m[i] < x1_ && std::abs(s->y_m[i]) < half_width_ &&
-          s->z_m[i] > z_min_) {
-        ++n;
-      }
+    for (const auto& p : slice->points) {
+      if (p.x_m > x0_ && p.x_m < x1_ && std::abs(p.y_m) < half_width_ && p.z_m > z_min_) ++n;
     }
     slices_[s->slice_index] = n;
   }

@@ -153,7 +153,7 @@ TEST(MissionStackTest, MapperAndNavigatorKilledMidMissionAreRestartedAndTheMissi
   for (const auto& [channel, type] : std::vector<std::pair<std::string, std::string>>{
            {"SIM.CLOCK", "cairn.lcmt_sim_clock"},
            {"HEALTH", "cairn.lcmt_health"},
-           {"p3at.LIDAR", "cairn.lcmt_point_cloud_slice"},
+           {"p3at.LIDAR_RANGES", "cairn.lcmt_lidar_ranges"},
            {"p3at.SCAN", "cairn.lcmt_laser_scan"},
            {"p3at.ODOM", "cairn.lcmt_odometry"},
            {"p3at.POSE", "cairn.lcmt_pose"},
@@ -270,9 +270,9 @@ TEST(MissionStackTest, ARecordedRunReplaysThroughScriptsReplayIntoTheSameStoredM
   // Live: sim, mapper and store under cairn-launch, the sensor channels recorded from before
   // the simulator starts (it starts once the mapper listens), so the live mapper and the log
   // see the same messages.
-  ChildProcess& recorder =
-      procs.StartRaw("record", {SourcePath("scripts/record"), log_file, "--lcm-url", procs.url(),
-                                "--channels", "^(p3at\\.(LIDAR|POSE|ODOM|IMU|SCAN)|SIM\\.CLOCK)$"});
+  ChildProcess& recorder = procs.StartRaw(
+      "record", {SourcePath("scripts/record"), log_file, "--lcm-url", procs.url(), "--channels",
+                 "^(p3at\\.(LIDAR_RANGES|POSE|ODOM|IMU|SCAN)|SIM\\.CLOCK)$"});
   const std::string run_live = procs.dir() + "/live";
   GraphOptions live_graph;
   live_graph.navigator = false;

@@ -8,8 +8,8 @@
 
 #include "cairn/lcmt_imu.hpp"
 #include "cairn/lcmt_laser_scan.hpp"
-#include "cairn/lcmt_odometry.hpp"
 #include "cairn/lcmt_lidar_ranges.hpp"
+#include "cairn/lcmt_odometry.hpp"
 #include "cairn/lcmt_point_cloud_slice.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_sonar_ping.hpp"
@@ -64,11 +64,13 @@ Msg PublishAndReceive(const SimOutputs& out, const std::string& channel) {
 }
 
 TEST(SensorPublishersTest, EveryBuiltinSensorHasOneOnItsChannel) {
-  const std::map<std::string, std::string> streams = {
-      {"hdl32e", channels::kLidarRanges}, {"planar_laser", channels::kScan},
-      {"turret", channels::kTurretScan}, {"odometry", channels::kOdom},
-      {"imu", channels::kImu},           {"ground_truth", channels::kPose},
-      {"sonar", channels::kSonar}};
+  const std::map<std::string, std::string> streams = {{"hdl32e", channels::kLidarRanges},
+                                                      {"planar_laser", channels::kScan},
+                                                      {"turret", channels::kTurretScan},
+                                                      {"odometry", channels::kOdom},
+                                                      {"imu", channels::kImu},
+                                                      {"ground_truth", channels::kPose},
+                                                      {"sonar", channels::kSonar}};
   for (const auto& [name, stream] : streams) {
     const SensorPublisher* p = BuiltinSensorPublishers().Find(name);
     ASSERT_NE(p, nullptr) << name;
@@ -186,7 +188,7 @@ TEST(SensorPublishersTest, FastLidarRangesEncodesTheSameBytesAsLcm) {
         if ((c + r) % 5 == 0) continue;  // no return
         common::LidarPoint p;
         p.x_m = 0.37f * static_cast<float>(r + 1) - 0.01f * static_cast<float>(c);
-        p.y_m = r % 3 == 0 ? NAN : -0.5f;  // a point without a range: no return either
+        p.y_m = r % 3 == 0 ? NAN : -0.5f;           // a point without a range: no return either
         p.z_m = 200.f * static_cast<float>(c % 2);  // beyond 16 bits of 2 mm steps
         p.intensity = static_cast<float>((c * 32 + r) % 300) - 20.f;  // clamped to 0..255
         p.ring = static_cast<int16_t>(r);

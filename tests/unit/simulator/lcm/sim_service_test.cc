@@ -9,8 +9,8 @@
 
 #include "cairn/lcmt_imu.hpp"
 #include "cairn/lcmt_laser_scan.hpp"
-#include "cairn/lcmt_odometry.hpp"
 #include "cairn/lcmt_lidar_ranges.hpp"
+#include "cairn/lcmt_odometry.hpp"
 #include "cairn/lcmt_pose.hpp"
 #include "cairn/lcmt_sim_clock.hpp"
 

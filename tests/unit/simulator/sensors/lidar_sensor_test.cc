@@ -3,7 +3,6 @@
 #include <cmath>
 #include <map>
 #include <set>
-
 #include <string>
 
 #include <gtest/gtest.h>
