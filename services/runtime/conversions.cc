@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "services/runtime/tiler.h"
 
@@ -37,18 +39,50 @@ Result<common::Pose3> PoseFromArrays(const double position_m[3], const double or
   return pose;
 }
 
+namespace {
+
+// The fields a lidar slice's two messages share (points and ranges), both ways.
+template <typename Msg>
+void SliceHeaderToLcm(const common::LidarSlice& slice, Msg* m) {
+  m->utime = slice.utime;
+  m->robot = slice.robot;
+  m->frame = "lidar";
+  m->revolution = slice.revolution;
+  m->slice_index = slice.slice_index;
+  m->slice_count = slice.slice_count;
+  m->azimuth_start_rad = slice.azimuth_start_rad;
+  m->max_range_m = slice.max_range_m;
+  ToLcm(slice.sensor_pose, m->sensor_position_m, m->sensor_orientation_wxyz);
+}
+
+// The shared fields of a slice message, checked (slice index within its count, a valid pose);
+// `what` names the message in the error.
+template <typename Msg>
+Result<common::LidarSlice> SliceHeaderFromLcm(const Msg& m, const char* what) {
+  if (m.slice_count <= 0 || m.slice_index < 0 || m.slice_index >= m.slice_count) {
+    return InvalidArgumentError(std::string(what) + " index " + std::to_string(m.slice_index) +
+                                " of " + std::to_string(m.slice_count) + " is out of range");
+  }
+  auto pose = PoseFromArrays(m.sensor_position_m, m.sensor_orientation_wxyz);
+  if (!pose.ok()) return InvalidArgumentError(std::string(what) + ": " + pose.status().message());
+  common::LidarSlice s;
+  s.utime = m.utime;
+  s.robot = m.robot;
+  s.revolution = m.revolution;
+  s.slice_index = m.slice_index;
+  s.slice_count = m.slice_count;
+  s.azimuth_start_rad = m.azimuth_start_rad;
+  s.max_range_m = m.max_range_m;
+  s.sensor_pose = *pose;
+  return s;
+}
+
+}  // namespace
+
 cairn::lcmt_point_cloud_slice ToLcmWithoutPoints(const common::LidarSlice& slice) {
   cairn::lcmt_point_cloud_slice m{};
-  m.utime = slice.utime;
-  m.robot = slice.robot;
-  m.frame = "lidar";
-  m.revolution = slice.revolution;
-  m.slice_index = slice.slice_index;
-  m.slice_count = slice.slice_count;
-  m.azimuth_start_rad = slice.azimuth_start_rad;
+  SliceHeaderToLcm(slice, &m);
   m.azimuth_end_rad = slice.azimuth_end_rad;
-  m.max_range_m = slice.max_range_m;
-  ToLcm(slice.sensor_pose, m.sensor_position_m, m.sensor_orientation_wxyz);
   m.num_points = 0;
   return m;
 }
@@ -79,22 +113,10 @@ Result<common::LidarSlice> FromLcm(const cairn::lcmt_point_cloud_slice& m) {
       m.ring.size() != n) {
     return InvalidArgumentError("lidar slice arrays disagree with num_points");
   }
-  if (m.slice_count <= 0 || m.slice_index < 0 || m.slice_index >= m.slice_count) {
-    return InvalidArgumentError("lidar slice index " + std::to_string(m.slice_index) + " of " +
-                                std::to_string(m.slice_count) + " is out of range");
-  }
-  auto pose = PoseFromArrays(m.sensor_position_m, m.sensor_orientation_wxyz);
-  if (!pose.ok()) return InvalidArgumentError("lidar slice: " + pose.status().message());
-  common::LidarSlice s;
-  s.utime = m.utime;
-  s.robot = m.robot;
-  s.revolution = m.revolution;
-  s.slice_index = m.slice_index;
-  s.slice_count = m.slice_count;
-  s.azimuth_start_rad = m.azimuth_start_rad;
+  Result<common::LidarSlice> header = SliceHeaderFromLcm(m, "lidar slice");
+  if (!header.ok()) return header;
+  common::LidarSlice s = std::move(header.value());
   s.azimuth_end_rad = m.azimuth_end_rad;
-  s.max_range_m = m.max_range_m;
-  s.sensor_pose = *pose;
   s.points.resize(n);
   for (size_t i = 0; i < n; ++i) {
     s.points[i] = {m.x_m[i], m.y_m[i], m.z_m[i], m.intensity[i], m.ring[i]};
@@ -115,17 +137,9 @@ cairn::lcmt_lidar_ranges ToLcmRangesWithoutRays(const common::LidarSlice& slice)
     throw std::invalid_argument("ToLcmRanges: the slice has no grid of ranges");
   }
   cairn::lcmt_lidar_ranges m{};
-  m.utime = slice.utime;
-  m.robot = slice.robot;
-  m.frame = "lidar";
-  m.revolution = slice.revolution;
-  m.slice_index = slice.slice_index;
-  m.slice_count = slice.slice_count;
-  m.azimuth_start_rad = slice.azimuth_start_rad;
+  SliceHeaderToLcm(slice, &m);
   m.azimuth_step_rad = grid.azimuth_step_rad;
-  m.max_range_m = slice.max_range_m;
   m.range_resolution_m = grid.range_resolution_m;
-  ToLcm(slice.sensor_pose, m.sensor_position_m, m.sensor_orientation_wxyz);
   const int rings = static_cast<int>(grid.ring_elevation_rad.size());
   m.num_rings = static_cast<int16_t>(rings);
   m.ring_elevation_rad = grid.ring_elevation_rad;
@@ -154,10 +168,8 @@ cairn::lcmt_lidar_ranges ToLcmRanges(const common::LidarSlice& slice) {
 }
 
 Result<common::LidarSlice> FromLcm(const cairn::lcmt_lidar_ranges& m) {
-  if (m.slice_count <= 0 || m.slice_index < 0 || m.slice_index >= m.slice_count) {
-    return InvalidArgumentError("lidar ranges: slice index " + std::to_string(m.slice_index) +
-                                " of " + std::to_string(m.slice_count) + " is out of range");
-  }
+  Result<common::LidarSlice> header = SliceHeaderFromLcm(m, "lidar ranges slice");
+  if (!header.ok()) return header;
   if (m.num_rings < 1 || m.num_rings > 127 || m.num_columns < 1 || m.num_columns > 65535 ||
       static_cast<int64_t>(m.num_rings) * m.num_columns != m.num_rays ||
       m.ring_elevation_rad.size() != static_cast<size_t>(m.num_rings) ||
@@ -184,18 +196,8 @@ Result<common::LidarSlice> FromLcm(const cairn::lcmt_lidar_ranges& m) {
       return InvalidArgumentError("lidar ranges: a ring elevation is not in [-pi/2, pi/2]");
     }
   }
-  auto pose = PoseFromArrays(m.sensor_position_m, m.sensor_orientation_wxyz);
-  if (!pose.ok()) return InvalidArgumentError("lidar ranges: " + pose.status().message());
-  common::LidarSlice s;
-  s.utime = m.utime;
-  s.robot = m.robot;
-  s.revolution = m.revolution;
-  s.slice_index = m.slice_index;
-  s.slice_count = m.slice_count;
-  s.azimuth_start_rad = m.azimuth_start_rad;
+  common::LidarSlice s = std::move(header.value());
   s.azimuth_end_rad = m.azimuth_start_rad + m.azimuth_step_rad * m.num_columns;
-  s.max_range_m = m.max_range_m;
-  s.sensor_pose = *pose;
   s.grid.ring_elevation_rad = m.ring_elevation_rad;
   s.grid.azimuth_step_rad = m.azimuth_step_rad;
   s.grid.columns = m.num_columns;

@@ -95,19 +95,19 @@ TEST(LidarLayoutTest, DefaultSliceFitsOneDatagramFriendlyMessage) {
   const int rays = (p.azimuth_steps / p.slices_per_revolution) * p.rings;
   EXPECT_GT(p.range_resolution_m, 0.0);  // published as ranges: 3 bytes a ray
   EXPECT_LE(rays * 3, 64 * 1024);
-  // As points (17 bytes each) the default slice of 5,760 rays would not fit: refused with the
-  // way out, 20 slices a turn or more.
+  EXPECT_LE(rays * 17, 64 * 1024);  // and as points
+  // As points (17 bytes each) a slice of 10 a turn, 5,760 rays, would not fit: refused with
+  // the way out. As ranges it fits.
   LidarParams points = p;
+  points.slices_per_revolution = 10;
+  EXPECT_NO_THROW(points.Validate());
   points.range_resolution_m = 0.0;
-  EXPECT_GT(rays * 17, 64 * 1024);
   try {
     points.Validate();
     ADD_FAILURE() << "a 98 KB slice of points was accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("slices_per_revolution"), std::string::npos) << e.what();
   }
-  points.slices_per_revolution = 20;
-  EXPECT_NO_THROW(points.Validate());
   // Four slices a turn: 14,400 rays, 43 KB as ranges.
   LidarParams four = p;
   four.slices_per_revolution = 4;
@@ -146,15 +146,15 @@ TEST_F(LidarSimTest, OneRevolutionIsSlicesCoveringTheTurnOnce) {
       EXPECT_TRUE(by_index.emplace(slice.slice_index, &slice).second) << slice.slice_index;
     }
   }
-  ASSERT_EQ(by_index.size(), 10u);
+  ASSERT_EQ(by_index.size(), 20u);
   double expected_start = 0.0;
   size_t points = 0;
   for (const auto& [index, slice] : by_index) {
-    EXPECT_EQ(slice->slice_count, 10);
+    EXPECT_EQ(slice->slice_count, 20);
     EXPECT_NEAR(slice->azimuth_start_rad, expected_start, 1e-12);
-    EXPECT_NEAR(slice->azimuth_end_rad - slice->azimuth_start_rad, 2.0 * M_PI / 10, 1e-12);
-    // Its grid: 180 columns of 0.2 deg by the 32 rings, 2 mm range steps.
-    EXPECT_EQ(slice->grid.columns, 180);
+    EXPECT_NEAR(slice->azimuth_end_rad - slice->azimuth_start_rad, 2.0 * M_PI / 20, 1e-12);
+    // Its grid: 90 columns of 0.2 deg by the 32 rings, 2 mm range steps.
+    EXPECT_EQ(slice->grid.columns, 90);
     EXPECT_NEAR(slice->grid.azimuth_step_rad, 2.0 * M_PI / 1800, 1e-15);
     EXPECT_EQ(slice->grid.ring_elevation_rad.size(), 32u);
     EXPECT_DOUBLE_EQ(slice->grid.range_resolution_m, 0.002);
@@ -177,8 +177,8 @@ TEST_F(LidarSimTest, OneRevolutionIsSlicesCoveringTheTurnOnce) {
   EXPECT_NEAR(expected_start, 2.0 * M_PI, 1e-12);
   // In a closed room every ray returns (no point is closer than the minimum range).
   EXPECT_EQ(points, 32u * 1800u);
-  // Slices are stamped with their own time, 10 ms apart.
-  EXPECT_LT(by_index.at(0)->utime, by_index.at(9)->utime);
+  // Slices are stamped with their own time, 5 ms apart.
+  EXPECT_LT(by_index.at(0)->utime, by_index.at(19)->utime);
 }
 
 TEST_F(LidarSimTest, WallAtKnownDistanceReadsWithinNoise) {
