@@ -24,8 +24,9 @@ struct LidarPoint {
 /// How a spinning lidar lays out one slice, when its source has a grid of rays (the simulator's
 /// lidar, a Velodyne): `columns` azimuth steps `azimuth_step_rad` apart from the slice's
 /// azimuth_start_rad, by the rings at `ring_elevation_rad`. A point's ring and column name its
-/// ray. When `range_resolution_m` > 0 every range is a multiple of it, and the slice travels as
-/// 3 bytes a ray (lcmt_lidar_ranges) instead of 17 a point.
+/// ray. When `range_resolution_m` > 0 the slice travels as 3 bytes a ray (lcmt_lidar_ranges,
+/// its ranges rounded to that resolution) instead of 17 a point; the points themselves are not
+/// rounded.
 struct LidarGrid {
   std::vector<float> ring_elevation_rad;  ///< ring 0 first
   double azimuth_step_rad{0.0};
