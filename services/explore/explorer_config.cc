@@ -43,6 +43,7 @@ void LoadFrontier(YamlMap map, FrontierModeParams* p) {
   map.Get("potential_scale", &p->frontier.potential_scale);
   map.Get("gain_scale", &p->frontier.gain_scale);
   map.Get("clearance_m", &p->frontier.clearance_m);
+  map.Get("goal_clearance_m", &p->frontier.goal_clearance_m);
   map.Get("blacklist_radius_m", &p->frontier.blacklist_radius_m);
   map.Get("free_around_robot_m", &p->free_around_robot_m);
   map.Get("choose_period_s", &p->choose_period_s);

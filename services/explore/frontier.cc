@@ -79,6 +79,9 @@ void FrontierParams::Validate() const {
   CAIRN_THROW_UNLESS(std::isfinite(clearance_m) && clearance_m >= 0.0,
                      "FrontierParams.clearance_m must be >= 0 and finite, got " << clearance_m);
   CAIRN_THROW_UNLESS(
+      std::isfinite(goal_clearance_m) && goal_clearance_m >= 0.0,
+      "FrontierParams.goal_clearance_m must be >= 0 and finite, got " << goal_clearance_m);
+  CAIRN_THROW_UNLESS(
       std::isfinite(blacklist_radius_m) && blacklist_radius_m >= 0.0,
       "FrontierParams.blacklist_radius_m must be >= 0 and finite, got " << blacklist_radius_m);
 }
@@ -111,13 +114,15 @@ std::vector<Frontier> FindFrontiers(const common::GridMap& map, const std::strin
   // Clearance: a cell is too close when its distance to the nearest occupied cell is below
   // clearance_m (a small tolerance keeps a distance of exactly clearance_m clear).
   const double clearance_cells = params.clearance_m / resolution_m;
-  const int radius = static_cast<int>(std::ceil(clearance_cells));
-  const double too_close_below = std::max(0.0, clearance_cells - 1e-9);
+  const double goal_clearance_cells = params.goal_clearance_m / resolution_m;
+  const int radius =
+      static_cast<int>(std::ceil(std::max(clearance_cells, goal_clearance_cells)));
   const std::vector<int64_t> occupied_d2 = OccupiedDistanceSq(classes, size_x, size_y, radius);
-  auto clear = [&](int64_t i) {
-    return occupied_d2[i] == kFar ||
-           static_cast<double>(occupied_d2[i]) >= too_close_below * too_close_below;
+  auto at_least = [&](int64_t i, double cells) {
+    const double below = std::max(0.0, cells - 1e-9);
+    return occupied_d2[i] == kFar || static_cast<double>(occupied_d2[i]) >= below * below;
   };
+  auto clear = [&](int64_t i) { return at_least(i, clearance_cells); };
 
   // Dijkstra from the robot's cell (path lengths in cells).
   std::vector<double> dist(num_cells, kInf);
@@ -206,22 +211,35 @@ std::vector<Frontier> FindFrontiers(const common::GridMap& map, const std::strin
     }
     f.centroid_m = sum / static_cast<double>(cluster.size());
 
-    int64_t goal = -1;
-    double goal_d2 = kInf;
+    struct Ranked {
+      int64_t index;
+      bool clear;
+      double centroid_d2;
+    };
+    std::vector<Ranked> reached;
     for (const int64_t i : cluster) {
       if (dist[i] == kInf) continue;
       const CellIndex cell{static_cast<int>(i % size_x), static_cast<int>(i / size_x)};
-      const double d2 = (geometry.CenterOf(cell) - f.centroid_m).squaredNorm();
-      // Cells are visited by increasing index, so an exact tie on both keeps the lower one.
-      if (goal < 0 || d2 < goal_d2 || (d2 == goal_d2 && dist[i] < dist[goal])) {
-        goal = i;
-        goal_d2 = d2;
-      }
+      reached.push_back({i, at_least(i, goal_clearance_cells),
+                         (geometry.CenterOf(cell) - f.centroid_m).squaredNorm()});
     }
-    if (goal < 0) continue;  // unreachable
-    f.goal_cell = {static_cast<int>(goal % size_x), static_cast<int>(goal / size_x)};
-    f.goal_m = geometry.CenterOf(f.goal_cell);
-    f.distance_m = dist[goal] * resolution_m;
+    if (reached.empty()) continue;  // unreachable
+    // Clear cells first, then nearest the centroid, the shorter path, the lower index.
+    std::sort(reached.begin(), reached.end(), [&](const Ranked& a, const Ranked& b) {
+      if (a.clear != b.clear) return a.clear;
+      if (a.centroid_d2 != b.centroid_d2) return a.centroid_d2 < b.centroid_d2;
+      if (dist[a.index] != dist[b.index]) return dist[a.index] < dist[b.index];
+      return a.index < b.index;
+    });
+    f.candidates.reserve(reached.size());
+    for (const Ranked& r : reached) {
+      const CellIndex cell{static_cast<int>(r.index % size_x), static_cast<int>(r.index / size_x)};
+      f.candidates.push_back(
+          {cell, geometry.CenterOf(cell), dist[r.index] * resolution_m, r.clear});
+    }
+    f.goal_cell = f.candidates.front().cell;
+    f.goal_m = f.candidates.front().position_m;
+    f.distance_m = f.candidates.front().distance_m;
     f.cost = params.potential_scale * f.distance_m - params.gain_scale * f.size_m;
     frontiers.push_back(std::move(f));
   }
@@ -242,17 +260,32 @@ std::optional<Frontier> ChooseFrontierGoal(const std::vector<Frontier>& frontier
     CAIRN_THROW_UNLESS(failed.allFinite(), "ChooseFrontierGoal: failed goals must be finite, got ("
                                                << failed.x() << ", " << failed.y() << ")");
   }
-  const Frontier* best = nullptr;
+  auto blacklisted = [&](const Vector2& goal_m) {
+    return std::any_of(failed_goals_m.begin(), failed_goals_m.end(), [&](const Vector2& failed) {
+      return (goal_m - failed).norm() <= params.blacklist_radius_m;
+    });
+  };
+  std::optional<Frontier> best;
   for (const Frontier& f : frontiers) {
-    const bool blacklisted =
-        std::any_of(failed_goals_m.begin(), failed_goals_m.end(), [&](const Vector2& failed) {
-          return (f.goal_m - failed).norm() <= params.blacklist_radius_m;
-        });
-    if (blacklisted) continue;
-    if (best == nullptr || f.cost < best->cost) best = &f;
+    if (f.candidates.empty()) {
+      if (blacklisted(f.goal_m)) continue;
+      if (!best || f.cost < best->cost) best = f;
+      continue;
+    }
+    for (const FrontierGoalCandidate& c : f.candidates) {
+      if (blacklisted(c.position_m)) continue;
+      const double cost = params.potential_scale * c.distance_m - params.gain_scale * f.size_m;
+      if (!best || cost < best->cost) {
+        best = f;
+        best->goal_cell = c.cell;
+        best->goal_m = c.position_m;
+        best->distance_m = c.distance_m;
+        best->cost = cost;
+      }
+      break;
+    }
   }
-  if (best == nullptr) return std::nullopt;
-  return *best;
+  return best;
 }
 
 std::optional<Frontier> ChooseFrontierGoal(const common::GridMap& map, const std::string& layer,

@@ -31,10 +31,18 @@
 /// search never squeezes into a gap narrower than the clearance. A frontier none of whose cells
 /// is reached is dropped.
 ///
-/// Goal and cost. The goal of a frontier is its reached cell nearest its centroid (ties: the
-/// shorter path, then the lower cell index), `distance_m` the Dijkstra path length from the
-/// robot to that goal, and cost = potential_scale·distance_m − gain_scale·size_m (explore_lite's
-/// weights, with the path length in place of its straight-line distance): low cost is better.
+/// Goal and cost. A frontier's goal candidates are its reached cells: first those at least
+/// goal_clearance_m (centre to centre) from every occupied cell, nearest the centroid first, then
+/// the others in the same order (ties: the shorter path, then the lower cell index). The robot
+/// must fit at its goal whatever way it faces, and a cell beside a wall is often a cell the
+/// navigator refuses (GOAL_OCCUPIED) however near the centroid it lies. The goal is the first
+/// candidate, `distance_m` the Dijkstra path length from the robot to it, and
+/// cost = potential_scale·distance_m − gain_scale·size_m (explore_lite's weights, with the path
+/// length in place of its straight-line distance): low cost is better.
+///
+/// Failed goals. ChooseFrontierGoal skips the candidates within blacklist_radius_m of a failed
+/// goal and takes the frontier's next one, so a frontier is given up only when all its reached
+/// cells are near failed goals (explore_lite gives up the whole frontier at its first failure).
 ///
 /// Cost. Time and memory (about 20 bytes per cell) grow with the number of cells of the whole
 /// grid, plus (2·clearance/resolution + 1)² per occupied cell: pass the local window being
@@ -51,7 +59,11 @@ struct FrontierParams {
   /// Keep-out distance from occupied cells for the reachability search (about the robot's
   /// radius: the P3DX half-width is about 0.19 m). 0: only occupied cells block.
   double clearance_m{0.2};
-  /// A frontier whose goal lies within this distance (inclusive) of a failed goal is skipped by
+  /// Goal cells at least this far (centre to centre) from every occupied cell are preferred:
+  /// about the robot's circumscribed radius plus a cell (the P3DX's is 0.30 m), so that the
+  /// footprint fits at the goal in any heading. 0: every reached cell is as good.
+  double goal_clearance_m{0.35};
+  /// A goal candidate within this distance (inclusive) of a failed goal is skipped by
   /// ChooseFrontierGoal (explore_lite: 5 cells, 0.25 m at 0.05 m).
   double blacklist_radius_m{0.25};
 
@@ -59,14 +71,24 @@ struct FrontierParams {
   void Validate() const;
 };
 
+/// A reached cell of a frontier that may serve as its goal.
+struct FrontierGoalCandidate {
+  common::CellIndex cell;
+  common::Vector2 position_m{0.0, 0.0};  ///< its centre, world metres
+  double distance_m{0.0};                ///< path length from the robot
+  bool clear{false};                     ///< at least goal_clearance_m from occupied cells
+};
+
 struct Frontier {
   std::vector<common::CellIndex> cells;  ///< the cluster's cells, by linear index
   double size_m{0.0};                    ///< cells.size() · resolution
   common::Vector2 centroid_m{0.0, 0.0};  ///< mean of the cell centres, world metres
-  common::CellIndex goal_cell;           ///< the reached cell nearest the centroid
-  common::Vector2 goal_m{0.0, 0.0};      ///< its centre, world metres
-  double distance_m{0.0};                ///< path length from the robot to the goal
-  double cost{0.0};                      ///< potential_scale·distance_m − gain_scale·size_m
+  /// The reached cells in order of preference (see the file comment); never empty.
+  std::vector<FrontierGoalCandidate> candidates;
+  common::CellIndex goal_cell;       ///< the chosen candidate (the first, unless blacklisted)
+  common::Vector2 goal_m{0.0, 0.0};  ///< its centre, world metres
+  double distance_m{0.0};            ///< path length from the robot to the goal
+  double cost{0.0};                  ///< potential_scale·distance_m − gain_scale·size_m
 };
 
 /// All reachable frontiers of `layer` seen from `robot_m` (world metres), sorted by
@@ -77,9 +99,11 @@ std::vector<Frontier> FindFrontiers(const common::GridMap& map, const std::strin
                                     const common::Vector2& robot_m,
                                     const FrontierParams& params = {});
 
-/// The lowest-cost frontier whose goal is farther than blacklist_radius_m from every failed
-/// goal (world metres); nullopt when there is none (exploration finished or all blacklisted).
-/// Does not assume `frontiers` is sorted; among equal costs the first wins.
+/// The lowest-cost frontier with a goal candidate farther than blacklist_radius_m from every
+/// failed goal (world metres), its goal, distance and cost those of its first such candidate;
+/// nullopt when there is none (exploration finished or all blacklisted). A frontier without
+/// candidates (built by hand) stands for its goal alone. Does not assume `frontiers` is sorted;
+/// among equal costs the first wins.
 /// @throws std::invalid_argument for invalid params or a non-finite failed goal.
 std::optional<Frontier> ChooseFrontierGoal(const std::vector<Frontier>& frontiers,
                                            const std::vector<common::Vector2>& failed_goals_m,

@@ -72,12 +72,35 @@ TEST(FrontierExplorerTest, AGoalWhoseFrontierIsExploredIsReplaced) {
 TEST(FrontierExplorerTest, AFailedGoalIsBlacklistedAndNoProgressGivesUp) {
   FrontierExplorer e(Params());
   const common::GridMap map = Corridor(4.0);
-  ASSERT_EQ(e.Tick(&map, kLayer, {1.0, 2.0}, 0.0).kind, FrontierAction::Kind::kSendGoal);
+  const FrontierAction first = e.Tick(&map, kLayer, {1.0, 2.0}, 0.0);
+  ASSERT_EQ(first.kind, FrontierAction::Kind::kSendGoal);
   e.OnGoalResult(1, false, 1.0);
   EXPECT_EQ(e.goals_failed(), 1);
   ASSERT_EQ(e.failed_goals().size(), 1u);
-  // The only frontier is blacklisted now (its goal is the same cell): none left.
-  EXPECT_EQ(e.Tick(&map, kLayer, {1.0, 2.0}, 2.0).kind, FrontierAction::Kind::kNone);
+  // The frontier's next cell outside the 0.25 m disc round the failed goal is its goal now.
+  const FrontierAction next = e.Tick(&map, kLayer, {1.0, 2.0}, 2.0);
+  ASSERT_EQ(next.kind, FrontierAction::Kind::kSendGoal) << next.why;
+  EXPECT_EQ(next.goal_id, 2);
+  EXPECT_NEAR(next.goal_m.x(), first.goal_m.x(), 1e-9);
+  EXPECT_GT((next.goal_m - first.goal_m).norm(), 0.25);
+  // Every goal along the 3.6 m of reached frontier fails: the discs cover it after a few
+  // (each spans five cells) and no frontier is left.
+  e.OnGoalResult(2, false, 3.0);
+  double now_s = 4.0;
+  FrontierAction a = e.Tick(&map, kLayer, {1.0, 2.0}, now_s);
+  while (a.kind == FrontierAction::Kind::kSendGoal && e.goals_failed() < 40) {
+    e.OnGoalResult(a.goal_id, false, now_s);
+    now_s += 1.0;
+    a = e.Tick(&map, kLayer, {1.0, 2.0}, now_s);
+  }
+  EXPECT_EQ(a.kind, FrontierAction::Kind::kNone);
+  EXPECT_GE(e.goals_failed(), 8);
+  EXPECT_LE(e.goals_failed(), 20);
+  for (size_t i = 0; i < e.failed_goals().size(); ++i) {
+    for (size_t j = 0; j < i; ++j) {
+      EXPECT_GT((e.failed_goals()[i] - e.failed_goals()[j]).norm(), 0.25) << i << " " << j;
+    }
+  }
 
   FrontierExplorer stuck(Params());
   ASSERT_EQ(stuck.Tick(&map, kLayer, {1.0, 2.0}, 0.0).kind, FrontierAction::Kind::kSendGoal);

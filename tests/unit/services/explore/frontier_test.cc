@@ -225,14 +225,102 @@ TEST(FrontierTest, FailedGoalsAreBlacklistedWithinTheRadius) {
   goal = ChooseFrontierGoal(frontiers, {near_left}, params);
   ASSERT_TRUE(goal.has_value());
   EXPECT_EQ(goal->goal_cell, (CellIndex{1, 15}));
-  // ... and inside a 0.35 m one.
+  // ... and inside a 0.35 m one, as are all three reached cells of the left opening (iy 14..16;
+  // 13 and 17 lie within the 0.2 m clearance of the wall's ends).
   params.blacklist_radius_m = 0.35;
   goal = ChooseFrontierGoal(frontiers, {near_left}, params);
   ASSERT_TRUE(goal.has_value());
   EXPECT_EQ(goal->goal_cell, (CellIndex{40, 15}));
+  EXPECT_NEAR(goal->cost, frontiers[1].cost, 1e-12);
 
-  EXPECT_FALSE(ChooseFrontierGoal(frontiers, {left_goal, right_goal}, params).has_value());
+  // Both goals failed: the right frontier's next cell outside the disc.
+  goal = ChooseFrontierGoal(frontiers, {left_goal, right_goal}, params);
+  ASSERT_TRUE(goal.has_value());
+  EXPECT_EQ(goal->goal_cell.ix, 40);
+  EXPECT_GT((goal->goal_m - right_goal).norm(), 0.35);
+  // Every candidate of both failed: nothing left.
+  std::vector<Vector2> all;
+  for (const Frontier& f : frontiers) {
+    for (const FrontierGoalCandidate& c : f.candidates) all.push_back(c.position_m);
+  }
+  EXPECT_FALSE(ChooseFrontierGoal(frontiers, all, params).has_value());
   EXPECT_FALSE(ChooseFrontierGoal(std::vector<Frontier>{}, {}, params).has_value());
+}
+
+// The half-known room with a pillar cell two cells in front of the frontier's middle: the
+// frontier cell nearest the centroid, (14, 9), is reached (0.2 m from the pillar, the search's
+// clearance) but the robot would not fit there in every heading.
+GridMap HalfKnownRoomWithPillar() {
+  GridMap map = HalfKnownRoom();
+  Fill(&map, 12, 9, 12, 9, kWall);
+  return map;
+}
+
+TEST(FrontierTest, TheGoalIsTheCellNearestTheCentroidThatIsClearOfWalls) {
+  const GridMap map = HalfKnownRoomWithPillar();
+  std::vector<Frontier> frontiers = Find(map, {5, 9});
+  ASSERT_EQ(frontiers.size(), 1u);
+  const Frontier& f = frontiers[0];
+  // Clear (0.35 m) cells first: (14, 6) and (14, 12) lie 0.36 m from the pillar and 0.3 m from the
+  // centroid; the same path length, so the lower index wins.
+  EXPECT_EQ(f.goal_cell, (CellIndex{14, 6}));
+  // Rows 1 and 17 lie within the search's clearance of the walls and are never reached.
+  ASSERT_EQ(f.candidates.size(), 15u);
+  EXPECT_EQ(f.candidates[0].cell, (CellIndex{14, 6}));
+  EXPECT_EQ(f.candidates[1].cell, (CellIndex{14, 12}));
+  EXPECT_TRUE(f.candidates[0].clear);
+  EXPECT_NEAR(f.distance_m, f.candidates[0].distance_m, 1e-12);
+  EXPECT_NEAR(f.cost, 3.0 * f.distance_m - 1.0 * 1.7, 1e-9);
+  // The cells near the pillar come last, nearest the centroid first.
+  int clear = 0;
+  for (const FrontierGoalCandidate& c : f.candidates) clear += c.clear ? 1 : 0;
+  EXPECT_EQ(clear, 6);  // iy 4..6 and 12..14: 0.35 m from the pillar and from the walls
+  EXPECT_FALSE(f.candidates[clear].clear);
+  EXPECT_EQ(f.candidates[clear].cell, (CellIndex{14, 9}));
+  for (const FrontierGoalCandidate& c : f.candidates) {
+    EXPECT_EQ(c.position_m, map.CenterOf(c.cell));
+  }
+
+  // With no goal clearance the centroid's own cell is the goal again.
+  FrontierParams params;
+  params.goal_clearance_m = 0.0;
+  frontiers = Find(map, {5, 9}, params);
+  ASSERT_EQ(frontiers.size(), 1u);
+  EXPECT_EQ(frontiers[0].goal_cell, (CellIndex{14, 9}));
+  // A frontier with no clear cell at all keeps its cell nearest the centroid.
+  params.goal_clearance_m = 5.0;
+  frontiers = Find(map, {5, 9}, params);
+  ASSERT_EQ(frontiers.size(), 1u);
+  EXPECT_EQ(frontiers[0].goal_cell, (CellIndex{14, 9}));
+  EXPECT_FALSE(frontiers[0].candidates[0].clear);
+}
+
+TEST(FrontierTest, AFailedGoalMovesToTheFrontiersNextCellOutsideTheBlacklist) {
+  const GridMap map = HalfKnownRoomWithPillar();
+  const std::vector<Frontier> frontiers = Find(map, {5, 9});
+  ASSERT_EQ(frontiers.size(), 1u);
+  const FrontierParams params;  // blacklist radius 0.25 m
+
+  std::vector<Vector2> failed = {map.CenterOf({14, 6})};
+  std::optional<Frontier> goal = ChooseFrontierGoal(frontiers, failed, params);
+  ASSERT_TRUE(goal.has_value());
+  EXPECT_EQ(goal->goal_cell, (CellIndex{14, 12}));
+  // The goal's distance and cost are its own cell's.
+  EXPECT_NEAR(goal->distance_m, frontiers[0].candidates[1].distance_m, 1e-12);
+  EXPECT_NEAR(goal->cost, 3.0 * goal->distance_m - 1.0 * 1.7, 1e-9);
+  EXPECT_EQ(goal->cells.size(), 17u);
+
+  // Both failed: their discs cover every clear cell, so the nearest the centroid of the others,
+  // the pillar's neighbour, is tried before the frontier is given up.
+  failed.push_back(map.CenterOf({14, 12}));
+  goal = ChooseFrontierGoal(frontiers, failed, params);
+  ASSERT_TRUE(goal.has_value());
+  EXPECT_EQ(goal->goal_cell, (CellIndex{14, 9}));
+
+  // Every cell of the frontier within a failed goal's disc: the frontier is given up.
+  failed.clear();
+  for (int iy = 1; iy <= 17; iy += 2) failed.push_back(map.CenterOf({14, iy}));
+  EXPECT_FALSE(ChooseFrontierGoal(frontiers, failed, params).has_value());
 }
 
 TEST(FrontierTest, ChoosingDoesNotAssumeASortedList) {
@@ -301,6 +389,9 @@ TEST(FrontierTest, BadInputThrows) {
   p = {};
   p.blacklist_radius_m = std::numeric_limits<double>::infinity();
   expect_throw_naming(p, "blacklist_radius_m");
+  p = {};
+  p.goal_clearance_m = -0.1;
+  expect_throw_naming(p, "goal_clearance_m");
   p = {};
   p.free_threshold = 70.f;
   expect_throw_naming(p, "free_threshold");
