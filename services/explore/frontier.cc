@@ -115,8 +115,7 @@ std::vector<Frontier> FindFrontiers(const common::GridMap& map, const std::strin
   // clearance_m (a small tolerance keeps a distance of exactly clearance_m clear).
   const double clearance_cells = params.clearance_m / resolution_m;
   const double goal_clearance_cells = params.goal_clearance_m / resolution_m;
-  const int radius =
-      static_cast<int>(std::ceil(std::max(clearance_cells, goal_clearance_cells)));
+  const int radius = static_cast<int>(std::ceil(std::max(clearance_cells, goal_clearance_cells)));
   const std::vector<int64_t> occupied_d2 = OccupiedDistanceSq(classes, size_x, size_y, radius);
   auto at_least = [&](int64_t i, double cells) {
     const double below = std::max(0.0, cells - 1e-9);

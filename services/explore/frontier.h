@@ -45,8 +45,8 @@
 /// cells are near failed goals (explore_lite gives up the whole frontier at its first failure).
 ///
 /// Cost. Time and memory (about 20 bytes per cell) grow with the number of cells of the whole
-/// grid, plus (2·clearance/resolution + 1)² per occupied cell: pass the local window being
-/// explored, not a site-sized grid.
+/// grid, plus (2·r/resolution + 1)² per occupied cell, r the larger of clearance_m and
+/// goal_clearance_m: pass the local window being explored, not a site-sized grid.
 
 namespace cairn::explore {
 
