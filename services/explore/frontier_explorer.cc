@@ -105,7 +105,8 @@ FrontierAction FrontierExplorer::Tick(const common::GridMap* map, const std::str
                   best->size_m, best->distance_m, best->goal_m.x(), best->goal_m.y());
     return Send(*best, now_s, line);
   }
-  // Driving: is the current goal still on a frontier, and is another much cheaper?
+  // Driving: is the current goal still on a frontier (within 1 m of one of its goal cells: the
+  // goal may be a later candidate than the first, after a failure), and is another much cheaper?
   bool still_frontier = false;
   for (const Frontier& f : all) {
     if ((f.goal_m - active_goal_).norm() < 1.0) {
@@ -113,6 +114,15 @@ FrontierAction FrontierExplorer::Tick(const common::GridMap* map, const std::str
       active_cost_ = f.cost;
       break;
     }
+    for (const FrontierGoalCandidate& c : f.candidates) {
+      if ((c.position_m - active_goal_).norm() < 1.0) {
+        still_frontier = true;
+        const FrontierParams& p = params_.frontier;
+        active_cost_ = p.potential_scale * c.distance_m - p.gain_scale * f.size_m;
+        break;
+      }
+    }
+    if (still_frontier) break;
   }
   if (!still_frontier || best->cost < active_cost_ - params_.switch_margin) {
     const std::string why = still_frontier ? "a cheaper frontier" : "its frontier is explored";

@@ -111,6 +111,27 @@ TEST(FrontierExplorerTest, AFailedGoalIsBlacklistedAndNoProgressGivesUp) {
   EXPECT_EQ(stuck.goals_failed(), 1);
 }
 
+TEST(FrontierExplorerTest, AGoalMovedAlongItsFrontierIsKeptWhileDriving) {
+  FrontierModeParams params = Params();
+  params.frontier.blacklist_radius_m = 1.2;  // the next goal lies over 1 m from the first
+  FrontierExplorer e(params);
+  const common::GridMap map = Corridor(4.0);
+  const FrontierAction first = e.Tick(&map, kLayer, {1.0, 2.0}, 0.0);
+  ASSERT_EQ(first.kind, FrontierAction::Kind::kSendGoal);
+  e.OnGoalResult(1, false, 1.0);
+  const FrontierAction next = e.Tick(&map, kLayer, {1.0, 2.0}, 2.0);
+  ASSERT_EQ(next.kind, FrontierAction::Kind::kSendGoal) << next.why;
+  EXPECT_GT((next.goal_m - first.goal_m).norm(), 1.2);
+  // The frontier is the same, its first cell still the failed goal: the goal is not sent again
+  // (a new id every second would make the navigator start over).
+  for (double t = 3.5; t < 8.0; t += 1.5) {
+    const FrontierAction a = e.Tick(&map, kLayer, {1.5, 2.0}, t);
+    EXPECT_EQ(a.kind, FrontierAction::Kind::kNone) << t << ": " << a.why;
+  }
+  EXPECT_EQ(e.goals_sent(), 2);
+  EXPECT_EQ(e.active_goal(), 2);
+}
+
 TEST(FrontierExplorerTest, AGoalThatFailedForAPassingReasonMayBeChosenAgain) {
   FrontierExplorer e(Params());
   const common::GridMap map = Corridor(4.0);
