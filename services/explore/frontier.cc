@@ -239,7 +239,7 @@ std::vector<Frontier> FindFrontiers(const common::GridMap& map, const std::strin
     f.goal_cell = f.candidates.front().cell;
     f.goal_m = f.candidates.front().position_m;
     f.distance_m = f.candidates.front().distance_m;
-    f.cost = params.potential_scale * f.distance_m - params.gain_scale * f.size_m;
+    f.cost = FrontierCost(params, f.distance_m, f.size_m);
     frontiers.push_back(std::move(f));
   }
 
@@ -264,27 +264,39 @@ std::optional<Frontier> ChooseFrontierGoal(const std::vector<Frontier>& frontier
       return (goal_m - failed).norm() <= params.blacklist_radius_m;
     });
   };
-  std::optional<Frontier> best;
+  // The best frontier and its first candidate outside the blacklist (nullptr: its own goal).
+  const Frontier* best = nullptr;
+  const FrontierGoalCandidate* best_goal = nullptr;
+  double best_cost = 0.0;
   for (const Frontier& f : frontiers) {
+    const FrontierGoalCandidate* goal = nullptr;
     if (f.candidates.empty()) {
       if (blacklisted(f.goal_m)) continue;
-      if (!best || f.cost < best->cost) best = f;
-      continue;
-    }
-    for (const FrontierGoalCandidate& c : f.candidates) {
-      if (blacklisted(c.position_m)) continue;
-      const double cost = params.potential_scale * c.distance_m - params.gain_scale * f.size_m;
-      if (!best || cost < best->cost) {
-        best = f;
-        best->goal_cell = c.cell;
-        best->goal_m = c.position_m;
-        best->distance_m = c.distance_m;
-        best->cost = cost;
+    } else {
+      for (const FrontierGoalCandidate& c : f.candidates) {
+        if (!blacklisted(c.position_m)) {
+          goal = &c;
+          break;
+        }
       }
-      break;
+      if (goal == nullptr) continue;
+    }
+    const double cost = goal != nullptr ? FrontierCost(params, goal->distance_m, f.size_m) : f.cost;
+    if (best == nullptr || cost < best_cost) {
+      best = &f;
+      best_goal = goal;
+      best_cost = cost;
     }
   }
-  return best;
+  if (best == nullptr) return std::nullopt;
+  Frontier chosen = *best;
+  if (best_goal != nullptr) {
+    chosen.goal_cell = best_goal->cell;
+    chosen.goal_m = best_goal->position_m;
+    chosen.distance_m = best_goal->distance_m;
+    chosen.cost = best_cost;
+  }
+  return chosen;
 }
 
 std::optional<Frontier> ChooseFrontierGoal(const common::GridMap& map, const std::string& layer,

@@ -91,6 +91,11 @@ struct Frontier {
   double cost{0.0};                  ///< potential_scale·distance_m − gain_scale·size_m
 };
 
+/// potential_scale·distance_m − gain_scale·size_m: a frontier's cost with its goal that far.
+inline double FrontierCost(const FrontierParams& params, double distance_m, double size_m) {
+  return params.potential_scale * distance_m - params.gain_scale * size_m;
+}
+
 /// All reachable frontiers of `layer` seen from `robot_m` (world metres), sorted by
 /// increasing cost (ties: shorter distance, then lower goal index).
 /// @throws std::invalid_argument for invalid params, a missing layer, or a robot position that

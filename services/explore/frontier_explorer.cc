@@ -109,16 +109,11 @@ FrontierAction FrontierExplorer::Tick(const common::GridMap* map, const std::str
   // goal may be a later candidate than the first, after a failure), and is another much cheaper?
   bool still_frontier = false;
   for (const Frontier& f : all) {
-    if ((f.goal_m - active_goal_).norm() < 1.0) {
-      still_frontier = true;
-      active_cost_ = f.cost;
-      break;
-    }
+    // The candidates begin with the frontier's own goal.
     for (const FrontierGoalCandidate& c : f.candidates) {
       if ((c.position_m - active_goal_).norm() < 1.0) {
         still_frontier = true;
-        const FrontierParams& p = params_.frontier;
-        active_cost_ = p.potential_scale * c.distance_m - p.gain_scale * f.size_m;
+        active_cost_ = FrontierCost(params_.frontier, c.distance_m, f.size_m);
         break;
       }
     }
