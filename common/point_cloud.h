@@ -25,8 +25,8 @@ struct LidarPoint {
 /// lidar, a Velodyne): `columns` azimuth steps `azimuth_step_rad` apart from the slice's
 /// azimuth_start_rad, by the rings at `ring_elevation_rad`. A point's ring and column name its
 /// ray. When `range_resolution_m` > 0 the slice travels as 3 bytes a ray (lcmt_lidar_ranges,
-/// its ranges rounded to that resolution) instead of 17 a point; the points themselves are not
-/// rounded.
+/// its ranges rounded to that resolution) instead of 17 a point, and its source may fill the
+/// slice's range image instead of its points (LidarSlice).
 struct LidarGrid {
   std::vector<float> ring_elevation_rad;  ///< ring 0 first
   double azimuth_step_rad{0.0};
@@ -46,7 +46,36 @@ struct LidarSlice {
   Pose3 sensor_pose;       ///< sensor in world at this slice's time
   std::vector<LidarPoint> points;
   LidarGrid grid;  ///< columns == 0: the points have no grid
+  /// The range image: the slice as a gridded sensor measures it, a range and an intensity per
+  /// ray, column by column and ring by ring within (grid.columns x rings), ranges in steps of
+  /// grid.range_resolution_m, 0 for no return. The simulator's HDL-32E fills these instead of
+  /// the points (they go on the bus as they are); a consumer that needs points calls
+  /// ExpandRangeImage. Empty when the slice carries points.
+  std::vector<uint16_t> range_steps;
+  std::vector<uint8_t> range_intensity;
 };
+
+/// A range in steps of `steps_per_m`, rounded to the nearest: 0 (no return) when not a number
+/// or under half a step, at most 65535.
+inline uint16_t LidarRangeToSteps(float range_m, float steps_per_m) {
+  const float steps = range_m * steps_per_m + 0.5f;
+  return steps >= 1.f ? (steps < 65535.f ? static_cast<uint16_t>(steps) : uint16_t{65535}) : 0;
+}
+/// An intensity as a range image carries it: rounded, within 0..255.
+inline uint8_t LidarIntensityByte(float intensity) {
+  const float v = intensity + 0.5f;
+  return v >= 1.f ? (v < 255.f ? static_cast<uint8_t>(v) : uint8_t{255}) : 0;
+}
+
+/// Whether `slice` carries a range image: a grid with 1 to 127 rings, 1 to 65535 columns and a
+/// resolution in (0, 1] m, and both arrays of columns x rings values.
+bool HasRangeImage(const LidarSlice& slice);
+
+/// Replaces `slice`'s range image by its points, appended after any it has: one per ray that
+/// returned (range > 0), at its ring's elevation and its column's azimuth
+/// (azimuth_start_rad + column * grid.azimuth_step_rad), ring and column set. The grid is
+/// kept. A slice without a range image is left as it is.
+void ExpandRangeImage(LidarSlice* slice);
 
 /// A full revolution: its slices in order; a missing slice leaves a gap.
 struct LidarRevolution {

@@ -102,6 +102,7 @@ Recording RecordTunnel(int revolutions, double lane_y, double speed_mps) {
       recording.poses.push_back(std::move(pose));
     }
     for (auto& slice : out.Mutable<common::LidarSlice>(sim::LidarSensor::kName)) {
+      common::ExpandRangeImage(&slice);  // the points, as FromLcm makes them off the bus
       auto& rev = by_number[slice.revolution];
       rev.revolution = slice.revolution;
       rev.robot = slice.robot;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -88,6 +89,11 @@ cairn::lcmt_point_cloud_slice ToLcmWithoutPoints(const common::LidarSlice& slice
 }
 
 cairn::lcmt_point_cloud_slice ToLcm(const common::LidarSlice& slice) {
+  if (common::HasRangeImage(slice)) {
+    common::LidarSlice points = slice;
+    common::ExpandRangeImage(&points);
+    return ToLcm(points);
+  }
   cairn::lcmt_point_cloud_slice m = ToLcmWithoutPoints(slice);
   const size_t n = slice.points.size();
   m.num_points = static_cast<int32_t>(n);
@@ -153,6 +159,12 @@ cairn::lcmt_lidar_ranges ToLcmRanges(const common::LidarSlice& slice) {
   const common::LidarGrid& grid = slice.grid;
   const int rings = m.num_rings;
   m.num_rays = grid.columns * rings;
+  if (common::HasRangeImage(slice)) {
+    m.ranges.resize(slice.range_steps.size());
+    std::memcpy(m.ranges.data(), slice.range_steps.data(), m.ranges.size() * sizeof(int16_t));
+    m.intensity = slice.range_intensity;
+    return m;
+  }
   m.ranges.assign(static_cast<size_t>(m.num_rays), 0);
   m.intensity.assign(static_cast<size_t>(m.num_rays), 0);
   const float steps_per_m = static_cast<float>(1.0 / grid.range_resolution_m);
@@ -162,7 +174,7 @@ cairn::lcmt_lidar_ranges ToLcmRanges(const common::LidarSlice& slice) {
     }
     const size_t ray = static_cast<size_t>(p.column) * rings + p.ring;
     m.ranges[ray] = static_cast<int16_t>(LidarRangeSteps(p, steps_per_m));
-    m.intensity[ray] = LidarIntensityByte(p.intensity);
+    m.intensity[ray] = common::LidarIntensityByte(p.intensity);
   }
   return m;
 }
@@ -202,32 +214,10 @@ Result<common::LidarSlice> FromLcm(const cairn::lcmt_lidar_ranges& m) {
   s.grid.azimuth_step_rad = m.azimuth_step_rad;
   s.grid.columns = m.num_columns;
   s.grid.range_resolution_m = m.range_resolution_m;
-  const int rings = m.num_rings;
-  std::vector<double> cos_el(rings), sin_el(rings);
-  for (int r = 0; r < rings; ++r) {
-    cos_el[r] = std::cos(static_cast<double>(m.ring_elevation_rad[r]));
-    sin_el[r] = std::sin(static_cast<double>(m.ring_elevation_rad[r]));
-  }
-  s.points.reserve(m.ranges.size());
-  for (int c = 0; c < m.num_columns; ++c) {
-    const double azimuth = m.azimuth_start_rad + c * m.azimuth_step_rad;
-    const double ca = std::cos(azimuth), sa = std::sin(azimuth);
-    const int16_t* ranges = m.ranges.data() + static_cast<size_t>(c) * rings;
-    const uint8_t* intensity = m.intensity.data() + static_cast<size_t>(c) * rings;
-    for (int r = 0; r < rings; ++r) {
-      const uint16_t steps = static_cast<uint16_t>(ranges[r]);
-      if (steps == 0) continue;
-      const double range_m = steps * m.range_resolution_m;
-      common::LidarPoint p;
-      p.x_m = static_cast<float>(cos_el[r] * ca * range_m);
-      p.y_m = static_cast<float>(cos_el[r] * sa * range_m);
-      p.z_m = static_cast<float>(sin_el[r] * range_m);
-      p.intensity = intensity[r];
-      p.ring = static_cast<int16_t>(r);
-      p.column = static_cast<uint16_t>(c);
-      s.points.push_back(p);
-    }
-  }
+  s.range_steps.resize(m.ranges.size());
+  std::memcpy(s.range_steps.data(), m.ranges.data(), m.ranges.size() * sizeof(int16_t));
+  s.range_intensity = m.intensity;
+  common::ExpandRangeImage(&s);
   return s;
 }
 

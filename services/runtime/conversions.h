@@ -28,6 +28,7 @@ void ToLcm(const common::Pose3& pose, double position_m[3], double orientation_w
 common::Result<common::Pose3> PoseFromArrays(const double position_m[3],
                                              const double orientation_wxyz[4]);
 
+/// A slice that carries a range image is sent as the image's points (common::ExpandRangeImage).
 cairn::lcmt_point_cloud_slice ToLcm(const common::LidarSlice& slice);
 /// The same without the points (num_points 0): what a fast encoder writes before them.
 cairn::lcmt_point_cloud_slice ToLcmWithoutPoints(const common::LidarSlice& slice);
@@ -35,28 +36,24 @@ cairn::lcmt_point_cloud_slice ToLcmWithoutPoints(const common::LidarSlice& slice
 /// mismatch or a bad pose is an error.
 common::Result<common::LidarSlice> FromLcm(const cairn::lcmt_point_cloud_slice& msg);
 
-/// A point's range in steps of `steps_per_m`, as lcmt_lidar_ranges carries it: rounded to the
-/// nearest, 0 (no return) when not a number or under half a step, at most 65535.
+/// A point's range in steps of `steps_per_m`, as lcmt_lidar_ranges carries it (see
+/// common::LidarRangeToSteps).
 inline uint16_t LidarRangeSteps(const common::LidarPoint& p, float steps_per_m) {
-  const float steps = std::sqrt(p.x_m * p.x_m + p.y_m * p.y_m + p.z_m * p.z_m) * steps_per_m + 0.5f;
-  return steps >= 1.f ? (steps < 65535.f ? static_cast<uint16_t>(steps) : uint16_t{65535}) : 0;
-}
-/// An intensity as lcmt_lidar_ranges carries it: rounded, within 0..255.
-inline uint8_t LidarIntensityByte(float intensity) {
-  const float v = intensity + 0.5f;
-  return v >= 1.f ? (v < 255.f ? static_cast<uint8_t>(v) : uint8_t{255}) : 0;
+  return common::LidarRangeToSteps(std::sqrt(p.x_m * p.x_m + p.y_m * p.y_m + p.z_m * p.z_m),
+                                   steps_per_m);
 }
 /// Whether `slice` has a grid of ranges that lcmt_lidar_ranges can carry (1 to 127 rings, 1 to
 /// 65535 columns, a resolution above 0).
 bool HasRangeGrid(const common::LidarSlice& slice);
 
-/// A slice with a grid and a range resolution (LidarGrid) as ranges, 3 bytes a ray: each point's
-/// range, rounded to the resolution, at its ring and column; rays without a point read 0.
+/// A slice with a grid and a range resolution (LidarGrid) as ranges, 3 bytes a ray: its range
+/// image as it is (common::HasRangeImage), or else each point's range, rounded to the
+/// resolution, at its ring and column; rays without a point read 0.
 /// @throws std::invalid_argument when the slice has no grid or a point lies outside it.
 cairn::lcmt_lidar_ranges ToLcmRanges(const common::LidarSlice& slice);
 /// The points of the rays that returned (range > 0), each at its ring's elevation and its
-/// column's azimuth, with the grid kept. Counts that disagree, more than 127 rings, a bad
-/// resolution, elevation, azimuth or pose are errors.
+/// column's azimuth (common::ExpandRangeImage), with the grid kept. Counts that disagree, more than
+/// 127 rings, a bad resolution, elevation, azimuth or pose are errors.
 common::Result<common::LidarSlice> FromLcm(const cairn::lcmt_lidar_ranges& msg);
 /// The same without the rays (num_rays 0, arrays empty): what a fast encoder writes before them.
 /// @throws std::invalid_argument when the slice has no grid.

@@ -164,7 +164,7 @@ int FastPointCloudSlice::getEncodedSize() const {
 
 int FastPointCloudSlice::encode(void* buf, int offset, int maxlen) const {
   const int size = getEncodedSize();
-  if (size < 0 || offset < 0 || maxlen < size) return -1;
+  if (size < 0 || offset < 0 || maxlen < size || !slice_->range_steps.empty()) return -1;
   // The fields up to num_points, by the generated code: the message without its points ends
   // with num_points = 0, which then gets the real count.
   const int head = head_.encode(buf, offset, maxlen);
@@ -213,6 +213,16 @@ int FastLidarRanges::encode(void* buf, int offset, int maxlen) const {
   std::memcpy(out - 4, &count, sizeof(count));
   uint8_t* const ranges = out;  // big-endian 16-bit steps
   uint8_t* const intensity = out + 2 * rays_;
+  if (common::HasRangeImage(*slice_)) {
+    // The sensor's own range image: one byte swap per range.
+    const uint16_t* steps = slice_->range_steps.data();
+    for (int64_t i = 0; i < rays_; ++i) {
+      const uint16_t v = __builtin_bswap16(steps[i]);
+      std::memcpy(ranges + 2 * i, &v, sizeof(v));
+    }
+    std::memcpy(intensity, slice_->range_intensity.data(), static_cast<size_t>(rays_));
+    return size;
+  }
   std::memset(out, 0, static_cast<size_t>(3 * rays_));
   const int rings = head_.num_rings;
   const int columns = head_.num_columns;
@@ -223,7 +233,7 @@ int FastLidarRanges::encode(void* buf, int offset, int maxlen) const {
     const uint16_t steps = runtime::LidarRangeSteps(p, steps_per_m);
     ranges[2 * ray] = static_cast<uint8_t>(steps >> 8);
     ranges[2 * ray + 1] = static_cast<uint8_t>(steps);
-    intensity[ray] = runtime::LidarIntensityByte(p.intensity);
+    intensity[ray] = common::LidarIntensityByte(p.intensity);
   }
   return size;
 }

@@ -66,10 +66,11 @@ class FastPointCloudSlice {
 };
 
 /// A lidar slice with a grid of ranges published with LCM's exact encoding of
-/// lcmt_lidar_ranges, written straight from the slice's points as FastPointCloudSlice does: the
-/// bytes are those of runtime::ToLcmRanges(slice).encode() (tested), without the message's two
-/// arrays filled and freed for every slice and written by the generated code value by value.
-/// encode() refuses (-1) a slice without a grid (runtime::HasRangeGrid) or with a point off it.
+/// lcmt_lidar_ranges, written straight from the slice's range image (a byte swap per range) or,
+/// when it has none, from its points: the bytes are those of runtime::ToLcmRanges(slice).encode()
+/// (tested), without the message's two arrays filled and freed for every slice and written by
+/// the generated code value by value. encode() refuses (-1) a slice without a grid
+/// (runtime::HasRangeGrid) or with a point off it.
 class FastLidarRanges {
  public:
   explicit FastLidarRanges(const common::LidarSlice& slice);

@@ -32,9 +32,10 @@ void LidarParams::Validate() const {
   CAIRN_THROW_UNLESS(FiniteNonNegative(range_noise_sigma_m),
                      "hdl32e.range_noise_sigma_m must be >= 0");
   // 16 bits of range steps must reach the maximum range.
-  CAIRN_THROW_UNLESS(range_resolution_m == 0.0 || (FinitePositive(range_resolution_m) &&
-                                                   max_range_m / range_resolution_m <= 65535.0),
-                     "hdl32e.range_resolution_m must be 0 or at least max_range_m / 65535");
+  CAIRN_THROW_UNLESS(range_resolution_m == 0.0 ||
+                         (FinitePositive(range_resolution_m) && range_resolution_m <= 1.0 &&
+                          max_range_m / range_resolution_m <= 65535.0),
+                     "hdl32e.range_resolution_m must be 0 or in [max_range_m / 65535, 1]");
   CAIRN_THROW_UNLESS(azimuths_per_ray_group >= 1, "hdl32e.azimuths_per_ray_group must be >= 1");
   CAIRN_THROW_UNLESS(rings_per_ray_group >= 1, "hdl32e.rings_per_ray_group must be >= 1");
   // One slice must fit a UDP-friendly message (17 bytes per point, 3 per ray as ranges), and
@@ -180,6 +181,7 @@ LidarSensor::LidarSensor(const LidarParams& params, const SensorContext& context
                                                     pattern_->slice_ray_begin[s]));
   }
   hits_.resize(largest);
+  noisy_m_.resize(largest);
   for (int r = 0; r < params_.rings; ++r) {
     ring_elevation_rad_.push_back(static_cast<float>(LidarRingElevationRad(params_, r)));
   }
@@ -208,7 +210,7 @@ void LidarSensor::Produce(const SensorFrame& frame, SimOutputs* out) {
 }
 
 common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revolution, int slice,
-                                          const common::Pose3& sensor) const {
+                                          const common::Pose3& sensor) {
   const LidarParams& p = params_;
   const LidarPattern& pattern = *pattern_;
   const RayPattern& rays = pattern.rays;
@@ -229,27 +231,55 @@ common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revo
   s.grid.range_resolution_m = p.range_resolution_m;
   const int first = pattern.slice_ray_begin[slice];
   const int last = pattern.slice_ray_begin[slice + 1];
+  const uint64_t noise_base =
+      static_cast<uint64_t>(revolution) * static_cast<uint64_t>(rays.directions.size());
+  // Half a million rays per simulated second: plain pointers, nothing reloaded per ray.
+  const RayHit* hits = hits_.data();  // the slice's rays: hits[i - first]
+  const int16_t* rings = pattern.ring.data();
+  const int32_t* steps = pattern.azimuth_step.data();
+  const float* intensity = frame.rays->intensities();
+  // Locals: the compiler cannot keep members in registers across the stores to the output.
+  const double min_range_m = p.min_range_m, max_range_m = p.max_range_m;
+  const double sigma_m = p.range_noise_sigma_m;
+  if (p.range_resolution_m > 0.0) {
+    // The range image, which goes on the bus as it is: no point per ray, no square root to
+    // find its range again.
+    const size_t ring_count = static_cast<size_t>(p.rings);
+    const size_t ray_count = static_cast<size_t>(s.grid.columns) * ring_count;
+    s.range_steps.assign(ray_count, 0);
+    s.range_intensity.assign(ray_count, 0);
+    uint16_t* range_steps = s.range_steps.data();
+    uint8_t* range_intensity = s.range_intensity.data();
+    // Two passes: the noisy ranges of every ray, then each ray's range step and intensity. A
+    // ray that missed draws noise too, which costs less than branching on it, and changes
+    // nothing: a draw is a pure function of the ray's number. Validate() bounds max_range_m in
+    // 16 bits of steps; a ray without a return reads 0.
+    const int count = last - first;
+    double* noisy_m = noisy_m_.data();
+    for (int k = 0; k < count; ++k) {
+      noisy_m[k] = hits[k].range_m + sigma_m * noise_.Gaussian(noise_base + first + k);
+    }
+    const double steps_per_m = 1.0 / p.range_resolution_m;
+    for (int i = first; i < last; ++i) {
+      const RayHit& h = hits[i - first];
+      const double range = noisy_m[i - first];
+      const bool returned = h.geom >= 0 && range >= min_range_m && range <= max_range_m;
+      const size_t ray = static_cast<size_t>(steps[i] - k_begin) * ring_count + rings[i];
+      range_steps[ray] = returned ? static_cast<uint16_t>(range * steps_per_m + 0.5) : 0;
+      range_intensity[ray] = returned ? common::LidarIntensityByte(intensity[h.geom]) : 0;
+    }
+    return s;
+  }
   // Sized for every ray and trimmed at the end: the points are written in place, field by
   // field (a point built aside and pushed back stalled on its 2-byte ring store).
   s.points.resize(last - first);
   common::LidarPoint* out = s.points.data();
-  const uint64_t noise_base =
-      static_cast<uint64_t>(revolution) * static_cast<uint64_t>(rays.directions.size());
-  // Half a million points per simulated second: plain pointers, nothing reloaded per point.
-  const RayHit* hits = hits_.data();  // the slice's rays: hits[i - first]
   const Eigen::Vector3d* directions = rays.directions.data();
-  const int16_t* rings = pattern.ring.data();
-  const int32_t* steps = pattern.azimuth_step.data();
-  const float* intensity = frame.rays->intensities();
-  // Locals: the compiler cannot keep members in registers across the stores to the points.
-  const double min_range_m = p.min_range_m, max_range_m = p.max_range_m;
   for (int i = first; i < last; ++i) {
     const RayHit& h = hits[i - first];
     if (h.geom < 0) continue;
     double range = h.range_m;
-    if (p.range_noise_sigma_m > 0.0) {
-      range += p.range_noise_sigma_m * noise_.Gaussian(noise_base + i);
-    }
+    if (sigma_m > 0.0) range += sigma_m * noise_.Gaussian(noise_base + i);
     if (range < min_range_m || range > max_range_m) continue;
     const Eigen::Vector3d& dir = directions[i];
     out->x_m = static_cast<float>(dir.x() * range);

@@ -27,9 +27,9 @@ struct LidarParams {
   double max_range_m{70.0};
   double min_range_m{0.4};
   double range_noise_sigma_m{0.02};
-  /// Slices travel as ranges in steps of this (the HDL-32E's 2 mm), 3 bytes a ray, on
-  /// <robot>.LIDAR_RANGES (the readings in the process are not rounded); 0: as float points
-  /// on <robot>.LIDAR, 17 bytes a point.
+  /// Slices are range images in steps of this (the HDL-32E's 2 mm; at most 1 m), 3 bytes a ray
+  /// on <robot>.LIDAR_RANGES (common::LidarSlice::range_steps; common::ExpandRangeImage makes
+  /// the points); 0: float points, on <robot>.LIDAR as 17 bytes a point.
   double range_resolution_m{0.002};
   int azimuths_per_ray_group{15};  ///< broad-phase granularity of the ray caster...
   int rings_per_ray_group{32};     ///< ... in azimuth and in elevation
@@ -87,7 +87,7 @@ class LidarSensor final : public SimSensor {
 
  private:
   common::LidarSlice MakeSlice(const SensorFrame& frame, int64_t revolution, int slice,
-                               const common::Pose3& sensor) const;
+                               const common::Pose3& sensor);
 
   LidarParams params_;
   std::shared_ptr<const LidarPattern> pattern_;
@@ -95,6 +95,7 @@ class LidarSensor final : public SimSensor {
   int site_{-1};
   int64_t slices_done_{0};
   std::vector<RayHit> hits_;  ///< one slice: hits_[ray - slice_ray_begin[slice]]
+  std::vector<double> noisy_m_;  ///< the same rays' ranges with their noise
   std::vector<float> ring_elevation_rad_;
   NoiseSource noise_;
 };

@@ -95,6 +95,8 @@ class OutdoorTerrainTest : public ::testing::Test {
         }
         for (auto& slice : out.Mutable<common::LidarSlice>(sim::LidarSensor::kName)) {
           const int64_t arrival_us = slice.utime;  // sim time: the test's only clock
+          // The points of the sensor's range image, as FromLcm makes them off the bus.
+          common::ExpandRangeImage(&slice);
           for (auto& revolution : assembler.OnSlice(std::move(slice), arrival_us)) {
             mapping::RevolutionDrops drops;
             auto prepared = inputs.PrepareRevolution(std::move(revolution), &drops);

@@ -17,8 +17,9 @@ using testing::SimTest;
 size_t PointsIn(const SimOutputs& out, double x0, double x1, double y0, double y1, double z0) {
   size_t n = 0;
   const int64_t rev = out.Readings<LidarSensor>().back().revolution - 1;
-  for (const auto& slice : out.Readings<LidarSensor>()) {
+  for (common::LidarSlice slice : out.Readings<LidarSensor>()) {
     if (slice.revolution != rev) continue;
+    common::ExpandRangeImage(&slice);  // the HDL-32E makes range images
     for (const auto& p : slice.points) {
       if (p.x_m > x0 && p.x_m < x1 && p.y_m > y0 && p.y_m < y1 && p.z_m > z0) ++n;
     }

@@ -1,5 +1,6 @@
 #include "simulator/lcm/sensor_publishers.h"
 
+#include <cstring>
 #include <map>
 #include <memory>
 #include <string>
@@ -208,6 +209,37 @@ TEST(SensorPublishersTest, FastLidarRangesEncodesTheSameBytesAsLcm) {
     EXPECT_EQ(fast, expected) << columns << " columns";
     EXPECT_EQ(wrapped.encode(fast.data(), 0, size - 1), -1);
     EXPECT_EQ(wrapped.encode(fast.data(), -1, size), -1);
+    // The same rays as a range image (what the HDL-32E makes): the same bytes, each range
+    // as it is, and decoded, the image's points.
+    common::LidarSlice image = slice;
+    image.points.clear();
+    image.range_steps.resize(m.ranges.size());
+    std::memcpy(image.range_steps.data(), m.ranges.data(), m.ranges.size() * sizeof(int16_t));
+    image.range_intensity = m.intensity;
+    ASSERT_TRUE(common::HasRangeImage(image));
+    std::vector<uint8_t> from_image(static_cast<size_t>(size) + 3, 0xAB);
+    ASSERT_EQ(FastLidarRanges(image).encode(from_image.data(), 3, size), size);
+    EXPECT_EQ(from_image, expected) << columns << " columns";
+    cairn::lcmt_lidar_ranges decoded;
+    ASSERT_EQ(decoded.decode(from_image.data(), 3, size), size);
+    auto back = runtime::FromLcm(decoded);
+    ASSERT_TRUE(back.ok()) << back.status().message();
+    common::LidarSlice expanded = image;
+    common::ExpandRangeImage(&expanded);
+    ASSERT_GT(expanded.points.size(), 0u);
+    ASSERT_EQ(back->points.size(), expanded.points.size());
+    for (size_t k = 0; k < expanded.points.size(); ++k) {
+      ASSERT_EQ(back->points[k].x_m, expanded.points[k].x_m) << k;
+      ASSERT_EQ(back->points[k].z_m, expanded.points[k].z_m) << k;
+      ASSERT_EQ(back->points[k].column, expanded.points[k].column) << k;
+    }
+    // As points on LIDAR, an image goes out expanded; the fast points encoder refuses it.
+    EXPECT_EQ(runtime::ToLcm(image).num_points, static_cast<int32_t>(expanded.points.size()));
+    const FastPointCloudSlice image_as_points(image);
+    std::vector<uint8_t> points_buffer(static_cast<size_t>(image_as_points.getEncodedSize()));
+    EXPECT_EQ(
+        image_as_points.encode(points_buffer.data(), 0, static_cast<int>(points_buffer.size())),
+        -1);
     // A point off the grid, or no grid at all: refused.
     common::LidarSlice off = slice;
     off.points.back().column = static_cast<uint16_t>(columns);

@@ -20,6 +20,18 @@ using testing::SimTest;
 
 constexpr double kDeg = M_PI / 180.0;
 
+// The lidar's slices as points, the way a consumer that needs points reads the range images
+// the HDL-32E makes.
+std::vector<common::LidarSlice> AsPoints(const std::vector<common::LidarSlice>& slices) {
+  std::vector<common::LidarSlice> out = slices;
+  for (common::LidarSlice& slice : out) {
+    EXPECT_TRUE(common::HasRangeImage(slice));
+    EXPECT_TRUE(slice.points.empty());  // the sensor writes no points beside its ranges
+    common::ExpandRangeImage(&slice);
+  }
+  return out;
+}
+
 TEST(LidarLayoutTest, RingAnglesAreExact) {
   const LidarParams p;  // HDL-32E defaults
   ASSERT_EQ(p.rings, 32);
@@ -141,7 +153,8 @@ TEST_F(LidarSimTest, OneRevolutionIsSlicesCoveringTheTurnOnce) {
   // Slices of revolution 0 fall due over the first 0.1 s.
   while (sim.time_s() < 0.1 + 1e-9) sim.Step(&out);
   std::map<int, const common::LidarSlice*> by_index;
-  for (const auto& slice : out.Readings<LidarSensor>()) {
+  const std::vector<common::LidarSlice> slices = AsPoints(out.Readings<LidarSensor>());
+  for (const auto& slice : slices) {
     if (slice.revolution == 0) {
       EXPECT_TRUE(by_index.emplace(slice.slice_index, &slice).second) << slice.slice_index;
     }
@@ -193,7 +206,7 @@ TEST_F(LidarSimTest, WallAtKnownDistanceReadsWithinNoise) {
   // Ring 23 is level (+0.0016 deg): its beams towards azimuth ~0 hit the wall face.
   int n = 0;
   double sum_error = 0.0;
-  for (const auto& slice : out.Readings<LidarSensor>()) {
+  for (const auto& slice : AsPoints(out.Readings<LidarSensor>())) {
     if (slice.slice_index != 0 && slice.slice_index != 19) continue;
     const common::Pose3& sensor = slice.sensor_pose;
     const double distance_to_wall = 5.0 - sensor.position_m.x();
@@ -205,14 +218,17 @@ TEST_F(LidarSimTest, WallAtKnownDistanceReadsWithinNoise) {
       const double expected =
           distance_to_wall / (std::cos(az) * std::cos(std::asin(pt.z_m / range)));
       const double error = range - expected;
-      EXPECT_LT(std::abs(error), 5.0 * sigma) << "azimuth " << az;
+      // The noise, and half a 2 mm step of rounding.
+      EXPECT_LT(std::abs(error), 5.0 * sigma + 0.001) << "azimuth " << az;
       sum_error += error;
       ++n;
     }
   }
   ASSERT_GT(n, 100);
-  // The mean error shrinks with sqrt(n): unbiased within 4 standard errors.
-  EXPECT_LT(std::abs(sum_error / n), 4.0 * sigma / std::sqrt(n));
+  // The mean error shrinks with sqrt(n): unbiased within 4 standard errors (rounding to the
+  // nearest step adds no bias, and its own spread, 2 mm / sqrt(12), is small beside sigma).
+  EXPECT_LT(std::abs(sum_error / n),
+            4.0 * std::hypot(sigma, 0.002 / std::sqrt(12.0)) / std::sqrt(n));
 
   // The planar laser's centre beam also reads the wall within its noise.
   ASSERT_FALSE(out.Readings<PlanarLaserSensor>().empty());
@@ -224,14 +240,17 @@ TEST_F(LidarSimTest, WallAtKnownDistanceReadsWithinNoise) {
 }
 
 TEST_F(LidarSimTest, NoiseFreeLidarIsExact) {
+  // As points (no range resolution), a noise-free reading is the exact distance.
   Scenario s = InlineScenario(RoomWorld(), "p3at", "pioneer3at");
   s.robots[0].sensors.Find<LidarSensor>()->range_noise_sigma_m = 0.0;
+  s.robots[0].sensors.Find<LidarSensor>()->range_resolution_m = 0.0;
   MujocoSim sim(s);
   SimOutputs out;
   while (sim.time_s() < 0.01) sim.Step(&out);
   ASSERT_FALSE(out.Readings<LidarSensor>().empty());
   const auto& slice = out.Readings<LidarSensor>().front();
   ASSERT_EQ(slice.slice_index, 0);
+  EXPECT_TRUE(slice.range_steps.empty());
   const double distance_to_wall = 5.0 - slice.sensor_pose.position_m.x();
   bool found = false;
   for (const auto& pt : slice.points) {
@@ -244,6 +263,61 @@ TEST_F(LidarSimTest, NoiseFreeLidarIsExact) {
   EXPECT_TRUE(found);
 }
 
+TEST_F(LidarSimTest, TheRangeImageIsTheReadingsRoundedToTheResolution) {
+  // The same run (same seed, so the same noise) as points and as a range image: every point's
+  // range, rounded to 2 mm, is at its ray; every ray without a point reads 0.
+  auto run = [](double resolution_m) {
+    Scenario s = InlineScenario(FlatWorld(R"(<geom type="box" size="0.5 0.5 0.5" pos="3 1 0.5"/>)"),
+                                "r", "pioneer3at");
+    s.robots[0].sensors.Find<LidarSensor>()->range_resolution_m = resolution_m;
+    MujocoSim sim(s);
+    SimOutputs out;
+    while (sim.time_s() < 0.1 + 1e-9) sim.Step(&out);
+    return out.Readings<LidarSensor>();
+  };
+  const std::vector<common::LidarSlice> points = run(0.0), image = run(0.002);
+  ASSERT_EQ(points.size(), image.size());
+  ASSERT_GE(points.size(), 20u);
+  size_t returns = 0, empty = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const common::LidarSlice& a = points[i];
+    const common::LidarSlice& b = image[i];
+    ASSERT_TRUE(common::HasRangeImage(b)) << i;
+    ASSERT_FALSE(common::HasRangeImage(a)) << i;
+    EXPECT_EQ(a.grid.columns, b.grid.columns);
+    const size_t rings = b.grid.ring_elevation_rad.size();
+    std::vector<uint16_t> expected(b.range_steps.size(), 0);
+    std::vector<uint8_t> expected_intensity(b.range_steps.size(), 0);
+    for (const auto& pt : a.points) {
+      const size_t ray = static_cast<size_t>(pt.column) * rings + pt.ring;
+      const float range = std::sqrt(pt.x_m * pt.x_m + pt.y_m * pt.y_m + pt.z_m * pt.z_m);
+      expected[ray] = static_cast<uint16_t>(std::lround(range / 0.002));
+      expected_intensity[ray] = static_cast<uint8_t>(std::lround(pt.intensity));
+    }
+    for (size_t ray = 0; ray < expected.size(); ++ray) {
+      // The points' float coordinates may move a range across a half step: one step apart.
+      ASSERT_NEAR(b.range_steps[ray], expected[ray], 1) << "slice " << i << " ray " << ray;
+      ASSERT_EQ(b.range_steps[ray] == 0, expected[ray] == 0) << "slice " << i << " ray " << ray;
+      ASSERT_EQ(b.range_intensity[ray], expected_intensity[ray]);
+      ++(expected[ray] == 0 ? empty : returns);
+    }
+    // Expanded, the image gives the points back within a step.
+    common::LidarSlice expanded = b;
+    common::ExpandRangeImage(&expanded);
+    ASSERT_EQ(expanded.points.size(), a.points.size()) << i;
+    EXPECT_TRUE(expanded.range_steps.empty());
+    for (size_t k = 0; k < a.points.size(); ++k) {
+      ASSERT_EQ(expanded.points[k].ring, a.points[k].ring);
+      ASSERT_EQ(expanded.points[k].column, a.points[k].column);
+      ASSERT_NEAR(expanded.points[k].x_m, a.points[k].x_m, 0.0015);
+      ASSERT_NEAR(expanded.points[k].y_m, a.points[k].y_m, 0.0015);
+      ASSERT_NEAR(expanded.points[k].z_m, a.points[k].z_m, 0.0015);
+    }
+  }
+  EXPECT_GT(returns, 10000u);  // the ground and the box
+  EXPECT_GT(empty, 10000u);    // the sky
+}
+
 TEST_F(LidarSimTest, RobotDoesNotSeeItselfButSeesOthers) {
   Scenario s = InlineScenario(FlatWorld(), "a", "pioneer3at");
   SpawnPose other;
@@ -254,7 +328,7 @@ TEST_F(LidarSimTest, RobotDoesNotSeeItselfButSeesOthers) {
   SimOutputs out;
   while (sim.time_s() < 0.1 + 1e-9) sim.Step(&out);
   size_t near_points = 0, toward_b = 0;
-  for (const auto& slice : out.Readings<LidarSensor>()) {
+  for (const auto& slice : AsPoints(out.Readings<LidarSensor>())) {
     if (slice.robot != "a") continue;
     for (const auto& pt : slice.points) {
       const double r = std::hypot(pt.x_m, pt.y_m);
