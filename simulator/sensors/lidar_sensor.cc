@@ -250,10 +250,10 @@ common::LidarSlice LidarSensor::MakeSlice(const SensorFrame& frame, int64_t revo
     s.range_intensity.assign(ray_count, 0);
     uint16_t* range_steps = s.range_steps.data();
     uint8_t* range_intensity = s.range_intensity.data();
-    // Two passes: the noisy ranges of every ray, then each ray's range step and intensity. A
-    // ray that missed draws noise too, which costs less than branching on it, and changes
-    // nothing: a draw is a pure function of the ray's number. Validate() bounds max_range_m in
-    // 16 bits of steps; a ray without a return reads 0.
+    // Two passes, measured cheaper than one: the noisy ranges of every ray, without a branch
+    // (a ray that missed draws noise too, which changes nothing: a draw is a pure function of
+    // the ray's number), then each ray's range step and intensity. Validate() bounds
+    // max_range_m in 16 bits of steps; a ray without a return reads 0.
     const int count = last - first;
     double* noisy_m = noisy_m_.data();
     for (int k = 0; k < count; ++k) {
