@@ -4,14 +4,17 @@
 
 namespace cairn::common {
 
+bool HasRangeGrid(const LidarSlice& slice) {
+  const LidarGrid& grid = slice.grid;
+  return grid.columns >= 1 && grid.columns <= 65535 && grid.range_resolution_m > 0.0 &&
+         std::isfinite(grid.range_resolution_m) && !grid.ring_elevation_rad.empty() &&
+         grid.ring_elevation_rad.size() <= 127;
+}
+
 bool HasRangeImage(const LidarSlice& slice) {
   const LidarGrid& grid = slice.grid;
-  const size_t rings = grid.ring_elevation_rad.size();
-  if (grid.columns < 1 || grid.columns > 65535 || rings < 1 || rings > 127 ||
-      !(grid.range_resolution_m > 0.0 && grid.range_resolution_m <= 1.0)) {
-    return false;
-  }
-  const size_t rays = static_cast<size_t>(grid.columns) * rings;
+  if (!HasRangeGrid(slice) || grid.range_resolution_m > 1.0) return false;
+  const size_t rays = static_cast<size_t>(grid.columns) * grid.ring_elevation_rad.size();
   return slice.range_steps.size() == rays && slice.range_intensity.size() == rays;
 }
 

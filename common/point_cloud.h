@@ -67,8 +67,12 @@ inline uint8_t LidarIntensityByte(float intensity) {
   return v >= 1.f ? (v < 255.f ? static_cast<uint8_t>(v) : uint8_t{255}) : 0;
 }
 
-/// Whether `slice` carries a range image: a grid with 1 to 127 rings, 1 to 65535 columns and a
-/// resolution in (0, 1] m, and both arrays of columns x rings values.
+/// Whether `slice` has a grid of ranges that lcmt_lidar_ranges can carry (1 to 127 rings, 1 to
+/// 65535 columns, a resolution above 0).
+bool HasRangeGrid(const LidarSlice& slice);
+
+/// Whether `slice` carries a range image: a range grid (HasRangeGrid) with a resolution of at
+/// most 1 m, and both arrays of columns x rings values.
 bool HasRangeImage(const LidarSlice& slice);
 
 /// Replaces `slice`'s range image by its points, appended after any it has: one per ray that

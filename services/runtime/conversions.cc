@@ -130,16 +130,9 @@ Result<common::LidarSlice> FromLcm(const cairn::lcmt_point_cloud_slice& m) {
   return s;
 }
 
-bool HasRangeGrid(const common::LidarSlice& slice) {
-  const common::LidarGrid& grid = slice.grid;
-  return grid.columns >= 1 && grid.columns <= 65535 && grid.range_resolution_m > 0.0 &&
-         std::isfinite(grid.range_resolution_m) && !grid.ring_elevation_rad.empty() &&
-         grid.ring_elevation_rad.size() <= 127;
-}
-
 cairn::lcmt_lidar_ranges ToLcmRangesWithoutRays(const common::LidarSlice& slice) {
   const common::LidarGrid& grid = slice.grid;
-  if (!HasRangeGrid(slice)) {
+  if (!common::HasRangeGrid(slice)) {
     throw std::invalid_argument("ToLcmRanges: the slice has no grid of ranges");
   }
   cairn::lcmt_lidar_ranges m{};

@@ -42,10 +42,6 @@ inline uint16_t LidarRangeSteps(const common::LidarPoint& p, float steps_per_m) 
   return common::LidarRangeToSteps(std::sqrt(p.x_m * p.x_m + p.y_m * p.y_m + p.z_m * p.z_m),
                                    steps_per_m);
 }
-/// Whether `slice` has a grid of ranges that lcmt_lidar_ranges can carry (1 to 127 rings, 1 to
-/// 65535 columns, a resolution above 0).
-bool HasRangeGrid(const common::LidarSlice& slice);
-
 /// A slice with a grid and a range resolution (LidarGrid) as ranges, 3 bytes a ray: its range
 /// image as it is (common::HasRangeImage), or else each point's range, rounded to the
 /// resolution, at its ring and column; rays without a point read 0.

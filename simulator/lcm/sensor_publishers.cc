@@ -191,13 +191,13 @@ int FastPointCloudSlice::encode(void* buf, int offset, int maxlen) const {
 }
 
 FastLidarRanges::FastLidarRanges(const common::LidarSlice& slice) : slice_(&slice) {
-  if (!runtime::HasRangeGrid(slice)) return;  // encode() refuses it
+  if (!common::HasRangeGrid(slice)) return;  // encode() refuses it
   head_ = runtime::ToLcmRangesWithoutRays(slice);
   rays_ = static_cast<int64_t>(head_.num_columns) * head_.num_rings;
 }
 
 int FastLidarRanges::getEncodedSize() const {
-  if (!runtime::HasRangeGrid(*slice_)) return -1;
+  if (!common::HasRangeGrid(*slice_)) return -1;
   const int64_t size = head_.getEncodedSize() + 3 * rays_;
   return size <= std::numeric_limits<int32_t>::max() ? static_cast<int>(size) : -1;
 }

@@ -70,7 +70,7 @@ class FastPointCloudSlice {
 /// when it has none, from its points: the bytes are those of runtime::ToLcmRanges(slice).encode()
 /// (tested), without the message's two arrays filled and freed for every slice and written by
 /// the generated code value by value. encode() refuses (-1) a slice without a grid
-/// (runtime::HasRangeGrid) or with a point off it.
+/// (common::HasRangeGrid) or with a point off it.
 class FastLidarRanges {
  public:
   explicit FastLidarRanges(const common::LidarSlice& slice);
