@@ -1,7 +1,7 @@
 // bench_sim: speed of the simulator on the reference workload, as a user pays it.
 //
 // Workload: the tunnel world, one Pioneer 3-AT with the full HDL-32E (32 x 1800 rays at 10 Hz,
-// 20 slices), its front planar laser, IMU, odometry and ground truth, driving up the 5 degree
+// 10 slices), its front planar laser, IMU, odometry and ground truth, driving up the 5 degree
 // ramp lane.
 //
 // Headline: what `cairn-sim --speed max` delivers. The real SimService runs the workload flat

@@ -1,7 +1,7 @@
 // bench_sim_fleet: many robots in one simulator, as `cairn-sim --speed max` serves them.
 //
 // Workload: the tunnel world with 1, 2, 4 and 8 Pioneer 3-ATs, each with its model's default
-// sensors (the full HDL-32E: 32 x 1800 rays at 10 Hz in 20 slices, the 180 deg planar laser,
+// sensors (the full HDL-32E: 32 x 1800 rays at 10 Hz in 10 slices, the 180 deg planar laser,
 // IMU, odometry, ground truth), one per lane (x 4 m, y 2, 6, 10, ... m), all driving along
 // their lanes at 0.5 m/s. The real SimService runs flat out and publishes every reading and
 // SIM.CLOCK on a private udpm bus (a port of its own, ttl=0: cairn-sim's default transport).

@@ -138,10 +138,10 @@ void TestSpan(const FeatureInputs& in, const ObstacleParams& p, int x, int y,
     if ((hm - hc) * delta < 0 || (hn - hm) * delta < 0) return;  // not monotonic
   }
   double before = 0, after = 0;
-  if (in.Known(x - d[0], y - d[1]))
-    before = same_sign_abs(double(hc) - in.H(x - d[0], y - d[1]), delta);
-  if (in.Known(nx + d[0], ny + d[1]))
-    after = same_sign_abs(double(in.H(nx + d[0], ny + d[1])) - hn, delta);
+  const bool before_known = in.Known(x - d[0], y - d[1]);
+  const bool after_known = in.Known(nx + d[0], ny + d[1]);
+  if (before_known) before = same_sign_abs(double(hc) - in.H(x - d[0], y - d[1]), delta);
+  if (after_known) after = same_sign_abs(double(in.H(nx + d[0], ny + d[1])) - hn, delta);
   // What an incline rises along this line per cell, from the normals of both cells (an edge
   // tilts the normals around it, so the lower of the two is taken).
   const double along = std::min(Rise(in.nx, in.ny, x, y, in.sx, d, in.res),
@@ -149,10 +149,12 @@ void TestSpan(const FeatureInputs& in, const ObstacleParams& p, int x, int y,
   if (std::fabs(delta) <= p.step_contrast * span * std::max({before, after, along})) return;
   // What the difference exceeds the incline's own rise by must stand out of the noise of the
   // two heights. The rise: the normals' (tilted up by an object's own edge, so no more than the
-  // larger of the differences before and after).
+  // larger of the differences before and after where either is known; with neither, two cells
+  // seen alone on a hillside, the normals' rise is all there is to go by).
   // A difference of a wall's height is no noise whatever the variance says (a cell that straddles
   // a wall's foot or top mixes both levels and its variance is of the wall's height).
-  const double rise = std::min(along, std::max(before, after));
+  const double rise =
+      before_known || after_known ? std::min(along, std::max(before, after)) : along;
   if (std::fabs(delta) < p.wall_min_height_m &&
       std::fabs(delta) - span * rise < p.step_noise_sigmas * DifferenceSigma(in, x, y, nx, ny)) {
     return;

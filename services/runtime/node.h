@@ -72,8 +72,8 @@ struct ChannelCounters {
 
 namespace internal {
 /// The calling thread's encoding buffer for Node::Publish, at least `size` bytes: grown when
-/// needed, never zeroed (encode() writes every byte; a lidar publishes 200 slices of up to
-/// 49 KB per simulated second).
+/// needed, never zeroed (encode() writes every byte; a lidar publishes 100 range images of
+/// 17 KB per simulated second).
 uint8_t* PublishBuffer(size_t size);
 }  // namespace internal
 

@@ -23,7 +23,7 @@ struct LidarParams {
   double max_elevation_deg{10.67};
   int azimuth_steps{1800};        ///< per revolution (0.2 deg)
   double rate_hz{10.0};           ///< revolutions per second
-  int slices_per_revolution{20};  ///< each slice is one message (8.6 KB as ranges)
+  int slices_per_revolution{10};  ///< each slice is one message (17 KB as ranges)
   double max_range_m{70.0};
   double min_range_m{0.4};
   double range_noise_sigma_m{0.02};
@@ -73,7 +73,7 @@ class LidarSensor final : public SimSensor {
   static constexpr char kName[] = "hdl32e";
   static constexpr char kDescription[] =
       "HDL-32E-like 3-D lidar: 32 rings -30.67..+10.67 deg, 1800 azimuth steps, 10 Hz, 70 m, "
-      "sigma 0.02 m; 20 slices a turn on <robot>.LIDAR_RANGES, 2 mm steps, 3 bytes a ray";
+      "sigma 0.02 m; 10 slices a turn on <robot>.LIDAR_RANGES, 2 mm steps, 3 bytes a ray";
   using Params = LidarParams;
   using Reading = common::LidarSlice;
   static constexpr auto kLoadParams = &LoadLidarParams;

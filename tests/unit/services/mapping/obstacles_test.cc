@@ -426,6 +426,45 @@ TEST(ObstaclesTest, AStepMustStandOutOfTheNoiseOfItsHeights) {
   EXPECT_EQ(OfKind(ExtractWith(step, no_noise_test), ObstacleKind::kStepUp).size(), 1u);
 }
 
+// A hillside seen from afar: a lidar ring crosses each cell along one contour, so a cell's
+// height is the ground's where its points lay, up to half a cell's rise off its centre's. Cells
+// seen in pairs with nothing known to either side differ by the slope's rise plus twice that
+// offset; the normals' rise (here from the true heights) is all there is to take the slope from,
+// and against it the difference is noise. The same difference on level ground is a step.
+TEST(ObstaclesTest, CellsSeenInPairsOnAHillsideHoldNoStep) {
+  const double offset_m = 0.012;
+  for (const double slope_deg : {8.0, 0.0}) {
+    SCOPED_TRACE(slope_deg);
+    const double t = std::tan(slope_deg * kDeg);
+    // Pairs of columns (x = 0.4 k to 0.4 k + 0.4 m), every other pair unknown.
+    GridMap map = MakeTerrain(40, 40, kRes, [t](double x, double) {
+      const int ix = static_cast<int>(std::floor(x / kRes));
+      return ix % 4 >= 2 ? std::numeric_limits<double>::quiet_NaN() : t * x;
+    });
+    map.AddLayer(layers::kElevationVariance).setConstant(0.004f * 0.004f);
+    ComputeGeometricLayers(&map, {});
+    // The normals stand; each cell's height moves to where its points lay, the lower cell of a
+    // pair down the slope, the upper one up it (on level ground: as far, for the same difference).
+    const double rise_m = slope_deg > 0 ? 0.0 : kRes * std::tan(8.0 * kDeg);
+    common::Layer& h = map.at(layers::kElevation);
+    for (int iy = 0; iy < map.size_y(); ++iy) {
+      for (int ix = 0; ix < map.size_x(); ++ix) {
+        if (ix % 4 == 0) h(ix, iy) -= static_cast<float>(offset_m);
+        if (ix % 4 == 1) h(ix, iy) += static_cast<float>(offset_m + rise_m);
+      }
+    }
+    const common::ObstacleRegistry r = ExtractObstacles(map, {});
+    const size_t steps = OfKind(r, ObstacleKind::kStepUp).size() +
+                         OfKind(r, ObstacleKind::kStepDown).size() +
+                         OfKind(r, ObstacleKind::kTerrace).size();
+    if (slope_deg > 0) {
+      EXPECT_EQ(steps, 0u);
+    } else {
+      EXPECT_GT(steps, 0u);
+    }
+  }
+}
+
 common::Obstacle Make(ObstacleKind kind) {
   common::Obstacle o;
   o.kind = kind;

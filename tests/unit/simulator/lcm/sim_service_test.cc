@@ -94,7 +94,7 @@ TEST_F(SimServiceTest, PublishesEverySensorAndTheClockInSimTime) {
   node_->Subscribe<cairn::lcmt_pose>("r.POSE", [&](const cairn::lcmt_pose& m) { last_pose = m; });
   dut_->StepAndPublish(500);  // 1 s
   dut_->HandlePending();
-  EXPECT_EQ(counts_["r.LIDAR_RANGES"], 200);  // ranges, 3 bytes a ray; no points
+  EXPECT_EQ(counts_["r.LIDAR_RANGES"], 100);  // ranges, 3 bytes a ray; no points
   EXPECT_EQ(counts_["r.LIDAR"], 0);
   EXPECT_EQ(counts_["r.SCAN"], 10);
   EXPECT_EQ(counts_["r.TURRET_SCAN"], 50);
@@ -105,13 +105,13 @@ TEST_F(SimServiceTest, PublishesEverySensorAndTheClockInSimTime) {
   EXPECT_EQ(last_pose.utime, 1000000);
   EXPECT_EQ(last_pose.robot, "r");
   EXPECT_EQ(last_slice.utime, 1000000);
-  EXPECT_EQ(last_slice.slice_index, 19);
-  EXPECT_EQ(last_slice.slice_count, 20);
+  EXPECT_EQ(last_slice.slice_index, 9);
+  EXPECT_EQ(last_slice.slice_count, 10);
   // The slice round-trips through the product's conversion.
   const auto slice = runtime::FromLcm(last_slice);
   ASSERT_TRUE(slice.ok()) << slice.status().ToString();
   EXPECT_GT(slice->points.size(), 1000u);
-  EXPECT_EQ(last_slice.num_rays, 90 * 32);
+  EXPECT_EQ(last_slice.num_rays, 180 * 32);
   EXPECT_DOUBLE_EQ(last_slice.range_resolution_m, 0.002);
 }
 
