@@ -122,7 +122,7 @@ Run Serve(int robots) {
       "sensors, %.3f s the rest (publishing); %.0f messages, %.1f MB per simulated second\n",
       robots, robots == 1 ? "" : "s", node.url().c_str(), r.start_s, r.sim_s, r.wall_s, r.cpu_s,
       r.worst(), r.best(), r.median(), r.sim_s / r.cpu_s, r.physics_s / r.sim_s,
-      r.sensors_s / r.sim_s, r.rest_s() / r.sim_s, r.messages, r.bytes / r.sim_s / 1e6);
+      r.sensors_s / r.sim_s, r.rest_s() / r.sim_s, r.messages / r.sim_s, r.bytes / r.sim_s / 1e6);
   return r;
 }
 

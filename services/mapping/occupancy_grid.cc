@@ -83,6 +83,8 @@ void OccupancyParams::Validate() const {
       std::isfinite(no_return_range_m) && no_return_range_m >= 0.0,
       "occupancy no_return_range_m must be finite and >= 0, got " << no_return_range_m);
   CAIRN_THROW_UNLESS(beam_step >= 1, "occupancy beam_step must be >= 1, got " << beam_step);
+  CAIRN_THROW_UNLESS(max_scan_tilt_rad > 0.0,
+                     "occupancy max_scan_tilt must be positive, got " << max_scan_tilt_rad);
   CAIRN_THROW_UNLESS(std::isfinite(resolution_m) && resolution_m > 0.0,
                      "occupancy resolution_m must be positive, got " << resolution_m);
   CAIRN_THROW_UNLESS(
@@ -225,6 +227,12 @@ OccupancyInsertStats OccupancyGrid::InsertScan(const common::LaserScan& scan) {
   OccupancyInsertStats stats;
   segments_.clear();
   const Eigen::Matrix3d rotation = pose.orientation.normalized().toRotationMatrix();
+  // The sensor's z axis against the vertical, without an acos: cos(tilt) = R(2, 2).
+  if (std::isfinite(params_.max_scan_tilt_rad) &&
+      rotation(2, 2) < std::cos(std::min(params_.max_scan_tilt_rad, M_PI))) {
+    stats.scans_tilted = 1;
+    return stats;
+  }
   const common::Vector2 origin = pose.position_m.head<2>();
   // A reading at or beyond the scan's own range_max is a no-return.
   const double scan_max =
@@ -522,6 +530,9 @@ OccupancyParams ReadOccupancyParams(common::YamlMap& m, const OccupancyParams& b
   m.Get("min_range_m", &p.min_range_m);
   m.Get("max_range_m", &p.max_range_m);
   m.Get("no_return_range_m", &p.no_return_range_m);
+  double max_scan_tilt_deg = p.max_scan_tilt_rad * 180.0 / M_PI;
+  m.Get("max_scan_tilt_deg", &max_scan_tilt_deg);
+  p.max_scan_tilt_rad = max_scan_tilt_deg * M_PI / 180.0;
   // Seed 003 test 36's "improved" mode raises it above clamp_max_logodds (.inf: misses always
   // apply).
   m.Get("protect_occupied_logodds", &p.protect_occupied_logodds);

@@ -71,6 +71,12 @@ struct OccupancyParams {
   /// its range_max_m).
   double no_return_range_m{30.0};
   int beam_step{1};  ///< use beams 0, step, 2·step, ... of a laser scan
+  /// A laser scan whose sensor tilts further than this from level (its z axis from the
+  /// vertical: roll and pitch together) is skipped whole. The grid models a level plane: a
+  /// robot pitched nose down by a bump or a hard stop puts a planar laser's beams on the floor
+  /// a metre or two ahead, and seed 003's protected-occupied rule keeps such a hit for good.
+  /// +inf (the default): every scan counts.
+  double max_scan_tilt_rad{std::numeric_limits<double>::infinity()};
   OccupancyTraversal traversal{OccupancyTraversal::kExact};
 
   // Grid (site-fixed, axis-aligned with the world).
@@ -103,6 +109,7 @@ struct OccupancyInsertStats {
   int64_t hits{0};           ///< hit updates applied
   int64_t misses{0};         ///< miss updates applied
   int64_t hits_outside{0};   ///< obstacle returns whose cell lies outside the grid (not marked)
+  int64_t scans_tilted{0};   ///< laser scans skipped whole: tilted beyond max_scan_tilt_rad
 };
 
 /// log(p / (1 - p)).

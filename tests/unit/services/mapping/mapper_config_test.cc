@@ -60,13 +60,16 @@ TEST(MapperConfigTest, TheShippedApartmentFileLoads) {
 
 TEST(MapperConfigTest, EnabledListsOrRemovesALayer) {
   const MapperConfig c = FromString(
-      "occupancy: {enabled: false, preset: seed003, band: {min_height_m: 0.2}}\n"
+      "occupancy: {enabled: false, preset: seed003, max_scan_tilt_deg: 2.5,\n"
+      "            band: {min_height_m: 0.2}}\n"
       "dynamic: {enabled: true, size_x_m: 4.0, size_y_m: 3.0, cost_inc: 6}\n"
       "occupancy_period_s: 0.5\n");
   const MapperCoreParams& core = c.params.core;
   EXPECT_EQ(core.layers, (std::vector<std::string>{"terrain", "octomap", "dynamic"}));
   EXPECT_TRUE(std::isinf(OccupancyParams().protect_occupied_logodds));
   EXPECT_FALSE(std::isinf(core.occupancy.grid.protect_occupied_logodds));  // the seed 003 preset
+  EXPECT_TRUE(std::isinf(OccupancyParams().max_scan_tilt_rad));
+  EXPECT_NEAR(core.occupancy.grid.max_scan_tilt_rad, 2.5 * M_PI / 180.0, 1e-12);
   EXPECT_DOUBLE_EQ(core.band.min_height_m, 0.2);
   EXPECT_EQ(core.dynamic.extent.size_x, 80);
   EXPECT_EQ(core.dynamic.layers.cost_inc, 6);

@@ -282,6 +282,42 @@ TEST(OccupancyGridTest, TiltedLaserLandsWhereItHits) {
   EXPECT_LT(grid.LogOddsAt({0.5, 0.0125}), 0.0f);
 }
 
+// A robot pitched nose down (a bump, a hard stop) puts its planar laser on the floor: from
+// 0.3 m at 6 deg, 2.87 m ahead. With seed 003's protected-occupied rule one such hit is a wall
+// for good; beyond max_scan_tilt the scan is skipped whole, and counted.
+TEST(OccupancyGridTest, AScanTiltedBeyondTheLimitIsSkippedAndCounted) {
+  OccupancyParams p = SeedParams();
+  p.max_scan_tilt_rad = 3.0 * M_PI / 180.0;
+  auto pitched = [](double pitch_deg) {
+    common::LaserScan scan = OneBeam(0.3 / std::sin(pitch_deg * M_PI / 180.0));
+    scan.sensor_pose.orientation =
+        Eigen::AngleAxisd(pitch_deg * M_PI / 180.0, Eigen::Vector3d::UnitY());
+    return scan;
+  };
+  OccupancyGrid grid(p);
+  const OccupancyInsertStats skipped = grid.InsertScan(pitched(6.0));
+  EXPECT_EQ(skipped.scans_tilted, 1);
+  EXPECT_EQ(skipped.beams_used, 0);
+  EXPECT_TRUE(std::isnan(grid.LogOddsAt({2.85, 0.0125})));
+  EXPECT_TRUE(std::isnan(grid.LogOddsAt({1.0, 0.0125})));
+  // Rolled as far: skipped too (the tilt is the sensor's z axis against the vertical).
+  common::LaserScan rolled = OneBeam(2.0);
+  rolled.sensor_pose.orientation = Eigen::AngleAxisd(6.0 * M_PI / 180.0, Eigen::Vector3d::UnitX());
+  EXPECT_EQ(grid.InsertScan(rolled).scans_tilted, 1);
+  // Within the limit, and with no limit (the default), the scan counts.
+  const OccupancyInsertStats kept = grid.InsertScan(pitched(2.0));
+  EXPECT_EQ(kept.scans_tilted, 0);
+  EXPECT_GT(kept.beams_used, 0);
+  OccupancyGrid unlimited(SeedParams());
+  EXPECT_EQ(unlimited.InsertScan(pitched(6.0)).scans_tilted, 0);
+  EXPECT_EQ(unlimited.LogOddsAt({0.3 / std::tan(6.0 * M_PI / 180.0), 0.0125}), 2.0f);
+  // A limit must be positive.
+  p.max_scan_tilt_rad = 0.0;
+  EXPECT_THROW(OccupancyGrid{p}, std::invalid_argument);
+  p.max_scan_tilt_rad = std::nan("");
+  EXPECT_THROW(OccupancyGrid{p}, std::invalid_argument);
+}
+
 // ---- OctoMap-like default mode ----------------------------------------------------------------
 
 TEST(OccupancyGridTest, DefaultValuesPerHitAndMissAndClamps) {
