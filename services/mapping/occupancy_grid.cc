@@ -83,8 +83,8 @@ void OccupancyParams::Validate() const {
       std::isfinite(no_return_range_m) && no_return_range_m >= 0.0,
       "occupancy no_return_range_m must be finite and >= 0, got " << no_return_range_m);
   CAIRN_THROW_UNLESS(beam_step >= 1, "occupancy beam_step must be >= 1, got " << beam_step);
-  CAIRN_THROW_UNLESS(max_scan_tilt_rad > 0.0,
-                     "occupancy max_scan_tilt must be positive, got " << max_scan_tilt_rad);
+  CAIRN_THROW_UNLESS(max_scan_tilt_rad > 0.0, "occupancy max_scan_tilt_deg must be positive, got "
+                                                  << max_scan_tilt_rad * 180.0 / M_PI);
   CAIRN_THROW_UNLESS(std::isfinite(resolution_m) && resolution_m > 0.0,
                      "occupancy resolution_m must be positive, got " << resolution_m);
   CAIRN_THROW_UNLESS(
@@ -227,9 +227,9 @@ OccupancyInsertStats OccupancyGrid::InsertScan(const common::LaserScan& scan) {
   OccupancyInsertStats stats;
   segments_.clear();
   const Eigen::Matrix3d rotation = pose.orientation.normalized().toRotationMatrix();
-  // The sensor's z axis against the vertical, without an acos: cos(tilt) = R(2, 2).
-  if (std::isfinite(params_.max_scan_tilt_rad) &&
-      rotation(2, 2) < std::cos(std::min(params_.max_scan_tilt_rad, M_PI))) {
+  // The sensor's z axis against the vertical, without an acos: cos(tilt) = R(2, 2). A limit of
+  // pi or more (+inf by default) skips nothing.
+  if (rotation(2, 2) < std::cos(std::min(params_.max_scan_tilt_rad, M_PI))) {
     stats.scans_tilted = 1;
     return stats;
   }
